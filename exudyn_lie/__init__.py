@@ -1,0 +1,28 @@
+"""exudyn_lie: explicit Munthe-Kaas Lie group integrators for Exudyn multibody models.
+
+Each rigid body is integrated on its own configuration-space Lie group, SE(3) (screw
+update) or SO(3)xR3 (decoupled update), as analysed by Müller & Terze, *The
+significance of the configuration space Lie group for the constraint satisfaction in
+numerical time integration of multibody systems*.
+
+Entry points
+------------
+* :func:`SolveDynamic` - drop-in solver for an Exudyn ``mbs`` (``exudyn_lie.bridge``);
+* :class:`Scene` / :class:`Simulator` - the multibody kernel without Exudyn;
+* :mod:`exudyn_lie.groups` - SO3, SE3, SO3xR3, quaternions, dual quaternions;
+* :mod:`exudyn_lie.integrators` - Butcher tableaus and the MK stepper;
+* ``python -m exudyn_lie paper | bench | stress``.
+"""
+__version__ = "0.1.0"
+
+from .integrators.tableau import get_method, method_names  # noqa: E402
+from .mbs import (GROUND, ConstraintError, Scene, SceneError, SimulationError,  # noqa: E402
+                  Simulator, StepSizeError)
+
+
+def __getattr__(name):
+    # the Exudyn bridge imports exudyn; load it on first use only
+    if name in ("SolveDynamic", "LieGroupSolver", "SceneFromExudyn"):
+        from . import bridge
+        return getattr(bridge, name)
+    raise AttributeError(f"module 'exudyn_lie' has no attribute {name!r}")

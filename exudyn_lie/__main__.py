@@ -1,0 +1,40 @@
+"""Command line: ``python -m exudyn_lie {paper,bench,stress} [options]``.
+
+* ``paper``  - reproduce the paper's comparison (SE3 vs SO3xR3 constraint satisfaction);
+* ``bench``  - work-precision and per-step benchmarks against Exudyn's native solvers;
+* ``stress`` - numerical stability stress suite.
+
+Each command lives in its own module (``exudyn_lie.paper``, ``.bench``, ``.stress``)
+with a ``main(argv)`` function; ``--help`` after a command lists its options.
+"""
+import importlib
+import sys
+
+COMMANDS = {
+    "paper": ("exudyn_lie.paper", "reproduce the paper's comparison, write REPRODUCTION.md and figures"),
+    "bench": ("exudyn_lie.bench", "work-precision / per-step benchmarks, write BENCHMARKS.md"),
+    "stress": ("exudyn_lie.stress", "numerical stability stress suite, write STRESS.md"),
+}
+
+
+def usage():
+    lines = ["usage: python -m exudyn_lie COMMAND [options]", "", "commands:"]
+    lines += [f"  {name:8s} {text}" for name, (_, text) in COMMANDS.items()]
+    return "\n".join(lines)
+
+
+def main(argv=None):
+    argv = sys.argv[1:] if argv is None else list(argv)
+    if not argv or argv[0] in ("-h", "--help"):
+        print(usage())
+        return 0
+    cmd = argv[0]
+    if cmd not in COMMANDS:
+        print(f"unknown command {cmd!r}\n\n{usage()}", file=sys.stderr)
+        return 2
+    module = importlib.import_module(COMMANDS[cmd][0])
+    return module.main(argv[1:]) or 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

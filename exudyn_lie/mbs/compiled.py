@@ -1,0 +1,248 @@
+"""Turn a :class:`~exudyn_lie.mbs.scene.Scene` into the flat arrays of the kernel.
+
+``compile_scene`` is done once per scene and group choice; the result
+(:class:`SceneData`, a namedtuple of arrays numba specialises on) is reused for every
+run.  Features a scene lacks are zero-length arrays, so their loops cost nothing, and
+the constraint solve is skipped entirely without joints.
+"""
+from collections import namedtuple
+
+import numpy as np
+
+from .kernel import GID_SE3, GID_SO3xR3, ROW_ROT, ROW_TRANS_LOCAL, ROW_TRANS_WORLD
+from .linalg import REL_PIVOT_TOL, rcm_order
+from .scene import GROUND, Scene, SceneError
+
+GROUP_IDS = {"SE3": GID_SE3, "SO3xR3": GID_SO3xR3}
+GROUP_NAMES = {v: k for k, v in GROUP_IDS.items()}
+
+SceneData = namedtuple("SceneData", [
+    "nb", "gid", "mass", "com", "M", "Minv", "gravity", "hasGravity", "hasQext",
+    "lbody", "lkind", "lvec", "lpos", "lfixed",
+    "sA", "sB", "sposA", "sposB", "sK", "sD", "sL0", "sf0",
+    "cA", "cB", "cposA", "cposB", "cK", "cD", "coff",
+    "tA", "tB", "trotA", "trotB", "tK", "tD", "toff", "ttq",
+    "jA", "jB", "jposA", "jrotA", "jposB", "jrotB", "jrow0", "jnrow",
+    "rkind", "rax", "rbx", "rbodyA", "rbodyB", "nrows", "bandwidth", "redundant", "pivotTol",
+])
+
+Work = namedtuple("Work", [
+    "Rs", "rs", "Vs", "Psi", "K", "Vd", "Q", "Qext", "Jr", "W", "eta", "h", "lam", "Sb", "Sd",
+    "perm", "ytmp", "info", "tmp6", "tmp12",
+    "v3a", "v3b", "v3c", "v3d", "v3e", "v3f", "v3g", "v3h", "v3i", "v3j", "v3k", "v3l", "v3m",
+    "v3n", "v3o", "v3p", "v3q", "v3r", "v3s", "v3t", "m3a", "m3b", "ident", "zero3", "zero6",
+    "tphi",
+])
+
+
+def body_mass_matrix(mass, inertia, com):
+    """The 6x6 body-fixed inertia matrix ``J_P`` about the frame origin (eq. NE1 with
+    the COM offset): ``[[Theta_P, m c^], [-m c^, m I]]`` for twists ``(omega, v)``."""
+    c = np.asarray(com, float)
+    ch = np.array([[0, -c[2], c[1]], [c[2], 0, -c[0]], [-c[1], c[0], 0]])
+    M = np.zeros((6, 6))
+    M[:3, :3] = inertia
+    M[:3, 3:] = mass * ch
+    M[3:, :3] = -mass * ch
+    M[3:, 3:] = mass * np.eye(3)
+    return M
+
+
+def joint_row_descriptors(constrainedAxes):
+    """Rows of Exudyn's ObjectJointGeneric for the given locks, as (kind, ax, bx):
+
+    * translations: in the A joint frame (``ROW_TRANS_LOCAL``), or in world
+      coordinates when all three translations are locked (``ROW_TRANS_WORLD``);
+    * rotations: 3 locked -> z0.y1, z0.x1, x0.y1; 2 locked (free axis f) -> f0 . l1 for
+      both locked axes l; 1 locked (universal, free axes f1 < f2) -> f1_0 . f2_1.
+    """
+    ax = constrainedAxes
+    rows = []
+    world = ax[0] and ax[1] and ax[2]
+    for i in range(3):
+        if ax[i]:
+            rows.append((ROW_TRANS_WORLD if world else ROW_TRANS_LOCAL, i, 0))
+    nrot = ax[3] + ax[4] + ax[5]
+    if nrot == 3:
+        rows += [(ROW_ROT, 2, 1), (ROW_ROT, 2, 0), (ROW_ROT, 0, 1)]
+    elif nrot == 2:
+        free = [i for i in range(3) if not ax[3 + i]][0]
+        for lk in range(3):
+            if ax[3 + lk]:
+                rows.append((ROW_ROT, free, lk))
+    elif nrot == 1:
+        f1, f2 = [i for i in range(3) if not ax[3 + i]]
+        rows.append((ROW_ROT, f1, f2))
+    return rows
+
+
+def resolve_groups(scene: Scene, liegroup):
+    """Per-body group names from ``'SE3'``, ``'SO3xR3'``, ``'auto'`` or a mapping/sequence."""
+    nb = scene.nBodies
+    if isinstance(liegroup, str):
+        key = _group_key(liegroup, "liegroup")
+        if key == "auto":
+            return auto_groups(scene)
+        return [key] * nb
+    if isinstance(liegroup, dict):
+        out = []
+        for i in range(nb):
+            if i not in liegroup:
+                raise SceneError(f"liegroup mapping has no entry for body {i} ({scene.bodies[i].name}); "
+                                 f"give one of 'SE3', 'SO3xR3' for every body")
+            out.append(_group_key(liegroup[i], f"liegroup[{i}]"))
+        extra = set(liegroup) - set(range(nb))
+        if extra:
+            raise SceneError(f"liegroup mapping names unknown bodies {sorted(extra)}")
+        return out
+    seq = list(liegroup)
+    if len(seq) != nb:
+        raise SceneError(f"liegroup sequence has {len(seq)} entries for {nb} bodies")
+    return [_group_key(g, f"liegroup[{i}]") for i, g in enumerate(seq)]
+
+
+def _group_key(name, what):
+    if isinstance(name, str):
+        low = name.strip().lower().replace("(", "").replace(")", "").replace(" ", "")
+        table = {"se3": "SE3", "so3xr3": "SO3xR3", "so3r3": "SO3xR3", "auto": "auto"}
+        if low in table:
+            return table[low]
+    raise SceneError(f"{what}: unknown Lie group {name!r}; use 'SE3', 'SO3xR3' or 'auto'")
+
+
+def auto_groups(scene: Scene):
+    """The automatic per-body choice (paper, section "significance of the c-space"):
+    SO3xR3 only for an unconstrained body whose frame sits at its COM (its force-free
+    motion is a subgroup of SO3xR3, section secFreeBody), SE3 for every other body
+    (lower-pair motions are SE3 subgroups, corollary 1 / lemma 1)."""
+    constrained = set()
+    for j in scene.joints:
+        constrained.update([j.bodyA, j.bodyB])
+    for s in scene.springs + scene.cartesianSprings + scene.torsionalSprings + scene.rigidSprings:
+        constrained.update([s.bodyA, s.bodyB])
+    out = []
+    for i, b in enumerate(scene.bodies):
+        free = i not in constrained
+        at_com = np.linalg.norm(b.com) == 0.0
+        out.append("SO3xR3" if (free and at_com) else "SE3")
+    return out
+
+
+def compile_scene(scene: Scene, groups):
+    """Flat arrays for the kernel.  ``groups`` is the per-body list of group names."""
+    nb = scene.nBodies
+    if nb == 0:
+        raise SceneError("the scene has no bodies")
+    gid = np.array([GROUP_IDS[g] for g in groups], dtype=np.int64)
+    mass = np.array([b.mass for b in scene.bodies], float)
+    com = np.array([b.com for b in scene.bodies], float).reshape(nb, 3)
+    M = np.array([body_mass_matrix(b.mass, b.inertia, b.com) for b in scene.bodies])
+    Minv = np.array([np.linalg.inv(Mi) for Mi in M])
+
+    def arr(x, shape, dtype=float):
+        a = np.array(x, dtype=dtype)
+        return a.reshape(shape) if a.size else np.zeros(shape if shape[0] != -1 else (0,) + shape[1:], dtype)
+
+    L = scene.loads
+    S = scene.springs
+    C = scene.cartesianSprings
+    T = scene.torsionalSprings
+    if scene.rigidSprings:
+        raise SceneError("RigidBodySpringDamper is not supported by the compiled kernel yet "
+                         f"({scene.rigidSprings[0].name}); use a PythonForce")
+
+    # joints: order by reverse Cuthill-McKee on the joint graph (joints sharing a body are
+    # adjacent) so that S = J M^-1 J^T is banded with a small bandwidth
+    J = scene.joints
+    nj = len(J)
+    edges = []
+    by_body = {}
+    for k, jt in enumerate(J):
+        for b in (jt.bodyA, jt.bodyB):
+            if b != GROUND:
+                by_body.setdefault(b, []).append(k)
+    for lst in by_body.values():
+        for x in range(len(lst)):
+            for y in range(x + 1, len(lst)):
+                edges.append((lst[x], lst[y]))
+    order = rcm_order(nj, edges) if nj else []
+    jrow0 = np.zeros(nj, np.int64)
+    jnrow = np.zeros(nj, np.int64)
+    rkind, rax, rbx, rA, rB, rjoint = [], [], [], [], [], []
+    for k in order:
+        jt = J[k]
+        rows = joint_row_descriptors(jt.constrainedAxes)
+        jrow0[k] = len(rkind)
+        jnrow[k] = len(rows)
+        for kind, a, b in rows:
+            rkind.append(kind)
+            rax.append(a)
+            rbx.append(b)
+            rA.append(jt.bodyA)
+            rB.append(jt.bodyB)
+            rjoint.append(k)
+    m = len(rkind)
+    # bandwidth of S: rows q > l couple iff they share a body; the farthest coupled
+    # earlier row of q is the first row that touched one of q's bodies
+    bw = 0
+    first_row_of_body = {}
+    for q in range(m):
+        for b in (rA[q], rB[q]):
+            if b == GROUND:
+                continue
+            if b not in first_row_of_body:
+                first_row_of_body[b] = q
+            bw = max(bw, q - first_row_of_body[b])
+
+    sd = SceneData(
+        nb=nb, gid=gid, mass=mass, com=com, M=M, Minv=Minv,
+        gravity=scene.gravity.astype(float), hasGravity=bool(np.any(scene.gravity != 0)),
+        hasQext=bool(scene.pythonForces),
+        lbody=arr([l.body for l in L], (-1,), np.int64),
+        lkind=arr([0 if l.kind == "force" else 1 for l in L], (-1,), np.int64),
+        lvec=arr([l.vector for l in L], (-1, 3)), lpos=arr([l.pos for l in L], (-1, 3)),
+        lfixed=arr([l.bodyFixed for l in L], (-1,), np.bool_),
+        sA=arr([s.bodyA for s in S], (-1,), np.int64), sB=arr([s.bodyB for s in S], (-1,), np.int64),
+        sposA=arr([s.posA for s in S], (-1, 3)), sposB=arr([s.posB for s in S], (-1, 3)),
+        sK=arr([s.stiffness for s in S], (-1,)), sD=arr([s.damping for s in S], (-1,)),
+        sL0=arr([s.referenceLength for s in S], (-1,)), sf0=arr([s.force for s in S], (-1,)),
+        cA=arr([s.bodyA for s in C], (-1,), np.int64), cB=arr([s.bodyB for s in C], (-1,), np.int64),
+        cposA=arr([s.posA for s in C], (-1, 3)), cposB=arr([s.posB for s in C], (-1, 3)),
+        cK=arr([s.stiffness for s in C], (-1, 3)), cD=arr([s.damping for s in C], (-1, 3)),
+        coff=arr([s.offset for s in C], (-1, 3)),
+        tA=arr([s.bodyA for s in T], (-1,), np.int64), tB=arr([s.bodyB for s in T], (-1,), np.int64),
+        trotA=arr([s.rotA for s in T], (-1, 3, 3)), trotB=arr([s.rotB for s in T], (-1, 3, 3)),
+        tK=arr([s.stiffness for s in T], (-1,)), tD=arr([s.damping for s in T], (-1,)),
+        toff=arr([s.offset for s in T], (-1,)), ttq=arr([s.torque for s in T], (-1,)),
+        jA=arr([j.bodyA for j in J], (-1,), np.int64), jB=arr([j.bodyB for j in J], (-1,), np.int64),
+        jposA=arr([j.posA for j in J], (-1, 3)), jrotA=arr([j.rotA for j in J], (-1, 3, 3)),
+        jposB=arr([j.posB for j in J], (-1, 3)), jrotB=arr([j.rotB for j in J], (-1, 3, 3)),
+        jrow0=jrow0, jnrow=jnrow,
+        rkind=arr(rkind, (-1,), np.int64), rax=arr(rax, (-1,), np.int64), rbx=arr(rbx, (-1,), np.int64),
+        rbodyA=arr(rA, (-1,), np.int64), rbodyB=arr(rB, (-1,), np.int64),
+        nrows=m, bandwidth=bw, redundant=False, pivotTol=REL_PIVOT_TOL,
+    )
+    return sd, np.array(rjoint, dtype=np.int64)
+
+
+def with_redundant(sd, flag):
+    return sd._replace(redundant=bool(flag), bandwidth=(sd.nrows - 1 if flag else sd.bandwidth))
+
+
+def make_work(sd, nstages):
+    nb = sd.nb
+    m = sd.nrows
+    z3 = lambda: np.zeros(3)
+    return Work(
+        Rs=np.zeros((nb, 3, 3)), rs=np.zeros((nb, 3)), Vs=np.zeros((nb, 6)), Psi=np.zeros((nb, 6)),
+        K=np.zeros((nstages, nb, 6)), Vd=np.zeros((nstages, nb, 6)), Q=np.zeros((nb, 6)),
+        Qext=np.zeros((nb, 6)), Jr=np.zeros((m, 12)), W=np.zeros((m, 12)), eta=np.zeros(m),
+        h=np.zeros(m), lam=np.zeros(m), Sb=np.zeros((m, sd.bandwidth + 1)),
+        Sd=np.zeros((m, m)) if sd.redundant else np.zeros((0, 0)),
+        perm=np.zeros(m, np.int64), ytmp=np.zeros(m), info=np.zeros(4, np.int64),
+        tmp6=np.zeros(6), tmp12=np.zeros(12),
+        v3a=z3(), v3b=z3(), v3c=z3(), v3d=z3(), v3e=z3(), v3f=z3(), v3g=z3(), v3h=z3(), v3i=z3(),
+        v3j=z3(), v3k=z3(), v3l=z3(), v3m=z3(), v3n=z3(), v3o=z3(), v3p=z3(), v3q=z3(), v3r=z3(),
+        v3s=z3(), v3t=z3(), m3a=np.zeros((3, 3)), m3b=np.zeros((3, 3)), ident=np.eye(3),
+        zero3=np.zeros(3), zero6=np.zeros(6), tphi=np.zeros(len(sd.tA)),
+    )

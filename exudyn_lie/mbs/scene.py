@@ -1,0 +1,403 @@
+"""The multibody scene: bodies, joints and forces, described in plain Python.
+
+A :class:`Scene` is what the user (or the Exudyn bridge) builds.  It knows nothing of
+time integration; :func:`exudyn_lie.mbs.compiled.compile_scene` turns it into the flat
+arrays the numba kernel works on.
+
+Conventions (see ``exudyn_lie/groups``):
+* every body has a body-fixed reference frame ``C = (R, r)``; ``R`` maps body to world;
+* inertia is given about the body frame origin (eq. NE1 with ``J_P``), the centre of
+  mass may sit at ``com`` (body coordinates) away from that origin;
+* twists are ``(omega, v)``, rotation first.  ``omega`` is always body-fixed; ``v`` is
+  body-fixed for SE3 bodies and spatial (``rdot``) for SO3xR3 bodies (mixed velocity);
+* joints follow Exudyn's ``ObjectJointGeneric`` equations so that the constraint
+  Jacobians can be compared with Exudyn's own (``ComputeJacobianAE``).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Callable, List, Optional, Sequence
+
+import numpy as np
+
+GROUND = -1
+
+# the six relative axes of a generic joint: translations x, y, z, rotations x, y, z
+JOINT_TYPES = {
+    "spherical": (1, 1, 1, 0, 0, 0),
+    "revolute": (1, 1, 1, 1, 1, 0),      # rotation about the joint frame's z axis
+    "prismatic": (0, 1, 1, 1, 1, 1),     # translation along the joint frame's x axis
+    "cylindrical": (1, 1, 0, 1, 1, 0),   # rotation about and translation along z
+    "universal": (1, 1, 1, 0, 0, 1),     # Cardan: free rotations about x (frame 0) and y (frame 1)
+    "fixed": (1, 1, 1, 1, 1, 1),
+    "planar": (0, 0, 1, 1, 1, 0),        # motion in the joint frame's x-y plane
+}
+
+
+class SceneError(ValueError):
+    """Raised for an inconsistent or unsupported scene description."""
+
+
+def _vec3(x, what):
+    a = np.asarray(x, dtype=float).reshape(-1)
+    if a.shape != (3,):
+        raise SceneError(f"{what} must be a 3-vector, got shape {np.shape(x)}")
+    if not np.all(np.isfinite(a)):
+        raise SceneError(f"{what} is not finite: {a}")
+    return a.copy()
+
+
+def _rot(x, what):
+    if x is None:
+        return np.eye(3)
+    a = np.asarray(x, dtype=float)
+    if a.shape != (3, 3):
+        raise SceneError(f"{what} must be a 3x3 rotation matrix, got shape {a.shape}")
+    if not np.all(np.isfinite(a)):
+        raise SceneError(f"{what} is not finite")
+    if np.linalg.norm(a.T @ a - np.eye(3)) > 1e-8 or np.linalg.det(a) < 0:
+        raise SceneError(f"{what} is not a proper rotation matrix (R^T R != I or det < 0)")
+    return a.copy()
+
+
+@dataclass
+class Body:
+    mass: float
+    inertia: np.ndarray          # 3x3, about the body frame origin, body coordinates
+    com: np.ndarray              # centre of mass in body coordinates
+    R0: np.ndarray               # initial rotation (body -> world)
+    r0: np.ndarray               # initial position of the body frame origin (world)
+    omega0: np.ndarray           # initial angular velocity, body-fixed
+    vel0: np.ndarray             # initial velocity of the body frame origin, world frame
+    name: str = ""
+
+
+@dataclass
+class Joint:
+    bodyA: int
+    bodyB: int
+    posA: np.ndarray             # joint frame origin on A (body coordinates; world if A is ground)
+    rotA: np.ndarray             # joint frame orientation on A
+    posB: np.ndarray
+    rotB: np.ndarray
+    constrainedAxes: tuple       # (tx, ty, tz, rx, ry, rz) in {0, 1}
+    kind: str = "generic"
+    name: str = ""
+
+
+@dataclass
+class SpringDamper:
+    """Point-to-point spring-damper: tension ``k (L - L0) + d Ldot + f0`` along the line."""
+    bodyA: int
+    posA: np.ndarray
+    bodyB: int
+    posB: np.ndarray
+    stiffness: float
+    damping: float
+    referenceLength: float
+    force: float = 0.0
+    name: str = ""
+
+
+@dataclass
+class TorsionalSpringDamper:
+    """Torque ``-(k (phi - phi0) + d phidot)`` about the z axis of the frame on A,
+    ``phi`` the relative rotation angle of the B frame about that axis (tracked over turns)."""
+    bodyA: int
+    rotA: np.ndarray
+    bodyB: int
+    rotB: np.ndarray
+    stiffness: float
+    damping: float
+    offset: float = 0.0
+    torque: float = 0.0
+    name: str = ""
+
+
+@dataclass
+class CartesianSpringDamper:
+    """Componentwise spring in world coordinates: ``f_i = k_i (d_i - o_i) + c_i ddot_i``."""
+    bodyA: int
+    posA: np.ndarray
+    bodyB: int
+    posB: np.ndarray
+    stiffness: np.ndarray
+    damping: np.ndarray
+    offset: np.ndarray
+    name: str = ""
+
+
+@dataclass
+class RigidBodySpringDamper:
+    """6-dof spring between two frames, Exudyn's ``ObjectConnectorRigidBodySpringDamper``
+    law: in the frame on A, displacement ``u = Aw^T (pB - pA)`` and the rotation
+    vector... see :mod:`exudyn_lie.mbs.compiled` for the exact law."""
+    bodyA: int
+    posA: np.ndarray
+    rotA: np.ndarray
+    bodyB: int
+    posB: np.ndarray
+    rotB: np.ndarray
+    stiffness: np.ndarray        # 6x6
+    damping: np.ndarray          # 6x6
+    offset: np.ndarray           # 6
+    name: str = ""
+
+
+@dataclass
+class Load:
+    """Constant force (``kind='force'``, applied at ``pos``) or torque on one body;
+    ``bodyFixed`` means the vector is given in body coordinates."""
+    body: int
+    kind: str
+    vector: np.ndarray
+    pos: np.ndarray
+    bodyFixed: bool = False
+    name: str = ""
+
+
+@dataclass
+class PythonForce:
+    """A Python callback adding forces: ``fn(t, state) -> (F, T)`` with ``F`` and ``T``
+    arrays (nBodies, 3) of world-frame forces at the body frame origins and world-frame
+    torques.  ``state`` is a :class:`exudyn_lie.mbs.state.BodyStates`.  Callbacks run
+    outside the compiled kernel, so a scene that has one integrates more slowly."""
+    fn: Callable
+    name: str = ""
+
+
+class Scene:
+    """A rigid multibody system in absolute coordinates (paper eq. BH2/index1).
+
+    Example
+    -------
+    >>> sc = Scene(gravity=[0, 0, -9.81])
+    >>> b = sc.AddBody(mass=1.0, inertia=np.eye(3) * 0.01, r0=[0.5, 0, 0])
+    >>> j = sc.AddSphericalJoint(GROUND, b, position=[0, 0, 0])
+    """
+
+    def __init__(self, gravity: Sequence[float] = (0.0, 0.0, 0.0)):
+        self.gravity = _vec3(gravity, "gravity")
+        self.bodies: List[Body] = []
+        self.joints: List[Joint] = []
+        self.springs: List[SpringDamper] = []
+        self.torsionalSprings: List[TorsionalSpringDamper] = []
+        self.cartesianSprings: List[CartesianSpringDamper] = []
+        self.rigidSprings: List[RigidBodySpringDamper] = []
+        self.loads: List[Load] = []
+        self.pythonForces: List[PythonForce] = []
+
+    # ----------------------------------------------------------------- bodies
+    def AddBody(self, mass, inertia, com=(0, 0, 0), R0=None, r0=(0, 0, 0),
+                omega0=(0, 0, 0), vel0=(0, 0, 0), name: str = "") -> int:
+        """Add a rigid body; returns its index.
+
+        ``inertia`` is the 3x3 inertia tensor about the *body frame origin* (for a frame
+        at the COM this is the COM inertia); ``com`` the centre of mass in body
+        coordinates; ``omega0`` body-fixed angular velocity; ``vel0`` the world velocity
+        of the body frame origin."""
+        idx = len(self.bodies)
+        label = name or f"body{idx}"
+        m = float(mass)
+        if not np.isfinite(m) or m <= 0:
+            raise SceneError(f"{label}: mass must be positive and finite, got {mass}")
+        J = np.asarray(inertia, dtype=float)
+        if J.shape == (3,):
+            J = np.diag(J)
+        if J.shape != (3, 3) or not np.all(np.isfinite(J)):
+            raise SceneError(f"{label}: inertia must be a finite 3x3 matrix (or its diagonal)")
+        if np.linalg.norm(J - J.T) > 1e-12 * max(1.0, np.abs(J).max()):
+            raise SceneError(f"{label}: inertia tensor is not symmetric")
+        c = _vec3(com, f"{label}: com")
+        # about the COM the tensor must be positive definite (Steiner back-shift)
+        Jc = J - m * (np.dot(c, c) * np.eye(3) - np.outer(c, c))
+        ev = np.linalg.eigvalsh(Jc)
+        if ev.min() <= 1e-14 * max(1.0, ev.max()):
+            raise SceneError(f"{label}: inertia about the centre of mass is not positive "
+                             f"definite (eigenvalues {ev}); give the inertia about the body "
+                             f"frame origin, consistent with mass and com")
+        self.bodies.append(Body(m, J, c, _rot(R0, f"{label}: R0"), _vec3(r0, f"{label}: r0"),
+                                _vec3(omega0, f"{label}: omega0"), _vec3(vel0, f"{label}: vel0"),
+                                label))
+        return idx
+
+    def _check_body(self, b, what, allow_ground=True):
+        if b == GROUND and allow_ground:
+            return
+        if not (isinstance(b, (int, np.integer)) and 0 <= b < len(self.bodies)):
+            raise SceneError(f"{what}: unknown body index {b} (scene has {len(self.bodies)} bodies"
+                             f"{', use GROUND=-1 for the ground' if allow_ground else ''})")
+
+    # ----------------------------------------------------------------- joints
+    def AddJoint(self, bodyA, bodyB, constrainedAxes, posA=(0, 0, 0), rotA=None,
+                 posB=(0, 0, 0), rotB=None, kind="generic", name="") -> int:
+        """Generic joint: lock any subset of the six relative axes of the joint frame.
+
+        The joint frame sits at ``posA``/``rotA`` on body A (world data if A is GROUND)
+        and ``posB``/``rotB`` on B.  Equations are Exudyn's ``ObjectJointGeneric``:
+        translations in A's joint frame (global if all three are locked), rotations by
+        dot products of joint frame axes."""
+        idx = len(self.joints)
+        label = name or f"joint{idx}({kind})"
+        self._check_body(bodyA, label)
+        self._check_body(bodyB, label)
+        if bodyA == bodyB:
+            raise SceneError(f"{label}: both sides of the joint are on the same "
+                             f"{'ground' if bodyA == GROUND else f'body {bodyA}'}; "
+                             f"a joint must connect two different bodies")
+        ax = tuple(int(a) for a in constrainedAxes)
+        if len(ax) != 6 or any(a not in (0, 1) for a in ax):
+            raise SceneError(f"{label}: constrainedAxes must be six 0/1 flags, got {constrainedAxes}")
+        if sum(ax) == 0:
+            raise SceneError(f"{label}: constrainedAxes locks nothing")
+        self.joints.append(Joint(int(bodyA), int(bodyB), _vec3(posA, f"{label}: posA"),
+                                 _rot(rotA, f"{label}: rotA"), _vec3(posB, f"{label}: posB"),
+                                 _rot(rotB, f"{label}: rotB"), ax, kind, label))
+        return idx
+
+    def _joint_at(self, kind, bodyA, bodyB, position, rotation, name):
+        """Joint whose frame coincides on both bodies at a world ``position``/``rotation``
+        in the initial configuration (like Exudyn's Create*Joint helpers)."""
+        p = _vec3(position, f"{kind} joint position")
+        Rw = _rot(rotation, f"{kind} joint rotation")
+        frames = []
+        for b in (bodyA, bodyB):
+            self._check_body(b, f"{kind} joint")
+            if b == GROUND:
+                frames.append((p, Rw))
+            else:
+                B = self.bodies[b]
+                frames.append((B.R0.T @ (p - B.r0), B.R0.T @ Rw))
+        return self.AddJoint(bodyA, bodyB, JOINT_TYPES[kind], posA=frames[0][0], rotA=frames[0][1],
+                             posB=frames[1][0], rotB=frames[1][1], kind=kind, name=name)
+
+    def AddSphericalJoint(self, bodyA, bodyB, position, name=""):
+        return self._joint_at("spherical", bodyA, bodyB, position, None, name)
+
+    def AddRevoluteJoint(self, bodyA, bodyB, position, axis=(0, 0, 1), name=""):
+        """Revolute joint about world ``axis`` through ``position`` (initial configuration)."""
+        return self._joint_at("revolute", bodyA, bodyB, position, frame_with_axis(axis, 2), name)
+
+    def AddPrismaticJoint(self, bodyA, bodyB, position, axis=(1, 0, 0), name=""):
+        return self._joint_at("prismatic", bodyA, bodyB, position, frame_with_axis(axis, 0), name)
+
+    def AddCylindricalJoint(self, bodyA, bodyB, position, axis=(0, 0, 1), name=""):
+        return self._joint_at("cylindrical", bodyA, bodyB, position, frame_with_axis(axis, 2), name)
+
+    def AddUniversalJoint(self, bodyA, bodyB, position, axisA=(1, 0, 0), axisB=(0, 1, 0), name=""):
+        """Cardan joint: ``axisA`` (fixed in A) and ``axisB`` (fixed in B) stay perpendicular."""
+        a = _vec3(axisA, "axisA")
+        b = _vec3(axisB, "axisB")
+        a /= np.linalg.norm(a)
+        b = b - a * np.dot(a, b)
+        if np.linalg.norm(b) < 1e-12:
+            raise SceneError("universal joint: axisA and axisB must not be parallel")
+        b /= np.linalg.norm(b)
+        Rw = np.column_stack([a, b, np.cross(a, b)])
+        return self._joint_at("universal", bodyA, bodyB, position, Rw, name)
+
+    def AddFixedJoint(self, bodyA, bodyB, position, name=""):
+        return self._joint_at("fixed", bodyA, bodyB, position, None, name)
+
+    def AddPlanarJoint(self, bodyA, bodyB, position, normal=(0, 0, 1), name=""):
+        return self._joint_at("planar", bodyA, bodyB, position, frame_with_axis(normal, 2), name)
+
+    # ----------------------------------------------------------------- forces
+    def AddSpringDamper(self, bodyA, posA, bodyB, posB, stiffness, damping=0.0,
+                        referenceLength=0.0, force=0.0, name="") -> int:
+        label = name or f"spring{len(self.springs)}"
+        self._check_body(bodyA, label)
+        self._check_body(bodyB, label)
+        self.springs.append(SpringDamper(int(bodyA), _vec3(posA, label), int(bodyB), _vec3(posB, label),
+                                         float(stiffness), float(damping), float(referenceLength),
+                                         float(force), label))
+        return len(self.springs) - 1
+
+    def AddTorsionalSpringDamper(self, bodyA, bodyB, rotA=None, rotB=None, stiffness=0.0,
+                                 damping=0.0, offset=0.0, torque=0.0, name="") -> int:
+        label = name or f"torsionalSpring{len(self.torsionalSprings)}"
+        self._check_body(bodyA, label)
+        self._check_body(bodyB, label)
+        self.torsionalSprings.append(TorsionalSpringDamper(
+            int(bodyA), _rot(rotA, label), int(bodyB), _rot(rotB, label), float(stiffness),
+            float(damping), float(offset), float(torque), label))
+        return len(self.torsionalSprings) - 1
+
+    def AddCartesianSpringDamper(self, bodyA, posA, bodyB, posB, stiffness, damping=(0, 0, 0),
+                                 offset=(0, 0, 0), name="") -> int:
+        label = name or f"cartesianSpring{len(self.cartesianSprings)}"
+        self._check_body(bodyA, label)
+        self._check_body(bodyB, label)
+        self.cartesianSprings.append(CartesianSpringDamper(
+            int(bodyA), _vec3(posA, label), int(bodyB), _vec3(posB, label),
+            _vec3(stiffness, label), _vec3(damping, label), _vec3(offset, label), label))
+        return len(self.cartesianSprings) - 1
+
+    def AddRigidBodySpringDamper(self, bodyA, bodyB, posA=(0, 0, 0), rotA=None, posB=(0, 0, 0),
+                                 rotB=None, stiffness=None, damping=None, offset=None, name="") -> int:
+        label = name or f"rigidBodySpring{len(self.rigidSprings)}"
+        self._check_body(bodyA, label)
+        self._check_body(bodyB, label)
+        K = np.zeros((6, 6)) if stiffness is None else np.asarray(stiffness, float).reshape(6, 6)
+        D = np.zeros((6, 6)) if damping is None else np.asarray(damping, float).reshape(6, 6)
+        o = np.zeros(6) if offset is None else np.asarray(offset, float).reshape(6)
+        self.rigidSprings.append(RigidBodySpringDamper(
+            int(bodyA), _vec3(posA, label), _rot(rotA, label), int(bodyB), _vec3(posB, label),
+            _rot(rotB, label), K.copy(), D.copy(), o.copy(), label))
+        return len(self.rigidSprings) - 1
+
+    def AddForce(self, body, force, position=(0, 0, 0), bodyFixed=False, name="") -> int:
+        """Constant force at body point ``position`` (body coordinates); world frame unless
+        ``bodyFixed``."""
+        label = name or f"force{len(self.loads)}"
+        self._check_body(body, label, allow_ground=False)
+        self.loads.append(Load(int(body), "force", _vec3(force, label), _vec3(position, label),
+                               bool(bodyFixed), label))
+        return len(self.loads) - 1
+
+    def AddTorque(self, body, torque, bodyFixed=False, name="") -> int:
+        label = name or f"torque{len(self.loads)}"
+        self._check_body(body, label, allow_ground=False)
+        self.loads.append(Load(int(body), "torque", _vec3(torque, label), np.zeros(3),
+                               bool(bodyFixed), label))
+        return len(self.loads) - 1
+
+    def AddPythonForce(self, fn, name="") -> int:
+        if not callable(fn):
+            raise SceneError(f"AddPythonForce: {fn!r} is not callable")
+        self.pythonForces.append(PythonForce(fn, name or f"pythonForce{len(self.pythonForces)}"))
+        return len(self.pythonForces) - 1
+
+    # ----------------------------------------------------------------- info
+    @property
+    def nBodies(self):
+        return len(self.bodies)
+
+    def constraint_rows_per_joint(self):
+        return [int(sum(j.constrainedAxes)) for j in self.joints]
+
+    def __repr__(self):
+        return (f"Scene({len(self.bodies)} bodies, {len(self.joints)} joints, "
+                f"{len(self.springs) + len(self.torsionalSprings) + len(self.cartesianSprings) + len(self.rigidSprings)} "
+                f"connectors, {len(self.loads)} loads, gravity={self.gravity.tolist()})")
+
+
+def frame_with_axis(axis, which):
+    """A rotation matrix whose column ``which`` is the unit ``axis`` (others completed)."""
+    a = np.asarray(axis, dtype=float).reshape(3)
+    n = np.linalg.norm(a)
+    if not np.isfinite(n) or n < 1e-14:
+        raise SceneError(f"axis {axis} must be a nonzero finite 3-vector")
+    a = a / n
+    if abs(a[which] - 1.0) < 1e-15:      # already the world axis: keep the identity frame
+        return np.eye(3)
+    # pick the world axis least aligned with a to complete a right-handed frame
+    helper = np.eye(3)[int(np.argmin(np.abs(a)))]
+    b = np.cross(a, helper)
+    b /= np.linalg.norm(b)
+    c = np.cross(a, b)
+    cols = [None, None, None]
+    cols[which] = a
+    cols[(which + 1) % 3] = b
+    cols[(which + 2) % 3] = c
+    return np.column_stack(cols)

@@ -1,0 +1,459 @@
+"""Compile a scene once, run it many times: the Munthe-Kaas driver.
+
+>>> sim = Simulator(scene, method="RK4", liegroup="SE3")
+>>> res = sim.Run(endTime=8.0, stepSize=1e-3, outputEvery=10)
+>>> res.jointViolation[:, 0]       # position violation of joint 0 over time
+
+The time loop runs inside numba (``kernel.mk_steps``) between output points; a scene
+with Python force callbacks runs a Python stage loop around the same compiled pieces.
+"""
+from __future__ import annotations
+
+import time as _time
+import warnings
+from dataclasses import dataclass, field
+from typing import Optional
+
+import numpy as np
+
+from ..integrators.tableau import get_method
+from . import kernel
+from .compiled import GROUP_NAMES, compile_scene, make_work, resolve_groups, with_redundant
+from .scene import GROUND, Scene, SceneError
+from .state import BodyStates, twist_to_world_velocity, world_velocity_to_twist
+
+
+class SimulationError(RuntimeError):
+    """A run that cannot continue (singular constraints, blow-up, non-finite state)."""
+
+
+class ConstraintError(SimulationError):
+    """Singular or inconsistent constraints."""
+
+
+class StepSizeError(SimulationError):
+    """The step size is beyond the stability limit of the method."""
+
+
+# relative size of the constraint residual/velocity error accepted at the start
+INITIAL_TOL = 1e-8
+
+
+@dataclass
+class Result:
+    """Outputs of :meth:`Simulator.Run` (one row per output time)."""
+    times: np.ndarray
+    R: np.ndarray
+    r: np.ndarray
+    V: np.ndarray
+    omega: np.ndarray          # body-fixed angular velocity
+    vel: np.ndarray            # world velocity of the body frame origin
+    energy: np.ndarray         # (kinetic, gravity, springs)
+    residuals: np.ndarray      # all constraint rows h(g)
+    jointPositionViolation: np.ndarray   # per joint: norm of its translational rows
+    jointRotationViolation: np.ndarray   # per joint: norm of its rotational rows
+    groups: list
+    method: str
+    stepSize: float
+    cpuTime: float = 0.0
+    steps: int = 0
+
+    @property
+    def totalEnergy(self):
+        return self.energy.sum(axis=1)
+
+    @property
+    def jointViolation(self):
+        return np.hypot(self.jointPositionViolation, self.jointRotationViolation)
+
+
+def constraint_jacobian(sd, wk, R, r, V):
+    """Residuals h(g), the dense constraint Jacobian J (m, 6 nb) in the bodies' group
+    velocity coordinates, and eta = -Jdot V, at the state (R, r, V)."""
+    m = sd.nrows
+    kernel.all_rows(sd, wk, np.ascontiguousarray(R, dtype=float), np.ascontiguousarray(r, dtype=float),
+                    np.ascontiguousarray(V, dtype=float), wk.h, wk.Jr, wk.eta)
+    J = np.zeros((m, 6 * sd.nb))
+    for q in range(m):
+        a, b = sd.rbodyA[q], sd.rbodyB[q]
+        if a >= 0:
+            J[q, 6 * a:6 * a + 6] += wk.Jr[q, :6]
+        if b >= 0:
+            J[q, 6 * b:6 * b + 6] += wk.Jr[q, 6:]
+    return wk.h.copy(), J, wk.eta.copy()
+
+
+class Simulator:
+    """Explicit Munthe-Kaas integration of a constrained rigid multibody scene.
+
+    Parameters
+    ----------
+    scene : Scene
+    method : name of a Butcher tableau (``exudyn_lie.integrators.method_names()``)
+    liegroup : ``'SE3'``, ``'SO3xR3'``, ``'auto'``, a per-body mapping or sequence
+    stabilization : None (the paper's choice: no stabilisation), ``'velocity'``
+        (project V onto ``J V = 0`` after every step) or ``'position'`` (additionally
+        project the configuration onto ``h(g) = 0`` on the group, then the velocity).
+    projectInitial : project inconsistent initial positions/velocities onto the
+        constraints instead of raising :class:`ConstraintError`.
+    """
+
+    def __init__(self, scene: Scene, method="RK4", liegroup="SE3", stabilization=None,
+                 projectInitial=False, verbose=False):
+        if not isinstance(scene, Scene):
+            raise SceneError(f"Simulator needs an exudyn_lie Scene, got {type(scene).__name__}")
+        self.scene = scene
+        self.tableau = get_method(method)
+        self.groups = resolve_groups(scene, liegroup)
+        if stabilization not in (None, "none", "velocity", "position"):
+            raise ValueError(f"unknown stabilization {stabilization!r}; use None, 'velocity' or 'position'")
+        self.stabilization = None if stabilization == "none" else stabilization
+        self.verbose = verbose
+        self.sd, self.rowJoint = compile_scene(scene, self.groups)
+        self.A = np.ascontiguousarray(self.tableau.A, dtype=float)
+        self.b = np.ascontiguousarray(self.tableau.b, dtype=float)
+        self.c = np.ascontiguousarray(self.tableau.c, dtype=float)
+        self.wk = make_work(self.sd, len(self.b))
+        self.gid = self.sd.gid
+        self.projectInitial = projectInitial
+        self.redundantJoints = []
+        self.SetInitialState()
+        self._check_redundancy()
+        self._check_initial_consistency()
+        if verbose:
+            for i, b in enumerate(scene.bodies):
+                print(f"exudyn_lie: body {i} ({b.name}): {self.groups[i]}")
+
+    # ----------------------------------------------------------------- state
+    def SetInitialState(self, R=None, r=None, omega=None, vel=None, t0=0.0):
+        """Set the state from the scene's initial data (or the given arrays)."""
+        sc = self.scene
+        self.R = np.ascontiguousarray(np.array([b.R0 for b in sc.bodies]) if R is None else R, float).copy()
+        self.r = np.ascontiguousarray(np.array([b.r0 for b in sc.bodies]) if r is None else r, float).copy()
+        om = np.array([b.omega0 for b in sc.bodies]) if omega is None else np.asarray(omega, float)
+        ve = np.array([b.vel0 for b in sc.bodies]) if vel is None else np.asarray(vel, float)
+        for name, x in (("R", self.R), ("r", self.r), ("omega", om), ("vel", ve)):
+            if not np.all(np.isfinite(x)):
+                bad = np.argwhere(~np.isfinite(np.asarray(x).reshape(len(sc.bodies), -1)))[0][0]
+                raise SceneError(f"initial state {name} of body {bad} ({sc.bodies[bad].name}) is not finite")
+        self.V = np.ascontiguousarray(world_velocity_to_twist(self.gid, self.R, om, ve))
+        self.t = float(t0)
+        if len(sc.torsionalSprings):
+            self.wk.tphi[:] = 0.0
+            kernel.update_torsion_tracking(self.sd, self.wk, self.R, self.r, self.V)
+
+    def states(self):
+        omega, vel = twist_to_world_velocity(self.gid, self.R, self.V)
+        return BodyStates(self.t, self.R.copy(), self.r.copy(), omega, vel)
+
+    # ----------------------------------------------------------------- constraints
+    def jacobian(self, R=None, r=None, V=None):
+        """(h, J, eta) at a state; J is dense (m, 6 nb) in the group velocity coordinates."""
+        return constraint_jacobian(self.sd, self.wk, self.R if R is None else R,
+                                   self.r if r is None else r, self.V if V is None else V)
+
+    def _joints_of_rows(self, rows):
+        names = []
+        for q in rows:
+            j = self.scene.joints[int(self.rowJoint[q])]
+            if j.name not in names:
+                names.append(j.name)
+        return names
+
+    def _dependent_rows(self, J, tol=1e-9):
+        """Rows taking part in a linear dependency of J (null space of J^T)."""
+        if J.shape[0] == 0:
+            return []
+        U, s, Vt = np.linalg.svd(J, full_matrices=True)
+        smax = s[0] if len(s) else 0.0
+        rank = int(np.sum(s > tol * max(smax, 1e-300)))
+        if rank == J.shape[0]:
+            return []
+        null = U[:, rank:]
+        weight = np.linalg.norm(null, axis=1)
+        return [int(q) for q in np.nonzero(weight > 1e-6)[0]]
+
+    def _check_redundancy(self):
+        if self.sd.nrows == 0:
+            return
+        h, J, eta = self.jacobian()
+        dep = self._dependent_rows(J)
+        if dep:
+            self.redundantJoints = self._joints_of_rows(dep)
+            self.sd = with_redundant(self.sd, True)
+            self.wk = make_work(self.sd, len(self.b))
+            kernel.update_torsion_tracking(self.sd, self.wk, self.R, self.r, self.V)
+            msg = (f"exudyn_lie: redundant constraints among joints {', '.join(self.redundantJoints)} "
+                   f"(rank of J < {self.sd.nrows} rows); using the rank-revealing (pivoted Cholesky) "
+                   f"solve")
+            warnings.warn(msg, RuntimeWarning, stacklevel=3)
+
+    def _check_initial_consistency(self):
+        if self.sd.nrows == 0:
+            return
+        h, J, eta = self.jacobian()
+        scale = max(1.0, float(np.max(np.abs(self.r))) if self.r.size else 1.0)
+        bad_pos = np.nonzero(np.abs(h) > INITIAL_TOL * scale)[0]
+        if len(bad_pos):
+            if not self.projectInitial:
+                raise ConstraintError(
+                    f"initial configuration violates joints {', '.join(self._joints_of_rows(bad_pos))} "
+                    f"(max |h| = {np.max(np.abs(h)):.3g}); fix the initial poses or pass "
+                    f"projectInitial=True to project them onto the constraints first")
+            self.ProjectPositions()
+        h, J, eta = self.jacobian()
+        JV = J @ self.V.reshape(-1)
+        vscale = max(1.0, float(np.max(np.abs(self.V))))
+        bad_vel = np.nonzero(np.abs(JV) > INITIAL_TOL * vscale)[0]
+        if len(bad_vel):
+            if not self.projectInitial:
+                raise ConstraintError(
+                    f"initial velocities violate the velocity constraints of joints "
+                    f"{', '.join(self._joints_of_rows(bad_vel))} (max |J V| = {np.max(np.abs(JV)):.3g}); "
+                    f"pass projectInitial=True to project them onto J V = 0 first")
+            self.ProjectVelocities()
+
+    def _solve_S(self, J, rhs):
+        """Solve (J M^-1 J^T) mu = rhs with the current mass matrices (least squares
+        for redundant rows); returns M^-1 J^T mu."""
+        Minv = self._Minv_dense()
+        S = J @ Minv @ J.T
+        mu = np.linalg.lstsq(S, rhs, rcond=1e-12)[0]
+        return Minv @ J.T @ mu
+
+    def _Minv_dense(self):
+        nb = self.sd.nb
+        Mi = np.zeros((6 * nb, 6 * nb))
+        for i in range(nb):
+            Bi = self.sd.Minv[i]
+            if self.gid[i] == 1:
+                D = np.eye(6)
+                D[3:, 3:] = self.R[i]
+                Bi = D @ Bi @ D.T
+            Mi[6 * i:6 * i + 6, 6 * i:6 * i + 6] = Bi
+        return Mi
+
+    def ProjectVelocities(self):
+        """Mass-orthogonal projection of V onto J V = 0."""
+        h, J, eta = self.jacobian()
+        if J.shape[0] == 0:
+            return
+        dV = self._solve_S(J, J @ self.V.reshape(-1))
+        self.V -= dV.reshape(-1, 6)
+
+    def ProjectPositions(self, tol=1e-13, maxIterations=20):
+        """Project the configuration onto h(g) = 0 on the group: Gauss-Newton steps
+        ``g <- g exp(-M^-1 J^T (J M^-1 J^T)^-1 h)`` (J is the derivative of h along
+        the left-trivialised perturbation g exp(delta), in each body's group)."""
+        for it in range(maxIterations):
+            h, J, eta = self.jacobian()
+            if J.shape[0] == 0 or np.max(np.abs(h)) <= tol:
+                return it
+            d = -self._solve_S(J, h).reshape(-1, 6)
+            for i in range(self.sd.nb):
+                Rn = np.zeros((3, 3))
+                rn = np.zeros(3)
+                kernel._exp_compose(int(self.gid[i]), self.R[i], self.r[i], np.ascontiguousarray(d[i]),
+                                    Rn, rn, np.zeros((3, 3)), np.zeros(3))
+                self.R[i] = Rn
+                self.r[i] = rn
+        h, J, eta = self.jacobian()
+        if np.max(np.abs(h)) > 1e3 * tol:
+            raise ConstraintError(
+                f"position projection did not converge in {maxIterations} iterations "
+                f"(max |h| = {np.max(np.abs(h)):.3g}); the constraints of joints "
+                f"{', '.join(self._joints_of_rows(np.nonzero(np.abs(h) > 1e3 * tol)[0]))} "
+                f"may not be satisfiable")
+        return maxIterations
+
+    # ----------------------------------------------------------------- stepping
+    def _vmax(self):
+        """A velocity bound far beyond any physical motion of this scene: used only to
+        stop a blowing-up integration before it produces inf/NaN."""
+        v0 = float(np.max(np.abs(self.V))) if self.V.size else 0.0
+        return 1e6 * max(1.0, v0)
+
+    def Advance(self, nsteps, stepSize):
+        """Integrate ``nsteps`` steps of size ``stepSize`` from the current state."""
+        h = float(stepSize)
+        if not np.isfinite(h) or h <= 0:
+            raise ValueError(f"step size must be positive and finite, got {stepSize}")
+        if nsteps <= 0:
+            return
+        if not hasattr(self, "_vmaxValue"):
+            self._vmaxValue = self._vmax()
+        if self.sd.hasQext or self.stabilization:
+            for n in range(int(nsteps)):
+                self._python_step(h)
+            return
+        st, done = kernel.mk_steps(self.sd, self.wk, self.A, self.b, self.c, self.t, h, int(nsteps),
+                                   self.R, self.r, self.V, self._vmaxValue)
+        self.t += done * h
+        if st != kernel.STATUS_OK:
+            self._raise_status(st, h)
+
+    def _python_step(self, h):
+        sd, wk = self.sd, self.wk
+        if sd.hasQext:
+            for j in range(len(self.b)):
+                kernel.mk_stage_state(sd, wk, self.A, j, h, self.R, self.r, self.V)
+                tj = self.t + self.c[j] * h
+                wk.Qext[:] = self._python_forces(tj, wk.Rs, wk.rs, wk.Vs)
+                st = kernel.rhs(sd, wk, tj, wk.Rs, wk.rs, wk.Vs, wk.Qext, wk.Vd[j])
+                if st != kernel.STATUS_OK:
+                    self._raise_status(st, h)
+                kernel.mk_stage_k(sd, wk, j)
+            kernel.mk_finish(sd, wk, self.b, h, self.R, self.r, self.V)
+            st = kernel.state_is_finite(sd, self.R, self.r, self.V, self._vmaxValue)
+            if st != kernel.STATUS_OK:
+                self._raise_status(st, h)
+            if len(sd.tA):
+                kernel.update_torsion_tracking(sd, wk, self.R, self.r, self.V)
+        else:
+            st, done = kernel.mk_steps(sd, wk, self.A, self.b, self.c, self.t, h, 1,
+                                       self.R, self.r, self.V, self._vmaxValue)
+            if st != kernel.STATUS_OK:
+                self._raise_status(st, h)
+        self.t += h
+        if self.stabilization == "position":
+            self.ProjectPositions()
+        if self.stabilization in ("velocity", "position"):
+            self.ProjectVelocities()
+
+    def _python_forces(self, t, R, r, V):
+        omega, vel = twist_to_world_velocity(self.gid, R, V)
+        st = BodyStates(t, R.copy(), r.copy(), omega, vel)
+        Q = np.zeros((self.sd.nb, 6))
+        for pf in self.scene.pythonForces:
+            out = pf.fn(t, st)
+            F, T = (np.asarray(x, float) for x in out)
+            if F.shape != (self.sd.nb, 3) or T.shape != (self.sd.nb, 3) or not (
+                    np.all(np.isfinite(F)) and np.all(np.isfinite(T))):
+                raise SimulationError(f"{pf.name} must return finite (F, T) arrays of shape "
+                                      f"({self.sd.nb}, 3); got {F.shape}, {T.shape}")
+            for i in range(self.sd.nb):
+                kernel.add_point_force(int(self.gid[i]), R[i], np.zeros(3), F[i], Q[i])
+                kernel.add_world_torque(R[i], T[i], Q[i])
+        return Q
+
+    def _raise_status(self, st, h):
+        if st == kernel.STATUS_SINGULAR:
+            h_, J, eta = self.jacobian(self.wk.Rs, self.wk.rs, self.wk.Vs)
+            dep = self._dependent_rows(J)
+            names = self._joints_of_rows(dep) if dep else self._joints_of_rows([int(self.wk.info[0])])
+            raise ConstraintError(
+                f"singular constraint Jacobian at t = {self.t:.6g} s: the constraints of joints "
+                f"{', '.join(names)} are linearly dependent (a singular configuration, or redundant "
+                f"joints); remove the redundant constraint axes (e.g. make one joint spherical) or "
+                f"check the joint frames")
+        sugg = h / 10.0
+        what = "non-finite (NaN/inf)" if st == kernel.STATUS_NONFINITE else "blowing up"
+        raise StepSizeError(
+            f"the state became {what} at t = {self.t:.6g} s with step size {h:.3g} s "
+            f"(method {self.tableau.name}); the step is beyond the stability limit: "
+            f"try a step size of {sugg:.3g} s or smaller")
+
+    def Accelerations(self):
+        """``(Vdot, lambda)`` at the current state from the index-1 system (eq. index1):
+        Vdot (nb, 6) in the group velocity coordinates, lambda the multipliers (m,)."""
+        sd, wk = self.sd, self.wk
+        Vdot = np.zeros((sd.nb, 6))
+        Qext = self._python_forces(self.t, self.R, self.r, self.V) if sd.hasQext else wk.Qext
+        st = kernel.rhs(sd, wk, self.t, self.R, self.r, self.V, Qext, Vdot)
+        if st != kernel.STATUS_OK:
+            self._raise_status(st, 0.0)
+        return Vdot, wk.lam.copy()
+
+    # ----------------------------------------------------------------- diagnostics
+    def Diagnostics(self):
+        """(energy[3], residuals[m], joint position violation[nj], joint rotation violation[nj])."""
+        sd, wk = self.sd, self.wk
+        e = np.zeros(3)
+        kernel.energies(sd, wk, self.R, self.r, self.V, e)
+        h = np.zeros(sd.nrows)
+        if sd.nrows:
+            kernel.constraint_residuals(sd, wk, self.R, self.r, self.V, h)
+        nj = len(self.scene.joints)
+        pv = np.zeros(nj)
+        rv = np.zeros(nj)
+        for j in range(nj):
+            r0, n = sd.jrow0[j], sd.jnrow[j]
+            rows = range(r0, r0 + n)
+            tr = [h[q] for q in rows if sd.rkind[q] != kernel.ROW_ROT]
+            ro = [h[q] for q in rows if sd.rkind[q] == kernel.ROW_ROT]
+            pv[j] = np.linalg.norm(tr) if tr else 0.0
+            rv[j] = np.linalg.norm(ro) if ro else 0.0
+        return e, h, pv, rv
+
+    def Momentum(self):
+        """(linear momentum, angular momentum about the world origin), world frame."""
+        p = np.zeros(3)
+        L = np.zeros(3)
+        omega, vel = twist_to_world_velocity(self.gid, self.R, self.V)
+        for i, b in enumerate(self.scene.bodies):
+            R = self.R[i]
+            c = b.com
+            xc = self.r[i] + R @ c
+            wW = R @ omega[i]
+            vc = vel[i] + np.cross(wW, R @ c)
+            Jc = b.inertia - b.mass * (np.dot(c, c) * np.eye(3) - np.outer(c, c))
+            p += b.mass * vc
+            L += np.cross(xc, b.mass * vc) + R @ (Jc @ omega[i])
+        return p, L
+
+    def Run(self, endTime, stepSize, outputEvery=1, startTime=None, progress=False):
+        """Integrate from the current state to ``endTime``; returns a :class:`Result`.
+
+        ``outputEvery`` steps between stored outputs (diagnostics are evaluated there)."""
+        h = float(stepSize)
+        if not np.isfinite(h) or h <= 0:
+            raise ValueError(f"stepSize must be positive and finite, got {stepSize}")
+        if startTime is not None:
+            self.t = float(startTime)
+        if endTime < self.t:
+            raise ValueError(f"endTime {endTime} is before the start time {self.t}")
+        nsteps = int(round((endTime - self.t) / h))
+        every = max(1, int(outputEvery))
+        nout = nsteps // every + 1 + (1 if nsteps % every else 0)
+        nb, m, nj = self.sd.nb, self.sd.nrows, len(self.scene.joints)
+        out = dict(times=np.zeros(nout), R=np.zeros((nout, nb, 3, 3)), r=np.zeros((nout, nb, 3)),
+                   V=np.zeros((nout, nb, 6)), energy=np.zeros((nout, 3)), residuals=np.zeros((nout, m)),
+                   pv=np.zeros((nout, nj)), rv=np.zeros((nout, nj)))
+
+        def record(k):
+            e, hres, pv, rv = self.Diagnostics()
+            out["times"][k] = self.t
+            out["R"][k] = self.R
+            out["r"][k] = self.r
+            out["V"][k] = self.V
+            out["energy"][k] = e
+            out["residuals"][k] = hres
+            out["pv"][k] = pv
+            out["rv"][k] = rv
+
+        record(0)
+        k = 1
+        done = 0
+        cpu = 0.0
+        tlast = _time.time()
+        t0 = self.t
+        while done < nsteps:
+            n = min(every, nsteps - done)
+            tic = _time.perf_counter()
+            self.Advance(n, h)
+            cpu += _time.perf_counter() - tic
+            done += n
+            # keep t exact (no drift from summing h)
+            self.t = t0 + done * h
+            record(k)
+            k += 1
+            if progress and _time.time() - tlast > 2.0:
+                tlast = _time.time()
+                print(f"exudyn_lie: t = {self.t:.4g} / {endTime:.4g} s", flush=True)
+        omega = np.zeros((nout, nb, 3))
+        vel = np.zeros((nout, nb, 3))
+        for i in range(nout):
+            omega[i], vel[i] = twist_to_world_velocity(self.gid, out["R"][i], out["V"][i])
+        return Result(out["times"], out["R"], out["r"], out["V"], omega, vel, out["energy"],
+                      out["residuals"], out["pv"], out["rv"], list(self.groups), self.tableau.name,
+                      h, cpu, nsteps)

@@ -1,0 +1,15 @@
+from setuptools import setup, find_packages
+
+setup(
+    name="exudyn_lie",
+    version="0.1.0",
+    description=("Explicit Munthe-Kaas Lie group integrators (SE3 / SO3xR3 per body) "
+                 "for constrained rigid multibody systems built with Exudyn"),
+    long_description=open("README.md", encoding="utf-8").read(),
+    long_description_content_type="text/markdown",
+    packages=find_packages(include=["exudyn_lie", "exudyn_lie.*", "models", "models.*"]),
+    python_requires=">=3.9",
+    install_requires=["exudyn>=1.13", "numpy", "numba", "matplotlib"],
+    extras_require={"test": ["pytest"]},
+    entry_points={"console_scripts": ["exudyn_lie=exudyn_lie.__main__:main"]},
+)

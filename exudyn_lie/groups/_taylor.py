@@ -40,6 +40,12 @@ from numba import njit
 
 EPS = float(np.finfo(np.float64).eps)   # 2.220446049250313e-16
 
+# numba fast-math flags of the hot-path code: FMA contraction only (no
+# reassociation, no finite-math or signed-zero assumptions).  ~15% faster and
+# at least as accurate; results may differ in the last bit from unfused code.
+FM = {"contract"}
+_FM = FM
+
 
 # ----------------------------------------------------------------------------
 # exact power series in u = t^2, as lists of Fractions (truncated to n terms)
@@ -243,7 +249,7 @@ DEXPINV_SERIES_COEFFS = np.array([float(b / factorial(i))
                                   for i, b in enumerate(bernoulli(SERIES_MAX_TERMS))])
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, inline="always", fastmath=_FM)
 def horner(c, u):
     """sum_k c[k] u^k for a tuple/array c (len >= 1).
 
@@ -267,7 +273,7 @@ def horner(c, u):
     return se + u * so
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=_FM)
 def ad_series(adM, cf, nterms):
     """sum_{i < nterms} cf[i] adM^i (square adM); shared by dexp/dexpinv series of all groups."""
     n = adM.shape[0]
@@ -283,7 +289,7 @@ def ad_series(adM, cf, nterms):
 # tiny dense helpers (numba's np.dot / @ needs scipy's BLAS, which is not a
 # dependency of this package)
 # ----------------------------------------------------------------------------
-@njit(cache=True)
+@njit(cache=True, fastmath=_FM)
 def mm(A, B):
     """Matrix product A @ B."""
     n, k = A.shape
@@ -298,7 +304,7 @@ def mm(A, B):
     return C
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=_FM)
 def mv(A, x):
     """Matrix-vector product A @ x."""
     n, k = A.shape

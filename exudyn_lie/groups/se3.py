@@ -52,6 +52,7 @@ import numpy as np
 from numba import njit
 
 from . import _taylor
+from ._taylor import FM as _FM
 from . import so3
 from ._taylor import ad_series, horner, mm, mv, DEXP_SERIES_COEFFS, DEXPINV_SERIES_COEFFS
 
@@ -77,12 +78,12 @@ NTERMS = {"dexp": dict(_NP), "dexpinv": dict(_NU), "selig": dict(_NS)}
 
 
 # ------------------------------------------------------------ scalar coefficients
-@njit(cache=True)
+@njit(cache=True, fastmath=_FM)
 def series_dexp(u):
     return horner(_PB, u), horner(_PC, u), horner(_PQ3, u), horner(_PQ4, u)
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=_FM)
 def closed_dexp(u):
     t = math.sqrt(u)
     s = math.sin(0.5 * t)
@@ -94,7 +95,7 @@ def closed_dexp(u):
     return B, C, (A - 2.0 * B) / u, (B - 3.0 * C) / u
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=_FM)
 def coef_dexp(u):
     """(B, C, Q3, Q4) at u = |xi|^2."""
     if u < U_SWITCH_DEXP:
@@ -102,12 +103,12 @@ def coef_dexp(u):
     return closed_dexp(u)
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=_FM)
 def series_dexpinv(u):
     return horner(_UD, u), horner(_UE2, u)
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=_FM)
 def closed_dexpinv(u):
     t = math.sqrt(u)
     h = 0.5 * t
@@ -116,7 +117,7 @@ def closed_dexpinv(u):
     return (1.0 - g) / u, (h * h + (g + 2.0) * (g - 1.0)) / (u * u)
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=_FM)
 def coef_dexpinv(u):
     """(D, E2) at u = |xi|^2."""
     if u < U_SWITCH_DEXPINV:
@@ -124,12 +125,12 @@ def coef_dexpinv(u):
     return closed_dexpinv(u)
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=_FM)
 def series_selig(u):
     return horner(_S2, u), horner(_S4, u)
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=_FM)
 def closed_selig(u):
     t = math.sqrt(u)
     s = math.sin(0.5 * t)
@@ -140,7 +141,7 @@ def closed_selig(u):
             1.0 / (u * u) + (t + sint) / (4.0 * u * t * cm1))
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=_FM)
 def coef_selig(u):
     """Selig's ad^2 and ad^4 coefficients (eq. dexpInvSE3) at u = |xi|^2."""
     if u < U_SWITCH_SELIG:
@@ -149,7 +150,7 @@ def coef_selig(u):
 
 
 # ------------------------------------------------------------------- hat / vee
-@njit(cache=True)
+@njit(cache=True, fastmath=_FM)
 def hat(X):
     """4x4 [[xi^, eta], [0, 0]]."""
     M = np.zeros((4, 4))
@@ -165,7 +166,7 @@ def hat(X):
     return M
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=_FM)
 def vee(M):
     out = np.empty(6)
     out[0] = 0.5 * (M[2, 1] - M[1, 2])
@@ -177,7 +178,7 @@ def vee(M):
     return out
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=_FM)
 def to_matrix(R, r):
     """4x4 homogeneous matrix of (R, r) (eq. C)."""
     C = np.zeros((4, 4))
@@ -187,13 +188,13 @@ def to_matrix(R, r):
     return C
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=_FM)
 def from_matrix(C):
     return np.ascontiguousarray(C[0:3, 0:3]), np.ascontiguousarray(C[0:3, 3])
 
 
 # ------------------------------------------------------------------- exp / log
-@njit(cache=True)
+@njit(cache=True, fastmath=_FM)
 def exp_into(X, R, r):
     """R[:], r[:] = exp(X) (eq. expX), no allocation."""
     x0 = X[0]
@@ -227,7 +228,7 @@ def exp_into(X, R, r):
     r[2] = e2 + B * c2 + C * (x0 * c1 - x1 * c0)
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=_FM)
 def exp(X):
     R = np.empty((3, 3))
     r = np.empty(3)
@@ -235,7 +236,7 @@ def exp(X):
     return R, r
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=_FM)
 def log(R, r):
     """X = (xi, eta) with exp(X) = (R, r), |xi| <= pi."""
     X = np.empty(6)
@@ -246,7 +247,7 @@ def log(R, r):
 
 
 # ------------------------------------------------------------ dexp / dexpinv
-@njit(cache=True)
+@njit(cache=True, fastmath=_FM)
 def dexp_apply_into(X, Y, out):
     """out[:] = dexp_X @ Y without forming the matrix; out may alias Y."""
     x0 = X[0]
@@ -287,7 +288,7 @@ def dexp_apply_into(X, Y, out):
     out[5] = z2 + B * f2 + C * g2 + kq3 * a2 + kq4 * b2
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=_FM)
 def dexpinv_apply_into(X, Y, out):
     """out[:] = dexpinv_X @ Y without forming the matrix; out may alias Y."""
     x0 = X[0]
@@ -327,7 +328,7 @@ def dexpinv_apply_into(X, Y, out):
     out[5] = z2 - 0.5 * f2 + D * g2 + ke * b2
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=_FM)
 def dexp_P(X):
     """Lower-left block P of dexp_X (eq. P1, corrected; see module doc)."""
     xi = X[0:3]
@@ -339,7 +340,7 @@ def dexp_P(X):
     return B * N + C * (mm(N, W) + mm(W, N)) + k * (Q3 * W + Q4 * mm(W, W))
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=_FM)
 def dexpinv_U(X):
     """Lower-left block U of dexpinv_X (eq. dexpInvSE3Park, corrected)."""
     xi = X[0:3]
@@ -351,7 +352,7 @@ def dexpinv_U(X):
     return -0.5 * N + D * (mm(N, W) + mm(W, N)) + (k * E2) * mm(W, W)
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=_FM)
 def dexp(X):
     """6x6 dexp_X (eq. dexpSE3)."""
     xi = X[0:3]
@@ -365,7 +366,7 @@ def dexp(X):
     return M
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=_FM)
 def dexpinv(X):
     """6x6 dexp_X^-1 (eq. dexpInvSE3Park)."""
     xi = X[0:3]
@@ -379,7 +380,7 @@ def dexpinv(X):
     return M
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=_FM)
 def dexpinv_selig(X):
     """Selig's closed form (eq. dexpInvSE3): I - ad/2 + S2 ad^2 + S4 ad^4."""
     S2, S4 = coef_selig(X[0] * X[0] + X[1] * X[1] + X[2] * X[2])
@@ -388,20 +389,20 @@ def dexpinv_selig(X):
     return np.eye(6) - 0.5 * a + S2 * a2 + S4 * mm(a2, a2)
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=_FM)
 def dexp_series(X, nterms):
     """sum_{i<nterms} ad_X^i/(i+1)! (eq. dexp), cross-check."""
     return ad_series(ad(X), DEXP_SERIES_COEFFS, nterms)
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=_FM)
 def dexpinv_series(X, nterms):
     """sum_{i<nterms} B_i/i! ad_X^i (eq. dexpInvSeries), cross-check."""
     return ad_series(ad(X), DEXPINV_SERIES_COEFFS, nterms)
 
 
 # ---------------------------------------------------------------- ad, Ad, group
-@njit(cache=True)
+@njit(cache=True, fastmath=_FM)
 def ad(X):
     """6x6 [[xi^, 0], [eta^, xi^]] (eq. adse3)."""
     M = np.zeros((6, 6))
@@ -412,7 +413,7 @@ def ad(X):
     return M
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=_FM)
 def Ad(R, r):
     """6x6 [[R, 0], [r^ R, R]]: hat(Ad_C X) = C hat(X) C^-1."""
     M = np.zeros((6, 6))
@@ -422,13 +423,13 @@ def Ad(R, r):
     return M
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=_FM)
 def compose(R1, r1, R2, r2):
     """(R1, r1)(R2, r2) = (R1 R2, r1 + R1 r2) (eq. MultSE3)."""
     return mm(R1, R2), r1 + mv(R1, r2)
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=_FM)
 def inverse(R, r):
     Rt = np.ascontiguousarray(R.T)
     return Rt, -mv(Rt, r)

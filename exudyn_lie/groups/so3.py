@@ -37,6 +37,7 @@ import numpy as np
 from numba import njit
 
 from . import _taylor
+from ._taylor import FM as _FM
 from ._taylor import ad_series, horner, mm, DEXP_SERIES_COEFFS, DEXPINV_SERIES_COEFFS
 
 # ---------------------------------------------------------------- switch points
@@ -58,12 +59,12 @@ _CATAN = _taylor.coeffs("ATAN", N_ATAN)
 
 
 # ------------------------------------------------------------ scalar coefficients
-@njit(cache=True)
+@njit(cache=True, fastmath=_FM)
 def series_ABC(u):
     return horner(_CA, u), horner(_CB, u), horner(_CC, u)
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=_FM)
 def closed_ABC(u):
     t = math.sqrt(u)
     s = math.sin(0.5 * t)
@@ -72,7 +73,7 @@ def closed_ABC(u):
     return sint / t, 2.0 * s * s / u, (t - sint) / (u * t)
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=_FM)
 def coef_ABC(u):
     """(A, B, C) at u = |xi|^2."""
     if u < U_SWITCH_EXP:
@@ -80,7 +81,7 @@ def coef_ABC(u):
     return closed_ABC(u)
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=_FM)
 def coef_AB(u):
     """(A, B) at u = |xi|^2 (exp)."""
     if u < U_SWITCH_EXP:
@@ -91,7 +92,7 @@ def coef_AB(u):
     return 2.0 * s * c / t, 2.0 * s * s / u
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=_FM)
 def coef_BC(u):
     """(B, C) at u = |xi|^2 (dexp)."""
     if u < U_SWITCH_EXP:
@@ -102,19 +103,19 @@ def coef_BC(u):
     return 2.0 * s * s / u, (t - 2.0 * s * c) / (u * t)
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=_FM)
 def series_D(u):
     return horner(_CD, u)
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=_FM)
 def closed_D(u):
     t = math.sqrt(u)
     h = 0.5 * t
     return (1.0 - h / math.tan(h)) / u
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=_FM)
 def coef_D(u):
     """D = (1 - (t/2)cot(t/2))/t^2 at u = t^2 (dexpinv)."""
     if u < U_SWITCH_DEXPINV:
@@ -123,7 +124,7 @@ def coef_D(u):
 
 
 # ------------------------------------------------------------------- hat / vee
-@njit(cache=True)
+@njit(cache=True, fastmath=_FM)
 def hat(x):
     W = np.zeros((3, 3))
     W[0, 1] = -x[2]
@@ -135,7 +136,7 @@ def hat(x):
     return W
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=_FM)
 def vee(W):
     """Inverse of hat (uses the skew part, so it is exact for skew input)."""
     out = np.empty(3)
@@ -146,7 +147,7 @@ def vee(W):
 
 
 # ------------------------------------------------------------------------ exp
-@njit(cache=True)
+@njit(cache=True, fastmath=_FM)
 def exp_into(x, R):
     """R[:] = exp(hat(x)) (eq. expSO3), no allocation."""
     x0 = x[0]
@@ -170,7 +171,7 @@ def exp_into(x, R):
     R[2, 1] = b12 + A * x0
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=_FM)
 def exp(x):
     R = np.empty((3, 3))
     exp_into(x, R)
@@ -178,7 +179,7 @@ def exp(x):
 
 
 # ----------------------------------------------------------------------- dexp
-@njit(cache=True)
+@njit(cache=True, fastmath=_FM)
 def dexp_apply_into(x, y, out):
     """out[:] = dexp_x @ y = y + B x*y + C x*(x*y); out may alias y."""
     x0 = x[0]
@@ -199,7 +200,7 @@ def dexp_apply_into(x, y, out):
     out[2] = y2 + B * c2 + C * d2
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=_FM)
 def dexpinv_apply_into(x, y, out):
     """out[:] = dexpinv_x @ y = y - x*y/2 + D x*(x*y); out may alias y."""
     x0 = x[0]
@@ -220,7 +221,7 @@ def dexpinv_apply_into(x, y, out):
     out[2] = y2 - 0.5 * c2 + D * d2
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=_FM)
 def dexp(x):
     """3x3 dexp matrix (eq. dexpSO3)."""
     B, C = coef_BC(x[0] * x[0] + x[1] * x[1] + x[2] * x[2])
@@ -228,7 +229,7 @@ def dexp(x):
     return np.eye(3) + B * W + C * mm(W, W)
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=_FM)
 def dexpinv(x):
     """3x3 inverse dexp matrix (eq. dexpInvSO3)."""
     D = coef_D(x[0] * x[0] + x[1] * x[1] + x[2] * x[2])
@@ -236,20 +237,20 @@ def dexpinv(x):
     return np.eye(3) - 0.5 * W + D * mm(W, W)
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=_FM)
 def dexp_series(x, nterms):
     """sum_{i<nterms} ad_x^i/(i+1)! (eq. dexp), cross-check."""
     return ad_series(hat(x), DEXP_SERIES_COEFFS, nterms)
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=_FM)
 def dexpinv_series(x, nterms):
     """sum_{i<nterms} B_i/i! ad_x^i (eq. dexpInvSeries), cross-check."""
     return ad_series(hat(x), DEXPINV_SERIES_COEFFS, nterms)
 
 
 # ------------------------------------------------------------------------ log
-@njit(cache=True)
+@njit(cache=True, fastmath=_FM)
 def quat_from_matrix(R):
     """Unit quaternion (q0, q1, q2, q3), q0 >= 0, of R (Shepperd's method).
 
@@ -297,7 +298,7 @@ def quat_from_matrix(R):
     return q
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=_FM)
 def rotvec_from_quat(q):
     """xi = 2 atan2(|q|, q0) q/|q| for q0 >= 0 (|xi| <= pi); q need not be unit."""
     q0 = q[0]
@@ -315,28 +316,28 @@ def rotvec_from_quat(q):
     return out
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=_FM)
 def log(R):
     """Rotation vector xi, |xi| <= pi, with exp(xi) = R."""
     return rotvec_from_quat(quat_from_matrix(R))
 
 
 # ---------------------------------------------------------------- ad, Ad, group
-@njit(cache=True)
+@njit(cache=True, fastmath=_FM)
 def ad(x):
     return hat(x)
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=_FM)
 def Ad(R):
     return R.copy()
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=_FM)
 def compose(R1, R2):
     return mm(R1, R2)
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=_FM)
 def inverse(R):
     return np.ascontiguousarray(R.T)

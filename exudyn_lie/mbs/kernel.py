@@ -294,8 +294,8 @@ def compute_forces(sd, wk, t, R, r, V, Q):
         gA, RA, rA, VA = _side(sd, a, R, r, V, ident, zero3, zero6)
         gB, RB, rB, VB = _side(sd, b, R, r, V, ident, zero3, zero6)
         phi, phid = torsion_angle(sd, wk, s, RA, VA, RB, VB)
-        tau = -(sd.tK[s] * (phi - sd.toff[s]) + sd.tD[s] * phid) + sd.ttq[s]
-        # torque tau about the world axis z_A acts on B, -tau on A
+        # Exudyn's law: tau = k (phi - phi0) + d phidot + torque; -tau z_A acts on B, +tau z_A on A
+        tau = -(sd.tK[s] * (phi - sd.toff[s]) + sd.tD[s] * phid + sd.ttq[s])
         _matvec(RA, sd.trotA[s, :, 2], F)
         for k in range(3):
             F[k] *= tau
@@ -314,16 +314,17 @@ def compute_forces(sd, wk, t, R, r, V, Q):
 def torsion_angle(sd, wk, s, RA, VA, RB, VB):
     """Relative rotation angle about z of frame A (tracked continuously through turns
     using the angle at the last accepted step, ``wk.tphi[s]``) and its rate."""
-    # relative rotation Rrel = (RA rotA)^T (RB rotB): phi = atan2(Rrel[1,0], Rrel[0,0])
+    # relative rotation Rrel = (RA rotA)^T (RB rotB); phi is its third Tait-Bryan (x-y-z)
+    # angle, atan2(-Rrel[0,1], Rrel[0,0]), as in Exudyn's TorsionalSpringDamper
     FA = wk.m3a
     FB = wk.m3b
     for i in range(3):
         for j in range(3):
             FA[i, j] = RA[i, 0] * sd.trotA[s, 0, j] + RA[i, 1] * sd.trotA[s, 1, j] + RA[i, 2] * sd.trotA[s, 2, j]
             FB[i, j] = RB[i, 0] * sd.trotB[s, 0, j] + RB[i, 1] * sd.trotB[s, 1, j] + RB[i, 2] * sd.trotB[s, 2, j]
-    r10 = FA[0, 1] * FB[0, 0] + FA[1, 1] * FB[1, 0] + FA[2, 1] * FB[2, 0]
+    r01 = FA[0, 0] * FB[0, 1] + FA[1, 0] * FB[1, 1] + FA[2, 0] * FB[2, 1]
     r00 = FA[0, 0] * FB[0, 0] + FA[1, 0] * FB[1, 0] + FA[2, 0] * FB[2, 0]
-    phi0 = np.arctan2(r10, r00)
+    phi0 = np.arctan2(-r01, r00)
     prev = wk.tphi[s]
     turns = np.round((prev - phi0) / (2.0 * np.pi))
     phi = phi0 + 2.0 * np.pi * turns
@@ -785,7 +786,7 @@ def energies(sd, wk, R, r, V, out):
         gA, RA, rA, VA = _side(sd, sd.tA[s], R, r, V, wk.ident, wk.zero3, wk.zero6)
         gB, RB, rB, VB = _side(sd, sd.tB[s], R, r, V, wk.ident, wk.zero3, wk.zero6)
         phi, phid = torsion_angle(sd, wk, s, RA, VA, RB, VB)
-        espr += 0.5 * sd.tK[s] * (phi - sd.toff[s]) ** 2 - sd.ttq[s] * phi
+        espr += 0.5 * sd.tK[s] * (phi - sd.toff[s]) ** 2 + sd.ttq[s] * phi
     out[0] = ekin
     out[1] = egrav
     out[2] = espr

@@ -101,8 +101,9 @@ class SpringDamper:
 
 @dataclass
 class TorsionalSpringDamper:
-    """Torque ``-(k (phi - phi0) + d phidot)`` about the z axis of the frame on A,
-    ``phi`` the relative rotation angle of the B frame about that axis (tracked over turns)."""
+    """Exudyn's torsional law ``tau = k (phi - offset) + d phidot + torque`` about the z
+    axis of the frame on A; ``-tau z_A`` acts on B, ``+tau z_A`` on A.  ``phi`` is the
+    third Tait-Bryan angle of the relative rotation, tracked over turns."""
     bodyA: int
     rotA: np.ndarray
     bodyB: int

@@ -27,11 +27,11 @@ SceneData = namedtuple("SceneData", [
 ])
 
 Work = namedtuple("Work", [
-    "Rs", "rs", "Vs", "Psi", "K", "Vd", "Q", "Qext", "Jr", "W", "eta", "h", "lam", "Sb", "Sd",
+    "Rs", "rs", "Vs", "Rb", "rb", "Vb", "Psi", "K", "Vd", "Q", "Qext", "Jr", "W", "eta", "h", "lam", "Sb", "Sd",
     "perm", "ytmp", "info", "tmp6", "tmp12",
     "v3a", "v3b", "v3c", "v3d", "v3e", "v3f", "v3g", "v3h", "v3i", "v3j", "v3k", "v3l", "v3m",
     "v3n", "v3o", "v3p", "v3q", "v3r", "v3s", "v3t", "m3a", "m3b", "ident", "zero3", "zero6",
-    "tphi",
+    "tphi", "watchBody", "watchEntry", "watchMax",
 ])
 
 
@@ -234,7 +234,8 @@ def make_work(sd, nstages):
     m = sd.nrows
     z3 = lambda: np.zeros(3)
     return Work(
-        Rs=np.zeros((nb, 3, 3)), rs=np.zeros((nb, 3)), Vs=np.zeros((nb, 6)), Psi=np.zeros((nb, 6)),
+        Rs=np.zeros((nb, 3, 3)), rs=np.zeros((nb, 3)), Vs=np.zeros((nb, 6)),
+        Rb=np.zeros((nb, 3, 3)), rb=np.zeros((nb, 3)), Vb=np.zeros((nb, 6)), Psi=np.zeros((nb, 6)),
         K=np.zeros((nstages, nb, 6)), Vd=np.zeros((nstages, nb, 6)), Q=np.zeros((nb, 6)),
         Qext=np.zeros((nb, 6)), Jr=np.zeros((m, 12)), W=np.zeros((m, 12)), eta=np.zeros(m),
         h=np.zeros(m), lam=np.zeros(m), Sb=np.zeros((m, sd.bandwidth + 1)),
@@ -245,4 +246,5 @@ def make_work(sd, nstages):
         v3j=z3(), v3k=z3(), v3l=z3(), v3m=z3(), v3n=z3(), v3o=z3(), v3p=z3(), v3q=z3(), v3r=z3(),
         v3s=z3(), v3t=z3(), m3a=np.zeros((3, 3)), m3b=np.zeros((3, 3)), ident=np.eye(3),
         zero3=np.zeros(3), zero6=np.zeros(6), tphi=np.zeros(len(sd.tA)),
+        watchBody=np.zeros(0, np.int64), watchEntry=np.zeros((0, 2), np.int64), watchMax=np.zeros(0),
     )

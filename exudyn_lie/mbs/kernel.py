@@ -709,9 +709,21 @@ def state_is_finite(sd, R, r, V, vmax):
     return STATUS_OK
 
 
+@njit(cache=True, inline="always", _nrt=False)
+def copy_state(sd, R, r, V, Rto, rto, Vto):
+    for i in range(sd.nb):
+        for a in range(3):
+            rto[i, a] = r[i, a]
+            for c in range(3):
+                Rto[i, a, c] = R[i, a, c]
+        for k in range(6):
+            Vto[i, k] = V[i, k]
+
+
 @njit(cache=True, _nrt=False)
 def mk_steps(sd, wk, A, b, c, t0, h, nsteps, R, r, V, vmax):
-    """Advance ``nsteps`` MK steps in place.  Returns (status, steps done)."""
+    """Advance ``nsteps`` MK steps in place.  Returns (status, steps done); on a failure
+    (R, r, V) hold the last accepted step (the rejected one is undone from wk.Rb...)."""
     s = b.shape[0]
     Qext = wk.Qext
     for n in range(nsteps):
@@ -722,13 +734,26 @@ def mk_steps(sd, wk, A, b, c, t0, h, nsteps, R, r, V, vmax):
             if st != STATUS_OK:
                 return st, n
             mk_stage_k(sd, wk, j)
+        copy_state(sd, R, r, V, wk.Rb, wk.rb, wk.Vb)
         mk_finish(sd, wk, b, h, R, r, V)
         st = state_is_finite(sd, R, r, V, vmax)
         if st != STATUS_OK:
+            copy_state(sd, wk.Rb, wk.rb, wk.Vb, R, r, V)
             return st, n
         if sd.tA.shape[0] > 0:
             update_torsion_tracking(sd, wk, R, r, V)
+        watch_rotation_entries(wk, R)
     return STATUS_OK, nsteps
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def watch_rotation_entries(wk, R):
+    """Largest |R[body][i, j]| of the watched entries over the accepted steps (cheap
+    monitoring between outputs, e.g. of a coordinate singularity; none by default)."""
+    for w in range(wk.watchBody.shape[0]):
+        a = abs(R[wk.watchBody[w], wk.watchEntry[w, 0], wk.watchEntry[w, 1]])
+        if a > wk.watchMax[w]:
+            wk.watchMax[w] = a
 
 
 # --------------------------------------------------------------------------- diagnostics

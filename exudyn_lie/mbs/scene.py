@@ -199,24 +199,7 @@ class Scene:
         of the body frame origin."""
         idx = len(self.bodies)
         label = name or f"body{idx}"
-        m = float(mass)
-        if not np.isfinite(m) or m <= 0:
-            raise SceneError(f"{label}: mass must be positive and finite, got {mass}")
-        J = np.asarray(inertia, dtype=float)
-        if J.shape == (3,):
-            J = np.diag(J)
-        if J.shape != (3, 3) or not np.all(np.isfinite(J)):
-            raise SceneError(f"{label}: inertia must be a finite 3x3 matrix (or its diagonal)")
-        if np.linalg.norm(J - J.T) > 1e-12 * max(1.0, np.abs(J).max()):
-            raise SceneError(f"{label}: inertia tensor is not symmetric")
-        c = _vec3(com, f"{label}: com")
-        # about the COM the tensor must be positive definite (Steiner back-shift)
-        Jc = J - m * (np.dot(c, c) * np.eye(3) - np.outer(c, c))
-        ev = np.linalg.eigvalsh(Jc)
-        if ev.min() <= 1e-14 * max(1.0, ev.max()):
-            raise SceneError(f"{label}: inertia about the centre of mass is not positive "
-                             f"definite (eigenvalues {ev}); give the inertia about the body "
-                             f"frame origin, consistent with mass and com")
+        m, J, c = _checked_mass_properties(label, mass, inertia, com)
         self.bodies.append(Body(m, J, c, _rot(R0, f"{label}: R0"), _vec3(r0, f"{label}: r0"),
                                 _vec3(omega0, f"{label}: omega0"), _vec3(vel0, f"{label}: vel0"),
                                 label))
@@ -310,8 +293,10 @@ class Scene:
         self._check_body(bodyA, label)
         self._check_body(bodyB, label)
         self.springs.append(SpringDamper(int(bodyA), _vec3(posA, label), int(bodyB), _vec3(posB, label),
-                                         float(stiffness), float(damping), float(referenceLength),
-                                         float(force), label))
+                                         _finite(stiffness, f"{label}: stiffness"),
+                                         _finite(damping, f"{label}: damping"),
+                                         _finite(referenceLength, f"{label}: referenceLength"),
+                                         _finite(force, f"{label}: force"), label))
         return len(self.springs) - 1
 
     def AddTorsionalSpringDamper(self, bodyA, bodyB, rotA=None, rotB=None, stiffness=0.0,
@@ -320,8 +305,9 @@ class Scene:
         self._check_body(bodyA, label)
         self._check_body(bodyB, label)
         self.torsionalSprings.append(TorsionalSpringDamper(
-            int(bodyA), _rot(rotA, label), int(bodyB), _rot(rotB, label), float(stiffness),
-            float(damping), float(offset), float(torque), label))
+            int(bodyA), _rot(rotA, label), int(bodyB), _rot(rotB, label),
+            _finite(stiffness, f"{label}: stiffness"), _finite(damping, f"{label}: damping"),
+            _finite(offset, f"{label}: offset"), _finite(torque, f"{label}: torque"), label))
         return len(self.torsionalSprings) - 1
 
     def AddCartesianSpringDamper(self, bodyA, posA, bodyB, posB, stiffness, damping=(0, 0, 0),
@@ -342,6 +328,8 @@ class Scene:
         K = np.zeros((6, 6)) if stiffness is None else np.asarray(stiffness, float).reshape(6, 6)
         D = np.zeros((6, 6)) if damping is None else np.asarray(damping, float).reshape(6, 6)
         o = np.zeros(6) if offset is None else np.asarray(offset, float).reshape(6)
+        if not (np.all(np.isfinite(K)) and np.all(np.isfinite(D)) and np.all(np.isfinite(o))):
+            raise SceneError(f"{label}: stiffness, damping and offset must be finite")
         self.rigidSprings.append(RigidBodySpringDamper(
             int(bodyA), _vec3(posA, label), _rot(rotA, label), int(bodyB), _vec3(posB, label),
             _rot(rotB, label), K.copy(), D.copy(), o.copy(), label))
@@ -369,6 +357,27 @@ class Scene:
         self.pythonForces.append(PythonForce(fn, name or f"pythonForce{len(self.pythonForces)}"))
         return len(self.pythonForces) - 1
 
+    def validate(self):
+        """Re-check all data (the item records are mutable): raises SceneError."""
+        for b in self.bodies:
+            b.mass, b.inertia, b.com = _checked_mass_properties(b.name, b.mass, b.inertia, b.com)
+            b.R0 = _rot(b.R0, f"{b.name}: R0")
+            for what in ("r0", "omega0", "vel0"):
+                setattr(b, what, _vec3(getattr(b, what), f"{b.name}: {what}"))
+        for s in self.springs:
+            for what in ("stiffness", "damping", "referenceLength", "force"):
+                _finite(getattr(s, what), f"{s.name}: {what}")
+        for s in self.torsionalSprings:
+            for what in ("stiffness", "damping", "offset", "torque"):
+                _finite(getattr(s, what), f"{s.name}: {what}")
+        for s in self.cartesianSprings:
+            for what in ("stiffness", "damping", "offset"):
+                _vec3(getattr(s, what), f"{s.name}: {what}")
+        for l in self.loads:
+            _vec3(l.vector, f"{l.name}: vector")
+        if not np.all(np.isfinite(self.gravity)):
+            raise SceneError(f"gravity is not finite: {self.gravity}")
+
     # ----------------------------------------------------------------- info
     @property
     def nBodies(self):
@@ -381,6 +390,42 @@ class Scene:
         return (f"Scene({len(self.bodies)} bodies, {len(self.joints)} joints, "
                 f"{len(self.springs) + len(self.torsionalSprings) + len(self.cartesianSprings) + len(self.rigidSprings)} "
                 f"connectors, {len(self.loads)} loads, gravity={self.gravity.tolist()})")
+
+
+def _checked_mass_properties(label, mass, inertia, com):
+    """Validated (mass, 3x3 inertia about the frame origin, com)."""
+    try:
+        m = float(mass)
+    except (TypeError, ValueError):
+        raise SceneError(f"{label}: mass must be a number, got {mass!r}") from None
+    if not np.isfinite(m) or m <= 0:
+        raise SceneError(f"{label}: mass must be positive and finite, got {mass}")
+    J = np.asarray(inertia, dtype=float)
+    if J.shape == (3,):
+        J = np.diag(J)
+    if J.shape != (3, 3) or not np.all(np.isfinite(J)):
+        raise SceneError(f"{label}: inertia must be a finite 3x3 matrix (or its diagonal)")
+    if np.linalg.norm(J - J.T) > 1e-12 * max(1.0, np.abs(J).max()):
+        raise SceneError(f"{label}: inertia tensor is not symmetric")
+    c = _vec3(com, f"{label}: com")
+    # about the COM the tensor must be positive definite (Steiner back-shift)
+    Jc = J - m * (np.dot(c, c) * np.eye(3) - np.outer(c, c))
+    ev = np.linalg.eigvalsh(Jc)
+    if ev.min() <= 1e-14 * max(1.0, ev.max()):
+        raise SceneError(f"{label}: inertia about the centre of mass is not positive "
+                         f"definite (eigenvalues {ev}); give the inertia about the body "
+                         f"frame origin, consistent with mass and com")
+    return m, J, c
+
+
+def _finite(x, what):
+    try:
+        v = float(x)
+    except (TypeError, ValueError):
+        raise SceneError(f"{what} must be a number, got {x!r}") from None
+    if not np.isfinite(v):
+        raise SceneError(f"{what} is not finite: {x}")
+    return v
 
 
 def frame_with_axis(axis, which):

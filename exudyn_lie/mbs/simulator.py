@@ -16,6 +16,7 @@ from typing import Optional
 
 import numpy as np
 
+from ..groups import se3, so3
 from ..integrators.tableau import get_method
 from . import kernel
 from .compiled import GROUP_NAMES, compile_scene, make_work, resolve_groups, with_redundant
@@ -103,6 +104,7 @@ class Simulator:
         if not isinstance(scene, Scene):
             raise SceneError(f"Simulator needs an exudyn_lie Scene, got {type(scene).__name__}")
         self.scene = scene
+        scene.validate()
         self.tableau = get_method(method)
         self.groups = resolve_groups(scene, liegroup)
         if stabilization not in (None, "none", "velocity", "position"):
@@ -126,18 +128,32 @@ class Simulator:
 
     # ----------------------------------------------------------------- state
     def SetInitialState(self, R=None, r=None, omega=None, vel=None, t0=0.0):
-        """Set the state from the scene's initial data (or the given arrays)."""
+        """Set the state from the scene's initial data (or the given arrays).  Everything
+        is validated before anything is assigned, so a rejected call changes nothing."""
         sc = self.scene
-        self.R = np.ascontiguousarray(np.array([b.R0 for b in sc.bodies]) if R is None else R, float).copy()
-        self.r = np.ascontiguousarray(np.array([b.r0 for b in sc.bodies]) if r is None else r, float).copy()
+        nb = len(sc.bodies)
+        R = np.array([b.R0 for b in sc.bodies]) if R is None else np.asarray(R, float)
+        r = np.array([b.r0 for b in sc.bodies]) if r is None else np.asarray(r, float)
         om = np.array([b.omega0 for b in sc.bodies]) if omega is None else np.asarray(omega, float)
         ve = np.array([b.vel0 for b in sc.bodies]) if vel is None else np.asarray(vel, float)
-        for name, x in (("R", self.R), ("r", self.r), ("omega", om), ("vel", ve)):
+        for name, x, shape in (("R", R, (nb, 3, 3)), ("r", r, (nb, 3)), ("omega", om, (nb, 3)),
+                               ("vel", ve, (nb, 3))):
+            if x.shape != shape:
+                raise SceneError(f"initial state {name} must have shape {shape}, got {x.shape}")
             if not np.all(np.isfinite(x)):
-                bad = np.argwhere(~np.isfinite(np.asarray(x).reshape(len(sc.bodies), -1)))[0][0]
+                bad = int(np.argwhere(~np.isfinite(x.reshape(nb, -1)))[0][0])
                 raise SceneError(f"initial state {name} of body {bad} ({sc.bodies[bad].name}) is not finite")
+        for i in range(nb):
+            if np.linalg.norm(R[i].T @ R[i] - np.eye(3)) > 1e-8 or np.linalg.det(R[i]) <= 0:
+                raise SceneError(f"initial state R of body {i} ({sc.bodies[i].name}) is not a proper "
+                                 f"rotation matrix (R^T R != I or det <= 0)")
+        if not np.isfinite(t0):
+            raise SceneError(f"initial time t0 = {t0} is not finite")
+        self.R = np.ascontiguousarray(R).copy()
+        self.r = np.ascontiguousarray(r).copy()
         self.V = np.ascontiguousarray(world_velocity_to_twist(self.gid, self.R, om, ve))
         self.t = float(t0)
+        self._segmentStart = (self.t, self.R.copy(), self.r.copy(), self.V.copy())
         if len(sc.torsionalSprings):
             self.wk.tphi[:] = 0.0
             kernel.update_torsion_tracking(self.sd, self.wk, self.R, self.r, self.V)
@@ -145,6 +161,29 @@ class Simulator:
     def states(self):
         omega, vel = twist_to_world_velocity(self.gid, self.R, self.V)
         return BodyStates(self.t, self.R.copy(), self.r.copy(), omega, vel)
+
+    def WatchRotationEntries(self, bodies, i, j):
+        """Monitor ``|R[b][i, j]|`` of the given bodies at every accepted step (e.g. the
+        sine of the middle Tait-Bryan angle, entry (0, 2), between output points).  The
+        running maxima are in :attr:`watchedMaxima`; :meth:`ResetWatch` clears them."""
+        b = np.asarray(bodies, np.int64).reshape(-1)
+        if len(b) and (b.min() < 0 or b.max() >= self.sd.nb):
+            raise SceneError(f"WatchRotationEntries: body indices {b.tolist()} out of range 0..{self.sd.nb - 1}")
+        if not (0 <= int(i) < 3 and 0 <= int(j) < 3):
+            raise SceneError(f"WatchRotationEntries: entry ({i}, {j}) is not in a 3x3 matrix")
+        entry = np.tile(np.array([[int(i), int(j)]], np.int64), (len(b), 1))
+        self.wk = self.wk._replace(watchBody=b.copy(), watchEntry=entry, watchMax=np.zeros(len(b)))
+        self._mkEntry = None
+        self.ResetWatch()
+
+    @property
+    def watchedMaxima(self):
+        return self.wk.watchMax
+
+    def ResetWatch(self):
+        """Restart the watched maxima from the current state."""
+        for w, b in enumerate(self.wk.watchBody):
+            self.wk.watchMax[w] = abs(self.R[b, self.wk.watchEntry[w, 0], self.wk.watchEntry[w, 1]])
 
     # ----------------------------------------------------------------- constraints
     def jacobian(self, R=None, r=None, V=None):
@@ -274,7 +313,10 @@ class Simulator:
         return 1e6 * max(1.0, v0)
 
     def Advance(self, nsteps, stepSize):
-        """Integrate ``nsteps`` steps of size ``stepSize`` from the current state."""
+        """Integrate ``nsteps`` steps of size ``stepSize`` from the current state.
+
+        On a failure (singular constraints, blow-up) the state is left at the last
+        accepted step and the error says where and what to do."""
         h = float(stepSize)
         if not np.isfinite(h) or h <= 0:
             raise ValueError(f"step size must be positive and finite, got {stepSize}")
@@ -282,15 +324,33 @@ class Simulator:
             return
         if not hasattr(self, "_vmaxValue"):
             self._vmaxValue = self._vmax()
+        # the state this call starts from: restored on failure, and where a blow-up's
+        # step suggestion linearises (the rejected state itself is far from the motion)
+        self._segmentStart = (self.t, self.R.copy(), self.r.copy(), self.V.copy())
         if self.sd.hasQext or self.stabilization:
+            t0 = self.t
             for n in range(int(nsteps)):
                 self._python_step(h)
+                self.t = t0 + (n + 1) * h    # exact, as the compiled loop's stage times
             return
-        st, done = kernel.mk_steps(self.sd, self.wk, self.A, self.b, self.c, self.t, h, int(nsteps),
-                                   self.R, self.r, self.V, self._vmaxValue)
-        self.t += done * h
+        st, done = self._mk_steps(int(nsteps), h)
+        self.t += done * h               # on a failure: the last accepted step
         if st != kernel.STATUS_OK:
             self._raise_status(st, h)
+
+    def _mk_steps(self, n, h):
+        """``kernel.mk_steps`` through its resolved compiled entry point: a plain numba
+        call re-derives the types of the two ~50-field namedtuples every time (~10 us)."""
+        args = (self.sd, self.wk, self.A, self.b, self.c, float(self.t), float(h), int(n),
+                self.R, self.r, self.V, float(self._vmaxValue))
+        ep = getattr(self, "_mkEntry", None)
+        if ep is None:
+            out = kernel.mk_steps(*args)
+            sig = tuple(kernel.mk_steps.typeof_pyval(a) for a in args)
+            ov = kernel.mk_steps.overloads.get(sig)
+            self._mkEntry = ov.entry_point if ov is not None else kernel.mk_steps
+            return out
+        return ep(*args)
 
     def _python_step(self, h):
         sd, wk = self.sd, self.wk
@@ -303,15 +363,17 @@ class Simulator:
                 if st != kernel.STATUS_OK:
                     self._raise_status(st, h)
                 kernel.mk_stage_k(sd, wk, j)
+            kernel.copy_state(sd, self.R, self.r, self.V, wk.Rb, wk.rb, wk.Vb)
             kernel.mk_finish(sd, wk, self.b, h, self.R, self.r, self.V)
             st = kernel.state_is_finite(sd, self.R, self.r, self.V, self._vmaxValue)
             if st != kernel.STATUS_OK:
+                kernel.copy_state(sd, wk.Rb, wk.rb, wk.Vb, self.R, self.r, self.V)
                 self._raise_status(st, h)
             if len(sd.tA):
                 kernel.update_torsion_tracking(sd, wk, self.R, self.r, self.V)
+            kernel.watch_rotation_entries(wk, self.R)
         else:
-            st, done = kernel.mk_steps(sd, wk, self.A, self.b, self.c, self.t, h, 1,
-                                       self.R, self.r, self.V, self._vmaxValue)
+            st, done = self._mk_steps(1, h)
             if st != kernel.STATUS_OK:
                 self._raise_status(st, h)
         self.t += h
@@ -337,6 +399,7 @@ class Simulator:
         return Q
 
     def _raise_status(self, st, h):
+        """Raise the error for a kernel status (public as :meth:`RaiseStatus`)."""
         if st == kernel.STATUS_SINGULAR:
             h_, J, eta = self.jacobian(self.wk.Rs, self.wk.rs, self.wk.Vs)
             dep = self._dependent_rows(J)
@@ -346,12 +409,91 @@ class Simulator:
                 f"{', '.join(names)} are linearly dependent (a singular configuration, or redundant "
                 f"joints); remove the redundant constraint axes (e.g. make one joint spherical) or "
                 f"check the joint frames")
-        sugg = h / 10.0
-        what = "non-finite (NaN/inf)" if st == kernel.STATUS_NONFINITE else "blowing up"
+        sugg = self.suggest_step(h)
+        what = "non-finite (NaN/inf)" if st == kernel.STATUS_NONFINITE else "unbounded (blow-up)"
         raise StepSizeError(
             f"the state became {what} at t = {self.t:.6g} s with step size {h:.3g} s "
             f"(method {self.tableau.name}); the step is beyond the stability limit: "
             f"try a step size of {sugg:.3g} s or smaller")
+
+    RaiseStatus = _raise_status
+
+    def suggest_step(self, h):
+        """A step size that should be stable: ``0.8 r / rho``, where ``rho`` is the spectral
+        radius of the linearised equations of motion at the state the failed
+        :meth:`Advance` started from (:meth:`SpectralRadius`) and ``r`` the radius of the
+        method's stability half-disk (:func:`~exudyn_lie.integrators.stability.stability_radius`).
+        Never more than ``h / 2``; ``h / 10`` if the estimate is not available."""
+        from ..integrators.stability import stability_radius
+        start = getattr(self, "_segmentStart", None)
+        try:
+            if start is None:
+                raise ValueError("no reference state")
+            t0, R, r, V = start[:4]
+            rho = self.SpectralRadius(R, r, V, t0)
+        except Exception:           # noqa: BLE001 - a suggestion must never mask the error
+            return h / 10.0
+        if not np.isfinite(rho) or rho <= 0:
+            return h / 10.0
+        return float(min(0.5 * h, 0.8 * stability_radius(self.tableau.name) / rho))
+
+    def SpectralRadius(self, R=None, r=None, V=None, t=None, iterations=40, seed=0):
+        """Estimate of the spectral radius ``rho`` of the Jacobian of the first-order
+        equations of motion ``(xi, V)' = (dexp^-1_{-xi} V, F(g exp(xi), V))`` in local
+        coordinates ``xi`` around ``g`` (eqs. ODE2 with MK1): power iteration on
+        central-difference Jacobian-vector products.  ``h rho`` is what the step size
+        must keep inside the method's stability region."""
+        R = self.R if R is None else np.asarray(R, float)
+        r = self.r if r is None else np.asarray(r, float)
+        V = self.V if V is None else np.asarray(V, float)
+        t = self.t if t is None else float(t)
+        nb = self.sd.nb
+        rng = np.random.default_rng(seed)
+        d = rng.normal(size=(2, nb, 6))
+        d /= np.linalg.norm(d)
+        scale = 1.0 + float(np.max(np.abs(V))) + float(np.max(np.abs(r)))
+        logs = []
+        for it in range(int(iterations)):
+            eps = 1e-7 * scale
+            fp = self._local_field(R, r, V, t, eps * d)
+            fm = self._local_field(R, r, V, t, -eps * d)
+            w = (fp - fm) / (2 * eps)
+            nw = float(np.linalg.norm(w))
+            if not np.isfinite(nw):
+                return float("nan")
+            if nw == 0.0:
+                return 0.0
+            logs.append(np.log(nw))
+            d = w / nw
+        # the dominant modes of a mechanical system come in complex pairs, for which the
+        # norm ratio oscillates: average the logarithms of the second half
+        return float(np.exp(np.mean(logs[len(logs) // 2:])))
+
+    def _local_field(self, R, r, V, t, dx):
+        """The vector field of :meth:`SpectralRadius` at ``(xi, V + dV) = dx``."""
+        sd, wk = self.sd, self.wk
+        nb = sd.nb
+        Rp = np.empty((nb, 3, 3))
+        rp = np.empty((nb, 3))
+        Vp = np.ascontiguousarray(V + dx[1])
+        out = np.empty((2, nb, 6))
+        ER, Er = np.empty((3, 3)), np.empty(3)
+        for i in range(nb):
+            X = np.ascontiguousarray(dx[0, i])
+            kernel._exp_compose(int(self.gid[i]), R[i], r[i], X, Rp[i], rp[i], ER, Er)
+            mX = -X
+            if self.gid[i] == kernel.GID_SE3:
+                se3.dexpinv_apply_into(mX, Vp[i], out[0, i])
+            else:
+                so3.dexpinv_apply_into(mX[:3], Vp[i, :3], out[0, i, :3])
+                out[0, i, 3:] = Vp[i, 3:]
+        Qext = self._python_forces(t, Rp, rp, Vp) if sd.hasQext else wk.Qext
+        Vdot = np.zeros((nb, 6))
+        st = kernel.rhs(sd, wk, t, Rp, rp, Vp, Qext, Vdot)
+        if st != kernel.STATUS_OK:
+            raise SimulationError("right-hand side failed while estimating the spectral radius")
+        out[1] = Vdot
+        return out
 
     def Accelerations(self):
         """``(Vdot, lambda)`` at the current state from the index-1 system (eq. index1):
@@ -374,15 +516,11 @@ class Simulator:
         if sd.nrows:
             kernel.constraint_residuals(sd, wk, self.R, self.r, self.V, h)
         nj = len(self.scene.joints)
-        pv = np.zeros(nj)
-        rv = np.zeros(nj)
-        for j in range(nj):
-            r0, n = sd.jrow0[j], sd.jnrow[j]
-            rows = range(r0, r0 + n)
-            tr = [h[q] for q in rows if sd.rkind[q] != kernel.ROW_ROT]
-            ro = [h[q] for q in rows if sd.rkind[q] == kernel.ROW_ROT]
-            pv[j] = np.linalg.norm(tr) if tr else 0.0
-            rv[j] = np.linalg.norm(ro) if ro else 0.0
+        if not hasattr(self, "_rowIsRot"):
+            self._rowIsRot = np.asarray(sd.rkind) == kernel.ROW_ROT
+        h2 = h * h
+        pv = np.sqrt(np.bincount(self.rowJoint, weights=np.where(self._rowIsRot, 0.0, h2), minlength=nj))
+        rv = np.sqrt(np.bincount(self.rowJoint, weights=np.where(self._rowIsRot, h2, 0.0), minlength=nj))
         return e, h, pv, rv
 
     def Momentum(self):
@@ -408,13 +546,26 @@ class Simulator:
         h = float(stepSize)
         if not np.isfinite(h) or h <= 0:
             raise ValueError(f"stepSize must be positive and finite, got {stepSize}")
-        if startTime is not None:
-            self.t = float(startTime)
-        if endTime < self.t:
-            raise ValueError(f"endTime {endTime} is before the start time {self.t}")
-        nsteps = int(round((endTime - self.t) / h))
+        t0 = self.t if startTime is None else float(startTime)
+        if not np.isfinite(t0):
+            raise ValueError(f"startTime must be finite, got {startTime}")
+        if not np.isfinite(endTime):
+            raise ValueError(f"endTime must be finite, got {endTime}")
+        if endTime < t0:
+            raise ValueError(f"endTime {endTime} is before the start time {t0}")
+        span = endTime - t0
+        # whole steps, then one shorter step that lands exactly on endTime
+        nsteps = int(np.floor(span / h + 1e-9))
+        hlast = span - nsteps * h
+        if hlast <= 1e-9 * max(1.0, abs(endTime)):
+            hlast = 0.0
+        if hlast > 0:
+            warnings.warn(f"exudyn_lie: endTime - startTime = {span:.6g} s is not a multiple of stepSize = {h:.6g} s; "
+                          f"{nsteps} steps of {h:.6g} s and a last step of {hlast:.6g} s end exactly at endTime",
+                          RuntimeWarning, stacklevel=2)
+        self.t = t0
         every = max(1, int(outputEvery))
-        nout = nsteps // every + 1 + (1 if nsteps % every else 0)
+        nout = nsteps // every + 1 + (1 if nsteps % every else 0) + (1 if hlast > 0 else 0)
         nb, m, nj = self.sd.nb, self.sd.nrows, len(self.scene.joints)
         out = dict(times=np.zeros(nout), R=np.zeros((nout, nb, 3, 3)), r=np.zeros((nout, nb, 3)),
                    V=np.zeros((nout, nb, 6)), energy=np.zeros((nout, 3)), residuals=np.zeros((nout, m)),
@@ -450,10 +601,17 @@ class Simulator:
             if progress and _time.time() - tlast > 2.0:
                 tlast = _time.time()
                 print(f"exudyn_lie: t = {self.t:.4g} / {endTime:.4g} s", flush=True)
-        omega = np.zeros((nout, nb, 3))
-        vel = np.zeros((nout, nb, 3))
-        for i in range(nout):
-            omega[i], vel[i] = twist_to_world_velocity(self.gid, out["R"][i], out["V"][i])
+        if hlast > 0:
+            tic = _time.perf_counter()
+            self.Advance(1, hlast)
+            cpu += _time.perf_counter() - tic
+            self.t = float(endTime)
+            record(k)
+            nsteps += 1
+        omega, vel = twist_to_world_velocity(np.tile(self.gid, nout), out["R"].reshape(-1, 3, 3),
+                                             out["V"].reshape(-1, 6))
+        omega = omega.reshape(nout, nb, 3)
+        vel = vel.reshape(nout, nb, 3)
         return Result(out["times"], out["R"], out["r"], out["V"], omega, vel, out["energy"],
                       out["residuals"], out["pv"], out["rv"], list(self.groups), self.tableau.name,
                       h, cpu, nsteps)

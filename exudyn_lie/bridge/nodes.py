@@ -1,0 +1,495 @@
+"""Node registry: one small class per Exudyn rigid-body node type.
+
+Each class handles all nodes of its type at once (arrays with one row per node) and
+converts in both directions between Exudyn's node coordinates and the package's body
+state ``(R, r, omega_local, vel_world)`` (rotation body->world, node position, body-fixed
+angular velocity, world velocity of the node):
+
+* :meth:`NodeKind.read`  ``(q_current, q_t) -> (R, r, omega, vel)``;
+* :meth:`NodeKind.write` ``(R, r, omega, vel[, omegaDot, acc]) -> (q_current, q_t[, q_tt])``,
+  keeping the rotation parameters continuous from one call to the next;
+* :meth:`NodeKind.velocity_map` ``T`` with ``q_t = T (omega, vel)`` and
+  :meth:`NodeKind.velocity_map_dot` ``Tdot (omega, vel)``, to compare Exudyn's mass matrix,
+  right-hand side and constraint Jacobian with the package's (tests).
+
+Exudyn stores ``total = reference + current`` for every coordinate; ``q`` here is always
+the *current* part, ``qref`` the reference part.
+
+The per-output write-back is compiled: one row writer per node type (``*_row``), selected
+by the class's ``code`` in :func:`write_row`; :func:`write_nodes` / :func:`write_all` do all
+nodes (and the joint multipliers) in one call.  Adding a node type = one subclass, its
+row writer + a branch in :func:`write_row`, one line in :data:`NODE_KINDS`.
+"""
+import math
+import warnings
+
+import numpy as np
+from numba import njit
+
+from . import rotations as rot
+
+CODE_ROTVEC = 0
+CODE_EP = 1
+CODE_RXYZ = 2
+NCOORD_MAX = 7          # position (3) + at most 4 rotation parameters
+TWO_PI = 2.0 * math.pi
+ROTVEC_LIMIT = 1.5 * math.pi
+RXYZ_WARN_COS = math.cos(math.radians(85.0))
+
+
+# ---------------------------------------------------------------------------- compiled row writers
+# One function per node type: from (R, omega_local, omegadot_local) to the total rotation
+# parameters p, their rate p_t and p_tt; ``prev`` (4) holds the last written parameters
+# (continuity) and is updated.  Returns 1 if an Rxyz node is near its singularity.
+
+@njit(cache=True)
+def _quat(R, out):
+    """Unit quaternion (scalar first, >= 0) of R, Shepperd's method."""
+    tr = R[0, 0] + R[1, 1] + R[2, 2]
+    if tr >= R[0, 0] and tr >= R[1, 1] and tr >= R[2, 2]:
+        s = 2.0 * math.sqrt(max(1.0 + tr, 0.0))
+        out[0] = 0.25 * s
+        out[1] = (R[2, 1] - R[1, 2]) / s
+        out[2] = (R[0, 2] - R[2, 0]) / s
+        out[3] = (R[1, 0] - R[0, 1]) / s
+    elif R[0, 0] >= R[1, 1] and R[0, 0] >= R[2, 2]:
+        s = 2.0 * math.sqrt(max(1.0 + R[0, 0] - R[1, 1] - R[2, 2], 0.0))
+        out[0] = (R[2, 1] - R[1, 2]) / s
+        out[1] = 0.25 * s
+        out[2] = (R[0, 1] + R[1, 0]) / s
+        out[3] = (R[0, 2] + R[2, 0]) / s
+    elif R[1, 1] >= R[2, 2]:
+        s = 2.0 * math.sqrt(max(1.0 - R[0, 0] + R[1, 1] - R[2, 2], 0.0))
+        out[0] = (R[0, 2] - R[2, 0]) / s
+        out[1] = (R[0, 1] + R[1, 0]) / s
+        out[2] = 0.25 * s
+        out[3] = (R[1, 2] + R[2, 1]) / s
+    else:
+        s = 2.0 * math.sqrt(max(1.0 - R[0, 0] - R[1, 1] + R[2, 2], 0.0))
+        out[0] = (R[1, 0] - R[0, 1]) / s
+        out[1] = (R[0, 2] + R[2, 0]) / s
+        out[2] = (R[1, 2] + R[2, 1]) / s
+        out[3] = 0.25 * s
+    if out[0] < 0.0:
+        for k in range(4):
+            out[k] = -out[k]
+    n = math.sqrt(out[0] ** 2 + out[1] ** 2 + out[2] ** 2 + out[3] ** 2)
+    for k in range(4):
+        out[k] /= n
+
+
+@njit(cache=True)
+def rotvec_row(R, omega, omegad, prev, first, p, p_t, p_tt):
+    """NodeRigidBodyRotVecLG: continuous rotation vector with |p| <= 3 pi / 2."""
+    qv = np.empty(4)
+    _quat(R, qv)
+    s = math.sqrt(qv[1] ** 2 + qv[2] ** 2 + qv[3] ** 2)
+    t = 2.0 * math.atan2(s, qv[0])
+    fac = 2.0 / qv[0] if s < 1e-12 else t / s
+    for k in range(3):
+        p[k] = qv[1 + k] * fac
+    if not first and t > 0.0 and TWO_PI - t <= ROTVEC_LIMIT:
+        # the same rotation on the long branch: p (t - 2 pi)/t, |.| = 2 pi - t
+        g = (t - TWO_PI) / t
+        d0 = 0.0
+        d1 = 0.0
+        for k in range(3):
+            d0 += (p[k] - prev[k]) ** 2
+            d1 += (p[k] * g - prev[k]) ** 2
+        if d1 < d0:
+            for k in range(3):
+                p[k] *= g
+    for k in range(3):
+        prev[k] = p[k]
+        p_t[k] = omega[k]
+        p_tt[k] = omegad[k]
+    return 0
+
+
+@njit(cache=True)
+def _ep_glocal_T_apply(e, w, out):
+    """out = GL(e)^T w,  GL(e) = 2 [-e_v, e0 I - hat(e_v)]."""
+    e0, e1, e2, e3 = e[0], e[1], e[2], e[3]
+    out[0] = 2.0 * (-e1 * w[0] - e2 * w[1] - e3 * w[2])
+    out[1] = 2.0 * (e0 * w[0] - e3 * w[1] + e2 * w[2])
+    out[2] = 2.0 * (e3 * w[0] + e0 * w[1] - e1 * w[2])
+    out[3] = 2.0 * (-e2 * w[0] + e1 * w[1] + e0 * w[2])
+
+
+@njit(cache=True)
+def ep_row(R, omega, omegad, prev, first, p, p_t, p_tt):
+    """NodeRigidBodyEP: sign-continuous Euler parameters, ep_t = GL^T omega / 4,
+    ep_tt = (GL(ep_t)^T omega + GL(ep)^T omegadot) / 4."""
+    _quat(R, p)
+    if not first:
+        dot = p[0] * prev[0] + p[1] * prev[1] + p[2] * prev[2] + p[3] * prev[3]
+        if dot < 0.0:
+            for k in range(4):
+                p[k] = -p[k]
+    tmp = np.empty(4)
+    _ep_glocal_T_apply(p, omega, tmp)
+    for k in range(4):
+        p_t[k] = 0.25 * tmp[k]
+        prev[k] = p[k]
+    _ep_glocal_T_apply(p_t, omega, tmp)
+    for k in range(4):
+        p_tt[k] = 0.25 * tmp[k]
+    _ep_glocal_T_apply(p, omegad, tmp)
+    for k in range(4):
+        p_tt[k] += 0.25 * tmp[k]
+    return 0
+
+
+@njit(cache=True)
+def _wrap_near(x, ref):
+    return x + TWO_PI * np.round((ref - x) / TWO_PI)
+
+
+@njit(cache=True)
+def rxyz_row(R, omega, omegad, prev, first, p, p_t, p_tt):
+    """NodeRigidBodyRxyz: the Tait-Bryan solution (of two, modulo 2 pi) nearest to the
+    previous angles; rates a_t = GR^-1 omega, a_tt = GR^-1 (omegadot - GRdot a_t)."""
+    c1 = math.sqrt(R[1, 2] ** 2 + R[2, 2] ** 2)
+    a1 = math.atan2(R[0, 2], c1)
+    if c1 > 1e-14:
+        a0 = math.atan2(-R[1, 2], R[2, 2])
+        a2 = math.atan2(-R[0, 1], R[0, 0])
+    else:
+        a0 = 0.0
+        a2 = math.atan2(R[1, 0], R[1, 1])
+    if first:
+        p[0], p[1], p[2] = a0, a1, a2
+    elif c1 < 1e-7:
+        # gimbal lock: only a0 + a2 (a1 = +pi/2) or a0 - a2 (a1 = -pi/2) is defined; keep a0
+        sg = 1.0 if a1 > 0 else -1.0
+        comb = a0 + sg * a2
+        p[0] = prev[0]
+        p[1] = _wrap_near(a1, prev[1])
+        p[2] = _wrap_near(sg * (comb - prev[0]), prev[2])
+    else:
+        b0 = _wrap_near(a0, prev[0])
+        b1 = _wrap_near(a1, prev[1])
+        b2 = _wrap_near(a2, prev[2])
+        e0 = _wrap_near(a0 + math.pi, prev[0])
+        e1 = _wrap_near(math.pi - a1, prev[1])
+        e2 = _wrap_near(a2 + math.pi, prev[2])
+        d0 = (b0 - prev[0]) ** 2 + (b1 - prev[1]) ** 2 + (b2 - prev[2]) ** 2
+        d1 = (e0 - prev[0]) ** 2 + (e1 - prev[1]) ** 2 + (e2 - prev[2]) ** 2
+        if d0 <= d1:
+            p[0], p[1], p[2] = b0, b1, b2
+        else:
+            p[0], p[1], p[2] = e0, e1, e2
+    for k in range(3):
+        prev[k] = p[k]
+    cb, sb = math.cos(p[1]), math.sin(p[1])
+    cc, sc = math.cos(p[2]), math.sin(p[2])
+    # inverse of GR = [[cb cc, sc, 0], [-cb sc, cc, 0], [sb, 0, 1]]
+    p_t[0] = (cc * omega[0] - sc * omega[1]) / cb
+    p_t[1] = sc * omega[0] + cc * omega[1]
+    p_t[2] = omega[2] - sb * p_t[0]
+    d1, d2 = p_t[1], p_t[2]
+    # GRdot a_t
+    g0 = (-sb * cc * d1 - cb * sc * d2) * p_t[0] + cc * d2 * p_t[1]
+    g1 = (sb * sc * d1 - cb * cc * d2) * p_t[0] - sc * d2 * p_t[1]
+    g2 = cb * d1 * p_t[0]
+    w0, w1, w2 = omegad[0] - g0, omegad[1] - g1, omegad[2] - g2
+    p_tt[0] = (cc * w0 - sc * w1) / cb
+    p_tt[1] = sc * w0 + cc * w1
+    p_tt[2] = w2 - sb * p_tt[0]
+    return 1 if abs(cb) < RXYZ_WARN_COS else 0
+
+
+@njit(cache=True)
+def write_row(code, R, omega, omegad, prev, first, p, p_t, p_tt):
+    if code == CODE_ROTVEC:
+        return rotvec_row(R, omega, omegad, prev, first, p, p_t, p_tt)
+    elif code == CODE_EP:
+        return ep_row(R, omega, omegad, prev, first, p, p_t, p_tt)
+    return rxyz_row(R, omega, omegad, prev, first, p, p_t, p_tt)
+
+
+# ---------------------------------------------------------------------------- all nodes at once
+# (kept in this file: numba's cache is invalidated only by changes of the defining file)
+@njit(cache=True)
+def write_nodes(gid, R, r, V, Vdot, doacc, code, body, idx, nq, qref, prev, first, q, qt, qtt, flags):
+    """Node coordinates from the body states (R, r, V) and accelerations Vdot (in each
+    body's group velocity coordinates: SE3 v body-fixed, SO3xR3 v = rdot)."""
+    om = np.zeros(3)
+    vel = np.zeros(3)
+    omd = np.zeros(3)
+    acc = np.zeros(3)
+    p = np.zeros(4)
+    pt = np.zeros(4)
+    ptt = np.zeros(4)
+    nflag = 0
+    for i in range(code.shape[0]):
+        b = body[i]
+        Rb = R[b]
+        for k in range(3):
+            om[k] = V[b, k]
+        if gid[b] == 0:
+            for k in range(3):
+                vel[k] = Rb[k, 0] * V[b, 3] + Rb[k, 1] * V[b, 4] + Rb[k, 2] * V[b, 5]
+        else:
+            for k in range(3):
+                vel[k] = V[b, 3 + k]
+        if doacc:
+            for k in range(3):
+                omd[k] = Vdot[b, k]
+            if gid[b] == 0:
+                # a = R (vdot + omega x v)
+                w0, w1, w2 = V[b, 0], V[b, 1], V[b, 2]
+                v0, v1, v2 = V[b, 3], V[b, 4], V[b, 5]
+                a0 = Vdot[b, 3] + w1 * v2 - w2 * v1
+                a1 = Vdot[b, 4] + w2 * v0 - w0 * v2
+                a2 = Vdot[b, 5] + w0 * v1 - w1 * v0
+                for k in range(3):
+                    acc[k] = Rb[k, 0] * a0 + Rb[k, 1] * a1 + Rb[k, 2] * a2
+            else:
+                for k in range(3):
+                    acc[k] = Vdot[b, 3 + k]
+        flags[i] = write_row(code[i], Rb, om, omd, prev[i], first, p, pt, ptt)
+        nflag += flags[i]
+        for k in range(3):
+            q[idx[i, k]] = r[b, k] - qref[i, k]
+            qt[idx[i, k]] = vel[k]
+            if doacc:
+                qtt[idx[i, k]] = acc[k]
+        for k in range(nq[i] - 3):
+            j = idx[i, 3 + k]
+            q[j] = p[k] - qref[i, 3 + k]
+            qt[j] = pt[k]
+            if doacc:
+                qtt[j] = ptt[k]
+    return nflag
+
+
+@njit(cache=True)
+def write_multipliers(lam, jrow, jae, jsign, ae):
+    for i in range(jrow.shape[0]):
+        ae[jae[i]] = jsign[i] * lam[jrow[i]]
+
+
+@njit(cache=True)
+def write_all(gid, R, r, V, Vdot, lam, doacc, code, body, idx, nq, qref, prev, q, qt, qtt, flags, jrow, jae, jsign,
+              ae):
+    """write_nodes + write_multipliers in one call."""
+    if doacc:
+        write_multipliers(lam, jrow, jae, jsign, ae)
+    return write_nodes(gid, R, r, V, Vdot, doacc, code, body, idx, nq, qref, prev, False, q, qt, qtt, flags)
+
+
+
+class NodeKind:
+    """Base class: nodes ``ids`` (Exudyn node numbers) of one type with coordinates
+    ``[position(3), rotation parameters(nrot)]`` at ODE2 indices ``idx`` (n, 3+nrot).
+
+    Per type: ``typeName`` (Exudyn's nodeType), ``code`` (selects the compiled row writer
+    :func:`write_row`), ``nrot`` and the numpy maps ``rotation``, ``omega_from_rate``,
+    ``rate_from_omega``, ``rate2_from_omega`` (independent of the compiled writer; the
+    tests check one against the other)."""
+    typeName = ""
+    code = -1
+    nrot = 3
+    # ((i, j), limit): the coordinates are singular where |R[i, j]| reaches 1; the bridge
+    # watches the entry at every internal step and warns above ``limit`` (None: regular)
+    singularity = None
+
+    def __init__(self, ids, idx, qref):
+        self.ids = np.asarray(ids, dtype=np.int64)
+        n = len(self.ids)
+        self.idx = np.asarray(idx, dtype=np.int64).reshape(n, 3 + self.nrot)
+        self.qref = np.asarray(qref, float).reshape(n, 3 + self.nrot)
+        self.prev = np.zeros((n, 4))        # last total rotation parameters (continuity)
+        self.first = True
+        self.warned = np.zeros(n, bool)
+
+    def __len__(self):
+        return len(self.ids)
+
+    # ---- per type (numpy)
+    def rotation(self, p):
+        """R (n,3,3) from total rotation parameters p (n, nrot)."""
+        raise NotImplementedError
+
+    def omega_from_rate(self, p, p_t):
+        raise NotImplementedError
+
+    def rate_from_omega(self, p, omega):
+        raise NotImplementedError
+
+    def rate2_from_omega(self, p, p_t, omega, omegad):
+        raise NotImplementedError
+
+    def check_params(self, p, quiet=False):
+        """Validate / normalise total rotation parameters read from Exudyn."""
+        return np.array(p, float, copy=True)
+
+    # ---- common
+    def read(self, q, q_t):
+        """(R, r, omega_local, vel_world) from the current coordinates q and velocities q_t
+        (full ODE2 system vectors); also the start of the continuity tracking."""
+        tot = self.qref + q[self.idx]
+        vel = q_t[self.idx]
+        p = self.check_params(tot[:, 3:])
+        self.prev[:, :self.nrot] = p
+        self.first = False
+        return self.rotation(p), tot[:, :3].copy(), self.omega_from_rate(p, vel[:, 3:]), vel[:, :3].copy()
+
+    def write(self, R, r, omega, vel, omegad=None, acc=None, q=None, q_t=None, q_tt=None):
+        """Scatter the state into the full system vectors q, q_t (and q_tt if given);
+        returns the total rotation parameters (n, nrot)."""
+        n, m = len(self), self.nrot
+        out = np.zeros((n, m))
+        p_t = np.zeros(m)
+        p_tt = np.zeros(m)
+        zero = np.zeros(3)
+        for i in range(n):
+            p = out[i]
+            flag = write_row(self.code, np.ascontiguousarray(R[i], dtype=float),
+                             np.ascontiguousarray(omega[i], dtype=float),
+                             zero if omegad is None else np.ascontiguousarray(omegad[i], dtype=float),
+                             self.prev[i], self.first, p, p_t, p_tt)
+            ix = self.idx[i]
+            q[ix[:3]] = np.asarray(r[i]) - self.qref[i, :3]
+            q[ix[3:]] = p - self.qref[i, 3:]
+            q_t[ix[:3]] = vel[i]
+            q_t[ix[3:]] = p_t
+            if q_tt is not None and omegad is not None:
+                q_tt[ix[:3]] = acc[i]
+                q_tt[ix[3:]] = p_tt
+            if flag:
+                self.singular_warning(i)
+        self.first = False
+        return out
+
+    def singular_warning(self, i):
+        pass
+
+    def velocity_map(self, q):
+        """T (n, 3+nrot, 6): node velocity coordinates = T (omega_local, vel_world)."""
+        p = self.check_params(self.qref[:, 3:] + q[self.idx[:, 3:]], quiet=True)
+        n = len(self)
+        T = np.zeros((n, 3 + self.nrot, 6))
+        T[:, :3, 3:] = np.eye(3)
+        for k in range(3):
+            e = np.zeros((n, 3))
+            e[:, k] = 1.0
+            T[:, 3:, k] = self.rate_from_omega(p, e)
+        return T
+
+    def velocity_map_dot(self, q, q_t):
+        """Tdot (omega, vel) = d/dt(T) applied to (omega, vel): the velocity-product
+        part of the node accelerations, q_tt = T (omegadot, acc) + Tdot (omega, vel)."""
+        p = self.qref[:, 3:] + q[self.idx[:, 3:]]
+        p_t = q_t[self.idx[:, 3:]]
+        omega = self.omega_from_rate(p, p_t)
+        n = len(self)
+        out = np.zeros((n, 3 + self.nrot))
+        out[:, 3:] = self.rate2_from_omega(p, p_t, omega, np.zeros((n, 3)))
+        return out
+
+
+class RotVecLGNode(NodeKind):
+    """``NodeRigidBodyRotVecLG``: rotation vector, velocities ``[v world, omega local]``.
+
+    Writing keeps the rotation vector continuous past |theta| = pi (no flip when the
+    rotation angle oscillates about pi) and returns to the principal branch when
+    |theta| would exceed 3 pi / 2: Exudyn 1.13.6 evaluates rotation vectors with
+    |theta| > 2 pi incorrectly, so the total must stay inside |theta| < 2 pi."""
+    typeName = "RigidBodyRotVecLG"
+    code = CODE_ROTVEC
+    nrot = 3
+
+    def check_params(self, p, quiet=False):
+        big = np.linalg.norm(p, axis=1) > rot.TWO_PI
+        if np.any(big) and not quiet:
+            warnings.warn(f"exudyn_lie: RotVecLG node(s) {self.ids[big].tolist()} have a rotation vector "
+                          f"with |theta| > 2 pi; Exudyn 1.13.6 evaluates such vectors incorrectly, "
+                          f"exudyn_lie uses the exact rotation exp(theta)", RuntimeWarning, stacklevel=4)
+        return np.array(p, float, copy=True)
+
+    def rotation(self, p):
+        return rot.rotvec_to_matrix(p)
+
+    def omega_from_rate(self, p, p_t):
+        return np.array(p_t, float, copy=True)
+
+    def rate_from_omega(self, p, omega):
+        return np.array(omega, float, copy=True)
+
+    def rate2_from_omega(self, p, p_t, omega, omegad):
+        return np.array(omegad, float, copy=True)
+
+
+class EPNode(NodeKind):
+    """``NodeRigidBodyEP``: Euler parameters (+ Exudyn's algebraic |ep| = 1 equation, whose
+    multiplier is 0), velocities ``[v world, ep_t]``.  The sign of ep is kept continuous."""
+    typeName = "RigidBodyEP"
+    code = CODE_EP
+    nrot = 4
+    TOL = 1e-6
+
+    def check_params(self, p, quiet=False):
+        nrm = np.linalg.norm(p, axis=1)
+        bad = np.abs(nrm - 1.0) > self.TOL
+        if np.any(bad) and not quiet:
+            from .reader import BridgeError
+            i = int(np.argmax(bad))
+            raise BridgeError(f"NodeRigidBodyEP {int(self.ids[i])}: Euler parameters (reference + initial) "
+                              f"have norm {nrm[i]:.9g}, not 1; give unit Euler parameters (e.g. from "
+                              f"RotationMatrix2EulerParameters)")
+        return p / nrm[:, None]
+
+    def rotation(self, p):
+        return rot.ep_to_matrix(p)
+
+    def omega_from_rate(self, p, p_t):
+        return np.einsum("nij,nj->ni", rot.ep_glocal(p), p_t)
+
+    def rate_from_omega(self, p, omega):
+        return 0.25 * np.einsum("nji,nj->ni", rot.ep_glocal(p), omega)
+
+    def rate2_from_omega(self, p, p_t, omega, omegad):
+        return 0.25 * (np.einsum("nji,nj->ni", rot.ep_glocal(p_t), omega)
+                       + np.einsum("nji,nj->ni", rot.ep_glocal(p), omegad))
+
+
+class RxyzNode(NodeKind):
+    """``NodeRigidBodyRxyz``: Tait-Bryan angles R = Rx Ry Rz, velocities ``[v, angle rates]``.
+
+    Writing keeps the angles continuous (both solutions of R, nearest 2 pi shift) and
+    warns once per node when the middle angle comes within 5 deg of +-90 deg, where the
+    angle rates ``GR^-1 omega`` grow without bound (the integration itself, done on R, is
+    not affected)."""
+    typeName = "RigidBodyRxyz"
+    code = CODE_RXYZ
+    nrot = 3
+    singularity = ((0, 2), math.sqrt(1.0 - RXYZ_WARN_COS ** 2))     # R[0, 2] = sin(beta)
+
+    def singular_warning(self, i):
+        if self.warned[i]:
+            return
+        self.warned[i] = True
+        warnings.warn(f"exudyn_lie: NodeRigidBodyRxyz {int(self.ids[i])}: the middle Tait-Bryan angle is "
+                      f"within 5 deg of +-90 deg (singularity of Rxyz); the angle rates written to Exudyn, "
+                      f"GR^-1 omega, become large and are infinite at 90 deg. The Lie group integration is "
+                      f"not affected; use NodeRigidBodyRotVecLG or EP nodes to avoid this",
+                      RuntimeWarning, stacklevel=3)
+
+    def rotation(self, p):
+        return rot.rxyz_to_matrix(p)
+
+    def omega_from_rate(self, p, p_t):
+        return np.einsum("nij,nj->ni", rot.rxyz_glocal(p), p_t)
+
+    def rate_from_omega(self, p, omega):
+        return np.linalg.solve(rot.rxyz_glocal(p), np.asarray(omega, float)[..., None])[..., 0]
+
+    def rate2_from_omega(self, p, p_t, omega, omegad):
+        rhs = np.asarray(omegad, float) - np.einsum("nij,nj->ni", rot.rxyz_glocal_dot(p, p_t), p_t)
+        return np.linalg.solve(rot.rxyz_glocal(p), rhs[..., None])[..., 0]
+
+
+#: the registry: Exudyn ``nodeType`` string -> class
+NODE_KINDS = {cls.typeName: cls for cls in (RotVecLGNode, EPNode, RxyzNode)}

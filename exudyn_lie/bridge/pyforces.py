@@ -1,0 +1,272 @@
+"""Exudyn items evaluated in Python (``Scene.AddPythonForce``): connectors with Python
+user functions, the RigidBodySpringDamper (not compiled by the kernel yet) and loads
+with a ``loadVectorUserFunction``.
+
+Every item implements ``add(t, st, F, T)``: it adds world forces ``F[b]`` (acting at the
+frame origin of body ``b``) and world torques ``T[b]`` for the body states ``st``
+(:class:`exudyn_lie.mbs.state.BodyStates`).  A force ``f`` at a body point ``p`` adds
+``f`` to ``F[b]`` and ``(p - r_b) x f`` to ``T[b]``.  User functions are called with
+Exudyn's signatures and the real ``mbs``.
+
+The force laws are Exudyn's (checked against ``ComputeODE2RHS`` in
+``tests/test_bridge_oracle.py``):
+
+* SpringDamper: ``f = uf(mbs, t, i, L - L0, Ldot - velocityOffset, k, d, force)``, tension
+  along ``e = (p1 - p0)/L``: ``-f e`` on marker 1, ``+f e`` on marker 0;
+* CartesianSpringDamper: ``f = uf(mbs, t, i, u, udot, k, d, offset)`` with
+  ``u = p1 - p0 - offset``: ``-f`` on marker 1, ``+f`` on marker 0;
+* TorsionalSpringDamper: ``tau = uf(mbs, t, i, phi, phidot, k, d, offset)``, ``phi`` the z
+  Tait-Bryan angle of ``J0^T J1`` (tracked over turns), ``phidot = z0 . (w1 - w0)``;
+  torque ``-tau z0`` on marker 1, ``+tau z0`` on marker 0;
+* RigidBodySpringDamper, Tait-Bryan form: ``u = (J0^T (p1 - p0), xyz angles of J0^T J1) - offset``,
+  ``udot = (J0^T (v1 - v0), J0^T (w1 - w0))``; intrinsic form: ``u = log_SE3(J0, J1) - offset``
+  (``(V(theta)^-1 J0^T (p1 - p0), theta)``), ``udot`` in the mid frame ``Jm = J0 exp(theta/2)``,
+  the force acting at the mid point (extra torque ``1/2 (Jm u_t) x F`` on both sides);
+  ``(f, m) = K u + D udot`` in that frame, or ``uf(mbs, t, i, u_disp + off_disp, u_rot + off_rot,
+  udot_v, udot_w, K, D, rotationMarker0, rotationMarker1, offset)`` (Exudyn passes the
+  displacement and rotation without the offset).
+"""
+import numpy as np
+
+from ..mbs.scene import GROUND
+from . import rotations as rot
+
+
+def _cross(a, b):
+    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
+
+
+def marker_state(mf, st):
+    """(p, v, A, w, rb) of a marker: world position, velocity, world rotation of the
+    marker frame (body rotation for position markers), world angular velocity, body
+    frame origin (None for ground)."""
+    if mf.body == GROUND:
+        z = np.zeros(3)
+        return mf.pos, z, mf.rotation(), z, None
+    b = mf.body
+    R = st.R[b]
+    s = mf.pos
+    om = st.omega[b]
+    p = st.r[b] + R @ s
+    v = st.vel[b] + R @ _cross(om, s)
+    return p, v, R @ mf.rotation(), R @ om, st.r[b]
+
+
+def apply(mf, p, rb, f, tq, F, T):
+    """Add the world force f at world point p and world torque tq to the marker's body."""
+    if mf.body == GROUND:
+        return
+    F[mf.body] += f
+    T[mf.body] += tq + _cross(p - rb, f)
+
+
+class PyItem:
+    """Base: an Exudyn item evaluated in Python."""
+    label = ""
+
+    def bodies(self):
+        return []
+
+    def add(self, t, st, F, T):
+        raise NotImplementedError
+
+
+class _Connector(PyItem):
+    def __init__(self, mbs, o, d, A, B):
+        self.mbs = mbs
+        self.o = int(o)
+        self.d = d
+        self.A = A
+        self.B = B
+        self.label = f"object {o} Object{d['objectType']}"
+
+    def bodies(self):
+        return [self.A.body, self.B.body]
+
+
+def _call(label, fn, *args):
+    try:
+        return fn(*args)
+    except Exception as e:
+        raise type(e)(f"{label}: user function raised: {e}") from e
+
+
+class SpringDamperUF(_Connector):
+    def __init__(self, mbs, o, d, A, B, uf):
+        super().__init__(mbs, o, d, A, B)
+        self.uf = uf
+
+    def add(self, t, st, F, T):
+        d = self.d
+        pA, vA, _, _, rA = marker_state(self.A, st)
+        pB, vB, _, _, rB = marker_state(self.B, st)
+        dp = pB - pA
+        L = np.sqrt(dp @ dp)
+        e = dp / L
+        Ld = (vB - vA) @ e
+        f = float(_call(self.label, self.uf, self.mbs, t, self.o, L - d["referenceLength"],
+                        Ld - d.get("velocityOffset", 0.0), d["stiffness"], d["damping"], d["force"]))
+        z = np.zeros(3)
+        apply(self.A, pA, rA, f * e, z, F, T)
+        apply(self.B, pB, rB, -f * e, z, F, T)
+
+
+class CartesianSpringDamperUF(_Connector):
+    def __init__(self, mbs, o, d, A, B, uf):
+        super().__init__(mbs, o, d, A, B)
+        self.uf = uf
+
+    def add(self, t, st, F, T):
+        d = self.d
+        pA, vA, _, _, rA = marker_state(self.A, st)
+        pB, vB, _, _, rB = marker_state(self.B, st)
+        u = pB - pA - np.asarray(d["offset"], float)
+        f = np.asarray(_call(self.label, self.uf, self.mbs, t, self.o, u, vB - vA, d["stiffness"],
+                             d["damping"], d["offset"]), float).reshape(3)
+        z = np.zeros(3)
+        apply(self.A, pA, rA, f, z, F, T)
+        apply(self.B, pB, rB, -f, z, F, T)
+
+
+class TorsionalSpringDamperUF(_Connector):
+    """Torsional spring with a user function (``uf``), or without a data node
+    (``track=False``: Exudyn's angle is then the principal one, in (-pi, pi])."""
+
+    def __init__(self, mbs, o, d, A, B, rotA, rotB, uf, track=True):
+        super().__init__(mbs, o, d, A, B)
+        self.rotA = rotA
+        self.rotB = rotB
+        self.uf = uf
+        self.track = track
+        self.prev = None
+
+    def angle(self, st):
+        """(phi tracked, phidot, world z axis of the A frame, (pA, rA), (pB, rB))."""
+        pA, vA, AA, wA, rA = marker_state(self.A, st)
+        pB, vB, AB, wB, rB = marker_state(self.B, st)
+        RA = (st.R[self.A.body] @ self.rotA) if self.A.body != GROUND else self.rotA
+        RB = (st.R[self.B.body] @ self.rotB) if self.B.body != GROUND else self.rotB
+        Rrel = RA.T @ RB
+        phi = np.arctan2(-Rrel[0, 1], Rrel[0, 0])
+        if self.track:
+            if self.prev is not None:
+                phi += 2 * np.pi * np.round((self.prev - phi) / (2 * np.pi))
+            self.prev = phi
+        z = RA[:, 2]
+        return phi, z @ (wB - wA), z, (pA, rA), (pB, rB)
+
+    def add(self, t, st, F, T):
+        d = self.d
+        phi, phid, z, (pA, rA), (pB, rB) = self.angle(st)
+        if self.uf is None:
+            tau = d["stiffness"] * (phi - d["offset"]) + d["damping"] * (phid - d.get("velocityOffset", 0.0)) \
+                + d["torque"]
+        else:
+            tau = float(_call(self.label, self.uf, self.mbs, t, self.o, phi, phid, d["stiffness"], d["damping"],
+                              d["offset"]))
+        zero = np.zeros(3)
+        apply(self.A, pA, rA, zero, tau * z, F, T)
+        apply(self.B, pB, rB, zero, -tau * z, F, T)
+
+
+def _left_jacobian(th):
+    """V(theta) = I + (1 - cos t)/t^2 W + (t - sin t)/t^3 W^2 (SE(3) translation part)."""
+    t = np.linalg.norm(th)
+    W = rot.skew(th)
+    if t < 1e-4:
+        b, c = 0.5 - t * t / 24.0, 1.0 / 6.0 - t * t / 120.0
+    else:
+        b, c = (1 - np.cos(t)) / t ** 2, (t - np.sin(t)) / t ** 3
+    return np.eye(3) + b * W + c * (W @ W)
+
+
+class RigidBodySpringDamper(_Connector):
+    """Exudyn's ``ObjectConnectorRigidBodySpringDamper`` (both formulations)."""
+
+    def __init__(self, mbs, o, d, A, B, rotA, rotB, uf):
+        super().__init__(mbs, o, d, A, B)
+        self.rotA = rotA
+        self.rotB = rotB
+        self.K = np.asarray(d["stiffness"], float).reshape(6, 6)
+        self.D = np.asarray(d["damping"], float).reshape(6, 6)
+        self.off = np.asarray(d["offset"], float).reshape(6)
+        self.intrinsic = bool(d.get("useIntrinsicFormulation", False))
+        self.uf = uf
+
+    def add(self, t, st, F, T):
+        pA, vA, _, wA, rA = marker_state(self.A, st)
+        pB, vB, _, wB, rB = marker_state(self.B, st)
+        J0 = (st.R[self.A.body] @ self.rotA) if self.A.body != GROUND else self.rotA
+        J1 = (st.R[self.B.body] @ self.rotB) if self.B.body != GROUND else self.rotB
+        Rrel = J0.T @ J1
+        if self.intrinsic:
+            th = rot.matrix_to_rotvec(Rrel)[0]
+            Jm = J0 @ rot.rotvec_to_matrix(0.5 * th)[0]
+            ul = np.linalg.solve(_left_jacobian(th), J0.T @ (pB - pA))
+            u = np.r_[ul, th] - self.off
+            ut = np.r_[Jm.T @ (vB - vA), Jm.T @ (wB - wA)]
+            Jf = Jm
+            lever = 0.5 * (Jm @ ul)          # the force acts at the mid point
+        else:
+            ang = rot.matrix_to_rxyz_candidates(Rrel)[0, 0]
+            u = np.r_[J0.T @ (pB - pA), ang] - self.off
+            ut = np.r_[J0.T @ (vB - vA), J0.T @ (wB - wA)]
+            Jf = J0
+            lever = None
+        if self.uf is None:
+            fl = self.K @ u + self.D @ ut
+        else:
+            raw = u + self.off                # Exudyn passes the displacement without the offset
+            fl = np.asarray(_call(self.label, self.uf, self.mbs, t, self.o, raw[:3], raw[3:], ut[:3], ut[3:],
+                                  self.K, self.D, self.d.get("rotationMarker0", np.eye(3)),
+                                  self.d.get("rotationMarker1", np.eye(3)), self.off), float).reshape(6)
+        f = Jf @ fl[:3]
+        m = Jf @ fl[3:]
+        c = _cross(lever, f) if lever is not None else np.zeros(3)
+        apply(self.A, pA, rA, f, m + c, F, T)
+        apply(self.B, pB, rB, -f, -m + c, F, T)
+
+
+class LoadUF(PyItem):
+    """LoadForceVector / LoadTorqueVector / LoadMassProportional with a
+    ``loadVectorUserFunction(mbs, t, loadVector)``."""
+
+    def __init__(self, mbs, l, loadType, lv, mf, bodyFixed, uf, mass, com):
+        self.mbs = mbs
+        self.l = int(l)
+        self.loadType = loadType
+        self.lv = lv
+        self.mf = mf
+        self.bodyFixed = bodyFixed
+        self.uf = uf
+        self.mass = mass
+        self.com = com
+        self.label = f"load {l} Load{loadType}"
+
+    def add(self, t, st, F, T):
+        v = np.asarray(_call(self.label, self.uf, self.mbs, t, self.lv), float).reshape(3)
+        b = self.mf.body
+        R = st.R[b]
+        if self.loadType == "MassProportional":
+            f = self.mass * v
+            F[b] += f
+            T[b] += _cross(R @ self.com, f)
+            return
+        if self.bodyFixed:
+            v = R @ (self.mf.rotation() @ v)
+        if self.loadType == "ForceVector":
+            F[b] += v
+            T[b] += _cross(R @ self.mf.pos, v)
+        else:
+            T[b] += v
+
+
+def combined(items, nb):
+    """One ``Scene.AddPythonForce`` callback evaluating all items."""
+    def fn(t, st):
+        F = np.zeros((nb, 3))
+        T = np.zeros((nb, 3))
+        for it in items:
+            it.add(t, st, F, T)
+        return F, T
+    return fn

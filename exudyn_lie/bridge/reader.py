@@ -1,0 +1,545 @@
+"""Read an assembled Exudyn ``mbs`` into an exudyn_lie :class:`~exudyn_lie.mbs.Scene`.
+
+:func:`SceneFromExudyn` only *reads* ``mbs`` (items and the initial configuration); it
+never changes it.  Every item is either translated exactly (same equations as Exudyn,
+checked against Exudyn's own ``ComputeMassMatrix / ComputeODE2RHS / ComputeJacobianAE``
+in ``tests/test_bridge_oracle.py``), skipped for a stated reason (inactive connectors,
+ground-to-ground items, sensors), or rejected with a :class:`BridgeError` naming the
+item type, its index and what is supported.
+
+Mapping (Exudyn -> scene):
+
+* ``ObjectRigidBody`` on ``NodeRigidBodyRotVecLG / EP / Rxyz`` -> a body; its frame is
+  the node frame, inertia about the node (``physicsInertia``), COM ``physicsCenterOfMass``;
+* ``ObjectGround`` (reference position / rotation), ``NodePointGround`` -> ground;
+* markers ``MarkerBodyRigid / MarkerNodeRigid`` (localHT), ``MarkerBodyPosition /
+  MarkerNodePosition`` (localPosition), ``MarkerBodyMass`` (mass-proportional loads);
+* ``ObjectJointSpherical / RevoluteZ / PrismaticX / Generic`` -> ``Scene.AddJoint`` with the
+  joint frame ``marker localHT rotation @ rotationMarker`` (Exudyn's equations = the
+  kernel's ``ObjectJointGeneric`` rows, row by row, see :func:`joint_ae_map`);
+* ``ObjectConnectorSpringDamper / CartesianSpringDamper / TorsionalSpringDamper`` ->
+  compiled springs (``velocityOffset`` folded into the constant force / torque); with a
+  Python user function, a torsional spring without its NodeGenericData (Exudyn then uses
+  the principal angle), and every ``ObjectConnectorRigidBodySpringDamper`` ->
+  :mod:`.pyforces` (``Scene.AddPythonForce``, evaluated in Python at every stage);
+* ``LoadForceVector / LoadTorqueVector / LoadMassProportional`` -> constant loads (a
+  uniform mass-proportional load on every body becomes the scene's gravity), with a
+  ``loadVectorUserFunction`` -> :mod:`.pyforces`.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import List, Optional
+
+import numpy as np
+
+from ..mbs.compiled import joint_row_descriptors
+from ..mbs.kernel import ROW_ROT
+from ..mbs.scene import GROUND, Scene, SceneError
+from . import pyforces
+from .nodes import NODE_KINDS
+
+SUPPORTED_NODES = ("NodeRigidBodyRotVecLG", "NodeRigidBodyEP", "NodeRigidBodyRxyz", "NodePointGround",
+                   "NodeGenericData (data only)")
+SUPPORTED_OBJECTS = ("ObjectGround", "ObjectRigidBody", "ObjectJointSpherical", "ObjectJointRevoluteZ",
+                     "ObjectJointPrismaticX", "ObjectJointGeneric", "ObjectConnectorSpringDamper",
+                     "ObjectConnectorCartesianSpringDamper", "ObjectConnectorRigidBodySpringDamper",
+                     "ObjectConnectorTorsionalSpringDamper")
+SUPPORTED_MARKERS = ("MarkerBodyRigid", "MarkerBodyPosition", "MarkerNodeRigid", "MarkerNodePosition",
+                     "MarkerBodyMass")
+SUPPORTED_LOADS = ("LoadForceVector", "LoadTorqueVector", "LoadMassProportional")
+
+JOINT_TYPES = ("JointSpherical", "JointRevoluteZ", "JointPrismaticX", "JointGeneric")
+CONNECTOR_TYPES = ("ConnectorSpringDamper", "ConnectorCartesianSpringDamper",
+                   "ConnectorRigidBodySpringDamper", "ConnectorTorsionalSpringDamper")
+
+
+class BridgeError(SceneError):
+    """The Exudyn model contains something exudyn_lie cannot integrate (or bad data)."""
+
+
+@dataclass
+class MarkerFrame:
+    """A marker resolved to a scene body: ``pos``/``rot`` in body coordinates (world
+    coordinates for ``GROUND``); ``rot`` is None for position-only markers."""
+    index: int
+    markerType: str
+    body: int
+    pos: np.ndarray
+    rot: Optional[np.ndarray]
+
+    def rotation(self):
+        return np.eye(3) if self.rot is None else self.rot
+
+
+@dataclass
+class JointInfo:
+    """An Exudyn joint and where its kernel rows go: ``aeRows[k]`` is the Exudyn AE index
+    (global) of the scene joint's k-th row (kernel row order); ``sign`` flips lambda when
+    the sides had to be swapped; ``aeAll`` all AE indices of the object."""
+    objectIndex: int
+    objectType: str
+    sceneJoint: Optional[int]
+    aeRows: np.ndarray
+    aeAll: np.ndarray
+    sign: float = 1.0
+
+
+class ExudynScene(Scene):
+    """A :class:`Scene` read from an Exudyn ``mbs``, with the maps back to Exudyn items."""
+
+    def __init__(self, mbs, gravity=(0.0, 0.0, 0.0)):
+        super().__init__(gravity)
+        self.mbs = mbs
+        self.bodyObject: List[int] = []       # Exudyn object index of each scene body
+        self.bodyNode: List[int] = []         # Exudyn node index of each scene body
+        self.nodeKinds = []                   # NodeKind instances (one per node type present)
+        self.kindBodies = []                  # scene body indices of each NodeKind's rows
+        self.joints_info: List[JointInfo] = []
+        self.pyItems = []                     # Python force items (pyforces.PyItem)
+        self.pyConnectedBodies = set()        # bodies tied by Python-force connectors
+        self.skipped = []                     # (item, index, reason)
+        self.aeZero: List[int] = []           # AE coordinates that stay 0 (EP norm rows, inactive joints)
+        self.nodeTypes = {}                   # node index -> Exudyn node type string
+
+    def body_of_object(self, obj):
+        try:
+            return self.bodyObject.index(int(obj))
+        except ValueError:
+            return None
+
+    def describe_body(self, i):
+        o, n = self.bodyObject[i], self.bodyNode[i]
+        name = self.bodies[i].name
+        return f"object {o} ('{name}', node {n} {self.nodeTypes[n]})"
+
+
+def _userfunction(d, key, what):
+    """The Python callable of an Exudyn user-function parameter, None if unset."""
+    uf = d.get(key, 0)
+    if isinstance(uf, (int, float)) and uf == 0:
+        return None
+    if uf is None:
+        return None
+    fn = uf.get("function") if isinstance(uf, dict) else uf
+    if not callable(fn):
+        raise BridgeError(f"{what}: {key} of type {uf.get('type') if isinstance(uf, dict) else type(uf)} "
+                          f"is not a Python callable; exudyn_lie supports Python user functions only")
+    return fn
+
+
+def _ht(d):
+    """(translation, rotation) of a marker's localHT (or localPosition)."""
+    if "localHT" in d:
+        H = np.asarray(d["localHT"], float)
+        return H[:3, 3].copy(), H[:3, :3].copy()
+    return np.asarray(d.get("localPosition", [0, 0, 0]), float).copy(), None
+
+
+def _inertia_matrix(v):
+    v = np.asarray(v, float).reshape(-1)
+    if v.shape == (3, 3):
+        return v
+    Jxx, Jyy, Jzz, Jyz, Jxz, Jxy = v
+    return np.array([[Jxx, Jxy, Jxz], [Jxy, Jyy, Jyz], [Jxz, Jyz, Jzz]])
+
+
+def joint_ae_map(objectType, constrainedAxes):
+    """Local Exudyn AE index of each kernel row of the joint (kernel row order)."""
+    rows = joint_row_descriptors(constrainedAxes)
+    nrot = sum(constrainedAxes[3:])
+    out = []
+    for kind, ax, bx in rows:
+        if kind != ROW_ROT:
+            out.append(ax - 1 if objectType == "JointPrismaticX" else ax)
+            continue
+        if objectType == "JointRevoluteZ":
+            out.append(3 + bx)                              # z0.x1, z0.y1
+        elif objectType == "JointPrismaticX":
+            out.append({(2, 1): 2, (2, 0): 3, (0, 1): 4}[(ax, bx)])
+        elif nrot == 3:
+            out.append({(2, 1): 3, (2, 0): 4, (0, 1): 5}[(ax, bx)])
+        elif nrot == 2:
+            out.append(3 + bx)
+        else:
+            out.append(3 + [i for i in range(3) if constrainedAxes[3 + i]][0])
+    return out
+
+
+class _Reader:
+    def __init__(self, mbs, configuration):
+        import exudyn as exu
+        self.exu = exu
+        self.mbs = mbs
+        self.sd = mbs.systemData
+        if not mbs.systemIsConsistent:
+            raise BridgeError("mbs is not assembled (mbs.systemIsConsistent is False); call mbs.Assemble() "
+                              "first (SolveDynamic does that with autoAssemble=True)")
+        cfg = {"initial": exu.ConfigurationType.Initial, "current": exu.ConfigurationType.Current}
+        if configuration.lower() not in cfg:
+            raise BridgeError(f"configuration must be 'initial' or 'current', got {configuration!r}")
+        c = cfg[configuration.lower()]
+        self.q = np.asarray(self.sd.GetODE2Coordinates(configuration=c), float)
+        self.q_t = np.asarray(self.sd.GetODE2Coordinates_t(configuration=c), float)
+        self.nObjects = self.sd.NumberOfObjects()
+        self.objects = [mbs.GetObject(i) for i in range(self.nObjects)]
+        self.markers = {}
+        self.ground = {}          # object index -> (pos, rot) of ObjectGround
+        self.rigidNodeBody = {}   # node index -> scene body
+        self.badNodes = []
+
+    # ------------------------------------------------------------------ nodes
+    def read_nodes(self, sc: ExudynScene):
+        mbs = self.mbs
+        byKind = {}
+        for n in range(self.sd.NumberOfNodes()):
+            d = mbs.GetNode(n)
+            t = d["nodeType"]
+            sc.nodeTypes[n] = t
+            if t in NODE_KINDS:
+                byKind.setdefault(t, []).append(n)
+            elif t in ("PointGround", "GenericData"):
+                continue
+            else:
+                self.badNodes.append((n, d.get("name", ""), t))
+        self.byKind = byKind
+
+    def check_nodes(self):
+        """Unsupported nodes not already reported through their object."""
+        for n, name, t in self.badNodes:
+            raise BridgeError(f"node {n} ('{name}') of type Node{t} is not supported by exudyn_lie; supported "
+                              f"nodes: {', '.join(SUPPORTED_NODES)}")
+
+    # ------------------------------------------------------------------ bodies
+    def read_bodies(self, sc: ExudynScene):
+        mbs = self.mbs
+        bodyOfNode = {}
+        for o, d in enumerate(self.objects):
+            t = d["objectType"]
+            if t == "Ground":
+                R = np.asarray(d.get("referenceRotation", np.eye(3)), float)
+                self.ground[o] = (np.asarray(d.get("referencePosition", [0, 0, 0]), float), R)
+            elif t == "RigidBody":
+                n = int(d["nodeNumber"])
+                nt = sc.nodeTypes.get(n)
+                if nt not in NODE_KINDS:
+                    raise BridgeError(f"object {o} ('{d.get('name', '')}') ObjectRigidBody uses node {n} of "
+                                      f"type Node{nt}; supported rigid-body nodes: "
+                                      f"{', '.join('Node' + k for k in NODE_KINDS)}")
+                if n in bodyOfNode:
+                    raise BridgeError(f"object {o} ('{d.get('name', '')}') ObjectRigidBody shares node {n} with "
+                                      f"object {bodyOfNode[n]}; one rigid body per node is supported")
+                bodyOfNode[n] = o
+            elif t not in JOINT_TYPES + CONNECTOR_TYPES:
+                raise BridgeError(f"object {o} ('{d.get('name', '')}') of type Object{t} is not supported by "
+                                  f"exudyn_lie; supported objects: {', '.join(SUPPORTED_OBJECTS)}")
+        self.check_nodes()
+        # node kinds, in node order; states of all nodes of a kind at once
+        states = {}
+        for t, nodes in self.byKind.items():
+            nodes = [n for n in nodes if n in bodyOfNode]
+            if not nodes:
+                continue
+            idx = np.array([self.sd.GetNodeLTGODE2(n) for n in nodes], dtype=np.int64)
+            qref = np.array([np.asarray(mbs.GetNode(n)["referenceCoordinates"], float) for n in nodes])
+            for k, n in enumerate(nodes):
+                for name, arr in (("coordinates", self.q), ("velocities", self.q_t)):
+                    if not np.all(np.isfinite(arr[idx[k]])) or not np.all(np.isfinite(qref[k])):
+                        raise BridgeError(f"node {n} ({t}, body object {bodyOfNode[n]}): initial {name} are not "
+                                          f"finite: {arr[idx[k]] if np.all(np.isfinite(qref[k])) else qref[k]}")
+            kind = NODE_KINDS[t](nodes, idx, qref)
+            R, r, om, vel = kind.read(self.q, self.q_t)
+            for k, n in enumerate(nodes):
+                states[n] = (R[k], r[k], om[k], vel[k])
+            sc.nodeKinds.append(kind)
+        # bodies in object order
+        for o, d in enumerate(self.objects):
+            if d["objectType"] != "RigidBody":
+                continue
+            n = int(d["nodeNumber"])
+            R, r, om, vel = states[n]
+            label = d.get("name", "") or f"object{o}"
+            try:
+                b = sc.AddBody(mass=float(d["mass"]), inertia=_inertia_matrix(d["inertia"]),
+                               com=np.asarray(d.get("centerOfMass", [0, 0, 0]), float), R0=_orthonormal(R),
+                               r0=r, omega0=om, vel0=vel, name=label)
+            except SceneError as e:
+                raise BridgeError(f"object {o} ObjectRigidBody: {e}") from None
+            sc.bodyObject.append(o)
+            sc.bodyNode.append(n)
+            self.rigidNodeBody[n] = b
+        for kind in sc.nodeKinds:
+            sc.kindBodies.append(np.array([self.rigidNodeBody[n] for n in kind.ids], dtype=np.int64))
+        if sc.nBodies == 0:
+            raise BridgeError("the Exudyn model has no ObjectRigidBody; nothing to integrate")
+        # EP normalisation rows stay 0
+        for n, t in sc.nodeTypes.items():
+            if t == "RigidBodyEP":
+                try:
+                    sc.aeZero.extend(int(i) for i in self.sd.GetNodeLTGAE(n))
+                except Exception:
+                    pass
+
+    # ------------------------------------------------------------------ markers
+    def marker(self, m, what, need_rotation=False, allow_mass=False) -> MarkerFrame:
+        m = int(m)
+        if m in self.markers:
+            mf = self.markers[m]
+        else:
+            if not 0 <= m < self.sd.NumberOfMarkers():
+                raise BridgeError(f"{what}: marker {m} does not exist")
+            d = self.mbs.GetMarker(m)
+            t = d["markerType"]
+            pos, Rm = _ht(d)
+            if t in ("BodyRigid", "BodyPosition", "BodyMass"):
+                o = int(d["bodyNumber"])
+                if o in self.ground:
+                    gp, gR = self.ground[o]
+                    body, pos, Rm = GROUND, gp + gR @ pos, (None if Rm is None else gR @ Rm)
+                elif self.objects[o]["objectType"] == "RigidBody":
+                    body = self._body_of_object(o)
+                else:
+                    raise BridgeError(f"{what}: marker {m} (Marker{t}) is attached to object {o} of type "
+                                      f"Object{self.objects[o]['objectType']}, not to a rigid body or ground")
+                if t == "BodyMass":
+                    pos, Rm = np.zeros(3), None
+            elif t in ("NodeRigid", "NodePosition"):
+                n = int(d["nodeNumber"])
+                nt = self.mbs.GetNode(n)["nodeType"]
+                if nt == "PointGround":
+                    body = GROUND
+                    pos = np.asarray(self.mbs.GetNode(n)["referenceCoordinates"], float)[:3] + (
+                        np.zeros(3) if t == "NodePosition" else pos)
+                elif n in self.rigidNodeBody:
+                    body = self.rigidNodeBody[n]
+                    if t == "NodePosition":
+                        pos = np.zeros(3)
+                else:
+                    raise BridgeError(f"{what}: marker {m} (Marker{t}) is attached to node {n} of type Node{nt}, "
+                                      f"which belongs to no ObjectRigidBody")
+            else:
+                raise BridgeError(f"{what}: marker {m} of type Marker{t} is not supported by exudyn_lie; "
+                                  f"supported markers: {', '.join(SUPPORTED_MARKERS)}")
+            mf = MarkerFrame(m, t, body, np.asarray(pos, float), Rm)
+            self.markers[m] = mf
+        if mf.markerType == "BodyMass" and not allow_mass:
+            raise BridgeError(f"{what}: marker {m} is a MarkerBodyMass, which only mass-proportional loads use")
+        if need_rotation and mf.rot is None:
+            raise BridgeError(f"{what}: marker {m} (Marker{mf.markerType}) has no orientation; this item needs "
+                              f"a MarkerBodyRigid or MarkerNodeRigid")
+        return mf
+
+    def _body_of_object(self, o):
+        n = int(self.objects[o]["nodeNumber"])
+        return self.rigidNodeBody[n]
+
+    # ------------------------------------------------------------------ joints / connectors
+    def read_items(self, sc: ExudynScene):
+        for o, d in enumerate(self.objects):
+            t = d["objectType"]
+            if t in JOINT_TYPES:
+                self.read_joint(sc, o, d)
+            elif t in CONNECTOR_TYPES:
+                self.read_connector(sc, o, d)
+
+    def _what(self, kind, o, d):
+        return f"object {o} ('{d.get('name', '')}') Object{d['objectType']}"
+
+    def read_joint(self, sc, o, d):
+        t = d["objectType"]
+        what = self._what("object", o, d)
+        try:
+            aeAll = np.array(self.sd.GetObjectLTGAE(o), dtype=np.int64)
+        except Exception:
+            aeAll = np.zeros(0, np.int64)
+        if not d.get("activeConnector", True):
+            sc.skipped.append((what, "inactive (activeConnector=False): Exudyn sets its multipliers to 0"))
+            sc.aeZero.extend(aeAll.tolist())
+            return
+        for key in ("offsetUserFunction", "offsetUserFunction_t"):
+            if _userfunction(d, key, what) is not None:
+                raise BridgeError(f"{what}: {key} (moving joint offsets) is not supported by exudyn_lie")
+        if d.get("alternativeConstraints", False):
+            raise BridgeError(f"{what}: alternativeConstraints=True is not supported by exudyn_lie; use the "
+                              f"default rotation constraints")
+        m0, m1 = (int(m) for m in d["markerNumbers"])
+        spherical = t == "JointSpherical"
+        A = self.marker(m0, what, need_rotation=not spherical)
+        B = self.marker(m1, what, need_rotation=not spherical)
+        if A.body == GROUND and B.body == GROUND:
+            sc.skipped.append((what, "connects ground to ground"))
+            sc.aeZero.extend(aeAll.tolist())
+            return
+        if spherical:
+            ca = tuple(int(c) for c in d.get("constrainedAxes", [1, 1, 1])) + (0, 0, 0)
+        elif t == "JointRevoluteZ":
+            ca = (1, 1, 1, 1, 1, 0)
+        elif t == "JointPrismaticX":
+            ca = (0, 1, 1, 1, 1, 1)
+        else:
+            ca = tuple(int(c) for c in d["constrainedAxes"])
+        if sum(ca) == 0:
+            sc.skipped.append((what, "constrains no axis"))
+            sc.aeZero.extend(aeAll.tolist())
+            return
+        sign = 1.0
+        if spherical:
+            # Exudyn: world components of p1 - p0 for the locked axes
+            rotA = rotB = np.eye(3)
+            if sum(ca[:3]) < 3:
+                if A.body != GROUND and B.body == GROUND:
+                    A, B, sign = B, A, -1.0          # rows -(p0 - p1): same row space, lambda flips
+                elif A.body != GROUND:
+                    raise BridgeError(f"{what}: constrainedAxes={list(ca[:3])} between two bodies is not "
+                                      f"supported by the exudyn_lie kernel (world-frame rows for partially "
+                                      f"locked spherical joints); lock all three axes, or attach one side to "
+                                      f"ground")
+                # A is ground: the kernel's rows in A's joint frame are world rows if rotA = I
+                rotA = np.eye(3)
+        else:
+            rotA = A.rot @ np.asarray(d.get("rotationMarker0", np.eye(3)), float)
+            rotB = B.rot @ np.asarray(d.get("rotationMarker1", np.eye(3)), float)
+        kind = {"JointSpherical": "spherical", "JointRevoluteZ": "revolute", "JointPrismaticX": "prismatic",
+                "JointGeneric": "generic"}[t]
+        try:
+            j = sc.AddJoint(A.body, B.body, ca, posA=A.pos, rotA=_orthonormal(rotA), posB=B.pos,
+                            rotB=_orthonormal(rotB), kind=kind, name=d.get("name", "") or f"object{o}")
+        except SceneError as e:
+            raise BridgeError(f"{what}: {e}") from None
+        local = joint_ae_map(t, ca)
+        if spherical:
+            local = [ax for ax in range(3) if ca[ax]]
+        aeRows = aeAll[local] if len(aeAll) else np.zeros(0, np.int64)
+        sc.joints_info.append(JointInfo(o, t, j, aeRows, aeAll, sign))
+        # AE rows of unlocked axes (g = lambda) stay 0
+        sc.aeZero.extend(sorted(set(aeAll.tolist()) - set(aeRows.tolist())))
+
+    def read_connector(self, sc, o, d):
+        t = d["objectType"]
+        what = self._what("object", o, d)
+        if not d.get("activeConnector", True):
+            sc.skipped.append((what, "inactive (activeConnector=False)"))
+            return
+        m0, m1 = (int(m) for m in d["markerNumbers"])
+        rigid = t in ("ConnectorRigidBodySpringDamper", "ConnectorTorsionalSpringDamper")
+        A = self.marker(m0, what, need_rotation=rigid)
+        B = self.marker(m1, what, need_rotation=rigid)
+        if A.body == GROUND and B.body == GROUND:
+            sc.skipped.append((what, "connects ground to ground (no force on any body)"))
+            return
+        name = d.get("name", "") or f"object{o}"
+        if t == "ConnectorSpringDamper":
+            uf = _userfunction(d, "springForceUserFunction", what)
+            if uf is None:
+                sc.AddSpringDamper(A.body, A.pos, B.body, B.pos, d["stiffness"], d["damping"],
+                                   d["referenceLength"], float(d["force"]) - float(d["damping"]) * float(
+                                       d.get("velocityOffset", 0.0)), name=name)
+            else:
+                self._py(sc, pyforces.SpringDamperUF(self.mbs, o, d, A, B, uf))
+        elif t == "ConnectorCartesianSpringDamper":
+            uf = _userfunction(d, "springForceUserFunction", what)
+            if uf is None:
+                sc.AddCartesianSpringDamper(A.body, A.pos, B.body, B.pos, d["stiffness"], d["damping"],
+                                            d["offset"], name=name)
+            else:
+                self._py(sc, pyforces.CartesianSpringDamperUF(self.mbs, o, d, A, B, uf))
+        elif t == "ConnectorTorsionalSpringDamper":
+            uf = _userfunction(d, "springTorqueUserFunction", what)
+            rotA = A.rot @ np.asarray(d.get("rotationMarker0", np.eye(3)), float)
+            rotB = B.rot @ np.asarray(d.get("rotationMarker1", np.eye(3)), float)
+            track = int(d.get("nodeNumber", -1)) >= 0      # NodeGenericData: angle unwrapped over turns
+            if uf is None and track:
+                # Scene (= Exudyn's law): tau = k (phi - off) + d phidot + torque, -tau z_A on B;
+                # Exudyn's velocityOffset vo enters as d (phidot - vo): torque - d vo
+                sc.AddTorsionalSpringDamper(A.body, B.body, rotA=_orthonormal(rotA), rotB=_orthonormal(rotB),
+                                            stiffness=d["stiffness"], damping=d["damping"], offset=d["offset"],
+                                            torque=float(d["torque"]) - float(d["damping"]) * float(
+                                                d.get("velocityOffset", 0.0)), name=name)
+            else:
+                # a user function, or no data node: Exudyn then uses the principal angle in
+                # (-pi, pi] (the torque jumps at +-pi), which the compiled spring does not do
+                self._py(sc, pyforces.TorsionalSpringDamperUF(self.mbs, o, d, A, B, rotA, rotB, uf, track))
+        elif t == "ConnectorRigidBodySpringDamper":
+            uf = _userfunction(d, "springForceTorqueUserFunction", what)
+            if _userfunction(d, "postNewtonStepUserFunction", what) is not None:
+                raise BridgeError(f"{what}: postNewtonStepUserFunction (switching / data coordinates) is not "
+                                  f"supported by exudyn_lie")
+            rotA = A.rot @ np.asarray(d.get("rotationMarker0", np.eye(3)), float)
+            rotB = B.rot @ np.asarray(d.get("rotationMarker1", np.eye(3)), float)
+            self._py(sc, pyforces.RigidBodySpringDamper(self.mbs, o, d, A, B, rotA, rotB, uf))
+
+    def _py(self, sc, item):
+        sc.pyItems.append(item)
+        for b in item.bodies():
+            if b != GROUND:
+                sc.pyConnectedBodies.add(b)
+
+    # ------------------------------------------------------------------ loads
+    def read_loads(self, sc: ExudynScene):
+        mass_prop = {}      # body -> summed constant mass-proportional vector
+        mass_prop_loads = []
+        for l in range(self.sd.NumberOfLoads()):
+            d = self.mbs.GetLoad(l)
+            t = d["loadType"]
+            what = f"load {l} ('{d.get('name', '')}') Load{t}"
+            if t not in ("ForceVector", "TorqueVector", "MassProportional"):
+                raise BridgeError(f"{what} is not supported by exudyn_lie; supported loads: "
+                                  f"{', '.join(SUPPORTED_LOADS)}")
+            lv = np.asarray(d["loadVector"], float)
+            if not np.all(np.isfinite(lv)):
+                raise BridgeError(f"{what}: loadVector is not finite: {lv}")
+            uf = _userfunction(d, "loadVectorUserFunction", what)
+            mf = self.marker(d["markerNumber"], what, allow_mass=(t == "MassProportional"))
+            if t == "MassProportional" and mf.markerType != "BodyMass":
+                raise BridgeError(f"{what}: needs a MarkerBodyMass, got Marker{mf.markerType}")
+            if mf.body == GROUND:
+                sc.skipped.append((what, "acts on ground"))
+                continue
+            name = d.get("name", "") or f"load{l}"
+            bodyFixed = bool(d.get("bodyFixed", False))
+            if uf is not None:
+                sc.pyItems.append(pyforces.LoadUF(self.mbs, l, t, lv, mf, bodyFixed, uf,
+                                                  sc.bodies[mf.body].mass, sc.bodies[mf.body].com))
+                continue
+            Rm = mf.rotation()
+            if t == "ForceVector":
+                sc.AddForce(mf.body, Rm @ lv if bodyFixed else lv, position=mf.pos, bodyFixed=bodyFixed, name=name)
+            elif t == "TorqueVector":
+                sc.AddTorque(mf.body, Rm @ lv if bodyFixed else lv, bodyFixed=bodyFixed, name=name)
+            else:
+                mass_prop[mf.body] = mass_prop.get(mf.body, np.zeros(3)) + lv
+                mass_prop_loads.append(name)
+        # a mass-proportional load equal on every body is gravity (energy diagnostics include it)
+        vecs = [mass_prop.get(b) for b in range(sc.nBodies)]
+        if all(v is not None for v in vecs) and all(np.array_equal(v, vecs[0]) for v in vecs):
+            sc.gravity = np.array(vecs[0], float)
+        else:
+            for b, v in mass_prop.items():
+                B = sc.bodies[b]
+                sc.AddForce(b, B.mass * v, position=B.com, name=f"massProportional{b}")
+
+
+def _orthonormal(R):
+    """Remove rounding noise (Exudyn stores 1e-16-accurate matrices; Scene wants 1e-8)."""
+    R = np.asarray(R, float)
+    U, s, Vt = np.linalg.svd(R)
+    if np.max(np.abs(s - 1.0)) > 1e-6:
+        raise BridgeError(f"rotation matrix is not orthonormal (singular values {s})")
+    return U @ Vt
+
+
+def SceneFromExudyn(mbs, configuration="initial") -> ExudynScene:
+    """Read an assembled Exudyn ``mbs`` into an :class:`ExudynScene` (a :class:`Scene`).
+
+    ``configuration``: ``'initial'`` (what a solve starts from) or ``'current'``.
+    ``mbs`` is not modified.  Raises :class:`BridgeError` for unsupported items."""
+    rd = _Reader(mbs, configuration)
+    sc = ExudynScene(mbs)
+    rd.read_nodes(sc)
+    rd.read_bodies(sc)
+    rd.read_items(sc)
+    rd.read_loads(sc)
+    sc.aeZero = sorted(set(sc.aeZero))
+    if sc.pyItems:
+        sc.AddPythonForce(pyforces.combined(sc.pyItems, sc.nBodies), name="exudyn user functions")
+    return sc

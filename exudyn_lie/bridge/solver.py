@@ -1,0 +1,593 @@
+"""``SolveDynamic`` for ordinary Exudyn scripts, and :class:`LieGroupSolver` (read once,
+solve many times).
+
+How it works: the model is read into a :class:`~exudyn_lie.mbs.Scene`
+(:func:`~exudyn_lie.bridge.reader.SceneFromExudyn`) and integrated by the package's
+:class:`~exudyn_lie.mbs.Simulator` *inside Exudyn's own time loop*: an
+``exudyn.MainSolverImplicitSecondOrder`` runs with its Newton iteration replaced by a
+hook (``SetUserFunctionNewton``) that advances the Munthe-Kaas integrator and writes the
+state back into the nodes (:mod:`.nodes`).  Exudyn therefore does everything else as in
+a native solve: sensors (stored and files), the solution file, pre/post-step user
+functions, the renderer, ``mbs.sys['dynamicSolver']`` and the final state left in
+``mbs``.
+
+Sub-stepping: one Exudyn step is one *output period*; the hook integrates ``k`` steps of
+size ``h = (endTime - startTime) / numberOfSteps`` inside it.  ``k`` is the largest
+common divisor of the number of steps and of every active output period (solution file,
+sensors, restart file, image recording) measured in steps, so outputs happen at exactly
+the times of a native solve.  With a pre- or post-step user function ``k = 1`` (they are
+called every step, as natively).  ``substeps=`` overrides the choice.
+"""
+from __future__ import annotations
+
+import math
+import time
+import warnings
+
+import numpy as np
+
+from ..integrators.tableau import get_method, method_names
+from ..mbs.compiled import auto_groups
+from ..mbs.simulator import Simulator
+from .fast import KernelCalls, NodeTable
+from .nodes import write_multipliers
+from .reader import BridgeError, ExudynScene, SceneFromExudyn
+
+GROUP_ALIASES = {"se3": "SE3", "so3xr3": "SO3xR3", "so3r3": "SO3xR3", "auto": "auto"}
+MAX_SUBSTEPS = 1000          # at most this many internal steps per Exudyn step (progress, renderer)
+PROGRESS_FIRST = 2.0         # seconds before the first progress line
+PROGRESS_EVERY = 2.0         # seconds between progress lines
+
+
+def _group_name(g, what):
+    if isinstance(g, str):
+        key = g.strip().lower().replace("(", "").replace(")", "").replace(" ", "").replace("_", "")
+        if key in GROUP_ALIASES:
+            return GROUP_ALIASES[key]
+    raise BridgeError(f"{what}: unknown Lie group {g!r}; use 'SE3', 'SO3xR3' or 'auto' (or a mapping "
+                      f"{{rigid-body object index: 'SE3' | 'SO3xR3'}})")
+
+
+def _check_method(method):
+    if not isinstance(method, str) or method not in method_names():
+        raise BridgeError(f"unknown method {method!r}; available: {', '.join(method_names())}")
+    return get_method(method)
+
+
+class LieGroupSolver:
+    """Integrate an Exudyn ``mbs`` with explicit Munthe-Kaas Lie group methods.
+
+    Parameters
+    ----------
+    mbs : an assembled ``exudyn.MainSystem``
+    method : a method of :func:`exudyn_lie.integrators.method_names` (``'RK4'``, ...)
+    liegroup : ``'SE3'``, ``'SO3xR3'``, ``'auto'`` or a mapping ``{object index of an
+        ObjectRigidBody: 'SE3' | 'SO3xR3'}`` (bodies not in the mapping use ``'auto'``).
+        ``'auto'``: SO3xR3 for an unconstrained body whose frame is at its COM, SE3 for
+        every other body.
+    stabilization : None (the paper: none), ``'velocity'`` or ``'position'``
+    projectInitial : project inconsistent initial states onto the constraints instead of
+        raising :class:`~exudyn_lie.mbs.ConstraintError`
+    verbose : print the group of every body, skipped items and the run plan
+
+    ``Solve(simulationSettings)`` runs inside Exudyn's time loop (sensors, files, user
+    functions); ``Run(endTime, stepSize)`` is the fast path without any Exudyn output
+    (returns a :class:`~exudyn_lie.mbs.Result`).  Both re-read the model from ``mbs``
+    (cheap) so that changed parameters or initial values are used.
+    """
+
+    def __init__(self, mbs, method="RK4", liegroup="auto", stabilization=None, projectInitial=False,
+                 verbose=False):
+        self.mbs = mbs
+        self.tableau = _check_method(method)
+        self.method = method
+        if stabilization not in (None, "none", "velocity", "position"):
+            raise BridgeError(f"unknown stabilization {stabilization!r}; use None, 'velocity' or 'position'")
+        self.stabilization = stabilization
+        self.projectInitial = bool(projectInitial)
+        self.verbose = bool(verbose)
+        self._liegroup_arg = self._check_liegroup(liegroup)
+        self.timing = {}
+        self.scene = None
+        self.sim = None
+        self._prepare(announce=self.verbose)
+
+    # ------------------------------------------------------------------ set-up
+    def _check_liegroup(self, liegroup):
+        if isinstance(liegroup, str):
+            return _group_name(liegroup, "liegroup")
+        if isinstance(liegroup, dict):
+            out = {}
+            for k, v in liegroup.items():
+                try:
+                    key = int(k)
+                except (TypeError, ValueError):
+                    raise BridgeError(f"liegroup mapping key {k!r} is not an Exudyn object index") from None
+                g = _group_name(v, f"liegroup[{key}]")
+                if g == "auto":
+                    continue
+                out[key] = g
+            return out
+        raise BridgeError(f"liegroup must be 'SE3', 'SO3xR3', 'auto' or a mapping {{object index: group}}, "
+                          f"got {type(liegroup).__name__}")
+
+    def _groups(self, sc: ExudynScene):
+        auto = auto_groups(sc)
+        tied = set(sc.pyConnectedBodies)
+        for it in sc.joints + sc.springs + sc.cartesianSprings + sc.torsionalSprings + sc.rigidSprings:
+            tied.update([it.bodyA, it.bodyB])
+        why = {}
+        for b in range(sc.nBodies):
+            if b in sc.pyConnectedBodies and auto[b] == "SO3xR3":
+                auto[b] = "SE3"
+            if auto[b] == "SO3xR3":
+                why[b] = "auto: unconstrained, frame at COM"
+            else:
+                why[b] = "auto: " + ("constrained by joints/connectors" if b in tied else "frame off the COM")
+        arg = self._liegroup_arg
+        if isinstance(arg, str):
+            groups = auto if arg == "auto" else [arg] * sc.nBodies
+            if arg != "auto":
+                why = {b: "all bodies" for b in range(sc.nBodies)}
+        else:
+            groups = list(auto)
+            for o, g in arg.items():
+                b = sc.body_of_object(o)
+                if b is None:
+                    raise BridgeError(f"liegroup mapping: object {o} is not an ObjectRigidBody of this mbs "
+                                      f"(rigid bodies: objects {sc.bodyObject})")
+                groups[b] = g
+                why[b] = "given"
+        return groups, why
+
+    def _prepare(self, announce=False):
+        """(Re-)read the model and build the simulator from mbs' initial configuration."""
+        sc = SceneFromExudyn(self.mbs, "initial")
+        groups, why = self._groups(sc)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", DeprecationWarning)
+            sim = Simulator(sc, self.method, groups, self.stabilization, self.projectInitial, verbose=False)
+        self.scene, self.sim, self.groups = sc, sim, groups
+        self._watch_singular_nodes()
+        self._fresh = True
+        self._build_buffers()
+        if announce:
+            self._announce(why)
+
+    def _announce(self, why):
+        sc = self.scene
+        for b in range(sc.nBodies):
+            print(f"exudyn_lie: body {sc.describe_body(b)}: {self.groups[b]} ({why[b]})")
+        for what, reason in sc.skipped:
+            print(f"exudyn_lie: skipped {what}: {reason}")
+        if sc.pyItems:
+            print(f"exudyn_lie: {len(sc.pyItems)} item(s) evaluated in Python: "
+                  f"{', '.join(it.label for it in sc.pyItems)}")
+
+    def _build_buffers(self):
+        sc, sim = self.scene, self.sim
+        # kernel rows of every joint, and their AE slots in Exudyn
+        self._jrows = []
+        for ji in sc.joints_info:
+            r0 = int(sim.sd.jrow0[ji.sceneJoint])
+            n = int(sim.sd.jnrow[ji.sceneJoint])
+            self._jrows.append((np.arange(r0, r0 + n), ji.aeRows, ji.sign))
+
+    # ------------------------------------------------------------------ state <-> mbs
+    def _views(self):
+        """Writable zero-copy views of mbs' Current q, q_t, q_tt, AE coordinates (Exudyn
+        >= 1.13 getters with ``copy=False``), checked to be live; None if unavailable."""
+        sd = self.mbs.systemData
+        cur = self._exu.ConfigurationType.Current
+        try:
+            views = (sd.GetODE2Coordinates(configuration=cur, copy=False),
+                     sd.GetODE2Coordinates_t(configuration=cur, copy=False),
+                     sd.GetODE2Coordinates_tt(configuration=cur, copy=False),
+                     sd.GetAECoordinates(configuration=cur, copy=False) if sd.AEsize() else np.zeros(0))
+        except TypeError:
+            return None
+        for v in views[:3]:
+            if not (isinstance(v, np.ndarray) and v.dtype == np.float64 and v.flags.c_contiguous
+                    and v.flags.writeable) or v.size == 0:
+                return None
+        q = views[0]
+        old = q[0]
+        q[0] = old + 1.0
+        live = sd.GetODE2Coordinates(configuration=cur)[0] == old + 1.0
+        q[0] = old
+        return views if live else None
+
+    def _init_buffers_from_mbs(self):
+        """Coordinate buffers: zero-copy views of mbs' Current configuration if possible
+        (then nothing has to be copied per output step), else copies pushed with Set*.
+        Called right after Exudyn's InitializeSolver (Current = the initial values)."""
+        exu = self._exu
+        sd = self.mbs.systemData
+        cur = exu.ConfigurationType.Current
+        self._nAE = sd.AEsize()
+        views = self._views()
+        self._live = views is not None
+        if self._live:
+            self._q, self._qt, self._qtt, self._ae = views
+        else:
+            self._q = np.array(sd.GetODE2Coordinates(configuration=cur), float)
+            self._qt = np.array(sd.GetODE2Coordinates_t(configuration=cur), float)
+            self._qtt = np.array(sd.GetODE2Coordinates_tt(configuration=cur), float)
+            self._ae = np.array(sd.GetAECoordinates(configuration=cur), float) if self._nAE else np.zeros(0)
+        if self._nAE:
+            self._ae[self.scene.aeZero] = 0.0
+        for kind in self.scene.nodeKinds:       # continuity starts from the initial parameters
+            kind.read(np.array(self._q), np.array(self._qt))
+        self._nodes = NodeTable(self.scene.nodeKinds, self.scene.kindBodies)
+        jr = [(rows, ae, np.full(len(rows), sign)) for rows, ae, sign in self._jrows]
+        self._jrow = np.concatenate([x[0] for x in jr]).astype(np.int64) if jr else np.zeros(0, np.int64)
+        self._jae = np.concatenate([x[1] for x in jr]).astype(np.int64) if jr else np.zeros(0, np.int64)
+        self._jsign = np.concatenate([x[2] for x in jr]).astype(float) if jr else np.zeros(0)
+        self._Vdot = np.zeros((self.scene.nBodies, 6))
+        self._hasJ = len(self._jrow) > 0
+        self._written = None
+
+    def _watch_singular_nodes(self):
+        """Nodes with singular coordinates (Rxyz) are watched at every internal step, so
+        that passing near the singularity between two outputs is reported too."""
+        nodes, bodies, limits, entry = [], [], [], None
+        for kind, kb in zip(self.scene.nodeKinds, self.scene.kindBodies):
+            if kind.singularity is not None:
+                entry = kind.singularity[0]
+                nodes += [(kind, k) for k in range(len(kind))]
+                bodies += list(kb)
+                limits += [kind.singularity[1]] * len(kind)
+        self._watchNodes = nodes
+        self._watchLimit = np.array(limits)
+        if nodes:
+            self.sim.WatchRotationEntries(bodies, *entry)
+
+    def _warn_watched_nodes(self):
+        """Warn (once per node) about watched nodes that came near their singularity
+        since the last call."""
+        if not self._watchNodes:
+            return
+        hit = self.sim.watchedMaxima > self._watchLimit
+        if hit.any():
+            self.sim.ResetWatch()
+            for w in np.nonzero(hit)[0]:
+                kind, k = self._watchNodes[w]
+                kind.singular_warning(k)
+
+    def _fill(self, accelerations):
+        """Node and AE buffers from the simulator state (Python path)."""
+        sim = self.sim
+        if accelerations:
+            Vdot, lam = sim.Accelerations()
+            self._Vdot[:] = Vdot
+            if len(self._jrow):
+                write_multipliers(lam, self._jrow, self._jae, self._jsign, self._ae)
+        return self._nodes.write(sim, self._Vdot, accelerations, self._q, self._qt, self._qtt)
+
+    def _push(self, accelerations):
+        """Copy the buffers into mbs' Current configuration (nothing to do for views)."""
+        if not self._live:
+            sd = self.mbs.systemData
+            cur = self._exu.ConfigurationType.Current
+            sd.SetODE2Coordinates(self._q, configuration=cur)
+            sd.SetODE2Coordinates_t(self._qt, configuration=cur)
+            if accelerations:
+                sd.SetODE2Coordinates_tt(self._qtt, configuration=cur)
+                if self._nAE:
+                    sd.SetAECoordinates(self._ae, configuration=cur)
+        if self._nodes.flags.any():
+            self._nodes.warn_flags()
+        if self._watch:
+            self._written = (np.array(self._q), np.array(self._qt))
+
+    def _write(self, accelerations):
+        self._fill(accelerations)
+        self._push(accelerations)
+
+    def _advance(self, n, h, accelerations):
+        """n steps, then the buffers (with accelerations and multipliers on the fast path)."""
+        sim = self.sim
+        kc = self._kc
+        if kc is not None:
+            try:
+                st, done, nflag = kc.advance(n, h, accelerations)
+            except Exception as e:           # kernel interface changed: fall back, say so once
+                if not (isinstance(e, TypeError) or type(e).__module__.startswith("numba")):
+                    raise
+                warnings.warn(f"exudyn_lie bridge: direct kernel calls unavailable ({type(e).__name__}: "
+                              f"{str(e).splitlines()[0][:200]}); using Simulator.Advance", RuntimeWarning,
+                              stacklevel=2)
+                self._kc = None
+                return self._advance(n, h, accelerations)
+            if st != 0:
+                sim.t += done * h            # the kernel left the last accepted step
+                sim.RaiseStatus(st, h)
+            sim.t += n * h
+        else:
+            sim.Advance(n, h)
+            nflag = self._fill(accelerations)
+        self._warn_watched_nodes()
+        return nflag
+
+    def _reread_current(self, t):
+        """A pre-step user function changed the coordinates: continue from them."""
+        sd = self.mbs.systemData
+        cur = self._exu.ConfigurationType.Current
+        q = np.array(sd.GetODE2Coordinates(configuration=cur), float)
+        qt = np.array(sd.GetODE2Coordinates_t(configuration=cur), float)
+        nb = self.scene.nBodies
+        R = np.zeros((nb, 3, 3))
+        r = np.zeros((nb, 3))
+        om = np.zeros((nb, 3))
+        ve = np.zeros((nb, 3))
+        for kind, bodies in zip(self.scene.nodeKinds, self.scene.kindBodies):
+            R[bodies], r[bodies], om[bodies], ve[bodies] = kind.read(q, qt)
+        U, _, Vt = np.linalg.svd(R)
+        self.sim.SetInitialState(U @ Vt, r, om, ve, t0=t)
+        self._nodes.prev[:] = NodeTable(self.scene.nodeKinds, self.scene.kindBodies).prev
+
+    # ------------------------------------------------------------------ planning
+    @staticmethod
+    def _period_steps(period, h):
+        """Output period in steps: an integer >= 1, or 1 if it is not a multiple of h."""
+        if period <= 0:
+            return 1
+        n = period / h
+        k = int(round(n))
+        if k < 1 or abs(n - k) > 1e-9 * max(1.0, n):
+            return 1
+        return k
+
+    def _plan(self, ss, nsteps, h, substeps):
+        mbs = self.mbs
+        userStep = bool(mbs.GetPreStepUserFunction()) or bool(mbs.GetPostStepUserFunction())
+        if substeps is not None:
+            k = int(substeps)
+            if k < 1 or nsteps % k:
+                raise BridgeError(f"substeps={substeps} must be a positive divisor of numberOfSteps={nsteps}")
+            return k, userStep
+        if userStep:
+            return 1, userStep
+        sol = ss.solution
+        k = nsteps
+        if sol.file.write:
+            k = math.gcd(k, self._period_steps(sol.file.writePeriod, h))
+        if sol.sensors.active and mbs.systemData.NumberOfSensors() > 0:
+            k = math.gcd(k, self._period_steps(sol.sensors.writePeriod, h))
+        if sol.restart.write:
+            k = math.gcd(k, self._period_steps(sol.restart.writePeriod, h))
+        if sol.recordImagesInterval > 0:
+            k = math.gcd(k, self._period_steps(sol.recordImagesInterval, h))
+        if k > MAX_SUBSTEPS:
+            k = max(d for d in range(1, MAX_SUBSTEPS + 1) if k % d == 0)
+        return k, userStep
+
+    def _needs_accelerations(self, ss, userStep):
+        """Accelerations / multipliers are written only if something can read them."""
+        if userStep:
+            return True
+        exp = ss.solution.file.export
+        if ss.solution.file.write and (exp.accelerations or exp.algebraicCoordinates):
+            return True
+        mbs = self.mbs
+        if ss.solution.sensors.active:
+            jointObjects = {ji.objectIndex for ji in self.scene.joints_info}
+            for s in range(mbs.systemData.NumberOfSensors()):
+                d = mbs.GetSensor(s)
+                st = d.get("sensorType", "")
+                ovt = str(d.get("outputVariableType", ""))
+                if st == "UserFunction" or "Acceleration" in ovt:
+                    return True
+                if st == "Object" and int(d.get("objectNumber", -1)) in jointObjects:
+                    return True          # joint outputs are the multipliers
+        return False
+
+    # ------------------------------------------------------------------ solve
+    def Solve(self, simulationSettings=None, updateInitialValues=False, storeSolver=True, showProgress=True,
+              substeps=None, accelerations=None, refresh=True):
+        """Solve from ``startTime`` to ``endTime`` in ``numberOfSteps`` steps of the
+        simulation settings, inside Exudyn's time loop; returns True.
+
+        ``accelerations``: write ``q_tt`` and the joint multipliers every output step
+        (None: only if a sensor, the solution file or a user function can read them)."""
+        import exudyn as exu
+        self._exu = exu
+        ticTotal = time.perf_counter()
+        ss = exu.SimulationSettings() if simulationSettings is None else simulationSettings
+        ti = ss.timeIntegration
+        nsteps = int(ti.numberOfSteps)
+        t0, tEnd = float(ti.startTime), float(ti.endTime)
+        if nsteps < 1 or not (np.isfinite(t0) and np.isfinite(tEnd)) or tEnd <= t0:
+            raise BridgeError(f"timeIntegration: need numberOfSteps >= 1 and endTime > startTime, got "
+                              f"numberOfSteps={ti.numberOfSteps}, startTime={t0}, endTime={tEnd}")
+        h = (tEnd - t0) / nsteps
+        if refresh or not self._fresh:
+            self._prepare(announce=False)
+        self._fresh = False
+        sim = self.sim
+        sim.t = t0
+        k, userStep = self._plan(ss, nsteps, h, substeps)
+        needAcc = self._needs_accelerations(ss, userStep) if accelerations is None else bool(accelerations)
+        self._watch = userStep          # a pre/post-step function may change the state
+        if self.verbose:
+            print(f"exudyn_lie: {self.tableau.name}, h = {h:.6g} s, {nsteps} steps from t = {t0:g} to {tEnd:g} s; "
+                  f"{k} step(s) per Exudyn step ({nsteps // k} Exudyn steps); accelerations "
+                  f"{'written' if needAcc else 'not needed'}")
+        # Exudyn runs nsteps / k steps of its implicit solver, whose Newton iteration is the
+        # hook; the settings are changed for the run and restored afterwards (as
+        # exudyn.SolveDynamic does with the solver type)
+        ss2 = ss
+        ti2 = ss2.timeIntegration
+        ga = ti2.generalizedAlpha
+        changed = [(ti2, "numberOfSteps", nsteps // k),
+                   (ti2, "solverType", exu.DynamicSolverType.GeneralizedAlpha),
+                   (ga, "computeInitialAccelerations", False), (ga, "useNewmark", False),
+                   (ga, "useIndex2Constraints", False), (ti2, "adaptiveStep", False),
+                   (ti2, "automaticStepSize", False)]
+        restore = [(obj, name, getattr(obj, name)) for obj, name, _ in changed]
+
+        solver = exu.MainSolverImplicitSecondOrder()
+        self.solver = solver
+        self._hookError = None
+        state = dict(tic=time.perf_counter(), nextProgress=time.perf_counter() + PROGRESS_FIRST, t0=t0, tEnd=tEnd)
+        self.timing = dict(integration=0.0, hook=0.0, steps=nsteps, exudynSteps=nsteps // k, substeps=k)
+
+        if storeSolver:
+            self.mbs.sys["dynamicSolver"] = solver
+            self.mbs.sys["simulationSettings"] = ss
+            self.mbs.sys["lieGroupSolver"] = self
+        try:
+            for obj, name, value in changed:
+                setattr(obj, name, value)
+            ok = solver.InitializeSolver(self.mbs, ss2)
+            if ok is False:
+                raise BridgeError(f"Exudyn's InitializeSolver failed: {solver.GetErrorString()}")
+            self._init_buffers_from_mbs()
+            vmax = 1e6 * max(1.0, float(np.max(np.abs(sim.V))) if sim.V.size else 0.0)
+            self._kc = None if (sim.sd.hasQext or sim.stabilization) else KernelCalls(
+                sim, self._nodes, self._Vdot, vmax, self._q, self._qt, self._qtt, self._jrow, self._jae,
+                self._jsign, self._ae)
+            self._write(True)                    # initial state with accelerations / multipliers
+            # the hook: k steps + write-back per Exudyn step (kept lean: it runs per output)
+            sdat = self.mbs.systemData
+            cur = exu.ConfigurationType.Current
+            watch = self._watch
+            live = self._live
+            timing = self.timing
+            perf = time.perf_counter
+            advance = self._advance
+            push = self._push
+
+            def hook(mainSolver, mbs, settings):
+                try:
+                    t1 = mainSolver.it.currentTime
+                    if watch and self._written is not None and not (
+                            np.array_equal(sdat.GetODE2Coordinates(configuration=cur), self._written[0])
+                            and np.array_equal(sdat.GetODE2Coordinates_t(configuration=cur), self._written[1])):
+                        self._reread_current(sim.t)
+                    tic = perf()
+                    nflag = advance(int(round((t1 - sim.t) / h)), h, needAcc)
+                    toc = perf()
+                    sim.t = t1
+                    if not live:
+                        push(needAcc)
+                    if nflag:
+                        self._nodes.warn_flags()
+                    if watch:
+                        self._written = (self._q.copy(), self._qt.copy())
+                    timing["integration"] += toc - tic
+                    if showProgress and toc > state["nextProgress"]:
+                        self._progress(state, t1)
+                    timing["hook"] += perf() - tic
+                    return True
+                except BaseException as e:      # noqa: BLE001 - re-raised after Exudyn unwinds
+                    self._hookError = e
+                    raise
+
+            solver.SetUserFunctionNewton(self.mbs, hook)
+            ok = solver.SolveSteps(self.mbs, ss2)
+            if ok and not needAcc:
+                self._write(True)                # final accelerations, as a native solve leaves them
+            solver.FinalizeSolver(self.mbs, ss2)
+        except BaseException:
+            err = self._hookError
+            if err is not None:
+                try:
+                    solver.FinalizeSolver(self.mbs, ss2)
+                except Exception:
+                    pass
+                raise err from None
+            raise
+        finally:
+            for obj, name, value in restore:
+                setattr(obj, name, value)
+        if not ok:
+            raise exu.SolverError(f"exudyn_lie: Exudyn's time loop terminated: {solver.GetErrorString()}")
+        if updateInitialValues:
+            sd = self.mbs.systemData
+            sd.SetSystemState(systemStateList=sd.GetSystemState(), configuration=exu.ConfigurationType.Initial)
+            sd.SetODE2Coordinates_tt(coordinates=sd.GetODE2Coordinates_tt(),
+                                     configuration=exu.ConfigurationType.Initial)
+        total = time.perf_counter() - ticTotal
+        self.timing["total"] = total
+        self.timing["bridgeOverhead"] = 1.0 - self.timing["integration"] / total if total > 0 else 0.0
+        if self.verbose:
+            print(f"exudyn_lie: done in {total:.3g} s ({self.timing['integration']:.3g} s integration, "
+                  f"bridge + Exudyn output {100 * self.timing['bridgeOverhead']:.1f} %)")
+        return True
+
+    def _progress(self, state, t):
+        now = time.perf_counter()
+        if now < state["nextProgress"]:
+            return
+        state["nextProgress"] = now + PROGRESS_EVERY
+        frac = (t - state["t0"]) / (state["tEnd"] - state["t0"])
+        el = now - state["tic"]
+        # the rate is measured from the first progress check on (the first step may include
+        # numba's one-off compilation, which says nothing about the remaining time)
+        if "rate0" not in state:
+            state["rate0"] = (now, t)
+            rem = "?"
+        else:
+            n0, t0 = state["rate0"]
+            rem = f"{(state['tEnd'] - t) * (now - n0) / (t - t0):.0f}" if t > t0 else "?"
+        print(f"exudyn_lie: t = {t:.6g} / {state['tEnd']:.6g} s ({100 * frac:.0f} %), {el:.1f} s elapsed, "
+              f"~{rem} s to go", flush=True)
+
+    # ------------------------------------------------------------------ fast path
+    def Run(self, endTime, stepSize, outputEvery=1, startTime=0.0, writeBack=True, progress=False,
+            refresh=True):
+        """Integrate without Exudyn's output machinery; returns a
+        :class:`~exudyn_lie.mbs.Result`.  ``writeBack``: leave the final state (with
+        accelerations) in mbs' Current configuration."""
+        import exudyn as exu
+        self._exu = exu
+        if refresh or not self._fresh:
+            self._prepare(announce=False)
+        self._fresh = False
+        self.sim.t = float(startTime)
+        tic = time.perf_counter()
+        res = self.sim.Run(endTime, stepSize, outputEvery=outputEvery, startTime=float(startTime),
+                           progress=progress)
+        self.timing = dict(integration=res.cpuTime, total=time.perf_counter() - tic)
+        self._warn_watched_nodes()
+        if writeBack:
+            self._watch = False
+            self._init_buffers_from_mbs()
+            self._write(True)
+            self.mbs.systemData.SetTime(self.sim.t)
+        return res
+
+
+def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialValues=False, storeSolver=True,
+                 showHints=False, showCausingItems=True, autoAssemble=True, *, method="RK4", liegroup="auto",
+                 stabilization=None, projectInitial=False, verbose=False, showProgress=True, substeps=None,
+                 accelerations=None):
+    """Drop-in for ``exudyn.SolveDynamic``: integrate ``mbs`` with an explicit Munthe-Kaas
+    Lie group method inside Exudyn's time loop; returns True.
+
+    The positional arguments are Exudyn's.  ``solverType`` must be None (the integrator is
+    chosen by ``method``); ``showHints`` / ``showCausingItems`` are accepted for
+    compatibility.  Keyword-only extras: ``method`` (:func:`exudyn_lie.method_names`),
+    ``liegroup`` ('SE3', 'SO3xR3', 'auto' or {rigid-body object index: group}),
+    ``stabilization``, ``projectInitial``, ``verbose`` (print the group per body and the
+    plan), ``showProgress`` (a progress line every 2 s on runs longer than 2 s),
+    ``substeps`` (internal steps per Exudyn step; default: one Exudyn step per output
+    period), ``accelerations`` (write q_tt / multipliers; default: when something reads
+    them).
+
+    Honours ``timeIntegration.startTime / endTime / numberOfSteps``, sensors (stored and
+    files), the solution file, pre/post-step user functions, ``updateInitialValues`` and
+    ``storeSolver`` (``mbs.sys['dynamicSolver']``, ``mbs.sys['lieGroupSolver']``).  Bad
+    input raises before ``mbs`` is touched."""
+    if solverType is not None:
+        raise BridgeError(f"solverType={solverType} is Exudyn's choice of solver; exudyn_lie integrates with "
+                          f"explicit Munthe-Kaas methods: pass method=... (one of {', '.join(method_names())})")
+    if not mbs.systemIsConsistent and autoAssemble:
+        warnings.warn("exudyn_lie.SolveDynamic: mbs is not assembled; calling mbs.Assemble()", RuntimeWarning,
+                      stacklevel=2)
+        mbs.Assemble()
+    solver = LieGroupSolver(mbs, method=method, liegroup=liegroup, stabilization=stabilization,
+                            projectInitial=projectInitial, verbose=verbose)
+    return solver.Solve(simulationSettings, updateInitialValues=updateInitialValues, storeSolver=storeSolver,
+                        showProgress=showProgress, substeps=substeps, accelerations=accelerations, refresh=False)

@@ -1,0 +1,157 @@
+"""Bad input: every refusal is a clear error naming the item, raised before mbs is
+touched (state, initial values, mbs.sys, stored sensor data unchanged)."""
+import numpy as np
+import pytest
+
+import exudyn as exu
+from exudyn.utilities import (LoadCoordinate, MarkerBodyPosition, MarkerNodeCoordinate, ObjectJointSpherical,
+                              RotationMatrixX, SensorBody)
+
+import exudyn_lie as exl
+from exudyn_lie.bridge import BridgeError, SceneFromExudyn
+from exudyn_lie.mbs import ConstraintError, StepSizeError
+
+from test_bridge_common import add_body, new_mbs, quiet_settings
+
+O = exu.OutputVariableType
+
+
+def model(extra=None, omega=(1.0, 2.0, 0.5)):
+    mbs = new_mbs()
+    g = mbs.CreateGround()
+    b = add_body(mbs, "RotVecLG", [1, 0, 0], RotationMatrixX(0.3), omega=omega, gravity=[0, 0, -9.81])
+    mbs.CreateSpringDamper(itemNumbers=[g, b], localPosition0=[1, 1, 0], stiffness=100)
+    mbs.AddSensor(SensorBody(bodyNumber=b, storeInternal=True, outputVariableType=O.Position))
+    if extra is not None:
+        extra(mbs, g, b)
+    mbs.Assemble()
+    return mbs
+
+
+def snapshot(mbs):
+    sd = mbs.systemData
+    C, I = exu.ConfigurationType.Current, exu.ConfigurationType.Initial
+    return dict(cur=[np.array(x, copy=True) for x in sd.GetSystemState(C)],
+                ini=[np.array(x, copy=True) for x in sd.GetSystemState(I)],
+                time=sd.GetTime(), sys=sorted(mbs.sys.keys()),
+                sensor=np.array(mbs.GetSensorStoredData(0), copy=True) if sd.NumberOfSensors() else None)
+
+
+def assert_unchanged(mbs, snap):
+    now = snapshot(mbs)
+    for key in ("cur", "ini"):
+        for a, b in zip(snap[key], now[key]):
+            np.testing.assert_array_equal(a, b)
+    assert now["time"] == snap["time"] and now["sys"] == snap["sys"]
+    if snap["sensor"] is not None:
+        np.testing.assert_array_equal(now["sensor"], snap["sensor"])
+
+
+def expect_error(mbs, exc, match, **kw):
+    snap = snapshot(mbs)
+    with pytest.raises(exc, match=match):
+        exl.SolveDynamic(mbs, kw.pop("ss", quiet_settings(0.01, 10)), **kw)
+    assert_unchanged(mbs, snap)
+
+
+@pytest.mark.parametrize("extra,match", [
+    (lambda mbs, g, b: mbs.CreateMassPoint(referencePosition=[2, 0, 0], mass=1),
+     r"object 3 .*ObjectMassPoint is not supported.*supported objects: ObjectGround, ObjectRigidBody"),
+    (lambda mbs, g, b: mbs.CreateDistanceConstraint(itemNumbers=[g, b], localPosition0=[0, 1, 0]),
+     r"object 3 .*ObjectConnectorDistance is not supported"),
+    (lambda mbs, g, b: mbs.AddLoad(LoadCoordinate(markerNumber=mbs.AddMarker(
+        MarkerNodeCoordinate(nodeNumber=0, coordinate=0)), load=1)),
+     r"load 1 .*LoadCoordinate is not supported.*LoadForceVector"),
+    (lambda mbs, g, b: (add_body(mbs, "EP", [2, 0, 0], np.eye(3)), mbs.AddObject(ObjectJointSpherical(
+        markerNumbers=[mbs.AddMarker(MarkerBodyPosition(bodyNumber=b, localPosition=[0.5, 0, 0])),
+                       mbs.AddMarker(MarkerBodyPosition(bodyNumber=3, localPosition=[-0.5, 0, 0]))],
+        constrainedAxes=[1, 1, 0]))),
+     r"ObjectJointSpherical: constrainedAxes=\[1, 1, 0\] between two bodies is not supported"),
+    (lambda mbs, g, b: mbs.CreateGenericJoint(itemNumbers=[g, b], position=[1, 0, 0],
+                                              constrainedAxes=[1, 1, 1, 0, 0, 0]) and
+     mbs.SetObjectParameter(3, "offsetUserFunction", lambda mbs, t, i, p: [0, 0, 0, 0, 0, 0]),
+     r"offsetUserFunction .*not supported"),
+])
+def test_unsupported_items_raise_clear_errors(extra, match):
+    mbs = model(extra)
+    expect_error(mbs, BridgeError, match)
+
+
+def test_unsupported_marker_is_named():
+    from exudyn_lie.bridge.reader import ExudynScene, _Reader
+    made = []
+    mbs = model(lambda mbs, g, b: made.append(mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=0, coordinate=0))))
+    rd = _Reader(mbs, "initial")
+    sc = ExudynScene(mbs)
+    rd.read_nodes(sc)
+    rd.read_bodies(sc)
+    with pytest.raises(BridgeError, match=rf"test item: marker {int(made[0])} of type MarkerNodeCoordinate is not "
+                                          rf"supported.*MarkerBodyRigid"):
+        rd.marker(made[0], "test item")
+
+
+def test_unknown_method_group_and_solver_type():
+    mbs = model()
+    expect_error(mbs, BridgeError, r"unknown method 'RK5'; available: .*RK4", method="RK5")
+    expect_error(mbs, BridgeError, r"unknown Lie group 'SE2'", liegroup="SE2")
+    expect_error(mbs, BridgeError, r"liegroup\[1\]: unknown Lie group 'SO2'", liegroup={1: "SO2"})
+    expect_error(mbs, BridgeError, r"object 2 is not an ObjectRigidBody", liegroup={2: "SE3"})
+    expect_error(mbs, BridgeError, r"solverType=.*exudyn_lie integrates with explicit",
+                 solverType=exu.DynamicSolverType.RK44)
+    expect_error(mbs, BridgeError, r"unknown stabilization", stabilization="baumgarte")
+    ss = quiet_settings(0.0, 10)
+    expect_error(mbs, BridgeError, r"endTime > startTime", ss=ss)
+
+
+def test_non_finite_initial_state():
+    mbs = model(omega=(1.0, np.nan, 0.5))
+    expect_error(mbs, BridgeError, r"node 0 .*initial velocities are not finite")
+    mbs = model()
+    q = np.array(mbs.systemData.GetODE2Coordinates(configuration=exu.ConfigurationType.Initial))
+    q[1] = np.inf
+    mbs.systemData.SetODE2Coordinates(q, configuration=exu.ConfigurationType.Initial)
+    expect_error(mbs, BridgeError, r"node 0 .*initial coordinates are not finite")
+
+
+def test_non_unit_euler_parameters():
+    mbs = model(lambda mbs, g, b: add_body(mbs, "EP", [2, 0, 0], np.eye(3)))
+    q = np.array(mbs.systemData.GetODE2Coordinates(configuration=exu.ConfigurationType.Initial))
+    n = mbs.GetObject(3)["nodeNumber"]
+    q[mbs.systemData.GetNodeLTGODE2(n)[3]] += 0.01
+    mbs.systemData.SetODE2Coordinates(q, configuration=exu.ConfigurationType.Initial)
+    expect_error(mbs, BridgeError, r"NodeRigidBodyEP 1: Euler parameters .* not 1")
+
+
+def test_inconsistent_initial_velocity_is_reported_or_projected():
+    def joint(mbs, g, b):
+        mbs.CreateSphericalJoint(itemNumbers=[g, b], position=[1.2, 0, 0])
+    mbs = model(joint, omega=(1.0, 2.0, 0.5))     # the body's velocity (0) violates the joint
+    expect_error(mbs, ConstraintError, r"initial velocities violate .*projectInitial=True")
+    assert exl.SolveDynamic(mbs, quiet_settings(0.01, 10), projectInitial=True)
+    p = mbs.GetObjectOutputBody(1, O.Position, localPosition=[0.2, 0, 0])
+    np.testing.assert_allclose(p, [1.2, 0, 0], atol=1e-10)
+
+
+def test_step_size_blow_up_is_raised_through_exudyn():
+    mbs = model(lambda mbs, g, b: mbs.CreateSpringDamper(itemNumbers=[g, b], localPosition0=[1, 0, 0],
+                                                         stiffness=1e9))
+    with pytest.raises(StepSizeError, match="step size"):
+        exl.SolveDynamic(mbs, quiet_settings(1.0, 10))
+
+
+def test_user_function_errors_name_the_item():
+    def bad(mbs, t, i, dL, dLt, k, d, f):
+        raise ValueError("boom")
+    mbs = model()
+    mbs.SetObjectParameter(2, "springForceUserFunction", bad)
+    with pytest.raises(ValueError, match=r"object 2 ObjectConnectorSpringDamper: user function raised: boom"):
+        exl.SolveDynamic(mbs, quiet_settings(0.01, 10))
+
+
+def test_unassembled_mbs():
+    mbs = new_mbs()
+    add_body(mbs, "RotVecLG", [1, 0, 0], np.eye(3))
+    with pytest.raises(BridgeError, match="not assembled"):
+        SceneFromExudyn(mbs)
+    with pytest.warns(RuntimeWarning, match="calling mbs.Assemble"):
+        assert exl.SolveDynamic(mbs, quiet_settings(0.01, 10))

@@ -17,6 +17,9 @@ import importlib
 from ._common import (GROUND, BodyData, Claim, JointData, ModelInfo, NativeResult,  # noqa: F401
                       SpringData, check_initial_consistency, native_solvers_for, run_native)
 
+__all__ = ["MODELS", "build", "module", "run_native", "native_solvers_for", "check_initial_consistency",
+           "ModelInfo", "BodyData", "JointData", "SpringData", "Claim", "NativeResult", "GROUND"]
+
 MODELS = [
     "free_body_com_rotation",
     "free_body_com_translation",

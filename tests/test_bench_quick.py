@@ -1,0 +1,120 @@
+"""The bench machinery on a tiny --quick configuration (functional checks only: no
+timing is asserted)."""
+import json
+import os
+
+import numpy as np
+import pytest
+
+from exudyn_lie import bench
+from exudyn_lie.analysis import bench_runs as BR
+from exudyn_lie.analysis import bench_wp as WP
+
+
+@pytest.fixture(scope="module")
+def quick_run(tmp_path_factory):
+    out = tmp_path_factory.mktemp("bench")
+    argv = ["--quick", "--models", "heavytop", "--sections", "wp,perstep,scaling", "--chain", "1,3",
+            "--methods", "RK4,RK6", "--groups", "SE3,SO3xR3", "--rounds", "2", "--jobs", "2",
+            "--out", str(out), "--no-progress"]
+    assert bench.main(argv) == 0
+    return out, argv
+
+
+def test_writes_table_with_command_header(quick_run):
+    out, argv = quick_run
+    text = (out / "BENCHMARKS.md").read_text()
+    assert text.startswith("# exudyn_lie benchmarks")
+    assert "`python -m exudyn_lie bench " + " ".join(argv) + "`" in text
+    for section in ("## Targets", "## 1. Work-precision", "## 2. Cost per step", "## 3. Scaling",
+                    "## 5. Profile and optimisation record", "_nrt=False"):
+        assert section in text
+    assert "ParameterVariation" in text
+
+
+def test_plots_exist(quick_run):
+    out, _ = quick_run
+    for name in ("wp_heavytop.png", "scaling.png"):
+        p = out / "bench_figures" / name
+        assert p.exists() and p.stat().st_size > 5000
+        assert p.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_error_decreases_with_step(quick_run):
+    out, _ = quick_run
+    data = json.loads((out / "bench_results.json").read_text())
+    comps = data["models"]["heavytop"]["comps"]
+    labels = {c["label"] for c in comps}
+    assert {"RK4 SE3", "RK6 SO3xR3", "GeneralizedAlpha", "TrapezoidalIndex2"} <= labels
+    for c in comps:
+        runs = [r for r in c["runs"] if r["ok"]]
+        assert len(runs) >= 3, c["label"]
+        runs.sort(key=lambda r: r["steps"])
+        errs = [r["error"] for r in runs]
+        # refining the step reduces the error (until the reference floor)
+        assert errs[-1] < 1e-2 * errs[0], (c["label"], errs)
+        for a, b in zip(errs[:-1], errs[1:]):
+            assert b < a or b < 1e-11, (c["label"], errs)
+        for r in runs:
+            assert len(r["times"]) >= 3 and r["time"] > 0
+
+
+def test_per_step_and_scaling_recorded(quick_run):
+    out, _ = quick_run
+    data = json.loads((out / "bench_results.json").read_text())
+    for h in ("0.001", "0.0001"):
+        ps = data["perstepSummary"]["heavytop"][h]
+        for k in ("RK4 SE3", "RK4 SO3xR3", "GeneralizedAlpha", "TrapezoidalIndex2"):
+            assert ps[k]["ok"] and ps[k]["us"] > 0
+    rows = data["scaling"]["rows"]
+    assert set(rows) == {"1", "3"}
+    for row in rows.values():
+        assert row["exl"]["ok"] and row["GA"]["ok"]
+
+
+def test_sweep_uses_worker_processes_and_keeps_order():
+    cases = [dict(kind="exl", model="heavytop", solver="RK4", group=g, T=0.01, nsteps=n, repeat=1, tag=i)
+             for i, (g, n) in enumerate([("SE3", 5), ("SO3xR3", 10), ("SE3", 20), ("SO3xR3", 40)])]
+    res = BR.sweep(cases, jobs=2)
+    assert [r["case"]["tag"] for r in res] == [0, 1, 2, 3]
+    assert all(r["ok"] for r in res)
+    assert all(r["pid"] != os.getpid() for r in res)
+    serial = BR.sweep(cases[:2], jobs=1)
+    np.testing.assert_allclose(serial[1]["r"], res[1]["r"], rtol=0, atol=0)
+
+
+def test_failed_run_is_a_data_point():
+    r = BR.run_case(dict(kind="native", model="heavytop", solver="RK44", T=0.01, nsteps=2, repeat=1))
+    assert not r["ok"] and "Error" in r["message"]       # Exudyn's explicit solvers refuse joints
+
+
+def test_time_to_accuracy_interpolates_on_the_pareto_front():
+    pts = [(1e-2, 1.0), (1e-4, 10.0), (1e-6, 100.0), (1e-3, 50.0)]     # (1e-3, 50) is dominated
+    assert WP.pareto(pts) == [(1e-2, 1.0), (1e-4, 10.0), (1e-6, 100.0)]
+    t, flag = WP.time_to_accuracy(pts, 1e-3)
+    assert flag == "interp" and t == pytest.approx(10 ** 0.5)
+    assert WP.time_to_accuracy(pts, 1e-1) == (1.0, "upper")
+    t, flag = WP.time_to_accuracy(pts, 1e-8)
+    assert np.isnan(t) and flag == "not reached"
+    assert WP.observed_order([(1e-2, 1e-4), (1e-3, 1e-8)]) == pytest.approx(4.0)
+    # second-order curve: time x 10 per 2 decades of error -> extrapolate along it
+    curve = [(1e-2, 1.0), (1e-4, 10.0)]
+    assert WP.extrapolate_time(curve, 1e-6) == pytest.approx(100.0)
+    assert np.isnan(WP.extrapolate_time(curve, 1e-3))         # already reached: no extrapolation
+    assert np.isnan(WP.extrapolate_time(curve, 1e-9))         # more than 3 decades away
+    assert WP.fit_exponent([1, 10, 100], [2, 20, 200]) == pytest.approx(1.0)
+
+
+def test_rotation_angle_is_accurate_for_tiny_angles():
+    from exudyn_lie.groups import so3
+    R = so3.exp(np.array([0.3, -0.2, 0.5]))
+    dR = so3.exp(np.array([1e-10, 0, 0]))
+    assert WP.rotation_angle(R, R @ dR) == pytest.approx(1e-10, rel=1e-5)
+
+
+def test_model_names_resolve():
+    assert BR.resolve_model("heavy_top") == "heavytop"
+    assert BR.resolve_model("spherical_double_pendulum") == "doublependulum"
+    assert BR.resolve_model("chain12") == "chain12"
+    with pytest.raises(KeyError):
+        BR.resolve_model("nosuchmodel")

@@ -207,7 +207,7 @@ def compare(mbs, groups, q, qt, t=0.0):
     out = dict(M=rel(pk["M"], Mx), f=rel(pk["Q"], fx), g=0.0, J=0.0, nrows=0)
     sim, sc = pk["sim"], pk["scene"]
     for ji in sc.joints_info:
-        r0, n = int(sim.sd.jrow0[ji.sceneJoint]), int(sim.sd.jnrow[ji.sceneJoint])
+        r0, n = (int(x) for x in sim.sd.jint[ji.sceneJoint, 2:4])
         rows = np.arange(r0, r0 + n)
         out["g"] = max(out["g"], rel(pk["h"][rows], ji.sign * ge[ji.aeRows]))
         out["J"] = max(out["J"], rel(pk["J"][rows], ji.sign * (Ce[ji.aeRows] @ P)))

@@ -460,5 +460,5 @@ def test_fast_path_is_used_for_compiled_scenes():
         warnings.simplefilter("error", RuntimeWarning)
         exl.SolveDynamic(mbs, settings(0.05, 1e-3))
     solver = mbs.sys["lieGroupSolver"]
-    assert solver._kc is not None and solver._kc.mk is not None and solver._kc.rhs is not None
+    assert solver._kc is not None and solver._kc.mk is not None and solver._kc.wr
     assert solver._live

@@ -1,10 +1,9 @@
 """Cheap repeated calls of the compiled kernel between two Exudyn output steps.
 
-A numba call with the kernel's scene/work tuples (~100 arrays) spends ~15-30 us in
-resolving and unboxing its arguments; ``Simulator.Advance`` and ``Simulator.Accelerations``
-pay that once each per call.  The bridge calls the same kernel functions with arguments
+A plain numba call with the kernel's scene/work tuples spends ~10 us in resolving the
+argument types; ``Simulator.Advance`` and ``Simulator.Accelerations`` pay it per call.  The bridge calls the same kernel functions with arguments
 of identical types once per Exudyn step, so :class:`KernelCalls` resolves the compiled
-overloads once (:func:`entry_point`) and calls them directly.  It is used only when the
+overload once (:func:`entry_point`) and calls it directly.  It is used only when the
 simulator runs its pure compiled loop (no Python forces, no stabilisation); if the
 kernel's interface differs from what is expected, the bridge falls back to ``Advance`` /
 ``Accelerations`` (and says so).
@@ -50,47 +49,45 @@ def entry_point(dispatcher, args):
 
 
 class KernelCalls:
-    """One Exudyn step on the fast path: ``kernel.mk_steps`` (n MK steps), optionally
-    ``kernel.rhs`` (end-of-step accelerations and multipliers), and the compiled
-    write-back of all node / AE coordinates, each through a resolved entry point."""
+    """One Exudyn step on the fast path: ``kernel.mk_steps`` (n MK steps; with
+    accelerations, a second call with no step evaluates the equations of motion at the
+    end state: ``wk.Vd[0]`` and the multipliers ``wk.lam``) and the compiled write-back of
+    all node / AE coordinates, each through a resolved entry point."""
 
-    def __init__(self, sim, nodes, Vdot, vmax, q, qt, qtt, jrow, jae, jsign, ae):
+    def __init__(self, sim, nodes, vmax, q, qt, qtt, jrow, jae, jsign, ae):
         self.sim = sim
         self.nodes = nodes
-        self.Vdot = Vdot
         self.vmax = float(vmax)
         self.bufs = (q, qt, qtt)
         self.jac = (jrow, jae, jsign, ae)
         self.mk = None
-        self.rhs = None
         self.wr = {}
+
+    def _mk_steps(self, t, h, n):
+        sim = self.sim
+        a1 = (sim.sd, sim.wk, sim.A, sim.b, sim.c, float(t), float(h), int(n), sim.R, sim.r, sim.V, self.vmax)
+        if self.mk is None:
+            out = kernel.mk_steps(*a1)
+            self.mk = entry_point(kernel.mk_steps, a1)
+            return out
+        return self.mk(*a1)
 
     def advance(self, n, h, accelerations):
         """Returns (status, steps done, number of flagged nodes); raises TypeError-like
         errors if the kernel's interface changed (the caller falls back)."""
         sim = self.sim
-        a1 = (sim.sd, sim.wk, sim.A, sim.b, sim.c, float(sim.t), float(h), int(n), sim.R, sim.r, sim.V, self.vmax)
-        if self.mk is None:
-            st, done = kernel.mk_steps(*a1)
-            self.mk = entry_point(kernel.mk_steps, a1)
-        else:
-            st, done = self.mk(*a1)
+        st, done = self._mk_steps(sim.t, h, n)
         if st != kernel.STATUS_OK:
             return st, done, 0
         if accelerations:
-            a2 = (sim.sd, sim.wk, float(sim.t + n * h), sim.R, sim.r, sim.V, sim.wk.Qext, self.Vdot)
-            if self.rhs is None:
-                st = kernel.rhs(*a2)
-                self.rhs = entry_point(kernel.rhs, a2)
-            else:
-                st = self.rhs(*a2)
+            st, _ = self._mk_steps(sim.t + n * h, 0.0, 0)
             if st != kernel.STATUS_OK:
                 return st, done, 0
         nt = self.nodes
         q, qt, qtt = self.bufs
         jrow, jae, jsign, ae = self.jac
-        a3 = (sim.sd.gid, sim.R, sim.r, sim.V, self.Vdot, sim.wk.lam, bool(accelerations), nt.code, nt.body, nt.idx,
-              nt.nq, nt.qref, nt.prev, q, qt, qtt, nt.flags, jrow, jae, jsign, ae)
+        a3 = (sim.sd.gid, sim.R, sim.r, sim.V, sim.wk.Vd[0], sim.wk.lam, bool(accelerations), nt.code, nt.body,
+              nt.idx, nt.nq, nt.qref, nt.prev, q, qt, qtt, nt.flags, jrow, jae, jsign, ae)
         wr = self.wr.get(accelerations)
         if wr is None:
             nflag = write_all(*a3)

@@ -169,8 +169,7 @@ class LieGroupSolver:
         # kernel rows of every joint, and their AE slots in Exudyn
         self._jrows = []
         for ji in sc.joints_info:
-            r0 = int(sim.sd.jrow0[ji.sceneJoint])
-            n = int(sim.sd.jnrow[ji.sceneJoint])
+            r0, n = (int(x) for x in sim.sd.jint[ji.sceneJoint, 2:4])
             self._jrows.append((np.arange(r0, r0 + n), ji.aeRows, ji.sign))
 
     # ------------------------------------------------------------------ state <-> mbs
@@ -445,8 +444,7 @@ class LieGroupSolver:
             self._init_buffers_from_mbs()
             vmax = 1e6 * max(1.0, float(np.max(np.abs(sim.V))) if sim.V.size else 0.0)
             self._kc = None if (sim.sd.hasQext or sim.stabilization) else KernelCalls(
-                sim, self._nodes, self._Vdot, vmax, self._q, self._qt, self._qtt, self._jrow, self._jae,
-                self._jsign, self._ae)
+                sim, self._nodes, vmax, self._q, self._qt, self._qtt, self._jrow, self._jae, self._jsign, self._ae)
             self._write(True)                    # initial state with accelerations / multipliers
             # the hook: k steps + write-back per Exudyn step (kept lean: it runs per output)
             sdat = self.mbs.systemData

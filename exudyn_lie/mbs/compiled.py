@@ -16,23 +16,27 @@ from .scene import GROUND, Scene, SceneError
 GROUP_IDS = {"SE3": GID_SE3, "SO3xR3": GID_SO3xR3}
 GROUP_NAMES = {v: k for k, v in GROUP_IDS.items()}
 
+# Per feature: an integer table (body indices, flags) and float tables; zero rows when the
+# scene lacks the feature.  Few, packed fields keep numba's compile time down (it grows
+# steeply with the number of arrays a compiled function receives).
 SceneData = namedtuple("SceneData", [
     "nb", "gid", "mass", "com", "M", "Minv", "gravity", "hasGravity", "hasQext",
-    "lbody", "lkind", "lvec", "lpos", "lfixed",
-    "sA", "sB", "sposA", "sposB", "sK", "sD", "sL0", "sf0",
-    "cA", "cB", "cposA", "cposB", "cK", "cD", "coff",
-    "tA", "tB", "trotA", "trotB", "tK", "tD", "toff", "ttq",
-    "jA", "jB", "jposA", "jrotA", "jposB", "jrotB", "jrow0", "jnrow",
-    "rkind", "rax", "rbx", "rbodyA", "rbodyB", "nrows", "bandwidth", "redundant", "pivotTol",
+    "lint", "lvec",                   # loads: [body, 0 force / 1 torque, bodyFixed]; [vector, point]
+    "sint", "spos", "spar",           # springs: [A, B]; [posA, posB]; [k, d, L0, f0]
+    "cint", "cpos", "cpar",           # Cartesian springs: [A, B]; [posA, posB]; [k(3), d(3), offset(3)]
+    "tint", "trot", "tpar",           # torsional springs: [A, B]; [rotA, rotB]; [k, d, offset, torque]
+    "jint", "jpos", "jrot",           # joints: [A, B, first row, rows]; [posA, posB]; [rotA, rotB]
+    "rint",                           # constraint rows: [kind, axis of A, axis of B, body A, body B]
+    "nrows", "bandwidth", "redundant", "pivotTol",
 ])
 
 Work = namedtuple("Work", [
-    "Rs", "rs", "Vs", "Rb", "rb", "Vb", "Psi", "K", "Vd", "Q", "Qext", "Jr", "W", "eta", "h", "lam", "Sb", "Sd",
-    "perm", "ytmp", "info", "tmp6", "tmp12",
-    "v3a", "v3b", "v3c", "v3d", "v3e", "v3f", "v3g", "v3h", "v3i", "v3j", "v3k", "v3l", "v3m",
-    "v3n", "v3o", "v3p", "v3q", "v3r", "v3s", "v3t", "m3a", "m3b", "ident", "zero3", "zero6",
+    "Rs", "rs", "Vs", "Rb", "rb", "Vb", "Psi", "K", "Vd", "Q", "Qext",
+    "Jr", "W", "eta", "h", "lam", "Sb", "Sd", "perm", "ytmp", "info",
+    "tmp6", "tmp12", "v3", "m3", "ident", "zero3", "zero6",
     "tphi", "watchBody", "watchEntry", "watchMax",
 ])
+N_SCRATCH3 = 20
 
 
 def body_mass_matrix(mass, inertia, com):
@@ -198,28 +202,21 @@ def compile_scene(scene: Scene, groups):
         nb=nb, gid=gid, mass=mass, com=com, M=M, Minv=Minv,
         gravity=scene.gravity.astype(float), hasGravity=bool(np.any(scene.gravity != 0)),
         hasQext=bool(scene.pythonForces),
-        lbody=arr([l.body for l in L], (-1,), np.int64),
-        lkind=arr([0 if l.kind == "force" else 1 for l in L], (-1,), np.int64),
-        lvec=arr([l.vector for l in L], (-1, 3)), lpos=arr([l.pos for l in L], (-1, 3)),
-        lfixed=arr([l.bodyFixed for l in L], (-1,), np.bool_),
-        sA=arr([s.bodyA for s in S], (-1,), np.int64), sB=arr([s.bodyB for s in S], (-1,), np.int64),
-        sposA=arr([s.posA for s in S], (-1, 3)), sposB=arr([s.posB for s in S], (-1, 3)),
-        sK=arr([s.stiffness for s in S], (-1,)), sD=arr([s.damping for s in S], (-1,)),
-        sL0=arr([s.referenceLength for s in S], (-1,)), sf0=arr([s.force for s in S], (-1,)),
-        cA=arr([s.bodyA for s in C], (-1,), np.int64), cB=arr([s.bodyB for s in C], (-1,), np.int64),
-        cposA=arr([s.posA for s in C], (-1, 3)), cposB=arr([s.posB for s in C], (-1, 3)),
-        cK=arr([s.stiffness for s in C], (-1, 3)), cD=arr([s.damping for s in C], (-1, 3)),
-        coff=arr([s.offset for s in C], (-1, 3)),
-        tA=arr([s.bodyA for s in T], (-1,), np.int64), tB=arr([s.bodyB for s in T], (-1,), np.int64),
-        trotA=arr([s.rotA for s in T], (-1, 3, 3)), trotB=arr([s.rotB for s in T], (-1, 3, 3)),
-        tK=arr([s.stiffness for s in T], (-1,)), tD=arr([s.damping for s in T], (-1,)),
-        toff=arr([s.offset for s in T], (-1,)), ttq=arr([s.torque for s in T], (-1,)),
-        jA=arr([j.bodyA for j in J], (-1,), np.int64), jB=arr([j.bodyB for j in J], (-1,), np.int64),
-        jposA=arr([j.posA for j in J], (-1, 3)), jrotA=arr([j.rotA for j in J], (-1, 3, 3)),
-        jposB=arr([j.posB for j in J], (-1, 3)), jrotB=arr([j.rotB for j in J], (-1, 3, 3)),
-        jrow0=jrow0, jnrow=jnrow,
-        rkind=arr(rkind, (-1,), np.int64), rax=arr(rax, (-1,), np.int64), rbx=arr(rbx, (-1,), np.int64),
-        rbodyA=arr(rA, (-1,), np.int64), rbodyB=arr(rB, (-1,), np.int64),
+        lint=arr([[l.body, 0 if l.kind == "force" else 1, int(l.bodyFixed)] for l in L], (-1, 3), np.int64),
+        lvec=arr([[l.vector, l.pos] for l in L], (-1, 2, 3)),
+        sint=arr([[s.bodyA, s.bodyB] for s in S], (-1, 2), np.int64),
+        spos=arr([[s.posA, s.posB] for s in S], (-1, 2, 3)),
+        spar=arr([[s.stiffness, s.damping, s.referenceLength, s.force] for s in S], (-1, 4)),
+        cint=arr([[s.bodyA, s.bodyB] for s in C], (-1, 2), np.int64),
+        cpos=arr([[s.posA, s.posB] for s in C], (-1, 2, 3)),
+        cpar=arr([[s.stiffness, s.damping, s.offset] for s in C], (-1, 3, 3)),
+        tint=arr([[s.bodyA, s.bodyB] for s in T], (-1, 2), np.int64),
+        trot=arr([[s.rotA, s.rotB] for s in T], (-1, 2, 3, 3)),
+        tpar=arr([[s.stiffness, s.damping, s.offset, s.torque] for s in T], (-1, 4)),
+        jint=arr([[j.bodyA, j.bodyB, jrow0[k], jnrow[k]] for k, j in enumerate(J)], (-1, 4), np.int64),
+        jpos=arr([[j.posA, j.posB] for j in J], (-1, 2, 3)),
+        jrot=arr([[j.rotA, j.rotB] for j in J], (-1, 2, 3, 3)),
+        rint=arr([list(x) for x in zip(rkind, rax, rbx, rA, rB)], (-1, 5), np.int64),
         nrows=m, bandwidth=bw, redundant=False, pivotTol=REL_PIVOT_TOL,
     )
     return sd, np.array(rjoint, dtype=np.int64)
@@ -232,19 +229,14 @@ def with_redundant(sd, flag):
 def make_work(sd, nstages):
     nb = sd.nb
     m = sd.nrows
-    z3 = lambda: np.zeros(3)
     return Work(
         Rs=np.zeros((nb, 3, 3)), rs=np.zeros((nb, 3)), Vs=np.zeros((nb, 6)),
         Rb=np.zeros((nb, 3, 3)), rb=np.zeros((nb, 3)), Vb=np.zeros((nb, 6)), Psi=np.zeros((nb, 6)),
-        K=np.zeros((nstages, nb, 6)), Vd=np.zeros((nstages, nb, 6)), Q=np.zeros((nb, 6)),
-        Qext=np.zeros((nb, 6)), Jr=np.zeros((m, 12)), W=np.zeros((m, 12)), eta=np.zeros(m),
-        h=np.zeros(m), lam=np.zeros(m), Sb=np.zeros((m, sd.bandwidth + 1)),
-        Sd=np.zeros((m, m)) if sd.redundant else np.zeros((0, 0)),
+        K=np.zeros((nstages, nb, 6)), Vd=np.zeros((nstages, nb, 6)), Q=np.zeros((nb, 6)), Qext=np.zeros((nb, 6)),
+        Jr=np.zeros((m, 12)), W=np.zeros((m, 12)), eta=np.zeros(m), h=np.zeros(m), lam=np.zeros(m),
+        Sb=np.zeros((m, sd.bandwidth + 1)), Sd=np.zeros((m, m)) if sd.redundant else np.zeros((0, 0)),
         perm=np.zeros(m, np.int64), ytmp=np.zeros(m), info=np.zeros(4, np.int64),
-        tmp6=np.zeros(6), tmp12=np.zeros(12),
-        v3a=z3(), v3b=z3(), v3c=z3(), v3d=z3(), v3e=z3(), v3f=z3(), v3g=z3(), v3h=z3(), v3i=z3(),
-        v3j=z3(), v3k=z3(), v3l=z3(), v3m=z3(), v3n=z3(), v3o=z3(), v3p=z3(), v3q=z3(), v3r=z3(),
-        v3s=z3(), v3t=z3(), m3a=np.zeros((3, 3)), m3b=np.zeros((3, 3)), ident=np.eye(3),
-        zero3=np.zeros(3), zero6=np.zeros(6), tphi=np.zeros(len(sd.tA)),
+        tmp6=np.zeros(6), tmp12=np.zeros(12), v3=np.zeros((N_SCRATCH3, 3)), m3=np.zeros((2, 3, 3)),
+        ident=np.eye(3), zero3=np.zeros(3), zero6=np.zeros(6), tphi=np.zeros(sd.tint.shape[0]),
         watchBody=np.zeros(0, np.int64), watchEntry=np.zeros((0, 2), np.int64), watchMax=np.zeros(0),
     )

@@ -22,6 +22,16 @@ Constraints follow Exudyn's ``ObjectJointGeneric`` (scene.py).  For a row ``h(g)
 ``hddot``: for ``h = a . d`` (a an axis, d a point difference)
 ``hddot = addot . d + 2 adot . ddot + a . dddot`` and the bias collects every term that
 is quadratic in the velocities.
+
+Code layout (compile time): the entry points take the ``SceneData`` / ``Work``
+namedtuples (``mk_steps`` - the time loop, also the accelerations at a state with
+``nsteps = 0`` - and ``all_rows`` - constraint rows and energies for diagnostics); they
+unpack them and call working functions that receive only the arrays they use.  Numba's
+compile time grows steeply with the size of the tuples a function receives: the big
+working functions (joint rows, spring forces, ...) are compiled and cached once with
+short signatures; the light per-stage ones are inlined (``inline="always"``), which
+keeps the stage free of call overhead.  Scratch vectors are rows of ``wk.v3`` (20, 3)
+and ``wk.m3`` (2, 3, 3).
 """
 import numpy as np
 from numba import njit
@@ -35,6 +45,11 @@ GID_SO3xR3 = 1
 ROW_TRANS_LOCAL = 0   # a = (R_A rotA)[:, ax] ; h = a . (pB - pA)
 ROW_TRANS_WORLD = 1   # a = e_ax (world)       ; h = a . (pB - pA)
 ROW_ROT = 2           # h = (R_A rotA)[:, ax] . (R_B rotB)[:, bx]
+
+# columns of the integer tables of SceneData
+ROW_KIND, ROW_AX, ROW_BX, ROW_BODY_A, ROW_BODY_B = 0, 1, 2, 3, 4      # rint (m, 5)
+J_BODY_A, J_BODY_B, J_ROW0, J_NROW = 0, 1, 2, 3                        # jint (nj, 4)
+L_BODY, L_KIND, L_FIXED = 0, 1, 2                                      # lint (nl, 3)
 
 STATUS_OK = 0
 STATUS_SINGULAR = 1
@@ -58,6 +73,14 @@ def _matvec(M, x, out):
 def _matTvec(M, x, out):
     for i in range(3):
         out[i] = M[0, i] * x[0] + M[1, i] * x[1] + M[2, i] * x[2]
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def _side(gid, b, R, r, V, ident, zero3, zero6):
+    """(gid, R, r, V) of a joint/connector side; ground has identity, zero velocity."""
+    if b < 0:
+        return GID_SE3, ident, zero3, zero6
+    return gid[b], R[b], r[b], V[b]
 
 
 # --------------------------------------------------------------------------- body kinematics
@@ -158,100 +181,48 @@ def apply_minv(gid, Minv, R, x, out, tmp):
             out[3 + i] = R[i, 0] * tmp[9] + R[i, 1] * tmp[10] + R[i, 2] * tmp[11]
 
 
-@njit(cache=True, _nrt=False)
-def add_inertial_forces(gid, M, mass, com, R, V, Q):
-    """Add the velocity-dependent (gyroscopic / centrifugal) terms to ``Q``.
-
-    SE3, eq. (NE1): ``M Vdot = W + ad_V^T (M V)``, ``ad_V^T (L, p) = (-(w x L) - v x p, -(w x p))``.
-    SO3xR3: ``M^m Vdot = W - (w x Theta_P w, m R (w x (w x c)))``."""
-    w0, w1, w2 = V[0], V[1], V[2]
-    if gid == GID_SE3:
-        Lx = M[0, 0] * V[0] + M[0, 1] * V[1] + M[0, 2] * V[2] + M[0, 3] * V[3] + M[0, 4] * V[4] + M[0, 5] * V[5]
-        Ly = M[1, 0] * V[0] + M[1, 1] * V[1] + M[1, 2] * V[2] + M[1, 3] * V[3] + M[1, 4] * V[4] + M[1, 5] * V[5]
-        Lz = M[2, 0] * V[0] + M[2, 1] * V[1] + M[2, 2] * V[2] + M[2, 3] * V[3] + M[2, 4] * V[4] + M[2, 5] * V[5]
-        px = M[3, 0] * V[0] + M[3, 1] * V[1] + M[3, 2] * V[2] + M[3, 3] * V[3] + M[3, 4] * V[4] + M[3, 5] * V[5]
-        py = M[4, 0] * V[0] + M[4, 1] * V[1] + M[4, 2] * V[2] + M[4, 3] * V[3] + M[4, 4] * V[4] + M[4, 5] * V[5]
-        pz = M[5, 0] * V[0] + M[5, 1] * V[1] + M[5, 2] * V[2] + M[5, 3] * V[3] + M[5, 4] * V[4] + M[5, 5] * V[5]
-        a0, a1, a2 = _cross(w0, w1, w2, Lx, Ly, Lz)
-        b0, b1, b2 = _cross(V[3], V[4], V[5], px, py, pz)
-        c0, c1, c2 = _cross(w0, w1, w2, px, py, pz)
-        Q[0] -= a0 + b0
-        Q[1] -= a1 + b1
-        Q[2] -= a2 + b2
-        Q[3] -= c0
-        Q[4] -= c1
-        Q[5] -= c2
-    else:
-        Lx = M[0, 0] * w0 + M[0, 1] * w1 + M[0, 2] * w2
-        Ly = M[1, 0] * w0 + M[1, 1] * w1 + M[1, 2] * w2
-        Lz = M[2, 0] * w0 + M[2, 1] * w1 + M[2, 2] * w2
-        a0, a1, a2 = _cross(w0, w1, w2, Lx, Ly, Lz)
-        Q[0] -= a0
-        Q[1] -= a1
-        Q[2] -= a2
-        if mass * (com[0] * com[0] + com[1] * com[1] + com[2] * com[2]) > 0.0:
-            wc0, wc1, wc2 = _cross(w0, w1, w2, com[0], com[1], com[2])
-            e0, e1, e2 = _cross(w0, w1, w2, wc0, wc1, wc2)
-            for i in range(3):
-                Q[3 + i] -= mass * (R[i, 0] * e0 + R[i, 1] * e1 + R[i, 2] * e2)
-
-
 # --------------------------------------------------------------------------- forces
 @njit(cache=True, inline="always", _nrt=False)
-def _side(sd, b, R, r, V, ident, zero3, zero6):
-    """(gid, R, r, V) of a joint/connector side; ground has identity, zero velocity."""
-    if b < 0:
-        return GID_SE3, ident, zero3, zero6
-    return sd.gid[b], R[b], r[b], V[b]
+def gravity_forces(gid, mass, com, gravity, R, Q, F):
+    """Gravity acts at the centre of mass."""
+    for i in range(gid.shape[0]):
+        for k in range(3):
+            F[k] = mass[i] * gravity[k]
+        add_point_force(gid[i], R[i], com[i], F, Q[i])
 
 
 @njit(cache=True, inline="always", _nrt=False)
-def compute_forces(sd, wk, t, R, r, V, Q):
-    """Applied and inertial generalised forces ``Q`` (nb, 6) at the state (R, r, V)."""
-    nb = sd.nb
-    pA = wk.v3a
-    pB = wk.v3b
-    vA = wk.v3c
-    vB = wk.v3d
-    bA = wk.v3e
-    bB = wk.v3f
-    F = wk.v3g
-    ident = wk.ident
-    zero3 = wk.zero3
-    zero6 = wk.zero6
-    for i in range(nb):
-        for k in range(6):
-            Q[i, k] = 0.0
-    # gravity acts at the centre of mass
-    if sd.hasGravity:
-        for i in range(nb):
-            for k in range(3):
-                F[k] = sd.mass[i] * sd.gravity[k]
-            add_point_force(sd.gid[i], R[i], sd.com[i], F, Q[i])
-    # constant loads
-    for l in range(sd.lbody.shape[0]):
-        i = sd.lbody[l]
-        if sd.lkind[l] == 0:
-            if sd.lfixed[l]:
-                _matvec(R[i], sd.lvec[l], F)
+def load_forces(gid, lint, lvec, R, Q, F):
+    """Constant forces (at a body point) and torques, world or body-fixed."""
+    for l in range(lint.shape[0]):
+        i = lint[l, L_BODY]
+        if lint[l, L_KIND] == 0:
+            if lint[l, L_FIXED]:
+                _matvec(R[i], lvec[l, 0], F)
             else:
                 for k in range(3):
-                    F[k] = sd.lvec[l, k]
-            add_point_force(sd.gid[i], R[i], sd.lpos[l], F, Q[i])
+                    F[k] = lvec[l, 0, k]
+            add_point_force(gid[i], R[i], lvec[l, 1], F, Q[i])
         else:
-            if sd.lfixed[l]:
+            if lint[l, L_FIXED]:
                 for k in range(3):
-                    Q[i, k] += sd.lvec[l, k]
+                    Q[i, k] += lvec[l, 0, k]
             else:
-                add_world_torque(R[i], sd.lvec[l], Q[i])
-    # point-to-point spring-dampers: tension f = k (L - L0) + d Ldot + f0
-    for s in range(sd.sA.shape[0]):
-        a = sd.sA[s]
-        b = sd.sB[s]
-        gA, RA, rA, VA = _side(sd, a, R, r, V, ident, zero3, zero6)
-        gB, RB, rB, VB = _side(sd, b, R, r, V, ident, zero3, zero6)
-        body_point(gA, RA, rA, VA, sd.sposA[s], pA, vA, bA)
-        body_point(gB, RB, rB, VB, sd.sposB[s], pB, vB, bB)
+                add_world_torque(R[i], lvec[l, 0], Q[i])
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def spring_forces(gid, sint, spos, spar, R, r, V, Q, v3, ident, zero3, zero6):
+    """Point-to-point spring-dampers: tension ``f = k (L - L0) + d Ldot + f0``
+    (``spar`` = k, d, L0, f0)."""
+    pA, pB, vA, vB, bA, bB, F = v3[0], v3[1], v3[2], v3[3], v3[4], v3[5], v3[6]
+    for s in range(sint.shape[0]):
+        a = sint[s, 0]
+        b = sint[s, 1]
+        gA, RA, rA, VA = _side(gid, a, R, r, V, ident, zero3, zero6)
+        gB, RB, rB, VB = _side(gid, b, R, r, V, ident, zero3, zero6)
+        body_point(gA, RA, rA, VA, spos[s, 0], pA, vA, bA)
+        body_point(gB, RB, rB, VB, spos[s, 1], pB, vB, bB)
         L = 0.0
         for k in range(3):
             L += (pB[k] - pA[k]) ** 2
@@ -262,70 +233,52 @@ def compute_forces(sd, wk, t, R, r, V, Q):
         for k in range(3):
             Ld += (pB[k] - pA[k]) * (vB[k] - vA[k])
         Ld /= L
-        f = sd.sK[s] * (L - sd.sL0[s]) + sd.sD[s] * Ld + sd.sf0[s]
+        f = spar[s, 0] * (L - spar[s, 2]) + spar[s, 1] * Ld + spar[s, 3]
         if a >= 0:
             for k in range(3):
                 F[k] = f * (pB[k] - pA[k]) / L
-            add_point_force(gA, RA, sd.sposA[s], F, Q[a])
+            add_point_force(gA, RA, spos[s, 0], F, Q[a])
         if b >= 0:
             for k in range(3):
                 F[k] = -f * (pB[k] - pA[k]) / L
-            add_point_force(gB, RB, sd.sposB[s], F, Q[b])
-    # Cartesian spring-dampers, world components
-    for s in range(sd.cA.shape[0]):
-        a = sd.cA[s]
-        b = sd.cB[s]
-        gA, RA, rA, VA = _side(sd, a, R, r, V, ident, zero3, zero6)
-        gB, RB, rB, VB = _side(sd, b, R, r, V, ident, zero3, zero6)
-        body_point(gA, RA, rA, VA, sd.cposA[s], pA, vA, bA)
-        body_point(gB, RB, rB, VB, sd.cposB[s], pB, vB, bB)
+            add_point_force(gB, RB, spos[s, 1], F, Q[b])
+
+
+@njit(cache=True, _nrt=False)
+def cartesian_forces(gid, cint, cpos, cpar, R, r, V, Q, v3, ident, zero3, zero6):
+    """Cartesian spring-dampers, world components ``f_i = k_i (d_i - o_i) + c_i ddot_i``
+    (``cpar[s]`` = rows k, c, o)."""
+    pA, pB, vA, vB, bA, bB, F = v3[0], v3[1], v3[2], v3[3], v3[4], v3[5], v3[6]
+    for s in range(cint.shape[0]):
+        a = cint[s, 0]
+        b = cint[s, 1]
+        gA, RA, rA, VA = _side(gid, a, R, r, V, ident, zero3, zero6)
+        gB, RB, rB, VB = _side(gid, b, R, r, V, ident, zero3, zero6)
+        body_point(gA, RA, rA, VA, cpos[s, 0], pA, vA, bA)
+        body_point(gB, RB, rB, VB, cpos[s, 1], pB, vB, bB)
         for k in range(3):
-            F[k] = sd.cK[s, k] * (pB[k] - pA[k] - sd.coff[s, k]) + sd.cD[s, k] * (vB[k] - vA[k])
+            F[k] = cpar[s, 0, k] * (pB[k] - pA[k] - cpar[s, 2, k]) + cpar[s, 1, k] * (vB[k] - vA[k])
         if a >= 0:
-            add_point_force(gA, RA, sd.cposA[s], F, Q[a])
+            add_point_force(gA, RA, cpos[s, 0], F, Q[a])
         if b >= 0:
             for k in range(3):
                 F[k] = -F[k]
-            add_point_force(gB, RB, sd.cposB[s], F, Q[b])
-    # torsional spring-dampers about the z axis of the frame on A
-    for s in range(sd.tA.shape[0]):
-        a = sd.tA[s]
-        b = sd.tB[s]
-        gA, RA, rA, VA = _side(sd, a, R, r, V, ident, zero3, zero6)
-        gB, RB, rB, VB = _side(sd, b, R, r, V, ident, zero3, zero6)
-        phi, phid = torsion_angle(sd, wk, s, RA, VA, RB, VB)
-        # Exudyn's law: tau = k (phi - phi0) + d phidot + torque; -tau z_A acts on B, +tau z_A on A
-        tau = -(sd.tK[s] * (phi - sd.toff[s]) + sd.tD[s] * phid + sd.ttq[s])
-        _matvec(RA, sd.trotA[s, :, 2], F)
-        for k in range(3):
-            F[k] *= tau
-        if b >= 0:
-            add_world_torque(RB, F, Q[b])
-        if a >= 0:
-            for k in range(3):
-                F[k] = -F[k]
-            add_world_torque(RA, F, Q[a])
-    # inertial (velocity product) terms
-    for i in range(nb):
-        add_inertial_forces(sd.gid[i], sd.M[i], sd.mass[i], sd.com[i], R[i], V[i], Q[i])
+            add_point_force(gB, RB, cpos[s, 1], F, Q[b])
 
 
-@njit(cache=True, inline="always", _nrt=False)
-def torsion_angle(sd, wk, s, RA, VA, RB, VB):
+@njit(cache=True, _nrt=False)
+def torsion_angle(rotA, rotB, prev, RA, VA, RB, VB, FA, FB):
     """Relative rotation angle about z of frame A (tracked continuously through turns
-    using the angle at the last accepted step, ``wk.tphi[s]``) and its rate."""
+    from the angle ``prev`` at the last accepted step) and its rate."""
     # relative rotation Rrel = (RA rotA)^T (RB rotB); phi is its third Tait-Bryan (x-y-z)
     # angle, atan2(-Rrel[0,1], Rrel[0,0]), as in Exudyn's TorsionalSpringDamper
-    FA = wk.m3a
-    FB = wk.m3b
     for i in range(3):
         for j in range(3):
-            FA[i, j] = RA[i, 0] * sd.trotA[s, 0, j] + RA[i, 1] * sd.trotA[s, 1, j] + RA[i, 2] * sd.trotA[s, 2, j]
-            FB[i, j] = RB[i, 0] * sd.trotB[s, 0, j] + RB[i, 1] * sd.trotB[s, 1, j] + RB[i, 2] * sd.trotB[s, 2, j]
+            FA[i, j] = RA[i, 0] * rotA[0, j] + RA[i, 1] * rotA[1, j] + RA[i, 2] * rotA[2, j]
+            FB[i, j] = RB[i, 0] * rotB[0, j] + RB[i, 1] * rotB[1, j] + RB[i, 2] * rotB[2, j]
     r01 = FA[0, 0] * FB[0, 1] + FA[1, 0] * FB[1, 1] + FA[2, 0] * FB[2, 1]
     r00 = FA[0, 0] * FB[0, 0] + FA[1, 0] * FB[1, 0] + FA[2, 0] * FB[2, 0]
     phi0 = np.arctan2(-r01, r00)
-    prev = wk.tphi[s]
     turns = np.round((prev - phi0) / (2.0 * np.pi))
     phi = phi0 + 2.0 * np.pi * turns
     # phidot = z_A . (omega_B,world - omega_A,world)
@@ -339,63 +292,148 @@ def torsion_angle(sd, wk, s, RA, VA, RB, VB):
     return phi, phid
 
 
+@njit(cache=True, _nrt=False)
+def torsional_forces(gid, tint, trot, tpar, tphi, R, r, V, Q, F, m3, ident, zero3, zero6):
+    """Torsional spring-dampers about the z axis of the frame on A (``tpar`` = k, d,
+    offset, torque).  Exudyn's law: ``tau = k (phi - phi0) + d phidot + torque``;
+    ``-tau z_A`` acts on B, ``+tau z_A`` on A."""
+    for s in range(tint.shape[0]):
+        a = tint[s, 0]
+        b = tint[s, 1]
+        gA, RA, rA, VA = _side(gid, a, R, r, V, ident, zero3, zero6)
+        gB, RB, rB, VB = _side(gid, b, R, r, V, ident, zero3, zero6)
+        phi, phid = torsion_angle(trot[s, 0], trot[s, 1], tphi[s], RA, VA, RB, VB, m3[0], m3[1])
+        tau = -(tpar[s, 0] * (phi - tpar[s, 2]) + tpar[s, 1] * phid + tpar[s, 3])
+        for k in range(3):
+            F[k] = tau * (RA[k, 0] * trot[s, 0, 0, 2] + RA[k, 1] * trot[s, 0, 1, 2] + RA[k, 2] * trot[s, 0, 2, 2])
+        if b >= 0:
+            add_world_torque(RB, F, Q[b])
+        if a >= 0:
+            for k in range(3):
+                F[k] = -F[k]
+            add_world_torque(RA, F, Q[a])
+
+
+@njit(cache=True, _nrt=False)
+def torsion_angles(gid, tint, trot, tphi, R, r, V, m3, ident, zero3, zero6):
+    """Store the current torsion angles as the branch reference for the next step."""
+    for s in range(tint.shape[0]):
+        gA, RA, rA, VA = _side(gid, tint[s, 0], R, r, V, ident, zero3, zero6)
+        gB, RB, rB, VB = _side(gid, tint[s, 1], R, r, V, ident, zero3, zero6)
+        phi, phid = torsion_angle(trot[s, 0], trot[s, 1], tphi[s], RA, VA, RB, VB, m3[0], m3[1])
+        tphi[s] = phi
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def inertial_forces(gid, M, mass, com, R, V, Q):
+    """Velocity-dependent (gyroscopic / centrifugal) terms of every body.
+
+    SE3, eq. (NE1): ``M Vdot = W + ad_V^T (M V)``, ``ad_V^T (L, p) = (-(w x L) - v x p, -(w x p))``.
+    SO3xR3: ``M^m Vdot = W - (w x Theta_P w, m R (w x (w x c)))``."""
+    for i in range(gid.shape[0]):
+        Mi = M[i]
+        Vi = V[i]
+        Qi = Q[i]
+        w0, w1, w2 = Vi[0], Vi[1], Vi[2]
+        if gid[i] == GID_SE3:
+            Lx = Mi[0, 0] * w0 + Mi[0, 1] * w1 + Mi[0, 2] * w2 + Mi[0, 3] * Vi[3] + Mi[0, 4] * Vi[4] + Mi[0, 5] * Vi[5]
+            Ly = Mi[1, 0] * w0 + Mi[1, 1] * w1 + Mi[1, 2] * w2 + Mi[1, 3] * Vi[3] + Mi[1, 4] * Vi[4] + Mi[1, 5] * Vi[5]
+            Lz = Mi[2, 0] * w0 + Mi[2, 1] * w1 + Mi[2, 2] * w2 + Mi[2, 3] * Vi[3] + Mi[2, 4] * Vi[4] + Mi[2, 5] * Vi[5]
+            px = Mi[3, 0] * w0 + Mi[3, 1] * w1 + Mi[3, 2] * w2 + Mi[3, 3] * Vi[3] + Mi[3, 4] * Vi[4] + Mi[3, 5] * Vi[5]
+            py = Mi[4, 0] * w0 + Mi[4, 1] * w1 + Mi[4, 2] * w2 + Mi[4, 3] * Vi[3] + Mi[4, 4] * Vi[4] + Mi[4, 5] * Vi[5]
+            pz = Mi[5, 0] * w0 + Mi[5, 1] * w1 + Mi[5, 2] * w2 + Mi[5, 3] * Vi[3] + Mi[5, 4] * Vi[4] + Mi[5, 5] * Vi[5]
+            a0, a1, a2 = _cross(w0, w1, w2, Lx, Ly, Lz)
+            b0, b1, b2 = _cross(Vi[3], Vi[4], Vi[5], px, py, pz)
+            c0, c1, c2 = _cross(w0, w1, w2, px, py, pz)
+            Qi[0] -= a0 + b0
+            Qi[1] -= a1 + b1
+            Qi[2] -= a2 + b2
+            Qi[3] -= c0
+            Qi[4] -= c1
+            Qi[5] -= c2
+        else:
+            Lx = Mi[0, 0] * w0 + Mi[0, 1] * w1 + Mi[0, 2] * w2
+            Ly = Mi[1, 0] * w0 + Mi[1, 1] * w1 + Mi[1, 2] * w2
+            Lz = Mi[2, 0] * w0 + Mi[2, 1] * w1 + Mi[2, 2] * w2
+            a0, a1, a2 = _cross(w0, w1, w2, Lx, Ly, Lz)
+            Qi[0] -= a0
+            Qi[1] -= a1
+            Qi[2] -= a2
+            c = com[i]
+            if mass[i] * (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]) > 0.0:
+                wc0, wc1, wc2 = _cross(w0, w1, w2, c[0], c[1], c[2])
+                e0, e1, e2 = _cross(w0, w1, w2, wc0, wc1, wc2)
+                Ri = R[i]
+                for k in range(3):
+                    Qi[3 + k] -= mass[i] * (Ri[k, 0] * e0 + Ri[k, 1] * e1 + Ri[k, 2] * e2)
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def compute_forces(sd, wk, t, R, r, V, Q):
+    """Applied and inertial generalised forces ``Q`` (nb, 6) at the state (R, r, V);
+    every force type a scene lacks is skipped."""
+    for i in range(sd.nb):
+        for k in range(6):
+            Q[i, k] = 0.0
+    F = wk.v3[6]
+    if sd.hasGravity:
+        gravity_forces(sd.gid, sd.mass, sd.com, sd.gravity, R, Q, F)
+    if sd.lint.shape[0] > 0:
+        load_forces(sd.gid, sd.lint, sd.lvec, R, Q, F)
+    if sd.sint.shape[0] > 0:
+        spring_forces(sd.gid, sd.sint, sd.spos, sd.spar, R, r, V, Q, wk.v3, wk.ident, wk.zero3, wk.zero6)
+    if sd.cint.shape[0] > 0:
+        cartesian_forces(sd.gid, sd.cint, sd.cpos, sd.cpar, R, r, V, Q, wk.v3, wk.ident, wk.zero3, wk.zero6)
+    if sd.tint.shape[0] > 0:
+        torsional_forces(sd.gid, sd.tint, sd.trot, sd.tpar, wk.tphi, R, r, V, Q, F, wk.m3, wk.ident, wk.zero3,
+                         wk.zero6)
+    inertial_forces(sd.gid, sd.M, sd.mass, sd.com, R, V, Q)
+
+
 @njit(cache=True, inline="always", _nrt=False)
 def update_torsion_tracking(sd, wk, R, r, V):
-    """Store the current torsion angles as the branch reference for the next step."""
-    for s in range(sd.tA.shape[0]):
-        gA, RA, rA, VA = _side(sd, sd.tA[s], R, r, V, wk.ident, wk.zero3, wk.zero6)
-        gB, RB, rB, VB = _side(sd, sd.tB[s], R, r, V, wk.ident, wk.zero3, wk.zero6)
-        phi, phid = torsion_angle(sd, wk, s, RA, VA, RB, VB)
-        wk.tphi[s] = phi
+    if sd.tint.shape[0] > 0:
+        torsion_angles(sd.gid, sd.tint, sd.trot, wk.tphi, R, r, V, wk.m3, wk.ident, wk.zero3, wk.zero6)
 
 
 # --------------------------------------------------------------------------- constraints
-@njit(cache=True, inline="always", _nrt=False)
-def joint_rows(sd, wk, j, R, r, V, h, Jr, eta, want_eta):
+@njit(cache=True, _nrt=False)
+def joint_rows(j, gid, jint, jpos, jrot, rint, R, r, V, h, Jr, eta, v3, ident, zero3, zero6):
     """Residual ``h``, Jacobian rows ``Jr`` (row, 12: 6 for side A, 6 for side B) and
     ``eta = -Jdot V`` of all rows of joint ``j``, written at the joint's row slots."""
-    a = sd.jA[j]
-    b = sd.jB[j]
-    gA, RA, rA, VA = _side(sd, a, R, r, V, wk.ident, wk.zero3, wk.zero6)
-    gB, RB, rB, VB = _side(sd, b, R, r, V, wk.ident, wk.zero3, wk.zero6)
-    pA = wk.v3a
-    pB = wk.v3b
-    vA = wk.v3c
-    vB = wk.v3d
-    bA = wk.v3e
-    bB = wk.v3f
-    body_point(gA, RA, rA, VA, sd.jposA[j], pA, vA, bA)
-    body_point(gB, RB, rB, VB, sd.jposB[j], pB, vB, bB)
-    d = wk.v3g
-    dd = wk.v3h
-    bd = wk.v3i
+    a = jint[j, J_BODY_A]
+    b = jint[j, J_BODY_B]
+    gA, RA, rA, VA = _side(gid, a, R, r, V, ident, zero3, zero6)
+    gB, RB, rB, VB = _side(gid, b, R, r, V, ident, zero3, zero6)
+    sA = jpos[j, 0]
+    sB = jpos[j, 1]
+    rotA = jrot[j, 0]
+    rotB = jrot[j, 1]
+    pA, pB, vA, vB, bA, bB = v3[0], v3[1], v3[2], v3[3], v3[4], v3[5]
+    d, dd, bd, dAl, tmp = v3[6], v3[7], v3[8], v3[9], v3[10]
+    ax, axd, axb, bx, bxd, bxb = v3[11], v3[12], v3[13], v3[14], v3[15], v3[16]
+    u, w, RtA = v3[17], v3[18], v3[19]
+    body_point(gA, RA, rA, VA, sA, pA, vA, bA)
+    body_point(gB, RB, rB, VB, sB, pB, vB, bB)
     for k in range(3):
         d[k] = pB[k] - pA[k]
         dd[k] = vB[k] - vA[k]
         bd[k] = bB[k] - bA[k]
-    # body-frame quantities used by all rows
-    dAl = wk.v3j    # RA^T (pB - rA): lever of the A-axis rotation
-    tmp = wk.v3k
+    # RA^T (pB - rA): lever of the A-axis rotation, used by the local translation rows
     for k in range(3):
         tmp[k] = pB[k] - rA[k]
     _matTvec(RA, tmp, dAl)
-    ax = wk.v3l
-    axd = wk.v3m
-    axb = wk.v3n
-    bx = wk.v3o
-    bxd = wk.v3p
-    bxb = wk.v3q
-    u = wk.v3r
-    w = wk.v3s
-    RtA = wk.v3t
-    for q in range(sd.jrow0[j], sd.jrow0[j] + sd.jnrow[j]):
+    row0 = jint[j, J_ROW0]
+    for q in range(row0, row0 + jint[j, J_NROW]):
         for k in range(12):
             Jr[q, k] = 0.0
-        kind = sd.rkind[q]
+        kind = rint[q, ROW_KIND]
+        rax = rint[q, ROW_AX]
         if kind == ROW_ROT:
+            rbx = rint[q, ROW_BX]
             for k in range(3):
-                u[k] = sd.jrotA[j, k, sd.rax[q]]
-                w[k] = sd.jrotB[j, k, sd.rbx[q]]
+                u[k] = rotA[k, rax]
+                w[k] = rotB[k, rbx]
             body_axis(RA, VA, u, ax, axd, axb)
             body_axis(RB, VB, w, bx, bxd, bxb)
             hv = 0.0
@@ -420,14 +458,14 @@ def joint_rows(sd, wk, j, R, r, V, h, Jr, eta, want_eta):
         else:
             if kind == ROW_TRANS_LOCAL:
                 for k in range(3):
-                    u[k] = sd.jrotA[j, k, sd.rax[q]]
+                    u[k] = rotA[k, rax]
                 body_axis(RA, VA, u, ax, axd, axb)
             else:
                 for k in range(3):
                     ax[k] = 0.0
                     axd[k] = 0.0
                     axb[k] = 0.0
-                ax[sd.rax[q]] = 1.0
+                ax[rax] = 1.0
             hv = 0.0
             et = 0.0
             for k in range(3):
@@ -437,21 +475,16 @@ def joint_rows(sd, wk, j, R, r, V, h, Jr, eta, want_eta):
             eta[q] = -et
             if a >= 0:
                 _matTvec(RA, ax, RtA)          # RA^T a
-                sA = sd.jposA[j]
-                # -(a . pdot_A) -> omega_A . (RA^T a x sA), v_A: -T_A^T a
-                c0, c1, c2 = _cross(RtA[0], RtA[1], RtA[2], sA[0], sA[1], sA[2])
                 if kind == ROW_TRANS_LOCAL:
-                    # + adot . d -> omega_A . (u x RA^T d); combined with the point term
-                    # this is omega_A . (u x RA^T (pB - rA)) since RA^T a = u
-                    e0, e1, e2 = _cross(u[0], u[1], u[2], dAl[0], dAl[1], dAl[2])
-                    Jr[q, 0] = e0
-                    Jr[q, 1] = e1
-                    Jr[q, 2] = e2
+                    # -(a . pdot_A) + adot . d -> omega_A . (u x RA^T (pB - rA)) since RA^T a = u
+                    c0, c1, c2 = _cross(u[0], u[1], u[2], dAl[0], dAl[1], dAl[2])
                 else:
-                    Jr[q, 0] = c0
-                    Jr[q, 1] = c1
-                    Jr[q, 2] = c2
-                if gA == GID_SE3:
+                    # -(a . pdot_A) -> omega_A . (RA^T a x sA)
+                    c0, c1, c2 = _cross(RtA[0], RtA[1], RtA[2], sA[0], sA[1], sA[2])
+                Jr[q, 0] = c0
+                Jr[q, 1] = c1
+                Jr[q, 2] = c2
+                if gA == GID_SE3:              # v_A: -T_A^T a
                     Jr[q, 3] = -RtA[0]
                     Jr[q, 4] = -RtA[1]
                     Jr[q, 5] = -RtA[2]
@@ -461,7 +494,6 @@ def joint_rows(sd, wk, j, R, r, V, h, Jr, eta, want_eta):
                     Jr[q, 5] = -ax[2]
             if b >= 0:
                 _matTvec(RB, ax, RtA)          # RB^T a
-                sB = sd.jposB[j]
                 c0, c1, c2 = _cross(sB[0], sB[1], sB[2], RtA[0], RtA[1], RtA[2])
                 Jr[q, 6] = c0
                 Jr[q, 7] = c1
@@ -476,20 +508,21 @@ def joint_rows(sd, wk, j, R, r, V, h, Jr, eta, want_eta):
                     Jr[q, 11] = ax[2]
 
 
-@njit(cache=True, _nrt=False)
-def all_rows(sd, wk, R, r, V, h, Jr, eta):
-    for j in range(sd.jA.shape[0]):
-        joint_rows(sd, wk, j, R, r, V, h, Jr, eta, True)
+@njit(cache=True, inline="always", _nrt=False)
+def joints_rows(gid, jint, jpos, jrot, rint, R, r, V, h, Jr, eta, v3, ident, zero3, zero6):
+    """:func:`joint_rows` of every joint."""
+    for j in range(jint.shape[0]):
+        joint_rows(j, gid, jint, jpos, jrot, rint, R, r, V, h, Jr, eta, v3, ident, zero3, zero6)
 
 
 @njit(cache=True, inline="always", _nrt=False)
-def _row_dot(sd, q, l, Jr, W):
+def _row_dot(rint, q, l, Jr, W):
     """(J M^-1 J^T)[q, l] = sum over the bodies shared by rows q and l."""
     s = 0.0
-    aq = sd.rbodyA[q]
-    bq = sd.rbodyB[q]
-    al = sd.rbodyA[l]
-    bl = sd.rbodyB[l]
+    aq = rint[q, ROW_BODY_A]
+    bq = rint[q, ROW_BODY_B]
+    al = rint[l, ROW_BODY_A]
+    bl = rint[l, ROW_BODY_B]
     if aq >= 0:
         if aq == al:
             for k in range(6):
@@ -508,38 +541,31 @@ def _row_dot(sd, q, l, Jr, W):
 
 
 @njit(cache=True, inline="always", _nrt=False)
-def solve_accelerations(sd, wk, R, V, Q, Vdot):
-    """Index-1 solve (eq. index1) by the Schur complement:
-    ``Vfree = M^-1 Q``, ``S = J M^-1 J^T``, ``S lambda = J Vfree - eta``,
-    ``Vdot = Vfree - M^-1 J^T lambda``.  Returns a status code (wk.info[0] = row)."""
-    nb = sd.nb
-    for i in range(nb):
-        apply_minv(sd.gid[i], sd.Minv[i], R[i], Q[i], Vdot[i], wk.tmp12)
-    m = sd.nrows
-    if m == 0:
-        return STATUS_OK
-    Jr = wk.Jr
-    W = wk.W
+def constrained_accelerations(gid, Minv, rint, bw, redundant, pivotTol, R, Vdot, Jr, W, eta, lam, Sb, Sd, perm,
+                              ytmp, info, tmp12):
+    """Index-1 solve (eq. index1) by the Schur complement, given ``Vdot = M^-1 Q``:
+    ``S = J M^-1 J^T``, ``S lambda = J Vdot - eta``, ``Vdot -= M^-1 J^T lambda``.
+    Returns a status code (info[0] = failing row, info[1] = rank if redundant)."""
+    m = rint.shape[0]
     # W = M^-1 J^T, per row and side
     for q in range(m):
-        a = sd.rbodyA[q]
-        b = sd.rbodyB[q]
+        a = rint[q, ROW_BODY_A]
+        b = rint[q, ROW_BODY_B]
         if a >= 0:
-            apply_minv(sd.gid[a], sd.Minv[a], R[a], Jr[q, 0:6], W[q, 0:6], wk.tmp12)
+            apply_minv(gid[a], Minv[a], R[a], Jr[q, 0:6], W[q, 0:6], tmp12)
         else:
             for k in range(6):
                 W[q, k] = 0.0
         if b >= 0:
-            apply_minv(sd.gid[b], sd.Minv[b], R[b], Jr[q, 6:12], W[q, 6:12], wk.tmp12)
+            apply_minv(gid[b], Minv[b], R[b], Jr[q, 6:12], W[q, 6:12], tmp12)
         else:
             for k in range(6):
                 W[q, 6 + k] = 0.0
     # right-hand side J Vfree - eta
-    lam = wk.lam
     for q in range(m):
-        s = -wk.eta[q]
-        a = sd.rbodyA[q]
-        b = sd.rbodyB[q]
+        s = -eta[q]
+        a = rint[q, ROW_BODY_A]
+        b = rint[q, ROW_BODY_B]
         if a >= 0:
             for k in range(6):
                 s += Jr[q, k] * Vdot[a, k]
@@ -547,37 +573,33 @@ def solve_accelerations(sd, wk, R, V, Q, Vdot):
             for k in range(6):
                 s += Jr[q, 6 + k] * Vdot[b, k]
         lam[q] = s
-    bw = sd.bandwidth
-    if sd.redundant:
-        S = wk.Sd
+    if redundant:
         for q in range(m):
             for l in range(q + 1):
-                v = _row_dot(sd, q, l, Jr, W)
-                S[q, l] = v
-                S[l, q] = v
-        rank = pivoted_cholesky_solve(S, m, lam, wk.perm, wk.ytmp, sd.pivotTol)
-        wk.info[1] = rank
+                v = _row_dot(rint, q, l, Jr, W)
+                Sd[q, l] = v
+                Sd[l, q] = v
+        info[1] = pivoted_cholesky_solve(Sd, m, lam, perm, ytmp, pivotTol)
     else:
-        B = wk.Sb
         dmax = 0.0
         for q in range(m):
             l0 = q - bw
             if l0 < 0:
                 l0 = 0
             for l in range(l0, q + 1):
-                B[q, q - l] = _row_dot(sd, q, l, Jr, W)
-            if B[q, 0] > dmax:
-                dmax = B[q, 0]
-        fail = band_cholesky_inplace(B, m, bw, sd.pivotTol * dmax)
+                Sb[q, q - l] = _row_dot(rint, q, l, Jr, W)
+            if Sb[q, 0] > dmax:
+                dmax = Sb[q, 0]
+        fail = band_cholesky_inplace(Sb, m, bw, pivotTol * dmax)
         if fail >= 0:
-            wk.info[0] = fail
+            info[0] = fail
             return STATUS_SINGULAR
-        band_cholesky_solve_inplace(B, m, bw, lam)
+        band_cholesky_solve_inplace(Sb, m, bw, lam)
     # Vdot -= W lambda
     for q in range(m):
         lq = lam[q]
-        a = sd.rbodyA[q]
-        b = sd.rbodyB[q]
+        a = rint[q, ROW_BODY_A]
+        b = rint[q, ROW_BODY_B]
         if a >= 0:
             for k in range(6):
                 Vdot[a, k] -= W[q, k] * lq
@@ -585,6 +607,13 @@ def solve_accelerations(sd, wk, R, V, Q, Vdot):
             for k in range(6):
                 Vdot[b, k] -= W[q, 6 + k] * lq
     return STATUS_OK
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def free_accelerations(gid, Minv, R, Q, Vdot, tmp12):
+    """``Vdot = M^-1 Q`` body by body."""
+    for i in range(gid.shape[0]):
+        apply_minv(gid[i], Minv[i], R[i], Q[i], Vdot[i], tmp12)
 
 
 @njit(cache=True, inline="always", _nrt=False)
@@ -597,14 +626,17 @@ def rhs(sd, wk, t, R, r, V, Qext, Vdot):
         for i in range(sd.nb):
             for k in range(6):
                 Q[i, k] += Qext[i, k]
-    if sd.nrows > 0:
-        for j in range(sd.jA.shape[0]):
-            joint_rows(sd, wk, j, R, r, V, wk.h, wk.Jr, wk.eta, True)
-    return solve_accelerations(sd, wk, R, V, Q, Vdot)
+    free_accelerations(sd.gid, sd.Minv, R, Q, Vdot, wk.tmp12)
+    if sd.nrows == 0:
+        return STATUS_OK
+    joints_rows(sd.gid, sd.jint, sd.jpos, sd.jrot, sd.rint, R, r, V, wk.h, wk.Jr, wk.eta, wk.v3, wk.ident,
+                wk.zero3, wk.zero6)
+    return constrained_accelerations(sd.gid, sd.Minv, sd.rint, sd.bandwidth, sd.redundant, sd.pivotTol, R, Vdot,
+                                     wk.Jr, wk.W, wk.eta, wk.lam, wk.Sb, wk.Sd, wk.perm, wk.ytmp, wk.info, wk.tmp12)
 
 
 # --------------------------------------------------------------------------- Munthe-Kaas steps
-@njit(cache=True, inline="always", _nrt=False)
+@njit(cache=True, _nrt=False)
 def _exp_compose(gid, R, r, X, Rout, rout, ER, Er):
     """``(Rout, rout) = (R, r) exp(X)`` in the body's group (eqs. expX / expSO3xR3)."""
     if gid == GID_SE3:
@@ -621,82 +653,97 @@ def _exp_compose(gid, R, r, X, Rout, rout, ER, Er):
 
 
 @njit(cache=True, inline="always", _nrt=False)
-def mk_stage_state(sd, wk, A, j, h, R, r, V):
+def stage_state(gid, A, j, h, R, r, V, K, Vd, Psi, Rs, rs, Vs, ER, Er):
     """Stage configuration ``g exp(Psi_j)`` and velocity ``V + h sum a_jl Vdot_l`` (eq. MK1)."""
-    for i in range(sd.nb):
-        Psi = wk.Psi[i]
+    for i in range(gid.shape[0]):
+        Pi = Psi[i]
         for k in range(6):
             ps = 0.0
             vs = V[i, k]
             for l in range(j):
-                ps += A[j, l] * wk.K[l, i, k]
-                vs += h * A[j, l] * wk.Vd[l, i, k]
-            Psi[k] = h * ps
-            wk.Vs[i, k] = vs
+                ps += A[j, l] * K[l, i, k]
+                vs += h * A[j, l] * Vd[l, i, k]
+            Pi[k] = h * ps
+            Vs[i, k] = vs
         if j == 0:
             for a in range(3):
-                wk.rs[i, a] = r[i, a]
+                rs[i, a] = r[i, a]
                 for b in range(3):
-                    wk.Rs[i, a, b] = R[i, a, b]
+                    Rs[i, a, b] = R[i, a, b]
         else:
-            _exp_compose(sd.gid[i], R[i], r[i], Psi, wk.Rs[i], wk.rs[i], wk.m3a, wk.v3a)
+            _exp_compose(gid[i], R[i], r[i], Pi, Rs[i], rs[i], ER, Er)
 
 
 @njit(cache=True, inline="always", _nrt=False)
-def mk_stage_k(sd, wk, j):
+def stage_k(gid, j, Psi, Vs, K, tmp6):
     """``k_j = dexp^-1_{-Psi_j} V_j`` (eq. MK1), per body in its own group."""
-    for i in range(sd.nb):
-        Kj = wk.K[j, i]
+    for i in range(gid.shape[0]):
+        Kj = K[j, i]
         if j == 0:
             for k in range(6):
-                Kj[k] = wk.Vs[i, k]
+                Kj[k] = Vs[i, k]
         else:
-            mPsi = wk.tmp6
             for k in range(6):
-                mPsi[k] = -wk.Psi[i, k]
-            if sd.gid[i] == GID_SE3:
-                se3.dexpinv_apply_into(mPsi, wk.Vs[i], Kj)
+                tmp6[k] = -Psi[i, k]
+            if gid[i] == GID_SE3:
+                se3.dexpinv_apply_into(tmp6, Vs[i], Kj)
             else:
-                so3.dexpinv_apply_into(mPsi[0:3], wk.Vs[i, 0:3], Kj[0:3])
+                so3.dexpinv_apply_into(tmp6[0:3], Vs[i, 0:3], Kj[0:3])
                 for k in range(3):
-                    Kj[3 + k] = wk.Vs[i, 3 + k]
+                    Kj[3 + k] = Vs[i, 3 + k]
 
 
 @njit(cache=True, inline="always", _nrt=False)
-def mk_finish(sd, wk, b, h, R, r, V):
+def finish(gid, b, h, R, r, V, K, Vd, Psi, Rn, C, rn, Er):
     """``g <- g exp(h sum b_j k_j)``, ``V <- V + h sum b_j Vdot_j``; re-orthonormalise R
     with one Newton step ``R <- R (3 I - R^T R) / 2`` (changes R by O(eps) only)."""
     s = b.shape[0]
-    for i in range(sd.nb):
-        Phi = wk.Psi[i]
+    for i in range(gid.shape[0]):
+        Phi = Psi[i]
         for k in range(6):
             ph = 0.0
             vv = 0.0
             for j in range(s):
-                ph += b[j] * wk.K[j, i, k]
-                vv += b[j] * wk.Vd[j, i, k]
+                ph += b[j] * K[j, i, k]
+                vv += b[j] * Vd[j, i, k]
             Phi[k] = h * ph
             V[i, k] += h * vv
-        _exp_compose(sd.gid[i], R[i], r[i], Phi, wk.m3b, wk.v3b, wk.m3a, wk.v3a)
-        Rn = wk.m3b
-        # Newton orthonormalisation
+        _exp_compose(gid[i], R[i], r[i], Phi, Rn, rn, C, Er)
+        # Newton orthonormalisation: C = (3 I - Rn^T Rn) / 2
         for a in range(3):
             for c in range(3):
                 g = 0.0
                 for k in range(3):
                     g += Rn[k, a] * Rn[k, c]
-                wk.m3a[a, c] = -0.5 * g
-            wk.m3a[a, a] += 1.5
+                C[a, c] = -0.5 * g
+            C[a, a] += 1.5
         for a in range(3):
-            r[i, a] = wk.v3b[a]
+            r[i, a] = rn[a]
             for c in range(3):
-                R[i, a, c] = Rn[a, 0] * wk.m3a[0, c] + Rn[a, 1] * wk.m3a[1, c] + Rn[a, 2] * wk.m3a[2, c]
+                R[i, a, c] = Rn[a, 0] * C[0, c] + Rn[a, 1] * C[1, c] + Rn[a, 2] * C[2, c]
+
+
+# the MK stages on the scene tuples: inlined into mk_steps, callable from Python too
+# (Simulator._python_step for scenes with Python forces or stabilisation)
+@njit(cache=True, inline="always", _nrt=False)
+def mk_stage_state(sd, wk, A, j, h, R, r, V):
+    stage_state(sd.gid, A, j, h, R, r, V, wk.K, wk.Vd, wk.Psi, wk.Rs, wk.rs, wk.Vs, wk.m3[0], wk.v3[0])
 
 
 @njit(cache=True, inline="always", _nrt=False)
-def state_is_finite(sd, R, r, V, vmax):
+def mk_stage_k(sd, wk, j):
+    stage_k(sd.gid, j, wk.Psi, wk.Vs, wk.K, wk.tmp6)
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def mk_finish(sd, wk, b, h, R, r, V):
+    finish(sd.gid, b, h, R, r, V, wk.K, wk.Vd, wk.Psi, wk.m3[1], wk.m3[0], wk.v3[1], wk.v3[0])
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def state_is_finite(gid, R, r, V, vmax):
     """0 if finite and bounded, STATUS_NONFINITE / STATUS_BLOWUP otherwise."""
-    for i in range(sd.nb):
+    for i in range(gid.shape[0]):
         for k in range(6):
             x = V[i, k]
             if not np.isfinite(x):
@@ -710,8 +757,8 @@ def state_is_finite(sd, R, r, V, vmax):
 
 
 @njit(cache=True, inline="always", _nrt=False)
-def copy_state(sd, R, r, V, Rto, rto, Vto):
-    for i in range(sd.nb):
+def copy_state(R, r, V, Rto, rto, Vto):
+    for i in range(R.shape[0]):
         for a in range(3):
             rto[i, a] = r[i, a]
             for c in range(3):
@@ -721,60 +768,59 @@ def copy_state(sd, R, r, V, Rto, rto, Vto):
 
 
 @njit(cache=True, _nrt=False)
+def watch_rotation_entries(watchBody, watchEntry, watchMax, R):
+    """Largest |R[body][i, j]| of the watched entries over the accepted steps (cheap
+    monitoring between outputs, e.g. of a coordinate singularity; none by default)."""
+    for w in range(watchBody.shape[0]):
+        a = abs(R[watchBody[w], watchEntry[w, 0], watchEntry[w, 1]])
+        if a > watchMax[w]:
+            watchMax[w] = a
+
+
+@njit(cache=True, _nrt=False)
 def mk_steps(sd, wk, A, b, c, t0, h, nsteps, R, r, V, vmax):
     """Advance ``nsteps`` MK steps in place.  Returns (status, steps done); on a failure
-    (R, r, V) hold the last accepted step (the rejected one is undone from wk.Rb...)."""
+    (R, r, V) hold the last accepted step (the rejected one is undone from wk.Rb...).
+
+    ``nsteps = 0`` evaluates the equations of motion once at the current state (the
+    first stage of a step): accelerations in ``wk.Vd[0]``, multipliers in ``wk.lam``.
+    (One call site of the inlined right-hand side serves both uses: a second one would
+    double the compile time.)"""
     s = b.shape[0]
     Qext = wk.Qext
-    for n in range(nsteps):
+    for n in range(max(nsteps, 1)):
         t = t0 + n * h
         for j in range(s):
             mk_stage_state(sd, wk, A, j, h, R, r, V)
             st = rhs(sd, wk, t + c[j] * h, wk.Rs, wk.rs, wk.Vs, Qext, wk.Vd[j])
             if st != STATUS_OK:
                 return st, n
+            if nsteps == 0:
+                return STATUS_OK, 0
             mk_stage_k(sd, wk, j)
-        copy_state(sd, R, r, V, wk.Rb, wk.rb, wk.Vb)
+        copy_state(R, r, V, wk.Rb, wk.rb, wk.Vb)
         mk_finish(sd, wk, b, h, R, r, V)
-        st = state_is_finite(sd, R, r, V, vmax)
+        st = state_is_finite(sd.gid, R, r, V, vmax)
         if st != STATUS_OK:
-            copy_state(sd, wk.Rb, wk.rb, wk.Vb, R, r, V)
+            copy_state(wk.Rb, wk.rb, wk.Vb, R, r, V)
             return st, n
-        if sd.tA.shape[0] > 0:
-            update_torsion_tracking(sd, wk, R, r, V)
-        watch_rotation_entries(wk, R)
+        update_torsion_tracking(sd, wk, R, r, V)
+        if wk.watchBody.shape[0] > 0:
+            watch_rotation_entries(wk.watchBody, wk.watchEntry, wk.watchMax, R)
     return STATUS_OK, nsteps
-
-
-@njit(cache=True, inline="always", _nrt=False)
-def watch_rotation_entries(wk, R):
-    """Largest |R[body][i, j]| of the watched entries over the accepted steps (cheap
-    monitoring between outputs, e.g. of a coordinate singularity; none by default)."""
-    for w in range(wk.watchBody.shape[0]):
-        a = abs(R[wk.watchBody[w], wk.watchEntry[w, 0], wk.watchEntry[w, 1]])
-        if a > wk.watchMax[w]:
-            wk.watchMax[w] = a
 
 
 # --------------------------------------------------------------------------- diagnostics
 @njit(cache=True, _nrt=False)
-def constraint_residuals(sd, wk, R, r, V, h):
-    """All constraint residuals h(g) (row order of the scene)."""
-    for j in range(sd.jA.shape[0]):
-        joint_rows(sd, wk, j, R, r, V, h, wk.Jr, wk.eta, False)
-
-
-@njit(cache=True, _nrt=False)
-def energies(sd, wk, R, r, V, out):
-    """out = (kinetic, gravity potential, spring potential)."""
+def kinetic_and_gravity(gid, M, mass, com, gravity, R, r, V, Vb):
+    """(kinetic energy, gravity potential) of all bodies."""
     ekin = 0.0
     egrav = 0.0
-    for i in range(sd.nb):
+    for i in range(gid.shape[0]):
         # body-fixed twist: v_b = R^T v for mixed bodies
-        Vb = wk.tmp6
         for k in range(3):
             Vb[k] = V[i, k]
-        if sd.gid[i] == GID_SE3:
+        if gid[i] == GID_SE3:
             for k in range(3):
                 Vb[3 + k] = V[i, 3 + k]
         else:
@@ -782,36 +828,49 @@ def energies(sd, wk, R, r, V, out):
                 Vb[3 + k] = R[i, 0, k] * V[i, 3] + R[i, 1, k] * V[i, 4] + R[i, 2, k] * V[i, 5]
         for a in range(6):
             for c in range(6):
-                ekin += 0.5 * Vb[a] * sd.M[i, a, c] * Vb[c]
+                ekin += 0.5 * Vb[a] * M[i, a, c] * Vb[c]
         for k in range(3):
-            xc = r[i, k] + R[i, k, 0] * sd.com[i, 0] + R[i, k, 1] * sd.com[i, 1] + R[i, k, 2] * sd.com[i, 2]
-            egrav -= sd.mass[i] * sd.gravity[k] * xc
+            xc = r[i, k] + R[i, k, 0] * com[i, 0] + R[i, k, 1] * com[i, 1] + R[i, k, 2] * com[i, 2]
+            egrav -= mass[i] * gravity[k] * xc
+    return ekin, egrav
+
+
+@njit(cache=True, _nrt=False)
+def spring_energy(gid, sint, spos, spar, cint, cpos, cpar, tint, trot, tpar, tphi, R, r, V, v3, m3, ident, zero3,
+                  zero6):
+    """Potential energy of the point-to-point, Cartesian and torsional springs."""
+    pA, pB, vA, vB, bA, bB = v3[0], v3[1], v3[2], v3[3], v3[4], v3[5]
     espr = 0.0
-    pA = wk.v3a
-    pB = wk.v3b
-    vA = wk.v3c
-    vB = wk.v3d
-    bA = wk.v3e
-    bB = wk.v3f
-    for s in range(sd.sA.shape[0]):
-        gA, RA, rA, VA = _side(sd, sd.sA[s], R, r, V, wk.ident, wk.zero3, wk.zero6)
-        gB, RB, rB, VB = _side(sd, sd.sB[s], R, r, V, wk.ident, wk.zero3, wk.zero6)
-        body_point(gA, RA, rA, VA, sd.sposA[s], pA, vA, bA)
-        body_point(gB, RB, rB, VB, sd.sposB[s], pB, vB, bB)
+    for s in range(sint.shape[0]):
+        gA, RA, rA, VA = _side(gid, sint[s, 0], R, r, V, ident, zero3, zero6)
+        gB, RB, rB, VB = _side(gid, sint[s, 1], R, r, V, ident, zero3, zero6)
+        body_point(gA, RA, rA, VA, spos[s, 0], pA, vA, bA)
+        body_point(gB, RB, rB, VB, spos[s, 1], pB, vB, bB)
         L = np.sqrt((pB[0] - pA[0]) ** 2 + (pB[1] - pA[1]) ** 2 + (pB[2] - pA[2]) ** 2)
-        espr += 0.5 * sd.sK[s] * (L - sd.sL0[s]) ** 2 + sd.sf0[s] * L
-    for s in range(sd.cA.shape[0]):
-        gA, RA, rA, VA = _side(sd, sd.cA[s], R, r, V, wk.ident, wk.zero3, wk.zero6)
-        gB, RB, rB, VB = _side(sd, sd.cB[s], R, r, V, wk.ident, wk.zero3, wk.zero6)
-        body_point(gA, RA, rA, VA, sd.cposA[s], pA, vA, bA)
-        body_point(gB, RB, rB, VB, sd.cposB[s], pB, vB, bB)
+        espr += 0.5 * spar[s, 0] * (L - spar[s, 2]) ** 2 + spar[s, 3] * L
+    for s in range(cint.shape[0]):
+        gA, RA, rA, VA = _side(gid, cint[s, 0], R, r, V, ident, zero3, zero6)
+        gB, RB, rB, VB = _side(gid, cint[s, 1], R, r, V, ident, zero3, zero6)
+        body_point(gA, RA, rA, VA, cpos[s, 0], pA, vA, bA)
+        body_point(gB, RB, rB, VB, cpos[s, 1], pB, vB, bB)
         for k in range(3):
-            espr += 0.5 * sd.cK[s, k] * (pB[k] - pA[k] - sd.coff[s, k]) ** 2
-    for s in range(sd.tA.shape[0]):
-        gA, RA, rA, VA = _side(sd, sd.tA[s], R, r, V, wk.ident, wk.zero3, wk.zero6)
-        gB, RB, rB, VB = _side(sd, sd.tB[s], R, r, V, wk.ident, wk.zero3, wk.zero6)
-        phi, phid = torsion_angle(sd, wk, s, RA, VA, RB, VB)
-        espr += 0.5 * sd.tK[s] * (phi - sd.toff[s]) ** 2 + sd.ttq[s] * phi
-    out[0] = ekin
-    out[1] = egrav
-    out[2] = espr
+            espr += 0.5 * cpar[s, 0, k] * (pB[k] - pA[k] - cpar[s, 2, k]) ** 2
+    for s in range(tint.shape[0]):
+        gA, RA, rA, VA = _side(gid, tint[s, 0], R, r, V, ident, zero3, zero6)
+        gB, RB, rB, VB = _side(gid, tint[s, 1], R, r, V, ident, zero3, zero6)
+        phi, phid = torsion_angle(trot[s, 0], trot[s, 1], tphi[s], RA, VA, RB, VB, m3[0], m3[1])
+        espr += 0.5 * tpar[s, 0] * (phi - tpar[s, 2]) ** 2 + tpar[s, 3] * phi
+    return espr
+
+
+@njit(cache=True, _nrt=False)
+def all_rows(sd, wk, R, r, V, h, Jr, eta, e):
+    """Diagnostics at the state (R, r, V): residuals ``h``, Jacobian rows ``Jr`` and
+    ``eta`` of every joint, and ``e`` = (kinetic, gravity potential, spring potential)."""
+    joints_rows(sd.gid, sd.jint, sd.jpos, sd.jrot, sd.rint, R, r, V, h, Jr, eta, wk.v3, wk.ident, wk.zero3,
+                wk.zero6)
+    ekin, egrav = kinetic_and_gravity(sd.gid, sd.M, sd.mass, sd.com, sd.gravity, R, r, V, wk.tmp6)
+    e[0] = ekin
+    e[1] = egrav
+    e[2] = spring_energy(sd.gid, sd.sint, sd.spos, sd.spar, sd.cint, sd.cpos, sd.cpar, sd.tint, sd.trot, sd.tpar,
+                         wk.tphi, R, r, V, wk.v3, wk.m3, wk.ident, wk.zero3, wk.zero6)

@@ -73,10 +73,10 @@ def constraint_jacobian(sd, wk, R, r, V):
     velocity coordinates, and eta = -Jdot V, at the state (R, r, V)."""
     m = sd.nrows
     kernel.all_rows(sd, wk, np.ascontiguousarray(R, dtype=float), np.ascontiguousarray(r, dtype=float),
-                    np.ascontiguousarray(V, dtype=float), wk.h, wk.Jr, wk.eta)
+                    np.ascontiguousarray(V, dtype=float), wk.h, wk.Jr, wk.eta, np.zeros(3))
     J = np.zeros((m, 6 * sd.nb))
     for q in range(m):
-        a, b = sd.rbodyA[q], sd.rbodyB[q]
+        a, b = sd.rint[q, kernel.ROW_BODY_A], sd.rint[q, kernel.ROW_BODY_B]
         if a >= 0:
             J[q, 6 * a:6 * a + 6] += wk.Jr[q, :6]
         if b >= 0:
@@ -338,11 +338,14 @@ class Simulator:
         if st != kernel.STATUS_OK:
             self._raise_status(st, h)
 
-    def _mk_steps(self, n, h):
+    def _mk_steps(self, n, h, t=None, R=None, r=None, V=None):
         """``kernel.mk_steps`` through its resolved compiled entry point: a plain numba
-        call re-derives the types of the two ~50-field namedtuples every time (~10 us)."""
-        args = (self.sd, self.wk, self.A, self.b, self.c, float(self.t), float(h), int(n),
-                self.R, self.r, self.V, float(self._vmaxValue))
+        call re-derives the types of the two namedtuples every time (~10 us)."""
+        if not hasattr(self, "_vmaxValue"):
+            self._vmaxValue = self._vmax()
+        args = (self.sd, self.wk, self.A, self.b, self.c, float(self.t if t is None else t), float(h), int(n),
+                self.R if R is None else R, self.r if r is None else r, self.V if V is None else V,
+                float(self._vmaxValue))
         ep = getattr(self, "_mkEntry", None)
         if ep is None:
             out = kernel.mk_steps(*args)
@@ -363,15 +366,14 @@ class Simulator:
                 if st != kernel.STATUS_OK:
                     self._raise_status(st, h)
                 kernel.mk_stage_k(sd, wk, j)
-            kernel.copy_state(sd, self.R, self.r, self.V, wk.Rb, wk.rb, wk.Vb)
+            kernel.copy_state(self.R, self.r, self.V, wk.Rb, wk.rb, wk.Vb)
             kernel.mk_finish(sd, wk, self.b, h, self.R, self.r, self.V)
-            st = kernel.state_is_finite(sd, self.R, self.r, self.V, self._vmaxValue)
+            st = kernel.state_is_finite(sd.gid, self.R, self.r, self.V, self._vmaxValue)
             if st != kernel.STATUS_OK:
-                kernel.copy_state(sd, wk.Rb, wk.rb, wk.Vb, self.R, self.r, self.V)
+                kernel.copy_state(wk.Rb, wk.rb, wk.Vb, self.R, self.r, self.V)
                 self._raise_status(st, h)
-            if len(sd.tA):
-                kernel.update_torsion_tracking(sd, wk, self.R, self.r, self.V)
-            kernel.watch_rotation_entries(wk, self.R)
+            kernel.update_torsion_tracking(sd, wk, self.R, self.r, self.V)
+            kernel.watch_rotation_entries(wk.watchBody, wk.watchEntry, wk.watchMax, self.R)
         else:
             st, done = self._mk_steps(1, h)
             if st != kernel.STATUS_OK:
@@ -487,37 +489,37 @@ class Simulator:
             else:
                 so3.dexpinv_apply_into(mX[:3], Vp[i, :3], out[0, i, :3])
                 out[0, i, 3:] = Vp[i, 3:]
-        Qext = self._python_forces(t, Rp, rp, Vp) if sd.hasQext else wk.Qext
-        Vdot = np.zeros((nb, 6))
-        st = kernel.rhs(sd, wk, t, Rp, rp, Vp, Qext, Vdot)
-        if st != kernel.STATUS_OK:
+        if self._evaluate(t, Rp, rp, Vp) != kernel.STATUS_OK:
             raise SimulationError("right-hand side failed while estimating the spectral radius")
-        out[1] = Vdot
+        out[1] = wk.Vd[0]
         return out
 
     def Accelerations(self):
         """``(Vdot, lambda)`` at the current state from the index-1 system (eq. index1):
         Vdot (nb, 6) in the group velocity coordinates, lambda the multipliers (m,)."""
-        sd, wk = self.sd, self.wk
-        Vdot = np.zeros((sd.nb, 6))
-        Qext = self._python_forces(self.t, self.R, self.r, self.V) if sd.hasQext else wk.Qext
-        st = kernel.rhs(sd, wk, self.t, self.R, self.r, self.V, Qext, Vdot)
+        st = self._evaluate(self.t, self.R, self.r, self.V)
         if st != kernel.STATUS_OK:
             self._raise_status(st, 0.0)
-        return Vdot, wk.lam.copy()
+        return self.wk.Vd[0].copy(), self.wk.lam.copy()
+
+    def _evaluate(self, t, R, r, V):
+        """Equations of motion at one state (``mk_steps`` with no step): accelerations in
+        ``wk.Vd[0]``, multipliers in ``wk.lam``; returns the kernel status."""
+        if self.sd.hasQext:
+            self.wk.Qext[:] = self._python_forces(t, R, r, V)
+        st, _ = self._mk_steps(0, 0.0, t, R, r, V)
+        return st
 
     # ----------------------------------------------------------------- diagnostics
     def Diagnostics(self):
         """(energy[3], residuals[m], joint position violation[nj], joint rotation violation[nj])."""
         sd, wk = self.sd, self.wk
         e = np.zeros(3)
-        kernel.energies(sd, wk, self.R, self.r, self.V, e)
         h = np.zeros(sd.nrows)
-        if sd.nrows:
-            kernel.constraint_residuals(sd, wk, self.R, self.r, self.V, h)
+        kernel.all_rows(sd, wk, self.R, self.r, self.V, h, wk.Jr, wk.eta, e)
         nj = len(self.scene.joints)
         if not hasattr(self, "_rowIsRot"):
-            self._rowIsRot = np.asarray(sd.rkind) == kernel.ROW_ROT
+            self._rowIsRot = sd.rint[:, kernel.ROW_KIND] == kernel.ROW_ROT
         h2 = h * h
         pv = np.sqrt(np.bincount(self.rowJoint, weights=np.where(self._rowIsRot, 0.0, h2), minlength=nj))
         rv = np.sqrt(np.bincount(self.rowJoint, weights=np.where(self._rowIsRot, h2, 0.0), minlength=nj))

@@ -8,12 +8,12 @@ simulator runs its pure compiled loop (no Python forces, no stabilisation); if t
 kernel's interface differs from what is expected, the bridge falls back to ``Advance`` /
 ``Accelerations`` (and says so).
 
-The node write-back (:func:`~exudyn_lie.bridge.nodes.write_nodes`) is compiled too.
+The node write-back (:func:`~exudyn_lie.bridge.nodes.write_all`) is compiled too.
 """
 import numpy as np
 
 from ..mbs import kernel
-from .nodes import NCOORD_MAX, write_all, write_nodes
+from .nodes import NCOORD_MAX, write_all
 
 
 _ENTRY_CACHE = {}
@@ -98,7 +98,7 @@ class KernelCalls:
 
 
 class NodeTable:
-    """All rigid nodes of a scene as flat arrays for :func:`write_nodes`."""
+    """All rigid nodes of a scene as flat arrays for :func:`~.nodes.write_all`."""
 
     def __init__(self, kinds, kindBodies):
         rows = sum(len(k) for k in kinds)
@@ -123,10 +123,13 @@ class NodeTable:
             self.kindOfRow += [(kind, k) for k in range(n)]
             i += n
 
-    def write(self, sim, Vdot, doacc, q, qt, qtt):
-        """Returns the number of nodes flagged (Rxyz near its singularity)."""
-        return write_nodes(sim.sd.gid, sim.R, sim.r, sim.V, Vdot, bool(doacc), self.code, self.body, self.idx, self.nq,
-                    self.qref, self.prev, False, q, qt, qtt, self.flags)
+    def write(self, sim, Vdot, lam, doacc, q, qt, qtt, multipliers):
+        """Node coordinates (and with ``doacc`` accelerations and the joint multipliers
+        ``(rows, AE slots, signs, AE buffer)``); returns the number of nodes flagged (Rxyz
+        near its singularity)."""
+        jrow, jae, jsign, ae = multipliers
+        return write_all(sim.sd.gid, sim.R, sim.r, sim.V, Vdot, lam, bool(doacc), self.code, self.body, self.idx,
+                         self.nq, self.qref, self.prev, q, qt, qtt, self.flags, jrow, jae, jsign, ae)
 
     def warn_flags(self):
         for i in np.nonzero(self.flags)[0]:

@@ -273,7 +273,8 @@ def write_multipliers(lam, jrow, jae, jsign, ae):
 @njit(cache=True)
 def write_all(gid, R, r, V, Vdot, lam, doacc, code, body, idx, nq, qref, prev, q, qt, qtt, flags, jrow, jae, jsign,
               ae):
-    """write_nodes + write_multipliers in one call."""
+    """write_nodes + write_multipliers in one call: the single compiled entry of the
+    write-back (every path uses it, so it is compiled once)."""
     if doacc:
         write_multipliers(lam, jrow, jae, jsign, ae)
     return write_nodes(gid, R, r, V, Vdot, doacc, code, body, idx, nq, qref, prev, False, q, qt, qtt, flags)

@@ -30,7 +30,6 @@ from ..integrators.tableau import get_method, method_names
 from ..mbs.compiled import auto_groups
 from ..mbs.simulator import Simulator
 from .fast import KernelCalls, NodeTable
-from .nodes import write_multipliers
 from .reader import BridgeError, ExudynScene, SceneFromExudyn
 
 GROUP_ALIASES = {"se3": "SE3", "so3xr3": "SO3xR3", "so3r3": "SO3xR3", "auto": "auto"}
@@ -223,6 +222,7 @@ class LieGroupSolver:
         self._jae = np.concatenate([x[1] for x in jr]).astype(np.int64) if jr else np.zeros(0, np.int64)
         self._jsign = np.concatenate([x[2] for x in jr]).astype(float) if jr else np.zeros(0)
         self._Vdot = np.zeros((self.scene.nBodies, 6))
+        self._lam = np.zeros(self.sim.sd.nrows)
         self._hasJ = len(self._jrow) > 0
         self._written = None
 
@@ -256,12 +256,12 @@ class LieGroupSolver:
     def _fill(self, accelerations):
         """Node and AE buffers from the simulator state (Python path)."""
         sim = self.sim
+        lam = self._lam
         if accelerations:
             Vdot, lam = sim.Accelerations()
             self._Vdot[:] = Vdot
-            if len(self._jrow):
-                write_multipliers(lam, self._jrow, self._jae, self._jsign, self._ae)
-        return self._nodes.write(sim, self._Vdot, accelerations, self._q, self._qt, self._qtt)
+        return self._nodes.write(sim, self._Vdot, lam, accelerations, self._q, self._qt, self._qtt,
+                                 (self._jrow, self._jae, self._jsign, self._ae))
 
     def _push(self, accelerations):
         """Copy the buffers into mbs' Current configuration (nothing to do for views)."""

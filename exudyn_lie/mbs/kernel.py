@@ -211,7 +211,7 @@ def load_forces(gid, lint, lvec, R, Q, F):
                 add_world_torque(R[i], lvec[l, 0], Q[i])
 
 
-@njit(cache=True, inline="always", _nrt=False)
+@njit(cache=True, _nrt=False)
 def spring_forces(gid, sint, spos, spar, R, r, V, Q, v3, ident, zero3, zero6):
     """Point-to-point spring-dampers: tension ``f = k (L - L0) + d Ldot + f0``
     (``spar`` = k, d, L0, f0)."""
@@ -540,7 +540,7 @@ def _row_dot(rint, q, l, Jr, W):
     return s
 
 
-@njit(cache=True, inline="always", _nrt=False)
+@njit(cache=True, _nrt=False)
 def constrained_accelerations(gid, Minv, rint, bw, redundant, pivotTol, R, Vdot, Jr, W, eta, lam, Sb, Sd, perm,
                               ytmp, info, tmp12):
     """Index-1 solve (eq. index1) by the Schur complement, given ``Vdot = M^-1 Q``:

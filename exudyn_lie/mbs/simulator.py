@@ -213,7 +213,12 @@ class Simulator:
         return [int(q) for q in np.nonzero(weight > 1e-6)[0]]
 
     def _check_redundancy(self):
+        """Redundant rows switch the kernel to its rank-revealing solve.  The kernel's own
+        band Cholesky of J M^-1 J^T at the initial state decides (O(m b^2)); only a
+        singular system gets the dense SVD that names the joints (O(m^2 n))."""
         if self.sd.nrows == 0:
+            return
+        if self._evaluate(self.t, self.R, self.r, self.V) != kernel.STATUS_SINGULAR:
             return
         h, J, eta = self.jacobian()
         dep = self._dependent_rows(J)
@@ -227,10 +232,20 @@ class Simulator:
                    f"solve")
             warnings.warn(msg, RuntimeWarning, stacklevel=3)
 
+    def _residuals_and_JV(self):
+        """h(g) and J V at the current state, row by row (no dense Jacobian)."""
+        sd, wk = self.sd, self.wk
+        kernel.all_rows(sd, wk, self.R, self.r, self.V, wk.h, wk.Jr, wk.eta, np.zeros(3))
+        Vz = np.vstack([self.V, np.zeros((1, 6))])          # row -1: the ground
+        a = sd.rint[:, kernel.ROW_BODY_A]
+        b = sd.rint[:, kernel.ROW_BODY_B]
+        JV = np.einsum("qk,qk->q", wk.Jr[:, :6], Vz[a]) + np.einsum("qk,qk->q", wk.Jr[:, 6:], Vz[b])
+        return wk.h.copy(), JV
+
     def _check_initial_consistency(self):
         if self.sd.nrows == 0:
             return
-        h, J, eta = self.jacobian()
+        h, JV = self._residuals_and_JV()
         scale = max(1.0, float(np.max(np.abs(self.r))) if self.r.size else 1.0)
         bad_pos = np.nonzero(np.abs(h) > INITIAL_TOL * scale)[0]
         if len(bad_pos):
@@ -240,8 +255,7 @@ class Simulator:
                     f"(max |h| = {np.max(np.abs(h)):.3g}); fix the initial poses or pass "
                     f"projectInitial=True to project them onto the constraints first")
             self.ProjectPositions()
-        h, J, eta = self.jacobian()
-        JV = J @ self.V.reshape(-1)
+        h, JV = self._residuals_and_JV()
         vscale = max(1.0, float(np.max(np.abs(self.V))))
         bad_vel = np.nonzero(np.abs(JV) > INITIAL_TOL * vscale)[0]
         if len(bad_vel):

@@ -4,7 +4,7 @@ A plain numba call with the kernel's scene/work tuples spends ~10 us in resolvin
 argument types; ``Simulator.Advance`` and ``Simulator.Accelerations`` pay it per call.  The bridge calls the same kernel functions with arguments
 of identical types once per Exudyn step, so :class:`KernelCalls` resolves the compiled
 overload once (:func:`entry_point`) and calls it directly.  It is used only when the
-simulator runs its pure compiled loop (no Python forces, no stabilisation); if the
+simulator runs its pure compiled loop (no Python forces); if the
 kernel's interface differs from what is expected, the bridge falls back to ``Advance`` /
 ``Accelerations`` (and says so).
 

@@ -443,7 +443,7 @@ class LieGroupSolver:
                 raise BridgeError(f"Exudyn's InitializeSolver failed: {solver.GetErrorString()}")
             self._init_buffers_from_mbs()
             vmax = 1e6 * max(1.0, float(np.max(np.abs(sim.V))) if sim.V.size else 0.0)
-            self._kc = None if (sim.sd.hasQext or sim.stabilization) else KernelCalls(
+            self._kc = None if sim.sd.hasQext else KernelCalls(
                 sim, self._nodes, vmax, self._q, self._qt, self._qtt, self._jrow, self._jae, self._jsign, self._ae)
             self._write(True)                    # initial state with accelerations / multipliers
             # the hook: k steps + write-back per Exudyn step (kept lean: it runs per output)

@@ -28,6 +28,7 @@ SceneData = namedtuple("SceneData", [
     "jint", "jpos", "jrot",           # joints: [A, B, first row, rows]; [posA, posB]; [rotA, rotB]
     "rint",                           # constraint rows: [kind, axis of A, axis of B, body A, body B]
     "nrows", "bandwidth", "redundant", "pivotTol",
+    "stabilization",                  # kernel.STAB_*: projection after every step
 ])
 
 Work = namedtuple("Work", [
@@ -217,7 +218,7 @@ def compile_scene(scene: Scene, groups):
         jpos=arr([[j.posA, j.posB] for j in J], (-1, 2, 3)),
         jrot=arr([[j.rotA, j.rotB] for j in J], (-1, 2, 3, 3)),
         rint=arr([list(x) for x in zip(rkind, rax, rbx, rA, rB)], (-1, 5), np.int64),
-        nrows=m, bandwidth=bw, redundant=False, pivotTol=REL_PIVOT_TOL,
+        nrows=m, bandwidth=bw, redundant=False, pivotTol=REL_PIVOT_TOL, stabilization=0,
     )
     return sd, np.array(rjoint, dtype=np.int64)
 

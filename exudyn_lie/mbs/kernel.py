@@ -55,6 +55,15 @@ STATUS_OK = 0
 STATUS_SINGULAR = 1
 STATUS_NONFINITE = 2
 STATUS_BLOWUP = 3
+STATUS_PROJECTION = 4      # the position projection did not converge
+
+# stabilisation after each step (SceneData.stabilization)
+STAB_NONE = 0
+STAB_VELOCITY = 1          # V <- V - M^-1 J^T (J M^-1 J^T)^-1 J V
+STAB_POSITION = 2          # Gauss-Newton on the group for h(g) = 0, then the velocity projection
+PROJ_MAX_ITER = 20
+PROJ_TOL = 1e-13           # converged: max |h| <= PROJ_TOL max(1, max |r|)
+PROJ_FAIL = 1e3            # failure: max |h| > PROJ_FAIL * tolerance after PROJ_MAX_ITER iterations
 
 
 # --------------------------------------------------------------------------- small vector helpers
@@ -540,14 +549,44 @@ def _row_dot(rint, q, l, Jr, W):
     return s
 
 
+@njit(cache=True, inline="always", _nrt=False)
+def rows_times(rint, Jr, X, c, y, out):
+    """``out = c y + J X`` for a per-body array X (nb, 6), from the row blocks of J."""
+    for q in range(rint.shape[0]):
+        s = c * y[q]
+        a = rint[q, ROW_BODY_A]
+        b = rint[q, ROW_BODY_B]
+        if a >= 0:
+            for k in range(6):
+                s += Jr[q, k] * X[a, k]
+        if b >= 0:
+            for k in range(6):
+                s += Jr[q, 6 + k] * X[b, k]
+        out[q] = s
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def subtract_rows_transposed(rint, W, lam, X):
+    """``X -= W^T lam`` per body, W (m, 12) holding the two body blocks of each row."""
+    for q in range(rint.shape[0]):
+        lq = lam[q]
+        a = rint[q, ROW_BODY_A]
+        b = rint[q, ROW_BODY_B]
+        if a >= 0:
+            for k in range(6):
+                X[a, k] -= W[q, k] * lq
+        if b >= 0:
+            for k in range(6):
+                X[b, k] -= W[q, 6 + k] * lq
+
+
 @njit(cache=True, _nrt=False)
-def constrained_accelerations(gid, Minv, rint, bw, redundant, pivotTol, R, Vdot, Jr, W, eta, lam, Sb, Sd, perm,
-                              ytmp, info, tmp12):
-    """Index-1 solve (eq. index1) by the Schur complement, given ``Vdot = M^-1 Q``:
-    ``S = J M^-1 J^T``, ``S lambda = J Vdot - eta``, ``Vdot -= M^-1 J^T lambda``.
+def schur_solve(gid, Minv, rint, bw, redundant, pivotTol, R, Jr, W, lam, Sb, Sd, perm, ytmp, info, tmp12):
+    """``W = M^-1 J^T`` (row blocks) and ``lam <- (J M^-1 J^T)^-1 lam``: the Schur
+    complement shared by the index-1 solve and the projections.  ``S`` is banded (band
+    Cholesky); with redundant rows the pivoted Cholesky drops the dependent ones.
     Returns a status code (info[0] = failing row, info[1] = rank if redundant)."""
     m = rint.shape[0]
-    # W = M^-1 J^T, per row and side
     for q in range(m):
         a = rint[q, ROW_BODY_A]
         b = rint[q, ROW_BODY_B]
@@ -561,18 +600,6 @@ def constrained_accelerations(gid, Minv, rint, bw, redundant, pivotTol, R, Vdot,
         else:
             for k in range(6):
                 W[q, 6 + k] = 0.0
-    # right-hand side J Vfree - eta
-    for q in range(m):
-        s = -eta[q]
-        a = rint[q, ROW_BODY_A]
-        b = rint[q, ROW_BODY_B]
-        if a >= 0:
-            for k in range(6):
-                s += Jr[q, k] * Vdot[a, k]
-        if b >= 0:
-            for k in range(6):
-                s += Jr[q, 6 + k] * Vdot[b, k]
-        lam[q] = s
     if redundant:
         for q in range(m):
             for l in range(q + 1):
@@ -580,32 +607,34 @@ def constrained_accelerations(gid, Minv, rint, bw, redundant, pivotTol, R, Vdot,
                 Sd[q, l] = v
                 Sd[l, q] = v
         info[1] = pivoted_cholesky_solve(Sd, m, lam, perm, ytmp, pivotTol)
-    else:
-        dmax = 0.0
-        for q in range(m):
-            l0 = q - bw
-            if l0 < 0:
-                l0 = 0
-            for l in range(l0, q + 1):
-                Sb[q, q - l] = _row_dot(rint, q, l, Jr, W)
-            if Sb[q, 0] > dmax:
-                dmax = Sb[q, 0]
-        fail = band_cholesky_inplace(Sb, m, bw, pivotTol * dmax)
-        if fail >= 0:
-            info[0] = fail
-            return STATUS_SINGULAR
-        band_cholesky_solve_inplace(Sb, m, bw, lam)
-    # Vdot -= W lambda
+        return STATUS_OK
+    dmax = 0.0
     for q in range(m):
-        lq = lam[q]
-        a = rint[q, ROW_BODY_A]
-        b = rint[q, ROW_BODY_B]
-        if a >= 0:
-            for k in range(6):
-                Vdot[a, k] -= W[q, k] * lq
-        if b >= 0:
-            for k in range(6):
-                Vdot[b, k] -= W[q, 6 + k] * lq
+        l0 = q - bw
+        if l0 < 0:
+            l0 = 0
+        for l in range(l0, q + 1):
+            Sb[q, q - l] = _row_dot(rint, q, l, Jr, W)
+        if Sb[q, 0] > dmax:
+            dmax = Sb[q, 0]
+    fail = band_cholesky_inplace(Sb, m, bw, pivotTol * dmax)
+    if fail >= 0:
+        info[0] = fail
+        return STATUS_SINGULAR
+    band_cholesky_solve_inplace(Sb, m, bw, lam)
+    return STATUS_OK
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def constrained_accelerations(gid, Minv, rint, bw, redundant, pivotTol, R, Vdot, Jr, W, eta, lam, Sb, Sd, perm,
+                              ytmp, info, tmp12):
+    """Index-1 solve (eq. index1) given ``Vdot = M^-1 Q``: ``S lambda = J Vdot - eta``,
+    ``Vdot -= M^-1 J^T lambda``, ``S = J M^-1 J^T``.  Returns a status code."""
+    rows_times(rint, Jr, Vdot, -1.0, eta, lam)
+    st = schur_solve(gid, Minv, rint, bw, redundant, pivotTol, R, Jr, W, lam, Sb, Sd, perm, ytmp, info, tmp12)
+    if st != STATUS_OK:
+        return st
+    subtract_rows_transposed(rint, W, lam, Vdot)
     return STATUS_OK
 
 
@@ -725,6 +754,71 @@ def finish(gid, b, h, R, r, V, K, Vd, Psi, Rn, C, rn, Er):
 
 # the MK stages on the scene tuples: inlined into mk_steps, callable from Python too
 # (Simulator._python_step for scenes with Python forces or stabilisation)
+@njit(cache=True, _nrt=False)
+def project(level, gid, Minv, jint, jpos, jrot, rint, bw, redundant, pivotTol, R, r, V, h, Jr, eta, W, lam, Sb,
+            Sd, perm, ytmp, info, tmp12, Psi, v3, m3, ident, zero3, zero6):
+    """Constraint stabilisation (Simulator(stabilization=...)), both on the group:
+
+    * positions (``level`` 2): Gauss-Newton ``g_i <- g_i exp(delta_i)``,
+      ``delta = -M^-1 J^T (J M^-1 J^T)^-1 h(g)`` (the mass-weighted least-change
+      correction; J is the derivative of h along g exp(delta) in each body's group);
+    * velocities (``level`` >= 1): ``V <- V - M^-1 J^T (J M^-1 J^T)^-1 J V``.
+
+    Returns a status code (STATUS_PROJECTION if max |h| stays above the tolerance)."""
+    nb = gid.shape[0]
+    if level >= STAB_POSITION:
+        scale = 1.0
+        for i in range(nb):
+            for k in range(3):
+                if abs(r[i, k]) > scale:
+                    scale = abs(r[i, k])
+        tol = PROJ_TOL * scale
+        hmax = 0.0
+        for it in range(PROJ_MAX_ITER + 1):
+            joints_rows(gid, jint, jpos, jrot, rint, R, r, V, h, Jr, eta, v3, ident, zero3, zero6)
+            hmax = 0.0
+            for q in range(rint.shape[0]):
+                if abs(h[q]) > hmax:
+                    hmax = abs(h[q])
+            if hmax <= tol or it == PROJ_MAX_ITER:
+                break
+            for q in range(rint.shape[0]):
+                lam[q] = h[q]
+            st = schur_solve(gid, Minv, rint, bw, redundant, pivotTol, R, Jr, W, lam, Sb, Sd, perm, ytmp, info,
+                             tmp12)
+            if st != STATUS_OK:
+                return st
+            for i in range(nb):
+                for k in range(6):
+                    Psi[i, k] = 0.0
+            subtract_rows_transposed(rint, W, lam, Psi)
+            for i in range(nb):
+                _exp_compose(gid[i], R[i], r[i], Psi[i], m3[1], v3[1], m3[0], v3[0])
+                for a in range(3):
+                    r[i, a] = v3[1, a]
+                    for c in range(3):
+                        R[i, a, c] = m3[1, a, c]
+        if hmax > PROJ_FAIL * tol:
+            return STATUS_PROJECTION
+    else:
+        joints_rows(gid, jint, jpos, jrot, rint, R, r, V, h, Jr, eta, v3, ident, zero3, zero6)
+    rows_times(rint, Jr, V, 0.0, eta, lam)
+    st = schur_solve(gid, Minv, rint, bw, redundant, pivotTol, R, Jr, W, lam, Sb, Sd, perm, ytmp, info, tmp12)
+    if st != STATUS_OK:
+        return st
+    subtract_rows_transposed(rint, W, lam, V)
+    return STATUS_OK
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def project_state(sd, wk, level, R, r, V):
+    if sd.nrows == 0:
+        return STATUS_OK
+    return project(level, sd.gid, sd.Minv, sd.jint, sd.jpos, sd.jrot, sd.rint, sd.bandwidth, sd.redundant,
+                   sd.pivotTol, R, r, V, wk.h, wk.Jr, wk.eta, wk.W, wk.lam, wk.Sb, wk.Sd, wk.perm, wk.ytmp, wk.info,
+                   wk.tmp12, wk.Psi, wk.v3, wk.m3, wk.ident, wk.zero3, wk.zero6)
+
+
 @njit(cache=True, inline="always", _nrt=False)
 def mk_stage_state(sd, wk, A, j, h, R, r, V):
     stage_state(sd.gid, A, j, h, R, r, V, wk.K, wk.Vd, wk.Psi, wk.Rs, wk.rs, wk.Vs, wk.m3[0], wk.v3[0])
@@ -804,6 +898,11 @@ def mk_steps(sd, wk, A, b, c, t0, h, nsteps, R, r, V, vmax):
         if st != STATUS_OK:
             copy_state(wk.Rb, wk.rb, wk.Vb, R, r, V)
             return st, n
+        if sd.stabilization != STAB_NONE:
+            st = project_state(sd, wk, sd.stabilization, R, r, V)
+            if st != STATUS_OK:
+                copy_state(wk.Rb, wk.rb, wk.Vb, R, r, V)
+                return st, n
         update_torsion_tracking(sd, wk, R, r, V)
         if wk.watchBody.shape[0] > 0:
             watch_rotation_entries(wk.watchBody, wk.watchEntry, wk.watchMax, R)

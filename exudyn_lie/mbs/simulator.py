@@ -112,6 +112,8 @@ class Simulator:
         self.stabilization = None if stabilization == "none" else stabilization
         self.verbose = verbose
         self.sd, self.rowJoint = compile_scene(scene, self.groups)
+        self.sd = self.sd._replace(stabilization={None: kernel.STAB_NONE, "velocity": kernel.STAB_VELOCITY,
+                                                  "position": kernel.STAB_POSITION}[self.stabilization])
         self.A = np.ascontiguousarray(self.tableau.A, dtype=float)
         self.b = np.ascontiguousarray(self.tableau.b, dtype=float)
         self.c = np.ascontiguousarray(self.tableau.c, dtype=float)
@@ -266,58 +268,21 @@ class Simulator:
                     f"pass projectInitial=True to project them onto J V = 0 first")
             self.ProjectVelocities()
 
-    def _solve_S(self, J, rhs):
-        """Solve (J M^-1 J^T) mu = rhs with the current mass matrices (least squares
-        for redundant rows); returns M^-1 J^T mu."""
-        Minv = self._Minv_dense()
-        S = J @ Minv @ J.T
-        mu = np.linalg.lstsq(S, rhs, rcond=1e-12)[0]
-        return Minv @ J.T @ mu
-
-    def _Minv_dense(self):
-        nb = self.sd.nb
-        Mi = np.zeros((6 * nb, 6 * nb))
-        for i in range(nb):
-            Bi = self.sd.Minv[i]
-            if self.gid[i] == 1:
-                D = np.eye(6)
-                D[3:, 3:] = self.R[i]
-                Bi = D @ Bi @ D.T
-            Mi[6 * i:6 * i + 6, 6 * i:6 * i + 6] = Bi
-        return Mi
-
     def ProjectVelocities(self):
-        """Mass-orthogonal projection of V onto J V = 0."""
-        h, J, eta = self.jacobian()
-        if J.shape[0] == 0:
-            return
-        dV = self._solve_S(J, J @ self.V.reshape(-1))
-        self.V -= dV.reshape(-1, 6)
+        """Mass-orthogonal projection of V onto J V = 0 (compiled, banded)."""
+        self._project(kernel.STAB_VELOCITY)
 
-    def ProjectPositions(self, tol=1e-13, maxIterations=20):
-        """Project the configuration onto h(g) = 0 on the group: Gauss-Newton steps
-        ``g <- g exp(-M^-1 J^T (J M^-1 J^T)^-1 h)`` (J is the derivative of h along
-        the left-trivialised perturbation g exp(delta), in each body's group)."""
-        for it in range(maxIterations):
-            h, J, eta = self.jacobian()
-            if J.shape[0] == 0 or np.max(np.abs(h)) <= tol:
-                return it
-            d = -self._solve_S(J, h).reshape(-1, 6)
-            for i in range(self.sd.nb):
-                Rn = np.zeros((3, 3))
-                rn = np.zeros(3)
-                kernel._exp_compose(int(self.gid[i]), self.R[i], self.r[i], np.ascontiguousarray(d[i]),
-                                    Rn, rn, np.zeros((3, 3)), np.zeros(3))
-                self.R[i] = Rn
-                self.r[i] = rn
-        h, J, eta = self.jacobian()
-        if np.max(np.abs(h)) > 1e3 * tol:
-            raise ConstraintError(
-                f"position projection did not converge in {maxIterations} iterations "
-                f"(max |h| = {np.max(np.abs(h)):.3g}); the constraints of joints "
-                f"{', '.join(self._joints_of_rows(np.nonzero(np.abs(h) > 1e3 * tol)[0]))} "
-                f"may not be satisfiable")
-        return maxIterations
+    def ProjectPositions(self):
+        """Project the configuration onto h(g) = 0 on the group (Gauss-Newton steps
+        ``g <- g exp(-M^-1 J^T (J M^-1 J^T)^-1 h)``, J being the derivative of h along the
+        left-trivialised perturbation g exp(delta) in each body's group), then the
+        velocities onto J V = 0."""
+        self._project(kernel.STAB_POSITION)
+
+    def _project(self, level):
+        st = kernel.project_state(self.sd, self.wk, level, self.R, self.r, self.V)
+        if st != kernel.STATUS_OK:
+            self._raise_status(st, 0.0)
 
     # ----------------------------------------------------------------- stepping
     def _vmax(self):
@@ -341,7 +306,7 @@ class Simulator:
         # the state this call starts from: restored on failure, and where a blow-up's
         # step suggestion linearises (the rejected state itself is far from the motion)
         self._segmentStart = (self.t, self.R.copy(), self.r.copy(), self.V.copy())
-        if self.sd.hasQext or self.stabilization:
+        if self.sd.hasQext:
             t0 = self.t
             for n in range(int(nsteps)):
                 self._python_step(h)
@@ -370,33 +335,30 @@ class Simulator:
         return ep(*args)
 
     def _python_step(self, h):
+        """One step with Python force callbacks between the compiled stages."""
         sd, wk = self.sd, self.wk
-        if sd.hasQext:
-            for j in range(len(self.b)):
-                kernel.mk_stage_state(sd, wk, self.A, j, h, self.R, self.r, self.V)
-                tj = self.t + self.c[j] * h
-                wk.Qext[:] = self._python_forces(tj, wk.Rs, wk.rs, wk.Vs)
-                st = kernel.rhs(sd, wk, tj, wk.Rs, wk.rs, wk.Vs, wk.Qext, wk.Vd[j])
-                if st != kernel.STATUS_OK:
-                    self._raise_status(st, h)
-                kernel.mk_stage_k(sd, wk, j)
-            kernel.copy_state(self.R, self.r, self.V, wk.Rb, wk.rb, wk.Vb)
-            kernel.mk_finish(sd, wk, self.b, h, self.R, self.r, self.V)
-            st = kernel.state_is_finite(sd.gid, self.R, self.r, self.V, self._vmaxValue)
+        for j in range(len(self.b)):
+            kernel.mk_stage_state(sd, wk, self.A, j, h, self.R, self.r, self.V)
+            tj = self.t + self.c[j] * h
+            wk.Qext[:] = self._python_forces(tj, wk.Rs, wk.rs, wk.Vs)
+            st = kernel.rhs(sd, wk, tj, wk.Rs, wk.rs, wk.Vs, wk.Qext, wk.Vd[j])
+            if st != kernel.STATUS_OK:
+                self._raise_status(st, h)
+            kernel.mk_stage_k(sd, wk, j)
+        kernel.copy_state(self.R, self.r, self.V, wk.Rb, wk.rb, wk.Vb)
+        kernel.mk_finish(sd, wk, self.b, h, self.R, self.r, self.V)
+        st = kernel.state_is_finite(sd.gid, self.R, self.r, self.V, self._vmaxValue)
+        if st != kernel.STATUS_OK:
+            kernel.copy_state(wk.Rb, wk.rb, wk.Vb, self.R, self.r, self.V)
+            self._raise_status(st, h)
+        if sd.stabilization != kernel.STAB_NONE:
+            st = kernel.project_state(sd, wk, sd.stabilization, self.R, self.r, self.V)
             if st != kernel.STATUS_OK:
                 kernel.copy_state(wk.Rb, wk.rb, wk.Vb, self.R, self.r, self.V)
                 self._raise_status(st, h)
-            kernel.update_torsion_tracking(sd, wk, self.R, self.r, self.V)
-            kernel.watch_rotation_entries(wk.watchBody, wk.watchEntry, wk.watchMax, self.R)
-        else:
-            st, done = self._mk_steps(1, h)
-            if st != kernel.STATUS_OK:
-                self._raise_status(st, h)
+        kernel.update_torsion_tracking(sd, wk, self.R, self.r, self.V)
+        kernel.watch_rotation_entries(wk.watchBody, wk.watchEntry, wk.watchMax, self.R)
         self.t += h
-        if self.stabilization == "position":
-            self.ProjectPositions()
-        if self.stabilization in ("velocity", "position"):
-            self.ProjectVelocities()
 
     def _python_forces(self, t, R, r, V):
         omega, vel = twist_to_world_velocity(self.gid, R, V)
@@ -425,6 +387,13 @@ class Simulator:
                 f"{', '.join(names)} are linearly dependent (a singular configuration, or redundant "
                 f"joints); remove the redundant constraint axes (e.g. make one joint spherical) or "
                 f"check the joint frames")
+        if st == kernel.STATUS_PROJECTION:
+            hres = self.wk.h
+            bad = np.nonzero(np.abs(hres) > kernel.PROJ_FAIL * kernel.PROJ_TOL)[0]
+            raise ConstraintError(
+                f"position projection did not converge in {kernel.PROJ_MAX_ITER} iterations at t = {self.t:.6g} s "
+                f"(max |h| = {np.max(np.abs(hres)):.3g}); the constraints of joints "
+                f"{', '.join(self._joints_of_rows(bad))} may not be satisfiable")
         sugg = self.suggest_step(h)
         what = "non-finite (NaN/inf)" if st == kernel.STATUS_NONFINITE else "unbounded (blow-up)"
         raise StepSizeError(

@@ -172,7 +172,6 @@ def plot_scaling(path, series, title):
         if not ok.any():
             continue
         ax.loglog(N[ok], t[ok] * 1e6, "o-", label=f"{label} (fit N^{p:.2f})" if np.isfinite(p) else label, ms=4)
-    N0 = np.array([1, 1000.0])
     ax.set_xlabel("number of bodies N")
     ax.set_ylabel("CPU time per step [us] (median)")
     ax.set_title(title, fontsize=10)

@@ -7,12 +7,9 @@ regeneration test.
 """
 from __future__ import annotations
 
-import re
-
 import numpy as np
 
 from .claims import CATEGORIES, EXACT_PER_STEP, EXACT_TOL, SAME_ORDER_DECADES, SEPARATION, fmt
-from .generated import body_hash, check_hash, with_header  # noqa: F401 (re-exported)
 
 TABLE_IDS = ("T1", "T2", "T3")
 

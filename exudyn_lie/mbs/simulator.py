@@ -11,16 +11,15 @@ from __future__ import annotations
 
 import time as _time
 import warnings
-from dataclasses import dataclass, field
-from typing import Optional
+from dataclasses import dataclass
 
 import numpy as np
 
 from ..groups import se3, so3
 from ..integrators.tableau import get_method
 from . import kernel
-from .compiled import GROUP_NAMES, compile_scene, make_work, resolve_groups, with_redundant
-from .scene import GROUND, Scene, SceneError
+from .compiled import compile_scene, make_work, resolve_groups, with_redundant
+from .scene import Scene, SceneError
 from .state import BodyStates, twist_to_world_velocity, world_velocity_to_twist
 
 

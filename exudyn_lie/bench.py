@@ -13,7 +13,10 @@ Sections (``--sections``, default all):
 * ``perstep`` cost of one step at h = 1e-3 (MK-RK4 against one generalized-alpha step);
 * ``scaling`` chains of N boxes with spherical joints, cost per step against N;
 * ``startup`` first run with an empty numba cache (compile) and a warm start, in
-  fresh interpreters.
+  fresh interpreters;
+* ``overhead`` the drop-in ``exl.SolveDynamic`` (Exudyn's loop, sensors, solution file,
+  write-back) against the integration alone, on the heavy top;
+* ``groups``  one compiled SE(3) exp + dexpinv evaluation (the group work per body and stage).
 
 Every sweep runs through Exudyn's ``exudyn.processing.ParameterVariation`` with
 multiprocessing (:func:`exudyn_lie.analysis.bench_runs.sweep`); every time is the
@@ -43,7 +46,7 @@ EXL_METHODS = ("RK4", "DOPRI5", "RK6")
 NATIVE_CONSTRAINED = ("GeneralizedAlpha", "GeneralizedAlpha-mN", "TrapezoidalIndex2")
 NATIVE_FREE = ("RK44", "RK67", "DOPRI5")
 EPS_LEVELS = (1e-4, 1e-5, 1e-6, 1e-7, 1e-8)
-SECTIONS = ("wp", "perstep", "scaling", "startup")
+SECTIONS = ("wp", "perstep", "scaling", "startup", "overhead", "groups")
 TARGET_RATIO = 10.0
 
 
@@ -61,7 +64,7 @@ class Config:
         self.jobs = int(args.jobs) if args.jobs else (os.cpu_count() or 1)
         self.href = float(args.href) if args.href else (1e-4 if q else 2.5e-5)
         self.sections = [s.strip() for s in args.sections.split(",")] if args.sections else (
-            ["wp", "perstep", "scaling", "startup"])
+            list(SECTIONS))
         for s in self.sections:
             if s not in SECTIONS:
                 raise SystemExit(f"bench: unknown section {s!r}; choose from {', '.join(SECTIONS)}")
@@ -250,15 +253,17 @@ def run_wp(cfg, log, out):
         cases.append(dict(kind="exl", model=m, solver="RK6", group="SE3", T=T, nsteps=Nref, repeat=1, role="ref"))
         cases.append(dict(kind="exl", model=m, solver="DOPRI5", group="SO3xR3", T=T, nsteps=Nref, repeat=1,
                           role="refcheck"))
-    # per-step cases
-    if "perstep" in cfg.sections:
-        cases += perstep_cases(cfg, models)
     if "wp" in cfg.sections:
         for m in cfg.models:
             for c in models[m]["comps"]:
                 cases += [c.case(k, T, cfg.repeat) for k in range(4) if c.valid_level(k, T)]
     refs = {}
     perstep = []
+    if "perstep" in cfg.sections:
+        # one process: the absolute cost per step of a single core, nothing running beside it
+        pcases = perstep_cases(cfg, models)
+        log(f"per step: {len(pcases)} runs, one at a time, load {loadavg()[0]:.2f}")
+        perstep = BR.sweep(pcases, jobs=1)
     pending = cases
     for rnd in range(cfg.rounds + 1):
         if not pending:
@@ -274,8 +279,6 @@ def run_wp(cfg, log, out):
                 refs.setdefault(c["model"], {})[role] = r
                 if not r["ok"]:
                     raise SystemExit(f"bench: reference run failed for {c['model']}: {r['message']}")
-            elif role == "perstep":
-                perstep.append(r)
             else:
                 comp = next(x for x in models[c["model"]]["comps"]
                             if x.key == (c["model"], c["kind"], c["solver"], c.get("group")))
@@ -598,6 +601,14 @@ def targets_lines(cfg, out):
             if "wall" in w:
                 A(f"| (4) warm start to the first step ({path} path) <= 2 s | {w['wall']:.3g} s wall "
                   f"(imports {w['imports']:.3g} s, first step {w['firstStep']:.3g} s) | {'yes' if w['wall'] <= 2 else 'no'} |")
+    ov = out.get("overhead")
+    if ov:
+        for key in ("sensor", "sensor+file"):
+            d = ov[key]
+            A(f"| (6) bridge: Exudyn outputs + write-back < 10 % of a SolveDynamic run (heavy top, h = {ov['h']:g} s, "
+              f"{key.replace('+', ' + solution file')} every {ov['period']:g} s) | {100 * d['overhead']:.1f} % "
+              f"({1e3 * d['bridge']:.3g} ms vs {1e3 * ov['kernel']:.3g} ms integration; Exudyn's own loop and outputs "
+              f"{100 * d['exudynShare']:.1f} %) | {'yes' if d['overhead'] < 0.10 else 'no'} |")
     A(f"| (5) sweeps in parallel through exudyn.processing.ParameterVariation | "
       f"`exudyn_lie.analysis.bench_runs.sweep`, {cfg.jobs} processes | yes |")
     return L
@@ -724,7 +735,8 @@ def write_report(cfg, out, cmdline):
     if ps:
         A("## 2. Cost per step")
         A("")
-        A("Median CPU time of one step of the time loop (1000 steps from the initial state); for the implicit "
+        A("Median CPU time of one step of the time loop (1000 steps from the initial state, one process at a time, "
+          "nothing else running); for the implicit "
           "solvers the mean number of Newton iterations per step in brackets. The last column compares one "
           "MK-RK4 step (SE3) with the cheaper generalized-alpha variant at the same step size.")
         A("")
@@ -802,8 +814,39 @@ def write_report(cfg, out, cmdline):
             ww = (f"{w['wall']:.3g} s | {w['imports']:.3g} s / {w['firstStep']:.3g} s" if "wall" in w else "failed | -")
             A(f"| {path} | {cw} | {ww} |")
         A("")
+    # ---- bridge overhead, group maps
+    ov = out.get("overhead")
+    if ov:
+        A("## 5. Bridge overhead")
+        A("")
+        A(f"The paper's heavy top (`models.build('heavy_top')` plus a position sensor), MK-RK4 SE3, h = {ov['h']:g} s, "
+          f"{ov['steps']} steps, outputs every {ov['period']:g} s ({ov['outputs']} outputs); medians of repeated runs. "
+          f"'integration' is `Simulator.Advance` in one call; 'Exudyn loop alone' is Exudyn's time loop with an "
+          f"empty Newton hook and the same outputs (a native solve pays it too).")
+        A("")
+        A("| outputs | integration | Exudyn loop alone | exl.SolveDynamic | overhead (SolveDynamic - integration) / SolveDynamic |")
+        A("|---|---|---|---|---|")
+        for key in ("sensor", "sensor+file"):
+            d = ov[key]
+            A(f"| {key.replace('+', ' + solution file')} | {1e3 * ov['kernel']:.3g} ms | {1e3 * d['exudyn']:.3g} ms | "
+              f"{1e3 * d['bridge']:.3g} ms | {100 * d['overhead']:.1f} % |")
+        A("")
+    gm = out.get("groups")
+    if gm:
+        A("## 6. Group maps")
+        A("")
+        A("One compiled SE(3) `exp_into` + `dexpinv_apply_into` pair (the group work of one body in one MK stage), "
+          "called 10^6 times from a numba loop over 1024 random screws of the given size; median of 7 runs.")
+        A("")
+        A("| \\|xi\\| | branch | us per exp + dexpinv |")
+        A("|---|---|---|")
+        for a, us in gm.items():
+            branch = ("Taylor series of both" if float(a) < 0.6 else
+                      "closed-form exp, Taylor dexpinv" if float(a) < 2.59 else "closed forms of both")
+            A(f"| {float(a):g} | {branch} | {us:.4f} |")
+        A("")
     # ---- profile notes
-    A("## 5. Profile and optimisation record")
+    A("## 7. Profile and optimisation record")
     A("")
     A(PROFILE_NOTES.format(extra=out.get("profileExtra", "")))
     A("")
@@ -884,6 +927,8 @@ def main(argv=None):
                         numba=numba.__version__, exudyn=exudyn.__version__, loadStart=loadavg(),
                         command=cmdline, jobs=cfg.jobs, T=cfg.T, quick=cfg.quick))
     log(f"models {cfg.models}, sections {cfg.sections}, T = {cfg.T:g} s, load {out['env']['loadStart']}")
+    if "startup" in cfg.sections:           # first, on a quiet machine
+        run_startup(cfg, log, out)
     if "wp" in cfg.sections or "perstep" in cfg.sections:
         run_wp(cfg, log, out)
         if "wp" in cfg.sections:
@@ -892,8 +937,14 @@ def main(argv=None):
             out["perstepSummary"] = summarize_perstep(out["perstep"])
     if "scaling" in cfg.sections:
         run_scaling(cfg, log, out)
-    if "startup" in cfg.sections:
-        run_startup(cfg, log, out)
+    if "overhead" in cfg.sections:
+        from .analysis.bench_micro import bridge_overhead
+        log("bridge overhead (heavy top, SolveDynamic vs the integration alone)")
+        out["overhead"] = bridge_overhead(T=2.0 if cfg.quick else 8.0, repeats=3 if cfg.quick else 7)
+    if "groups" in cfg.sections:
+        from .analysis.bench_micro import group_maps
+        log("group maps (SE3 exp + dexpinv)")
+        out["groups"] = group_maps(n=10 ** 5 if cfg.quick else 10 ** 6)
     out["env"]["loadEnd"] = loadavg()
     out["profileExtra"] = PROFILE_EXTRA
     os.makedirs(cfg.out, exist_ok=True)

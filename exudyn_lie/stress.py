@@ -18,7 +18,8 @@ number from this run) plus PNG figures to ``--out`` (default ``./stress_results`
                   agreement with Exudyn's generalized-alpha;
 * ``badinput``    bad input gives a clear error and leaves the scene / mbs unchanged.
 
-Options: ``--quick`` (the subset the tests run), ``--out DIR``, ``--cases a,b`` (subset).
+Options: ``--quick`` (the subset the tests run), ``--out DIR``, ``--cases a,b`` (subset),
+``--readme README.md`` (also rewrite the README's generated summary block).
 Exit status 0 when no check FAILs, 1 otherwise.
 """
 from __future__ import annotations
@@ -128,6 +129,17 @@ def render(results, command, quick, wall):
     return "\n".join(L) + "\n"
 
 
+def readme_summary(results, quick):
+    """The README's block: one row per case with its key numbers."""
+    total = sum(len(r.checks) for r in results)
+    failed = sum(len(r.failed()) for r in results)
+    L = [f"{total} checks ({'quick subset' if quick else 'full suite'}), {failed} failed.", "",
+         "| case | checked | checks | failed | key numbers |", "|---|---|---|---|---|"]
+    for r in results:
+        L.append(f"| {r.key} | {_esc(r.title)} | {len(r.checks)} | {len(r.failed())} | {_esc(r.headline)} |")
+    return "\n".join(L) + "\n"
+
+
 def main(argv=None):
     argv = sys.argv[1:] if argv is None else list(argv)
     ap = argparse.ArgumentParser(prog="python -m exudyn_lie stress",
@@ -135,7 +147,12 @@ def main(argv=None):
     ap.add_argument("--quick", action="store_true", help="the quick subset (what the tests run)")
     ap.add_argument("--out", default="stress_results", help="output directory (default ./stress_results)")
     ap.add_argument("--cases", default="", help=f"comma-separated subset of {','.join(CASE_ORDER)}")
+    ap.add_argument("--readme", default=None, metavar="FILE",
+                    help="also write the summary table into the generated block of FILE (the repository's README.md)")
     args = ap.parse_args(argv)
+    if args.readme and not Path(args.readme).exists():
+        print(f"exudyn_lie stress: --readme {args.readme}: no such file", file=sys.stderr)
+        return 2
     cases = [c.strip() for c in args.cases.split(",") if c.strip()] or None
     command = "python -m exudyn_lie stress " + " ".join(shlex.quote(a) for a in argv)
     tic = time.perf_counter()
@@ -148,6 +165,9 @@ def main(argv=None):
     text = render(results, command.strip(), args.quick, wall)
     out = Path(args.out) / "STRESS.md"
     out.write_text(text)
+    if args.readme:
+        from .analysis.generated import update_file_block
+        update_file_block(args.readme, "stress", command.strip(), readme_summary(results, args.quick))
     failed = sum(len(r.failed()) for r in results)
     print(f"exudyn_lie stress: wrote {out} ({wall:.1f} s): {failed} failed checks")
     return 1 if failed else 0

@@ -27,7 +27,7 @@ def test_writes_table_with_command_header(quick_run):
     assert text.startswith("# exudyn_lie benchmarks")
     assert "`python -m exudyn_lie bench " + " ".join(argv) + "`" in text
     for section in ("## Targets", "## 1. Work-precision", "## 2. Cost per step", "## 3. Scaling",
-                    "## 5. Profile and optimisation record", "_nrt=False"):
+                    "## 7. Profile and optimisation record", "_nrt=False"):
         assert section in text
     assert "ParameterVariation" in text
 
@@ -118,3 +118,22 @@ def test_model_names_resolve():
     assert BR.resolve_model("chain12") == "chain12"
     with pytest.raises(KeyError):
         BR.resolve_model("nosuchmodel")
+
+
+def test_overhead_and_group_sections(tmp_path):
+    """The bridge-overhead and group-map sections run and report (no timing asserted)."""
+    readme = tmp_path / "README.md"
+    readme.write_text("intro\n")
+    argv = ["--quick", "--sections", "overhead,groups", "--out", str(tmp_path), "--no-progress",
+            "--readme", str(readme)]
+    assert bench.main(argv) == 0
+    data = json.loads((tmp_path / "bench_results.json").read_text())
+    ov = data["overhead"]
+    for key in ("sensor", "sensor+file"):
+        assert 0 < ov["kernel"] < ov[key]["bridge"] and 0 < ov[key]["overhead"] < 1
+    assert set(data["groups"]) == {"0.05", "1.0", "3.0"} and all(v > 0 for v in data["groups"].values())
+    text = (tmp_path / "BENCHMARKS.md").read_text()
+    assert "## 5. Bridge overhead" in text and "## 6. Group maps" in text
+    from exudyn_lie.analysis.generated import read_block
+    cmd, ok, body = read_block(readme.read_text(), "bench")
+    assert ok and cmd.startswith("python -m exudyn_lie bench --quick") and "(6) bridge" in body

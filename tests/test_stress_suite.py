@@ -156,6 +156,21 @@ def test_command_writes_stress_md(tmp_path):
     assert "## Failed checks\n\nNone." in text
 
 
+def test_command_writes_readme_block(tmp_path):
+    from exudyn_lie.analysis.generated import read_block
+    readme = tmp_path / "README.md"
+    readme.write_text("intro\n")
+    assert stress.main(["--quick", "--out", str(tmp_path), "--cases", "badinput", "--readme", str(readme)]) == 0
+    cmd, ok, body = read_block(readme.read_text(), "stress")
+    assert ok and cmd.startswith("python -m exudyn_lie stress --quick")
+    assert "| badinput |" in body and "0 failed" in body and "clear error" in body
+
+
+def test_every_case_has_a_headline(suite):
+    for key, cr in suite[0].items():
+        assert cr.headline, key
+
+
 def test_command_rejects_unknown_case(tmp_path, capsys):
     assert stress.main(["--quick", "--out", str(tmp_path), "--cases", "nosuch"]) == 2
     assert "unknown stress case" in capsys.readouterr().err

@@ -1,0 +1,135 @@
+"""Two small measurements of ``python -m exudyn_lie bench``:
+
+* :func:`group_maps` (section ``groups``): the cost of one compiled SE(3) ``exp`` +
+  ``dexpinv`` evaluation - the group work of one body in one Munthe-Kaas stage
+  (``exp_into`` for the stage configuration, ``dexpinv_apply_into`` for ``k_j``, eq. MK1) -
+  called from a numba loop, on both sides of the Taylor switches;
+* :func:`bridge_overhead` (section ``overhead``): the share of a drop-in
+  ``exl.SolveDynamic`` run spent outside the integration (Exudyn's time loop, sensors,
+  solution file, the bridge's hook and write-back), on the paper's heavy top.
+"""
+from __future__ import annotations
+
+import os
+import tempfile
+import time
+import warnings
+
+import numpy as np
+from numba import njit
+
+from ..groups import se3
+
+
+@njit(cache=True)
+def _loop_se3_exp_dexpinv(Xs, Vs, n):
+    """n evaluations of se3.exp_into + se3.dexpinv_apply_into (the MK stage pattern)."""
+    R = np.empty((3, 3))
+    r = np.empty(3)
+    k = np.empty(6)
+    acc = 0.0
+    m = Xs.shape[0]
+    for it in range(n):
+        j = it % m
+        se3.exp_into(Xs[j], R, r)
+        se3.dexpinv_apply_into(Xs[j], Vs[j], k)
+        acc += R[0, 1] + r[2] + k[0] + k[5]
+    return acc
+
+
+def group_maps(angles=(0.05, 1.0, 3.0), n=10 ** 6, repeats=7, seed=0):
+    """{|xi|: median us per exp + dexpinv pair} over 1024 random screws of each size
+    (0.05: Taylor branches, the size of an MK stage increment h V; 1.0: closed-form exp;
+    3.0: closed forms of exp and dexpinv)."""
+    rng = np.random.default_rng(seed)
+    out = {}
+    for angle in angles:
+        Xs = rng.normal(size=(1024, 6))
+        Xs[:, 0:3] *= angle / np.linalg.norm(Xs[:, 0:3], axis=1)[:, None]
+        Vs = rng.normal(size=(1024, 6))
+        _loop_se3_exp_dexpinv(Xs, Vs, 10)          # compile / load from the cache
+        times = []
+        for _ in range(repeats):
+            t0 = time.perf_counter()
+            _loop_se3_exp_dexpinv(Xs, Vs, n)
+            times.append(time.perf_counter() - t0)
+        out[angle] = float(np.median(times)) / n * 1e6
+    return out
+
+
+def _settings(T, h, period, file, solution_path):
+    import exudyn as exu
+    ss = exu.SimulationSettings()
+    ss.timeIntegration.endTime = T
+    ss.timeIntegration.numberOfSteps = int(round(T / h))
+    ss.timeIntegration.verboseMode = 0
+    ss.solution.sensors.active = True
+    ss.solution.sensors.writePeriod = period
+    ss.solution.file.write = file
+    ss.solution.file.writePeriod = period
+    ss.solution.file.name = solution_path
+    ss.timeIntegration.generalizedAlpha.computeInitialAccelerations = False
+    return ss
+
+
+def _heavy_top_with_sensor():
+    import exudyn as exu
+    import models
+    mbs, info = models.build("heavy_top")
+    mbs.AddSensor(exu.itemInterface.SensorBody(bodyNumber=info.bodies[0].objectIndex, storeInternal=True,
+                                               outputVariableType=exu.OutputVariableType.Position))
+    mbs.Assemble()
+    return mbs, info
+
+
+def bridge_overhead(T=8.0, h=1e-3, period=0.01, repeats=7):
+    """Times (median of ``repeats``) of the heavy top, h = 1e-3 s, outputs every ``period``:
+
+    * ``kernel``: ``Simulator.Advance(n, h)`` in one call (the integration alone);
+    * ``exudyn``: Exudyn's time loop with an empty Newton hook and the same outputs (what
+      the outputs cost in Exudyn itself; a native solve pays this too);
+    * ``bridge``: ``exl.SolveDynamic`` with a position sensor (and the solution file).
+
+    overhead = (bridge - kernel) / bridge."""
+    import exudyn as exu
+
+    import exudyn_lie as exl
+    n = int(round(T / h))
+    path = os.path.join(tempfile.gettempdir(), f"exudyn_lie_bench_solution_{os.getpid()}.txt")
+
+    def kernel():
+        mbs, info = _heavy_top_with_sensor()
+        sim = exl.LieGroupSolver(mbs, liegroup="SE3").sim
+        t = time.perf_counter()
+        sim.Advance(n, h)
+        return time.perf_counter() - t
+
+    def exudyn_only(file):
+        mbs, info = _heavy_top_with_sensor()
+        solver = exu.MainSolverImplicitSecondOrder()
+        solver.SetUserFunctionNewton(mbs, lambda s, m, ss: True)
+        ss = _settings(T, h, period, file, path)
+        ss.timeIntegration.numberOfSteps = int(round(T / period))     # one Exudyn step per output, as the bridge
+        t = time.perf_counter()
+        solver.SolveSystem(mbs, ss)
+        return time.perf_counter() - t
+
+    def bridge(file):
+        mbs, info = _heavy_top_with_sensor()
+        t = time.perf_counter()
+        exl.SolveDynamic(mbs, _settings(T, h, period, file, path), liegroup="SE3", showProgress=False)
+        return time.perf_counter() - t
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", DeprecationWarning)
+        bridge(True)                  # warm-up (numba cache, first calls)
+        med = lambda f: float(np.median([f() for _ in range(repeats)]))
+        out = dict(T=T, h=h, period=period, steps=n, outputs=int(round(T / period)), kernel=med(kernel))
+        for file in (False, True):
+            key = "sensor+file" if file else "sensor"
+            e = med(lambda: exudyn_only(file))
+            b = med(lambda: bridge(file))
+            out[key] = dict(exudyn=e, bridge=b, overhead=(b - out["kernel"]) / b, exudynShare=e / b)
+    if os.path.exists(path):
+        os.remove(path)
+    return out

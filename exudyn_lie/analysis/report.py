@@ -152,18 +152,9 @@ def write_report(ctx) -> str:
 
     # ------------------------------------------------------------------ tables
     L += ["## Maximum violations", ""]
-    L += _table("T1", "exudyn_lie MK-RK4: maximum constraint violation (joints: position [m], rotation rows "
-                "[-]; free bodies: COM drift from the exact solution [m], orientation error eps_r [rad])",
-                infos, results, ("SE3", "SO3xR3"), dts)
+    L += violation_tables(infos, results, dts)
     cons = [i for i in infos if i.constrained]
     free = [i for i in infos if not i.constrained]
-    note = " ('failed t=...': the solver stopped there; the maximum is up to that time)"
-    if cons:
-        L += _table("T2", "Exudyn's implicit solvers on the constrained models, same measures" + note, cons,
-                    results, ("GeneralizedAlpha", "TrapezoidalIndex2"), dts)
-    if free:
-        L += _table("T3", "Exudyn's explicit solvers (RotVecLG Lie group update) on the free bodies" + note, free,
-                    results, ("RK44", "DOPRI5"), dts)
     L += ["## Energy drift", "",
           "Maximum |E(t) - E(0)| [J] (kinetic + gravity + spring energy from the states).", ""]
     for title, group, cols in (("exudyn_lie MK-RK4", infos, ("SE3", "SO3xR3")),
@@ -259,9 +250,15 @@ def readme_summary(ctx) -> str:
                  f"\\|p0 - r\\|^2, {h['computed_without_half']:.2f} J without the 1/2 | "
                  f"{h['verdict'].replace('|', chr(92) + '|')} |")
     L.append("")
-    L += _table("T1", "exudyn_lie MK-RK4: maximum violation over the run (joints: position rows [m], rotation "
-                "rows [-]; free bodies: COM drift from the exact solution [m], orientation error eps_r [rad])",
-                infos, results, ("SE3", "SO3xR3"), dts)
+    L += violation_tables(infos, results, dts)
+    return "\n".join(L)
+
+
+def violation_tables(infos, results, dts):
+    """Tables 1-3: the maximum violations of exudyn_lie and of Exudyn's own solvers."""
+    L = _table("T1", "exudyn_lie MK-RK4: maximum violation over the run (joints: position rows [m], rotation "
+               "rows [-]; free bodies: COM drift from the exact solution [m], orientation error eps_r [rad])",
+               infos, results, ("SE3", "SO3xR3"), dts)
     cons = [i for i in infos if i.constrained]
     free = [i for i in infos if not i.constrained]
     note = " ('failed t=...': Newton failed there with the fixed step; the maximum is up to that time)"
@@ -271,4 +268,4 @@ def readme_summary(ctx) -> str:
     if free:
         L += _table("T3", "Exudyn's explicit solvers (RotVecLG Lie group update) on the free bodies", free,
                     results, ("RK44", "DOPRI5"), dts)
-    return "\n".join(L)
+    return L

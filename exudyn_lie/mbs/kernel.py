@@ -626,15 +626,15 @@ def schur_solve(gid, Minv, rint, bw, redundant, pivotTol, R, Jr, W, lam, Sb, Sd,
 
 
 @njit(cache=True, inline="always", _nrt=False)
-def constrained_accelerations(gid, Minv, rint, bw, redundant, pivotTol, R, Vdot, Jr, W, eta, lam, Sb, Sd, perm,
-                              ytmp, info, tmp12):
-    """Index-1 solve (eq. index1) given ``Vdot = M^-1 Q``: ``S lambda = J Vdot - eta``,
-    ``Vdot -= M^-1 J^T lambda``, ``S = J M^-1 J^T``.  Returns a status code."""
-    rows_times(rint, Jr, Vdot, -1.0, eta, lam)
+def schur_correct(gid, Minv, rint, bw, redundant, pivotTol, R, X, c, y, Jr, W, lam, Sb, Sd, perm, ytmp, info, tmp12):
+    """``X -= M^-1 J^T lambda`` with ``(J M^-1 J^T) lambda = c y + J X``: the correction that
+    makes ``J X = -c y``.  The index-1 solve (eq. index1) is ``X = Vdot = M^-1 Q``,
+    ``c y = -eta``; the velocity projection ``X = V``, ``c = 0``.  Returns a status code."""
+    rows_times(rint, Jr, X, c, y, lam)
     st = schur_solve(gid, Minv, rint, bw, redundant, pivotTol, R, Jr, W, lam, Sb, Sd, perm, ytmp, info, tmp12)
     if st != STATUS_OK:
         return st
-    subtract_rows_transposed(rint, W, lam, Vdot)
+    subtract_rows_transposed(rint, W, lam, X)
     return STATUS_OK
 
 
@@ -660,8 +660,8 @@ def rhs(sd, wk, t, R, r, V, Qext, Vdot):
         return STATUS_OK
     joints_rows(sd.gid, sd.jint, sd.jpos, sd.jrot, sd.rint, R, r, V, wk.h, wk.Jr, wk.eta, wk.v3, wk.ident,
                 wk.zero3, wk.zero6)
-    return constrained_accelerations(sd.gid, sd.Minv, sd.rint, sd.bandwidth, sd.redundant, sd.pivotTol, R, Vdot,
-                                     wk.Jr, wk.W, wk.eta, wk.lam, wk.Sb, wk.Sd, wk.perm, wk.ytmp, wk.info, wk.tmp12)
+    return schur_correct(sd.gid, sd.Minv, sd.rint, sd.bandwidth, sd.redundant, sd.pivotTol, R, Vdot, -1.0, wk.eta,
+                         wk.Jr, wk.W, wk.lam, wk.Sb, wk.Sd, wk.perm, wk.ytmp, wk.info, wk.tmp12)
 
 
 # --------------------------------------------------------------------------- Munthe-Kaas steps
@@ -802,12 +802,8 @@ def project(level, gid, Minv, jint, jpos, jrot, rint, bw, redundant, pivotTol, R
             return STATUS_PROJECTION
     else:
         joints_rows(gid, jint, jpos, jrot, rint, R, r, V, h, Jr, eta, v3, ident, zero3, zero6)
-    rows_times(rint, Jr, V, 0.0, eta, lam)
-    st = schur_solve(gid, Minv, rint, bw, redundant, pivotTol, R, Jr, W, lam, Sb, Sd, perm, ytmp, info, tmp12)
-    if st != STATUS_OK:
-        return st
-    subtract_rows_transposed(rint, W, lam, V)
-    return STATUS_OK
+    return schur_correct(gid, Minv, rint, bw, redundant, pivotTol, R, V, 0.0, eta, Jr, W, lam, Sb, Sd, perm, ytmp,
+                         info, tmp12)
 
 
 @njit(cache=True, inline="always", _nrt=False)

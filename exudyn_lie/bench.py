@@ -105,8 +105,8 @@ def parse_args(argv):
     cold.add_argument("--no-cold", dest="cold", action="store_false")
     p.add_argument("--wait-quiet", type=float, default=0.0, help="wait up to this many seconds for a "
                    "1-minute load average below 1.0 before measuring")
-    p.add_argument("--out", default=".", help="output directory (BENCHMARKS.md, bench_results.json, "
-                   "bench_figures/)")
+    p.add_argument("--out", default="bench_results", help="output directory (BENCHMARKS.md, bench_results.json, "
+                   "bench_figures/; default ./bench_results)")
     p.add_argument("--no-progress", action="store_true", help="no progress lines")
     p.add_argument("--readme", default=None, metavar="FILE", help="also write the summary (targets, work-precision "
                    "ratios) into the generated block of FILE (the repository's README.md)")

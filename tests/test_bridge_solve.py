@@ -452,8 +452,7 @@ def test_progress_lines_on_long_runs(capsys, monkeypatch):
 
 
 def test_fast_path_is_used_for_compiled_scenes():
-    """The direct kernel calls and zero-copy coordinate views are active (if the kernel's
-    interface changes, the bridge falls back with a RuntimeWarning and this test says so)."""
+    """The direct kernel calls (resolved entry points) and zero-copy coordinate views are active."""
     import warnings
     mbs, b, s, sj = heavy_top()
     with warnings.catch_warnings():

@@ -82,15 +82,20 @@ def _heavy_top_with_sensor():
     return mbs, info
 
 
-def bridge_overhead(T=8.0, h=1e-3, period=0.01, repeats=7):
-    """Times (median of ``repeats``) of the heavy top, h = 1e-3 s, outputs every ``period``:
+def bridge_overhead(T=8.0, h=1e-3, periods=(0.01, 0.1), repeats=11):
+    """Times (median of ``repeats``) of the heavy top, h = 1e-3 s, ``T`` s:
 
     * ``kernel``: ``Simulator.Advance(n, h)`` in one call (the integration alone);
-    * ``exudyn``: Exudyn's time loop with an empty Newton hook and the same outputs (what
-      the outputs cost in Exudyn itself; a native solve pays this too);
-    * ``bridge``: ``exl.SolveDynamic`` with a position sensor (and the solution file).
-
-    overhead = (bridge - kernel) / bridge."""
+    * ``none``: ``exl.SolveDynamic`` without any output (sensors and solution file off):
+      the integration plus the fixed cost of a solve (reading the model, compiling the
+      scene, Exudyn's InitializeSolver);
+    * per output period and output kind (a position sensor; sensor + solution file):
+      ``exudyn``: Exudyn's time loop with an empty Newton hook and the same outputs (what
+      the outputs cost in Exudyn itself; a native solve pays it too), ``bridge``:
+      ``exl.SolveDynamic``.  ``outputs`` = (bridge - none) / bridge is the share of the
+      output machinery (Exudyn's sensors / file and the bridge's per-output kernel calls
+      and write-back), ``bridgeOnly`` = (bridge - none - exudyn) / bridge the part the
+      bridge adds to what a native solve pays too."""
     import exudyn as exu
 
     import exudyn_lie as exl
@@ -104,7 +109,7 @@ def bridge_overhead(T=8.0, h=1e-3, period=0.01, repeats=7):
         sim.Advance(n, h)
         return time.perf_counter() - t
 
-    def exudyn_only(file):
+    def exudyn_only(period, file):
         mbs, info = _heavy_top_with_sensor()
         solver = exu.MainSolverImplicitSecondOrder()
         solver.SetUserFunctionNewton(mbs, lambda s, m, ss: True)
@@ -114,22 +119,38 @@ def bridge_overhead(T=8.0, h=1e-3, period=0.01, repeats=7):
         solver.SolveSystem(mbs, ss)
         return time.perf_counter() - t
 
-    def bridge(file):
+    def bridge(period, file, sensors=True):
         mbs, info = _heavy_top_with_sensor()
+        ss = _settings(T, h, period, file, path)
+        ss.solution.sensors.active = sensors
         t = time.perf_counter()
-        exl.SolveDynamic(mbs, _settings(T, h, period, file, path), liegroup="SE3", showProgress=False)
+        exl.SolveDynamic(mbs, ss, liegroup="SE3", showProgress=False)
         return time.perf_counter() - t
 
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", DeprecationWarning)
-        bridge(True)                  # warm-up (numba cache, first calls)
-        med = lambda f: float(np.median([f() for _ in range(repeats)]))
-        out = dict(T=T, h=h, period=period, steps=n, outputs=int(round(T / period)), kernel=med(kernel))
+    # all variants in turn, round after round (the machine's speed drifts: measuring one
+    # variant after the other would compare different moments); medians over the rounds
+    variants = {("kernel",): kernel, ("none",): lambda: bridge(T, False, sensors=False)}
+    for period in periods:
         for file in (False, True):
             key = "sensor+file" if file else "sensor"
-            e = med(lambda: exudyn_only(file))
-            b = med(lambda: bridge(file))
-            out[key] = dict(exudyn=e, bridge=b, overhead=(b - out["kernel"]) / b, exudynShare=e / b)
+            variants[(period, key, "exudyn")] = lambda p=period, f=file: exudyn_only(p, f)
+            variants[(period, key, "bridge")] = lambda p=period, f=file: bridge(p, f)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", DeprecationWarning)
+        bridge(periods[0], True)                  # warm-up (numba cache, first calls)
+        times = {k: [] for k in variants}
+        for _ in range(repeats):
+            for k, f in variants.items():
+                times[k].append(f())
+    med = {k: float(np.median(v)) for k, v in times.items()}
+    none = med[("none",)]
+    out = dict(T=T, h=h, steps=n, kernel=med[("kernel",)], none=none, periods={})
+    for period in periods:
+        rows = {}
+        for key in ("sensor", "sensor+file"):
+            e, b = med[(period, key, "exudyn")], med[(period, key, "bridge")]
+            rows[key] = dict(exudyn=e, bridge=b, outputs=(b - none) / b, bridgeOnly=(b - none - e) / b)
+        out["periods"][period] = dict(steps=int(round(period / h)), outputs=int(round(T / period)), **rows)
     if os.path.exists(path):
         os.remove(path)
     return out

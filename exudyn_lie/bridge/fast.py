@@ -3,10 +3,8 @@
 A plain numba call with the kernel's scene/work tuples spends ~10 us in resolving the
 argument types; ``Simulator.Advance`` and ``Simulator.Accelerations`` pay it per call.  The bridge calls the same kernel functions with arguments
 of identical types once per Exudyn step, so :class:`KernelCalls` resolves the compiled
-overload once (:func:`entry_point`) and calls it directly.  It is used only when the
-simulator runs its pure compiled loop (no Python forces); if the
-kernel's interface differs from what is expected, the bridge falls back to ``Advance`` /
-``Accelerations`` (and says so).
+overload once (:func:`entry_point`) and calls it directly.  It is used when the
+simulator runs its pure compiled loop (no Python forces).
 
 The node write-back (:func:`~exudyn_lie.bridge.nodes.write_all`) is compiled too.
 """
@@ -68,13 +66,13 @@ class KernelCalls:
         a1 = (sim.sd, sim.wk, sim.A, sim.b, sim.c, float(t), float(h), int(n), sim.R, sim.r, sim.V, self.vmax)
         if self.mk is None:
             out = kernel.mk_steps(*a1)
-            self.mk = entry_point(kernel.mk_steps, a1)
+            self.mk = entry_point(kernel.mk_steps, a1) or kernel.mk_steps
             return out
         return self.mk(*a1)
 
     def advance(self, n, h, accelerations):
-        """Returns (status, steps done, number of flagged nodes); raises TypeError-like
-        errors if the kernel's interface changed (the caller falls back)."""
+        """n steps, then the node coordinates; returns (status, steps done, number of
+        flagged nodes)."""
         sim = self.sim
         st, done = self._mk_steps(sim.t, h, n)
         if st != kernel.STATUS_OK:
@@ -91,10 +89,9 @@ class KernelCalls:
         wr = self.wr.get(accelerations)
         if wr is None:
             nflag = write_all(*a3)
-            self.wr[accelerations] = entry_point(write_all, a3)
-        else:
-            nflag = wr(*a3)
-        return st, done, nflag
+            self.wr[accelerations] = entry_point(write_all, a3) or write_all
+            return st, done, nflag
+        return st, done, wr(*a3)
 
 
 class NodeTable:

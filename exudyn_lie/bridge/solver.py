@@ -288,16 +288,7 @@ class LieGroupSolver:
         sim = self.sim
         kc = self._kc
         if kc is not None:
-            try:
-                st, done, nflag = kc.advance(n, h, accelerations)
-            except Exception as e:           # kernel interface changed: fall back, say so once
-                if not (isinstance(e, TypeError) or type(e).__module__.startswith("numba")):
-                    raise
-                warnings.warn(f"exudyn_lie bridge: direct kernel calls unavailable ({type(e).__name__}: "
-                              f"{str(e).splitlines()[0][:200]}); using Simulator.Advance", RuntimeWarning,
-                              stacklevel=2)
-                self._kc = None
-                return self._advance(n, h, accelerations)
+            st, done, nflag = kc.advance(n, h, accelerations)
             if st != 0:
                 sim.t += done * h            # the kernel left the last accepted step
                 sim.RaiseStatus(st, h)
@@ -456,9 +447,11 @@ class LieGroupSolver:
             advance = self._advance
             push = self._push
 
+            it = solver.it                       # Exudyn's iteration data (live), read once per step
+
             def hook(mainSolver, mbs, settings):
                 try:
-                    t1 = mainSolver.it.currentTime
+                    t1 = it.currentTime
                     if watch and self._written is not None and not (
                             np.array_equal(sdat.GetODE2Coordinates(configuration=cur), self._written[0])
                             and np.array_equal(sdat.GetODE2Coordinates_t(configuration=cur), self._written[1])):

@@ -661,8 +661,8 @@ def write_report(cfg, out, cmdline):
       f"every time is the median over repeated runs inside one worker ({cfg.repeat} repetitions, 3 for runs "
       f"over 1 s); ratios compare times measured in this invocation")
     A("* timed: exudyn_lie `Simulator.Advance(n, h)` (the compiled time loop) and Exudyn "
-      f"`MainSolver*.SolveSteps` (Exudyn's time loop, solution file and sensors off); set-up "
-      f"(reading the model, `Simulator(...)`, `InitializeSolver`) excluded and reported separately")
+      "`MainSolver*.SolveSteps` (Exudyn's time loop, solution file and sensors off); set-up "
+      "(reading the model, `Simulator(...)`, `InitializeSolver`) excluded and reported separately")
     A("")
     summ = out.get("wpSummary", {})
     ps = out.get("perstepSummary", {})

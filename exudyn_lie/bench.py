@@ -826,8 +826,9 @@ def write_report(cfg, out, cmdline):
           f"solve: reading the model, compiling the scene, Exudyn's set-up): {1e3 * ov['none']:.3g} ms. 'Exudyn "
           f"alone' is Exudyn's time loop with an empty Newton hook and the same outputs (a native solve pays it "
           f"too). Output share = (SolveDynamic - SolveDynamic without outputs) / SolveDynamic; the bridge's part "
-          f"subtracts 'Exudyn alone' (per output: one kernel call for the sub-steps and the compiled write-back "
-          f"of the node coordinates).")
+          f"subtracts 'Exudyn alone' (per output: the Python hook and the copy of one row of node coordinates; "
+          f"the outputs are integrated and converted a chunk at a time, one kernel call per chunk; with the "
+          f"solution file, also the accelerations and joint multipliers its default export asks for).")
         A("")
         A("| outputs | every | Exudyn alone | exl.SolveDynamic | output share | the bridge's part |")
         A("|---|---|---|---|---|---|")
@@ -977,5 +978,6 @@ PROFILE_EXTRA = """\
 | 4 | set-up was O(N^3): the redundancy check ran a dense SVD of the m x 6N constraint Jacobian, the consistency check built it (144 MB at N = 1000) | the kernel's own band Cholesky at the initial state decides (the SVD runs only for a singular system, to name its joints); J V is formed row by row | `bench --sections scaling --chain 300,1000` at commit 3cb19c5: set-up 0.59 s (N = 300), 21.9 s (N = 1000); now: section 3 |
 | 5 | stabilisation ran a Python step loop with a dense least-squares projection per step | velocity and position projection compiled into the time loop, sharing the banded Schur complement of the index-1 solve | `stress --cases longrun` at commit f7e0786: 46 / 68 us per projected heavy-top step (SE3, velocity / position), 52 / 129 us (SO3xR3); now 3.5-4.1 us (STRESS.md, long runs) |
 | 6 | blow-up handling: the rejected step was recomputed from the segment start, and the suggested step h/10 was itself unstable for large steps (one stress probe suggested 5.6e-10 s and ran for minutes) | the kernel keeps a copy of the last accepted state (18 doubles per body) and restores it; the suggestion is 0.8 r / rho with rho the spectral radius of the linearised equations (power iteration, a few right-hand sides) and r the tableau's stability half-disk radius | every suggested step is stable (STRESS.md, groupmaps) |
+| 8 | bridge outputs: per Exudyn output step the hook made two compiled calls (the sub-steps, then the write-back), and each call unboxes every array it receives (~80 arrays of the scene and work tuples and the node table): ~5 us per output, a sixth of the ten heavy-top steps between two outputs at h = 1e-3 s and Exudyn's default period of 0.01 s | `mk_steps` records the state (and, from the first stage of the following step, the accelerations and multipliers) at each output of a chunk of up to 256 outputs; `write_rows` converts the chunk in one call; the hook copies one row into mbs | `bench --sections overhead` at commit 873fb9b: a sensor every 10 steps 15.4 % of the run (the bridge's calls 14.4 %); now: section 5 |
 | 7 | tried and not kept: `inline="always"` on the leaf helpers (`body_point`, `apply_minv`, ...) and un-inlining the per-stage functions, after row 3 | - | no measurable change per step, cold start slower |
 """

@@ -2,8 +2,6 @@
 
 The quick subset is ``pytest tests -m "not slow"``; the full suite is ``pytest tests``.
 """
-import os
-
 import numpy as np
 import pytest
 

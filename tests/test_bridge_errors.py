@@ -139,6 +139,30 @@ def test_step_size_blow_up_is_raised_through_exudyn():
         exl.SolveDynamic(mbs, quiet_settings(1.0, 10))
 
 
+@pytest.mark.parametrize("rows", [1, None])
+def test_blow_up_inside_a_chunk_keeps_the_outputs_before_it(monkeypatch, rows):
+    """A blow-up in the middle of a chunk of outputs: every output before the last accepted
+    step is written (finite), the error names that step's time, mbs holds a finite state;
+    the same as one output per kernel call."""
+    import re
+    import exudyn_lie.bridge.solver as bsolver
+    if rows is not None:
+        monkeypatch.setattr(bsolver, "CHUNK_ROWS", rows)
+    mbs = model(lambda mbs, g, b: mbs.CreateSpringDamper(itemNumbers=[g, b], localPosition0=[1, 0, 0],
+                                                         stiffness=4e5))
+    ss = quiet_settings(20.0, 2000)
+    ss.solution.sensors.active = True
+    with pytest.raises(StepSizeError, match="step size") as ei:
+        exl.SolveDynamic(mbs, ss)
+    tf = float(re.search(r"at t = ([0-9.e+-]+) s", str(ei.value)).group(1))
+    d = np.asarray(mbs.GetSensorStoredData(0))
+    assert tf > 0.02 and np.all(np.isfinite(d))
+    np.testing.assert_allclose(d[:, 0], 0.01 * np.arange(len(d)), atol=1e-12)
+    assert d[-1, 0] == pytest.approx(tf, abs=1e-12)
+    assert np.all(np.isfinite(mbs.systemData.GetODE2Coordinates()))
+    assert mbs.sys["lieGroupSolver"]._chunks.maxRows == (rows or bsolver.CHUNK_ROWS)
+
+
 def test_user_function_errors_name_the_item():
     def bad(mbs, t, i, dL, dLt, k, d, f):
         raise ValueError("boom")

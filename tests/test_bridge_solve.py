@@ -452,12 +452,45 @@ def test_progress_lines_on_long_runs(capsys, monkeypatch):
 
 
 def test_fast_path_is_used_for_compiled_scenes():
-    """The direct kernel calls (resolved entry points) and zero-copy coordinate views are active."""
+    """Chunks of outputs per kernel call (resolved entry points) and zero-copy coordinate
+    views are active."""
     import warnings
+    from exudyn_lie.bridge.fast import entry_point
+    from exudyn_lie.bridge.nodes import write_rows
+    from exudyn_lie.mbs import kernel
     mbs, b, s, sj = heavy_top()
     with warnings.catch_warnings():
         warnings.simplefilter("error", RuntimeWarning)
-        exl.SolveDynamic(mbs, settings(0.05, 1e-3))
+        exl.SolveDynamic(mbs, settings(0.5, 1e-3))
     solver = mbs.sys["lieGroupSolver"]
-    assert solver._kc is not None and solver._kc.mk is not None and solver._kc.wr
+    ch = solver._chunks
+    assert ch is not None and ch.size > 1 and ch.maxRows > 1
+    assert ch._ep["mk"] is not kernel.mk_steps and ch._ep["write"] is not write_rows
     assert solver._live
+    assert entry_point(kernel.mk_steps, ()) is None            # no overload for these types
+
+
+@pytest.mark.parametrize("rows", [1, 3, None])
+def test_chunked_outputs_equal_one_output_per_call(monkeypatch, rows):
+    """Outputs computed a chunk at a time are the states of the one-output-per-call path:
+    sensors (position, joint force = multipliers), final coordinates and q_tt."""
+    import exudyn_lie.bridge.solver as bsolver
+    ref = None
+    for r in (1, rows):
+        if r is not None:
+            monkeypatch.setattr(bsolver, "CHUNK_ROWS", r)
+        else:
+            monkeypatch.undo()
+        mbs, b, s, sj = heavy_top()
+        exl.SolveDynamic(mbs, settings(0.5, 1e-3))
+        solver = mbs.sys["lieGroupSolver"]
+        assert solver._chunks.maxRows == (r or bsolver.CHUNK_ROWS)
+        sd = mbs.systemData
+        out = (np.asarray(mbs.GetSensorStoredData(s)), np.asarray(mbs.GetSensorStoredData(sj)),
+               np.asarray(sd.GetODE2Coordinates()), np.asarray(sd.GetODE2Coordinates_tt()))
+        if ref is None:
+            ref = out
+            assert len(out[0]) == 51
+            continue
+        for a, x in zip(ref, out):
+            np.testing.assert_allclose(x, a, rtol=0, atol=1e-12)

@@ -5,7 +5,6 @@ import warnings
 import numpy as np
 import pytest
 
-from exudyn_lie.groups import so3
 from exudyn_lie.mbs import GROUND, ConstraintError, Scene, Simulator, StepSizeError
 
 # --------------------------------------------------------------------------- scenes

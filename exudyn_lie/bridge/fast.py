@@ -1,18 +1,24 @@
-"""Cheap repeated calls of the compiled kernel between two Exudyn output steps.
+"""Exudyn output steps on the compiled path: chunks of outputs per call of the kernel.
 
-A plain numba call with the kernel's scene/work tuples spends ~10 us in resolving the
-argument types; ``Simulator.Advance`` and ``Simulator.Accelerations`` pay it per call.  The bridge calls the same kernel functions with arguments
-of identical types once per Exudyn step, so :class:`KernelCalls` resolves the compiled
-overload once (:func:`entry_point`) and calls it directly.  It is used when the
-simulator runs its pure compiled loop (no Python forces).
-
-The node write-back (:func:`~exudyn_lie.bridge.nodes.write_all`) is compiled too.
+A Python call of a numba function unboxes every array it receives: the kernel's scene and
+work tuples hold ~60 arrays (~2 us per call, as much as a heavy-top step), the write-back
+another ~20.  Per Exudyn output step that would be most of the bridge's cost at the usual
+ten steps per output.  So :class:`OutputChunks` lets ``kernel.mk_steps`` integrate a chunk
+of output steps in one call, recording the state (and accelerations / multipliers) at each
+output, converts the chunk to node coordinates in one call of
+:func:`~exudyn_lie.bridge.nodes.write_rows`, and per Exudyn step only copies one row into
+mbs.  Where a user function may change the state between outputs the chunk is one output
+long.  Both calls go through entry points resolved once (:func:`entry_point`).  Used when
+the simulator runs its pure compiled loop (no Python forces).
 """
 import numpy as np
 
 from ..mbs import kernel
-from .nodes import NCOORD_MAX, write_all
+from .nodes import NCOORD_MAX, write_rows
 
+CHUNK_SECONDS = 0.05        # aimed wall time of one chunk (progress, responsiveness)
+CHUNK_DOUBLES = 1 << 22     # at most this many doubles of chunk buffers (32 MiB)
+CHUNK_ROWS = 256            # at most this many outputs per chunk
 
 _ENTRY_CACHE = {}
 
@@ -46,56 +52,95 @@ def entry_point(dispatcher, args):
         return None
 
 
-class KernelCalls:
-    """One Exudyn step on the fast path: ``kernel.mk_steps`` (n MK steps; with
-    accelerations, a second call with no step evaluates the equations of motion at the
-    end state: ``wk.Vd[0]`` and the multipliers ``wk.lam``) and the compiled write-back of
-    all node / AE coordinates, each through a resolved entry point."""
+def _call(cache, name, dispatcher, args):
+    """``dispatcher(*args)``, through its entry point from the second call on."""
+    ep = cache.get(name)
+    if ep is None:
+        out = dispatcher(*args)
+        cache[name] = entry_point(dispatcher, args) or dispatcher
+        return out
+    return ep(*args)
 
-    def __init__(self, sim, nodes, vmax, q, qt, qtt, jrow, jae, jsign, ae):
-        self.sim = sim
-        self.nodes = nodes
-        self.vmax = float(vmax)
-        self.bufs = (q, qt, qtt)
-        self.jac = (jrow, jae, jsign, ae)
-        self.mk = None
-        self.wr = {}
 
-    def _mk_steps(self, t, h, n):
-        sim = self.sim
-        a1 = (sim.sd, sim.wk, sim.A, sim.b, sim.c, float(t), float(h), int(n), sim.R, sim.r, sim.V, self.vmax)
-        if self.mk is None:
-            out = kernel.mk_steps(*a1)
-            self.mk = entry_point(kernel.mk_steps, a1) or kernel.mk_steps
-            return out
-        return self.mk(*a1)
+class OutputChunks:
+    """Output steps of ``nsub`` MK steps each, computed a chunk at a time.
 
-    def advance(self, n, h, accelerations):
-        """n steps, then the node coordinates; returns (status, steps done, number of
-        flagged nodes)."""
-        sim = self.sim
-        st, done = self._mk_steps(sim.t, h, n)
-        if st != kernel.STATUS_OK:
-            return st, done, 0
-        if accelerations:
-            st, _ = self._mk_steps(sim.t + n * h, 0.0, 0)
-            if st != kernel.STATUS_OK:
-                return st, done, 0
+    :meth:`refill` integrates the next chunk from the simulator's state (which then runs
+    ahead of Exudyn's time by up to one chunk) and :meth:`pop` copies the next output row
+    into the coordinate buffers ``(q, qt, qtt, ae)`` (with ``doacc`` also accelerations and
+    joint multipliers).  ``maxRows = 1`` keeps the simulator in step with Exudyn."""
+
+    def __init__(self, sim, nodes, vmax, bufs, jac, nsub, h, doacc, maxRows=CHUNK_ROWS):
+        self.sim, self.nodes = sim, nodes
+        self.vmax, self.nsub, self.h, self.doacc = float(vmax), int(nsub), float(h), bool(doacc)
+        self.bufs = bufs
+        self.jac = jac
+        q, qt, qtt, ae = bufs
+        nb, m = sim.sd.nb, sim.sd.nrows
+        perRow = nb * 24 + m + 3 * q.size + ae.size
+        self.maxRows = max(1, min(int(maxRows), CHUNK_DOUBLES // max(perRow, 1)))
+        M = self.maxRows
+        self.Ro, self.ro = np.zeros((M, nb, 3, 3)), np.zeros((M, nb, 3))
+        self.Vo, self.Vdo, self.lamo = np.zeros((M, nb, 6)), np.zeros((M, nb, 6)), np.zeros((M, m))
+        # rows start as the current coordinates: entries the write-back does not touch
+        # (AE coordinates of no joint row) keep their values
+        self.Q, self.Qt, self.Qtt = np.tile(q, (M, 1)), np.tile(qt, (M, 1)), np.tile(qtt, (M, 1))
+        self.AE = np.tile(ae, (M, 1))
+        self.size = 1                   # outputs in the next chunk (adapted to CHUNK_SECONDS)
+        self.rows = self.next = 0
+        self.tStart = sim.t
+        self.failure = None
+        self._ep = {}
+
+    def refill(self, nout):
+        """Integrate the next ``min(nout, size)`` outputs; returns (outputs computed,
+        flagged nodes).  On a kernel failure the outputs before it are kept, the
+        simulator holds the last accepted step and :attr:`failure` the status."""
+        sim, h, nsub = self.sim, self.h, self.nsub
+        n = max(1, min(int(nout), self.size))
+        t0 = sim.t
+        acc = n if self.doacc else 0
+        a1 = (sim.sd, sim.wk, sim.A, sim.b, sim.c, float(t0), h, n * nsub, sim.R, sim.r, sim.V, self.vmax, nsub,
+              self.Ro[:n], self.ro[:n], self.Vo[:n], self.Vdo[:acc], self.lamo[:acc])
+        st, done = _call(self._ep, "mk", kernel.mk_steps, a1)
+        rows = done // nsub
+        if st != kernel.STATUS_OK and self.doacc and rows > 0 and np.isnan(self.Vdo[rows - 1, 0, 0]):
+            rows -= 1                   # its accelerations failed: not an output
         nt = self.nodes
-        q, qt, qtt = self.bufs
-        jrow, jae, jsign, ae = self.jac
-        a3 = (sim.sd.gid, sim.R, sim.r, sim.V, sim.wk.Vd[0], sim.wk.lam, bool(accelerations), nt.code, nt.body,
-              nt.idx, nt.nq, nt.qref, nt.prev, q, qt, qtt, nt.flags, jrow, jae, jsign, ae)
-        wr = self.wr.get(accelerations)
-        if wr is None:
-            nflag = write_all(*a3)
-            self.wr[accelerations] = entry_point(write_all, a3) or write_all
-            return st, done, nflag
-        return st, done, wr(*a3)
+        q, qt, qtt, ae = self.bufs
+        jrow, jae, jsign = self.jac
+        a2 = (rows, sim.sd.gid, self.Ro, self.ro, self.Vo, self.Vdo, self.lamo, self.doacc, nt.code, nt.body,
+              nt.idx, nt.nq, nt.qref, nt.prev, self.Q, self.Qt, self.Qtt, nt.flags, jrow, jae, jsign, self.AE)
+        nflag = _call(self._ep, "write", write_rows, a2)
+        sim.t = t0 + done * h           # on a failure: the last accepted step
+        self.tStart, self.rows, self.next = t0, rows, 0
+        self.failure = None if st == kernel.STATUS_OK else st
+        return rows, nflag
+
+    def adapt(self, seconds, rows):
+        """The next chunk's size from the wall time of this one."""
+        if rows > 0 and self.maxRows > 1:
+            per = max(seconds / rows, 1e-9)
+            self.size = max(1, min(self.maxRows, int(CHUNK_SECONDS / per)))
+
+    def time_of_next(self):
+        return self.tStart + (self.next + 1) * self.nsub * self.h
+
+    def pop(self):
+        """Copy the next output row into the coordinate buffers."""
+        o = self.next
+        q, qt, qtt, ae = self.bufs
+        q[:] = self.Q[o]
+        qt[:] = self.Qt[o]
+        if self.doacc:
+            qtt[:] = self.Qtt[o]
+            if ae.size:
+                ae[:] = self.AE[o]
+        self.next = o + 1
 
 
 class NodeTable:
-    """All rigid nodes of a scene as flat arrays for :func:`~.nodes.write_all`."""
+    """All rigid nodes of a scene as flat arrays for :func:`~.nodes.write_rows`."""
 
     def __init__(self, kinds, kindBodies):
         rows = sum(len(k) for k in kinds)
@@ -121,12 +166,13 @@ class NodeTable:
             i += n
 
     def write(self, sim, Vdot, lam, doacc, q, qt, qtt, multipliers):
-        """Node coordinates (and with ``doacc`` accelerations and the joint multipliers
-        ``(rows, AE slots, signs, AE buffer)``); returns the number of nodes flagged (Rxyz
-        near its singularity)."""
+        """Node coordinates of the simulator's state (and with ``doacc`` accelerations and
+        the joint multipliers ``(rows, AE slots, signs, AE buffer)``); returns the number
+        of nodes flagged (Rxyz near its singularity)."""
         jrow, jae, jsign, ae = multipliers
-        return write_all(sim.sd.gid, sim.R, sim.r, sim.V, Vdot, lam, bool(doacc), self.code, self.body, self.idx,
-                         self.nq, self.qref, self.prev, q, qt, qtt, self.flags, jrow, jae, jsign, ae)
+        return write_rows(1, sim.sd.gid, sim.R[None], sim.r[None], sim.V[None], Vdot[None], lam[None], bool(doacc),
+                          self.code, self.body, self.idx, self.nq, self.qref, self.prev, q[None], qt[None], qtt[None],
+                          self.flags, jrow, jae, jsign, ae[None])
 
     def warn_flags(self):
         for i in np.nonzero(self.flags)[0]:

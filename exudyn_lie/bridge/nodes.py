@@ -248,8 +248,10 @@ def write_nodes(gid, R, r, V, Vdot, doacc, code, body, idx, nq, qref, prev, firs
             else:
                 for k in range(3):
                     acc[k] = Vdot[b, 3 + k]
-        flags[i] = write_row(code[i], Rb, om, omd, prev[i], first, p, pt, ptt)
-        nflag += flags[i]
+        f = write_row(code[i], Rb, om, omd, prev[i], first, p, pt, ptt)
+        if f:
+            flags[i] = 1                 # kept until the warning is given (warn_flags)
+            nflag += 1
         for k in range(3):
             q[idx[i, k]] = r[b, k] - qref[i, k]
             qt[idx[i, k]] = vel[k]
@@ -273,11 +275,25 @@ def write_multipliers(lam, jrow, jae, jsign, ae):
 @njit(cache=True)
 def write_all(gid, R, r, V, Vdot, lam, doacc, code, body, idx, nq, qref, prev, q, qt, qtt, flags, jrow, jae, jsign,
               ae):
-    """write_nodes + write_multipliers in one call: the single compiled entry of the
-    write-back (every path uses it, so it is compiled once)."""
+    """write_nodes + write_multipliers of one state."""
     if doacc:
         write_multipliers(lam, jrow, jae, jsign, ae)
     return write_nodes(gid, R, r, V, Vdot, doacc, code, body, idx, nq, qref, prev, False, q, qt, qtt, flags)
+
+
+@njit(cache=True)
+def write_rows(nrows, gid, Rs, rs, Vs, Vdots, lams, doacc, code, body, idx, nq, qref, prev, Q, Qt, Qtt, flags, jrow,
+               jae, jsign, AE):
+    """:func:`write_all` of the states ``Rs[o], rs[o], Vs[o]`` (accelerations ``Vdots[o]``,
+    multipliers ``lams[o]``) into rows ``o < nrows`` of ``Q, Qt, Qtt, AE``, in order (the
+    rotation parameters stay continuous from row to row).  The single compiled entry of
+    the write-back: every path uses it, one state being one row.  Returns the number of
+    flagged (node, row) pairs."""
+    nflag = 0
+    for o in range(nrows):
+        nflag += write_all(gid, Rs[o], rs[o], Vs[o], Vdots[o], lams[o], doacc, code, body, idx, nq, qref, prev,
+                           Q[o], Qt[o], Qtt[o], flags, jrow, jae, jsign, AE[o])
+    return nflag
 
 
 

@@ -28,7 +28,7 @@ import numpy as np
 from numba import njit
 
 from . import so3
-from ._taylor import horner, mv
+from ._taylor import mv
 
 
 @njit(cache=True)

@@ -868,25 +868,48 @@ def watch_rotation_entries(watchBody, watchEntry, watchMax, R):
 
 
 @njit(cache=True, _nrt=False)
-def mk_steps(sd, wk, A, b, c, t0, h, nsteps, R, r, V, vmax):
+def mk_steps(sd, wk, A, b, c, t0, h, nsteps, R, r, V, vmax, every, Ro, ro, Vo, Vdo, lamo):
     """Advance ``nsteps`` MK steps in place.  Returns (status, steps done); on a failure
     (R, r, V) hold the last accepted step (the rejected one is undone from wk.Rb...).
 
     ``nsteps = 0`` evaluates the equations of motion once at the current state (the
     first stage of a step): accelerations in ``wk.Vd[0]``, multipliers in ``wk.lam``.
     (One call site of the inlined right-hand side serves both uses: a second one would
-    double the compile time.)"""
+    double the compile time.)
+
+    Outputs: with ``every > 0`` the state after every ``every``-th step goes to row
+    ``o = (n + 1) / every - 1`` of ``Ro, ro, Vo``; if ``Vdo`` has rows, the accelerations
+    and multipliers at that state go to ``Vdo[o], lamo[o]``.  They are the first stage of
+    the following step (explicit RK: stage 1 is evaluated at the step's initial state),
+    so recording them costs one extra evaluation per call, after the last step.  A failure
+    in that evaluation leaves ``Vdo[o, 0, 0]`` NaN.  (A caller that needs several outputs
+    then enters the compiled code once instead of once per output.)"""
     s = b.shape[0]
     Qext = wk.Qext
-    for n in range(max(nsteps, 1)):
+    acc = Vdo.shape[0] > 0
+    pending = -1                         # output row whose accelerations are still due
+    n = 0
+    while True:
         t = t0 + n * h
+        evalOnly = n >= nsteps
+        if evalOnly and nsteps > 0 and pending < 0:
+            return STATUS_OK, nsteps
         for j in range(s):
             mk_stage_state(sd, wk, A, j, h, R, r, V)
             st = rhs(sd, wk, t + c[j] * h, wk.Rs, wk.rs, wk.Vs, Qext, wk.Vd[j])
             if st != STATUS_OK:
+                if pending >= 0:
+                    Vdo[pending, 0, 0] = np.nan
                 return st, n
-            if nsteps == 0:
-                return STATUS_OK, 0
+            if pending >= 0:
+                for i in range(Vdo.shape[1]):
+                    for k in range(6):
+                        Vdo[pending, i, k] = wk.Vd[0, i, k]
+                for k in range(lamo.shape[1]):
+                    lamo[pending, k] = wk.lam[k]
+                pending = -1
+            if evalOnly:
+                return STATUS_OK, nsteps
             mk_stage_k(sd, wk, j)
         copy_state(R, r, V, wk.Rb, wk.rb, wk.Vb)
         mk_finish(sd, wk, b, h, R, r, V)
@@ -902,7 +925,12 @@ def mk_steps(sd, wk, A, b, c, t0, h, nsteps, R, r, V, vmax):
         update_torsion_tracking(sd, wk, R, r, V)
         if wk.watchBody.shape[0] > 0:
             watch_rotation_entries(wk.watchBody, wk.watchEntry, wk.watchMax, R)
-    return STATUS_OK, nsteps
+        n += 1
+        if every > 0 and n % every == 0:
+            o = n // every - 1
+            copy_state(R, r, V, Ro[o], ro[o], Vo[o])
+            if acc:
+                pending = o
 
 
 # --------------------------------------------------------------------------- diagnostics

@@ -316,6 +316,16 @@ class Simulator:
         if st != kernel.STATUS_OK:
             self._raise_status(st, h)
 
+    def NoOutputs(self):
+        """The output arguments of ``kernel.mk_steps`` for a call that records nothing:
+        ``(0, Ro, ro, Vo, Vdo, lamo)`` with no rows (of the one compiled signature)."""
+        out = getattr(self, "_noOutputs", None)
+        if out is None:
+            nb, m = self.sd.nb, self.sd.nrows
+            out = self._noOutputs = (0, np.zeros((0, nb, 3, 3)), np.zeros((0, nb, 3)), np.zeros((0, nb, 6)),
+                                     np.zeros((0, nb, 6)), np.zeros((0, m)))
+        return out
+
     def _mk_steps(self, n, h, t=None, R=None, r=None, V=None):
         """``kernel.mk_steps`` through its resolved compiled entry point: a plain numba
         call re-derives the types of the two namedtuples every time (~10 us)."""
@@ -323,7 +333,7 @@ class Simulator:
             self._vmaxValue = self._vmax()
         args = (self.sd, self.wk, self.A, self.b, self.c, float(self.t if t is None else t), float(h), int(n),
                 self.R if R is None else R, self.r if r is None else r, self.V if V is None else V,
-                float(self._vmaxValue))
+                float(self._vmaxValue)) + self.NoOutputs()
         ep = getattr(self, "_mkEntry", None)
         if ep is None:
             out = kernel.mk_steps(*args)

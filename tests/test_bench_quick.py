@@ -143,3 +143,49 @@ def test_overhead_and_group_sections(tmp_path):
     from exudyn_lie.analysis.generated import read_block
     cmd, ok, body = read_block(readme.read_text(), "bench")
     assert ok and cmd.startswith("python -m exudyn_lie bench --quick") and "(6) bridge" in body
+
+
+def _comp(kind, solver, runs, group=None):
+    """A bench competitor with given (h, error, time) runs."""
+    c = bench.Competitor("m", kind, solver, group)
+    for k, (h, e, t) in enumerate(runs):
+        c.results[k] = dict(ok=True, h=h, time=t)
+        c.errors[k] = e
+    return c
+
+
+def test_not_reached_ratio_is_a_lower_bound_from_the_shortest_native_run():
+    # exudyn_lie reaches 1e-8 in 0.01 s; native A stops at 1e-3 after 1 s, native B at 1e-5
+    # after 10 s: the fastest native needs > 1 s (A needs > 1 s, B > 10 s), so the ratio is > 100
+    exl = _comp("exl", "RK4", [(1e-2, 1e-3, 1e-4), (1e-3, 1e-9, 1e-2)], "SE3")
+    na = _comp("native", "GeneralizedAlpha", [(1e-3, 1e-2, 0.1), (1e-4, 1e-3, 1.0)])
+    nb = _comp("native", "TrapezoidalIndex2", [(1e-4, 1e-4, 1.0), (1e-5, 1e-5, 10.0)])
+    summ = bench.summarize_wp(None, {"m": dict(comps=[exl, na, nb])})["m"]
+    row = next(r for r in summ if r["eps"] == 1e-8)
+    assert row["ratioBound"] == ">"
+    t_exl = WP.time_to_accuracy(exl.points(), 1e-8)[0]
+    assert row["ratio"] == pytest.approx(1.0 / t_exl)
+
+
+def test_native_reference_check_detects_a_floor():
+    # errors falling at order 2: Exudyn converges to the reference
+    conv = WP.native_reference_check({"GeneralizedAlpha": [(1e-3, 4e-4), (5e-4, 1e-4), (2.5e-4, 2.5e-5)]})
+    assert conv["converges"] and conv["order"] == pytest.approx(2.0) and conv["err"] == 2.5e-5
+    # a model difference of 1e-4 puts a floor under the native errors: detected
+    floor = WP.native_reference_check({"GeneralizedAlpha": [(1e-3, 5e-4), (5e-4, 2.0e-4), (2.5e-4, 1.3e-4)]})
+    assert not floor["converges"]
+    # the solver with the smallest error is the one reported
+    two = WP.native_reference_check({"GeneralizedAlpha": [(1e-3, 4e-4), (5e-4, 1e-4)],
+                                     "RK44": [(1e-3, 1e-8), (5e-4, 6.25e-10)]})
+    assert two["solver"] == "RK44" and two["nominal"] == 4
+    assert WP.native_reference_check({"GeneralizedAlpha": [(1e-3, 4e-4)]}) is None
+
+
+def test_heavy_top_reference_agrees_with_exudyn(quick_run):
+    """The reference (exudyn_lie RK6) is checked by Exudyn's own solvers: their errors
+    against it still fall at their order, so the package and Exudyn integrate the same model."""
+    out, _ = quick_run
+    data = json.loads((out / "bench_results.json").read_text())
+    rn = data["models"]["heavytop"]["refNative"]
+    assert rn["converges"], rn
+    assert rn["order"] > 1.5 and rn["err"] < 1e-4, rn

@@ -108,6 +108,34 @@ def observed_order(points_h):
     return float(np.polyfit(x, y, 1)[0])
 
 
+NATIVE_ORDER = {"GeneralizedAlpha": 2, "GeneralizedAlpha-mN": 2, "TrapezoidalIndex2": 2, "RK44": 4, "RK67": 6}
+
+
+def native_reference_check(runs):
+    """Independent check of the reference (an exudyn_lie run) by Exudyn's own solvers.
+
+    ``runs``: ``{solver: [(h, err), ...]}``, the fixed-step native runs of one model with
+    their final errors against the reference.  If the reference (or the model the
+    package reads) differed from Exudyn's solution by ``delta``, the native errors would
+    level off at ``delta`` and the observed order between the two finest runs would
+    fall towards 0.  Returns, for the native solver with the smallest error, a dict
+    ``solver, h, err, order`` (over its two finest runs) and ``nominal`` (its order),
+    with ``converges`` = the errors still fall at >= half the nominal order; ``None``
+    when no native solver has two finished runs."""
+    best = None
+    for solver, pts in runs.items():
+        pts = sorted((h, e) for h, e in pts if np.isfinite(e) and e > 0 and np.isfinite(h) and h > 0)
+        if len(pts) < 2 or solver not in NATIVE_ORDER:
+            continue
+        (h1, e1), (h2, e2) = pts[0], pts[1]          # finest, next finest
+        order = math.log(e2 / e1) / math.log(h2 / h1) if h2 > h1 else np.nan
+        cand = dict(solver=solver, h=h1, err=e1, order=order, nominal=NATIVE_ORDER[solver],
+                    converges=bool(np.isfinite(order) and order >= 0.5 * NATIVE_ORDER[solver]))
+        if best is None or e1 < best["err"]:
+            best = cand
+    return best
+
+
 def fit_exponent(N, t):
     """Exponent p of ``t ~ N^p`` (least squares in log-log)."""
     N = np.asarray(N, float)

@@ -1,9 +1,11 @@
 """``python -m exudyn_lie paper``: reproduce the examples of Müller & Terze.
 
 Runs every model of :mod:`models` (the paper's mechanisms as Exudyn models) with
-MK-RK4 on SE(3) and on SO(3)xR3 (through :class:`exudyn_lie.bridge.LieGroupSolver`)
-and with Exudyn's own solvers, at dt = 1e-2, 1e-3, 1e-4 s over the paper's time spans,
-then writes to ``--out`` (default ``./paper_results``):
+MK-RK4 on SE(3) and on SO(3)xR3 (through :class:`exudyn_lie.bridge.LieGroupSolver`,
+compiled ``Run`` path) and with Exudyn's own solvers, at dt = 1e-2, 1e-3, 1e-4 s over
+the paper's time spans; at dt >= 1e-3 the MK-RK4 runs are repeated through the drop-in
+``exl.SolveDynamic`` (Exudyn's time loop, every step recorded by sensors) as a
+cross-check.  Then it writes to ``--out`` (default ``./paper_results``):
 
 * ``REPRODUCTION.md`` - set-up, a verdict per claim of the paper, the maximum violation
   per model / joint / group / step (and the same for Exudyn's solvers), energy drift,
@@ -34,6 +36,8 @@ DTS_FULL = (1e-2, 1e-3, 1e-4)
 DTS_QUICK = (1e-2, 1e-3)
 GROUPS = ("SE3", "SO3xR3")
 IMPLICIT = ("GeneralizedAlpha", "TrapezoidalIndex2")
+CROSSCHECK_MIN_DT = 1e-3        # the SolveDynamic cross-check runs at these step sizes and above
+VIA_SOLVE_DYNAMIC = " SolveDynamic"     # result key suffix: ('SE3 SolveDynamic', dt)
 README_BLOCK = "paper"
 
 
@@ -67,7 +71,7 @@ def _task(args):
     name, kind, dts, out = args
     import exudyn as exu
     import models
-    from exudyn_lie.analysis.runs import LieRunner, run_native
+    from exudyn_lie.analysis.runs import LieRunner, run_native, run_solve_dynamic
     tic = time.perf_counter()
     runs = {}
     with warnings.catch_warnings():
@@ -79,6 +83,10 @@ def _task(args):
                 lr = LieRunner(info, g)
                 for dt in dts:
                     runs[(g, dt)] = lr.run(dt, keep_states=keep)
+            for g in GROUPS:                     # the same runs through exl.SolveDynamic (cross-check)
+                for dt in dts:
+                    if dt >= CROSSCHECK_MIN_DT * (1 - 1e-9):
+                        runs[(g + VIA_SOLVE_DYNAMIC, dt)] = run_solve_dynamic(info, g, dt)
             solvers, natives = GROUPS, ()
         else:
             mbs, info = models.build(name)

@@ -127,9 +127,9 @@ def build(mbs=None, nodeType=exu.NodeType.RotationRotationVector, endTime=1.0, l
         "paper).",
     ]
     info.claims += [
-        Claim("joint1", "position", "exact_SE3", "corollary 1 / lemma 1",
+        Claim("joint1", "position", "exact_SE3", "corollary 1 (joint to the ground: lemma 1 with G1 = {I})",
               "Body 1 rotates about a fixed axis (subgroup): SE(3) keeps joint 1 exactly."),
-        Claim("joint4", "position", "exact_SE3", "corollary 1 / lemma 1",
+        Claim("joint4", "position", "exact_SE3", "corollary 1 (joint to the ground: lemma 1 with G1 = {I})",
               "Body 3 rotates about a fixed axis (subgroup): SE(3) keeps joint 4 exactly."),
         Claim("joint2", "position", "same_order", "corollary 3", "Coupler joint: same order for both groups."),
         Claim("joint3", "position", "same_order", "corollary 3", "Coupler joint: same order for both groups."),

@@ -10,10 +10,13 @@ omega_10 = omega_20 = (0, 0, 20 pi) rad/s, v_10 = r_11 x omega_10, v_20 = r_21 x
 + (0, 0, 1) m/s (prismatic joint speed 1 m/s), r_1i the position of the joint-1 axis
 relative to the COM of body i.
 
-Claim (lemma 1): body 1 rotates about a fixed axis (SO(2)), body 2 rotates about the
-same axis and slides along it (SO(2) x R, a cylinder subgroup); the joint actions
-commute, so the SE(3) update satisfies both joints exactly for any step size, while
-SO(3)xR3 (only submanifolds of its subgroups) depends on the step size.
+Claim (the paper: "an example where lemma 1 applies"): body 1 rotates about a fixed
+axis (SO(2)), body 2 rotates about the same axis and slides along it (SO(2) x R, a
+cylinder subgroup); the joint actions commute, so the SE(3) update satisfies both joints
+exactly for any step size, while SO(3)xR3 (only submanifolds of its subgroups) depends
+on the step size.  Joint 1, a lower pair to the ground, is body 1's motion constraint
+(corollary 1; lemma 1 with G1 = {I}); joint 2, between the two moving bodies, is
+lemma 1 proper.
 
 Gaps filled (see ``info.choices``):
 
@@ -118,10 +121,18 @@ def build(mbs=None, nodeType=exu.NodeType.RotationRotationVector, endTime=2.0, j
         "v_10 = r_11 x omega = (0, 2 pi, 0), v_20 = r_21 x omega + (0, 0, 1) = (0, 4 pi, 1) m/s.",
         "Time span 2 s (not given in the paper).",
     ]
-    for j in ("joint1", "joint2"):
-        info.claims.append(Claim(j, "position", "exact_SE3", "lemma 1",
-                                 f"{j}: both bodies move in SE(3) subgroups whose product is a group: SE(3) "
-                                 f"satisfies the joint exactly, SO(3)xR3 depends on the step size."))
-        info.claims.append(Claim(j, "rotation", "SE3_exact", "lemma 1",
-                                 f"{j} orientation rows: exact with SE(3) (lemma 1); nothing claimed for SO(3)xR3."))
+    ground = "corollary 1 (joint to the ground: lemma 1 with G1 = {I})"
+    info.claims += [
+        Claim("joint1", "position", "exact_SE3", ground,
+              "joint1: body 1 rotates about the fixed revolute axis (SO(2), a subgroup of SE(3)): SE(3) satisfies "
+              "the joint exactly, SO(3)xR3 depends on the step size."),
+        Claim("joint1", "rotation", "SE3_exact", ground,
+              "joint1 orientation rows: exact with SE(3); nothing claimed for SO(3)xR3."),
+        Claim("joint2", "position", "exact_SE3", "lemma 1",
+              "joint2: both bodies move in SE(3) subgroups (SO(2), SO(2) x R) whose relative motion is a subgroup "
+              "(the prismatic joint commutes with the revolute): SE(3) satisfies the joint exactly, SO(3)xR3 "
+              "depends on the step size."),
+        Claim("joint2", "rotation", "SE3_exact", "lemma 1",
+              "joint2 orientation rows: exact with SE(3) (lemma 1); nothing claimed for SO(3)xR3."),
+    ]
     return mbs, info

@@ -40,12 +40,20 @@ def envelope(t, y, n=MAXPOINTS):
 
 
 def _curve(ax, rd, y, label):
-    if y is None or len(y) == 0:
+    """One curve; a failed run is marked in the legend (and its last value with an x),
+    also when it has no data to draw."""
+    c = COLORS.get(rd.stepSize)
+    if not rd.ok:
+        t_end = float(rd.times[-1]) if len(rd.times) else 0.0
+        label += " (failed at t=0, no data)" if t_end <= 0.0 else f" (failed at t={t_end:.3g} s)"
+    if y is None or len(y) == 0 or len(rd.times) <= 1:
+        if not rd.ok:
+            ax.semilogy([], [], color=c, lw=1.0, ls="--", label=label)
         return
     t, yy = envelope(rd.times, y)
-    c = COLORS.get(rd.stepSize)
-    ax.semilogy(t, np.maximum(yy, FLOOR), color=c, lw=1.0,
-                label=label + ("" if rd.ok else f" (failed at t={rd.times[-1]:.3g} s)"))
+    ax.semilogy(t, np.maximum(yy, FLOOR), color=c, lw=1.0, label=label)
+    if not rd.ok:
+        ax.semilogy([t[-1]], [max(float(yy[-1]), FLOOR) if np.isfinite(yy[-1]) else FLOOR], "x", color=c, ms=6)
 
 
 def _grid(plt, nrows, ncols, title):

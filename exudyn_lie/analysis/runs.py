@@ -4,7 +4,12 @@ native solvers, and reduce every run to the same measures.
 * :func:`run_lie` - MK-RK4 on ``SE3`` or ``SO3xR3`` via
   :class:`exudyn_lie.bridge.LieGroupSolver` (the Exudyn model is read by
   ``SceneFromExudyn``; the compiled ``Simulator.Run`` path, compiled once per model and
-  group, many step sizes);
+  group, many step sizes) - the fast path of ``python -m exudyn_lie paper``;
+* :func:`run_solve_dynamic` - the same MK-RK4 run through the drop-in
+  ``exudyn_lie.SolveDynamic(mbs, simulationSettings, method='RK4', liegroup=...)``, i.e.
+  inside Exudyn's own time loop; every step is recorded by Exudyn sensors (node states
+  and the joint markers) and the measures are computed from what Exudyn sees in ``mbs``,
+  not from the package's arrays (the paper tests assert the claims on these runs);
 * :func:`run_native` - ``exudyn.SolveDynamic`` with GeneralizedAlpha /
   TrapezoidalIndex2 (constrained models) or RK44 / DOPRI5 (free bodies), states read
   from node sensors (:func:`models.run_native`).
@@ -12,9 +17,10 @@ native solvers, and reduce every run to the same measures.
 Both give a :class:`RunData`: the body states at the output times and, computed from
 them with :mod:`.geometry` and :mod:`.energy` (the same formulas for every solver),
 the violation of every joint, the COM drift and orientation error against the exact
-solution (free bodies), and the total energy.  Runs of exudyn_lie also keep the
-kernel's own diagnostics (``kernelPosition`` / ``kernelRotation`` / ``kernelEnergy``)
-so that they can be cross-checked.
+solution (free bodies), and the total energy.  Runs of the fast path also keep the
+kernel's own diagnostics (``kernelPosition`` / ``kernelRotation`` / ``kernelEnergy``),
+runs through ``SolveDynamic`` the joint violations computed from Exudyn's own marker
+outputs (``markerPosition`` / ``markerRotation``), so that both can be cross-checked.
 """
 from __future__ import annotations
 
@@ -55,7 +61,10 @@ class RunData:
     kernelPosition: Dict[str, np.ndarray] = field(default_factory=dict)
     kernelRotation: Dict[str, np.ndarray] = field(default_factory=dict)
     kernelEnergy: Optional[np.ndarray] = None
+    markerPosition: Dict[str, np.ndarray] = field(default_factory=dict)   # from Exudyn's marker sensors
+    markerRotation: Dict[str, np.ndarray] = field(default_factory=dict)
     native: bool = False
+    via: str = ""                   # 'Run' (fast path), 'SolveDynamic' or 'native'
 
     @property
     def label(self):
@@ -135,9 +144,9 @@ class LieRunner:
                 res, ok, msg = None, False, f"{type(e).__name__}: {e}"
         wall = time.perf_counter() - tic
         if res is None:
-            return RunData(info.name, self.group, stepSize, False, msg, wall, np.zeros(0))
+            return RunData(info.name, self.group, stepSize, False, msg, wall, np.zeros(0), via="Run")
         bm = self.bodyMap
-        rd = RunData(info.name, self.group, stepSize, ok, msg, float(res.cpuTime), res.times.copy())
+        rd = RunData(info.name, self.group, stepSize, ok, msg, float(res.cpuTime), res.times.copy(), via="Run")
         measure(info, rd, res.R[:, bm], res.r[:, bm], res.omega[:, bm], res.vel[:, bm], keep_states)
         for name, k in self.jointMap.items():
             rd.kernelPosition[name] = res.jointPositionViolation[:, k].copy()
@@ -151,11 +160,149 @@ def run_lie(info, group, stepSize, endTime=None, outputPeriod=1e-3, keep_states=
     return LieRunner(info, group).run(stepSize, endTime, outputPeriod, keep_states)
 
 
+# --------------------------------------------------------------------------- through SolveDynamic
+@dataclass
+class _Sensors:
+    nodes: list                 # per body: (Position, RotationMatrix, AngularVelocityLocal, Velocity)
+    markers: dict               # joint name -> ((Position, RotationMatrix or None) side A, ... side B)
+
+
+def exudyn_sensors(info):
+    """Exudyn sensors (stored internally, no files) on every body node - position,
+    rotation matrix, local angular velocity, velocity - and on both markers of every
+    joint - position, and the rotation matrix where the joint has rotation rows.  Added
+    to ``info.mbs`` once (kept on ``info``); the caller assembles."""
+    import exudyn as exu
+    old = getattr(info, "_exudynSensors", None)
+    if old is not None:
+        return old
+    mbs = info.mbs
+    ovt = exu.OutputVariableType
+
+    def add(kind, **kw):
+        return mbs.AddSensor(kind(storeInternal=True, writeToFile=False, **kw))
+
+    nodes = [tuple(add(exu.itemInterface.SensorNode, nodeNumber=b.nodeIndex, outputVariableType=v)
+                   for v in (ovt.Position, ovt.RotationMatrix, ovt.AngularVelocityLocal, ovt.Velocity))
+             for b in info.bodies]
+    markers = {}
+    for j in info.joints:
+        rot = any(j.lockedAxes[3:])
+        markers[j.name] = tuple(
+            (add(exu.itemInterface.SensorMarker, markerNumber=m, outputVariableType=ovt.Position),
+             add(exu.itemInterface.SensorMarker, markerNumber=m, outputVariableType=ovt.RotationMatrix)
+             if rot else None) for m in j.markers)
+    info._exudynSensors = _Sensors(nodes, markers)
+    return info._exudynSensors
+
+
+def _rotation_marker(info, j, side):
+    """The joint's extra frame rotation on one side (``rotationMarker0/1`` of joints that
+    have it, else I): the joint frame is Exudyn's marker rotation output times it."""
+    o = info.mbs.GetObject(j.objectIndex)
+    key = f"rotationMarker{side}"
+    return np.asarray(o[key], float) if key in o else np.eye(3)
+
+
+def marker_violations(info, j, data):
+    """(position, rotation) violation of joint ``j`` from Exudyn's marker outputs alone:
+    ``data`` = ((pA (nt,3), RA (nt,3,3) or None), (pB, RB)) - marker positions and
+    rotation matrices (which include the marker's local frame) as Exudyn reports them.
+    The rows are those of :func:`.geometry.joint_violations` with each side's frame
+    taken as (marker position, marker rotation x rotationMarker)."""
+    from dataclasses import replace
+    (pA, RA), (pB, RB) = data
+    nt = len(pA)
+    eye = np.broadcast_to(np.eye(3), (nt, 3, 3))
+    R = np.stack([eye if RA is None else RA, eye if RB is None else RB], axis=1)
+    r = np.stack([pA, pB], axis=1)
+    pseudo = replace(j, bodyA=0, bodyB=1, posA=np.zeros(3), posB=np.zeros(3),
+                     rotA=_rotation_marker(info, j, 0), rotB=_rotation_marker(info, j, 1))
+    return joint_violations(pseudo, R, r)
+
+
+def solve_dynamic_settings(stepSize, endTime):
+    """Exudyn SimulationSettings: ``endTime / stepSize`` steps, sensors written at every
+    step (stored internally), no solution file, quiet."""
+    import exudyn as exu
+    s = exu.SimulationSettings()
+    ti = s.timeIntegration
+    ti.endTime = float(endTime)
+    ti.numberOfSteps = int(round(endTime / stepSize))
+    ti.verboseMode = 0
+    s.solution.file.write = False
+    s.solution.sensors.writePeriod = float(stepSize)
+    s.show.statistics = False
+    s.show.computationTime = False
+    return s
+
+
+def run_solve_dynamic(info, group, stepSize, endTime=None, keep_states=False, method="RK4"):
+    """MK-RK4 on ``group`` through ``exudyn_lie.SolveDynamic(mbs, simulationSettings,
+    method='RK4', liegroup=group)`` - Exudyn's own time loop with the package as its
+    integrator - recording EVERY step with Exudyn sensors (:func:`exudyn_sensors`).
+
+    The measures are computed from the sensor data, i.e. from what Exudyn sees in
+    ``mbs``: body states (node sensors) -> :func:`measure` (joint violations, COM drift,
+    orientation error, energy, the same formulas as for every other run), and the joint
+    violations once more from the joint markers' world positions / rotations
+    (``markerPosition`` / ``markerRotation``, :func:`marker_violations`).  Runs start
+    from the model's initial values in ``mbs`` (a model can be run several times)."""
+    import contextlib
+    import io
+
+    import exudyn_lie as exl
+    endTime = info.endTime if endTime is None else float(endTime)
+    sens = exudyn_sensors(info)
+    mbs = info.mbs
+    mbs.Assemble()
+    s = solve_dynamic_settings(stepSize, endTime)
+    nsteps = s.timeIntegration.numberOfSteps
+    ok, msg = True, ""
+    tic = time.perf_counter()
+    with warnings.catch_warnings(), contextlib.redirect_stdout(io.StringIO()):
+        warnings.simplefilter("ignore", RuntimeWarning)
+        try:
+            exl.SolveDynamic(mbs, s, method=method, liegroup=group, showProgress=False)
+        except Exception as e:       # SimulationError (blow-up), ConstraintError, Exudyn's SolverError
+            ok, msg = False, f"{type(e).__name__}: {str(e).strip().splitlines()[0] if str(e).strip() else ''}"
+    wall = time.perf_counter() - tic
+    lgs = mbs.sys.get("lieGroupSolver") if hasattr(mbs, "sys") else None
+    cpu = float(lgs.timing.get("integration", wall)) if lgs is not None and ok else wall
+    get = mbs.GetSensorStoredData
+    data = [[np.asarray(get(x)) for x in s4] for s4 in sens.nodes]
+    nb = len(info.bodies)
+    nt = min(len(d) for s4 in data for d in s4) if data else 0
+    times = data[0][0][:nt, 0].copy() if nt else np.zeros(0)
+    if ok and (nt != nsteps + 1 or np.max(np.abs(times - stepSize * np.arange(nt))) > 1e-9 * endTime):
+        ok, msg = False, (f"the sensors did not record every step: {nt} rows for {nsteps} steps "
+                          f"(t = {times[0] if nt else float('nan'):g} .. {times[-1] if nt else float('nan'):g})")
+    rd = RunData(info.name, group, stepSize, ok, msg, cpu, times, via="SolveDynamic")
+    R = np.zeros((nt, nb, 3, 3))
+    r = np.zeros((nt, nb, 3))
+    om = np.zeros((nt, nb, 3))
+    ve = np.zeros((nt, nb, 3))
+    for i, (dp, dR, dw, dv) in enumerate(data):
+        r[:, i] = dp[:nt, 1:4]
+        R[:, i] = dR[:nt, 1:10].reshape(nt, 3, 3)
+        om[:, i] = dw[:nt, 1:4]
+        ve[:, i] = dv[:nt, 1:4]
+    measure(info, rd, R, r, om, ve, keep_states)
+    for j in info.joints:
+        sides = []
+        for sP, sR in sens.markers[j.name]:
+            p = np.asarray(get(sP))[:nt, 1:4]
+            Rm = None if sR is None else np.asarray(get(sR))[:nt, 1:10].reshape(nt, 3, 3)
+            sides.append((p, Rm))
+        rd.markerPosition[j.name], rd.markerRotation[j.name] = marker_violations(info, j, sides)
+    return rd
+
+
 # --------------------------------------------------------------------------- native
 def run_native(info, solver, stepSize, endTime=None, outputPeriod=1e-3, keep_states=False):
     """Exudyn's own solver on the model (see :func:`models.run_native`)."""
     from models import run_native as _run
     period = max(stepSize, outputPeriod)
     res = _run(info, solver, stepSize, endTime=endTime, outputPeriod=period)
-    rd = RunData(info.name, solver, stepSize, res.ok, res.message, res.cpuTime, res.times, native=True)
+    rd = RunData(info.name, solver, stepSize, res.ok, res.message, res.cpuTime, res.times, native=True, via="native")
     return measure(info, rd, res.R, res.r, res.omega, res.vel, keep_states)

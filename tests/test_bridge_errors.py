@@ -4,8 +4,9 @@ import numpy as np
 import pytest
 
 import exudyn as exu
-from exudyn.utilities import (LoadCoordinate, MarkerBodyPosition, MarkerNodeCoordinate, ObjectJointSpherical,
-                              RotationMatrixX, SensorBody)
+from exudyn.utilities import (LoadCoordinate, LoadForceVector, LoadTorqueVector, MarkerBodyPosition,
+                              MarkerNodeCoordinate, MarkerNodePosition, ObjectJointSpherical, RotationMatrixX,
+                              SensorBody)
 
 import exudyn_lie as exl
 from exudyn_lie.bridge import BridgeError, SceneFromExudyn
@@ -179,3 +180,148 @@ def test_unassembled_mbs():
         SceneFromExudyn(mbs)
     with pytest.warns(RuntimeWarning, match="calling mbs.Assemble"):
         assert exl.SolveDynamic(mbs, quiet_settings(0.01, 10))
+
+
+# ---------------------------------------------------------------------------- loads needing an orientation
+def _position_marker_load(loadType, bodyFixed, marker):
+    """Unassembled model with a load on a position-only marker of the body."""
+    def extra(mbs, g, b):
+        if marker == "node":
+            m = mbs.AddMarker(MarkerNodePosition(nodeNumber=mbs.GetObject(b)["nodeNumber"]))
+        else:
+            m = mbs.AddMarker(MarkerBodyPosition(bodyNumber=b, localPosition=[0.1, 0.2, 0]))
+        mbs.AddLoad(loadType(markerNumber=m, loadVector=[1, 2, 3], bodyFixed=bodyFixed))
+    mbs = new_mbs()
+    g = mbs.CreateGround()
+    b = add_body(mbs, "RotVecLG", [1, 0, 0], RotationMatrixX(0.3), gravity=[0, 0, -9.81])
+    extra(mbs, g, b)
+    return mbs
+
+
+@pytest.mark.parametrize("marker", ["body", "node"])
+@pytest.mark.parametrize("loadType,bodyFixed", [(LoadForceVector, True), (LoadTorqueVector, False),
+                                                (LoadTorqueVector, True)])
+def test_loads_needing_an_orientation_on_position_markers_are_refused_like_exudyn(loadType, bodyFixed, marker):
+    """Exudyn's Assemble refuses a torque, or a force with bodyFixed=True, on a marker
+    without orientation; the bridge refuses the same models (before assembling them)."""
+    mbs = _position_marker_load(loadType, bodyFixed, marker)
+    with pytest.raises(Exception, match=r"(?i)orientation"):
+        mbs.Assemble()
+    mbs = _position_marker_load(loadType, bodyFixed, marker)
+    with pytest.raises(BridgeError, match=rf"load 1 .*Load{loadType.__name__[4:]}: "
+                                          rf"{'a torque' if loadType is LoadTorqueVector else 'bodyFixed=True'} "
+                                          rf"needs a marker with an orientation.*Exudyn refuses"):
+        exl.SolveDynamic(mbs, quiet_settings(0.01, 10))
+    assert not mbs.systemIsConsistent and not mbs.sys
+
+
+def test_body_fixed_force_on_a_position_marker_set_after_assemble():
+    """bodyFixed set after Assemble: Exudyn's solver fails on it; the bridge refuses it
+    (no guessed frame), mbs unchanged."""
+    mbs = _position_marker_load(LoadForceVector, False, "body")
+    mbs.Assemble()
+    mbs.SetLoadParameter(1, "bodyFixed", True)
+    assert mbs.systemIsConsistent
+    expect_error(mbs, BridgeError, r"load 1 .*bodyFixed=True needs a marker with an orientation")
+    with pytest.raises(Exception):
+        exu.SolveDynamic(mbs, quiet_settings(0.01, 10))
+
+
+# ---------------------------------------------------------------------------- mbs untouched
+def _unassembled(extra=None, omega=(1.0, 2.0, 0.5)):
+    mbs = new_mbs()
+    g = mbs.CreateGround()
+    b = add_body(mbs, "RotVecLG", [1, 0, 0], RotationMatrixX(0.3), omega=omega, gravity=[0, 0, -9.81])
+    mbs.CreateSpringDamper(itemNumbers=[g, b], localPosition0=[1, 1, 0], stiffness=100)
+    mbs.AddSensor(SensorBody(bodyNumber=b, storeInternal=True, outputVariableType=O.Position))
+    if extra is not None:
+        extra(mbs, g, b)
+    return mbs
+
+
+@pytest.mark.parametrize("case", ["unsupported item", "partial spherical", "joint violated", "velocity violated",
+                                  "non-finite", "method", "liegroup", "settings", "substeps"])
+def test_autoassemble_validates_before_assembling(case):
+    """With autoAssemble and an mbs that is not assembled, bad input raises before
+    mbs.Assemble() runs: mbs stays unassembled and mbs.sys empty."""
+    kw, ss = {}, quiet_settings(0.01, 10)
+    extra, omega = None, (1.0, 2.0, 0.5)
+    if case == "unsupported item":
+        extra, err, match = (lambda mbs, g, b: mbs.CreateMassPoint(referencePosition=[2, 0, 0], mass=1)), \
+            BridgeError, r"ObjectMassPoint is not supported"
+    elif case == "partial spherical":
+        def extra(mbs, g, b):
+            b2 = add_body(mbs, "EP", [2, 0, 0], np.eye(3))
+            mbs.AddObject(ObjectJointSpherical(markerNumbers=[
+                mbs.AddMarker(MarkerBodyPosition(bodyNumber=b, localPosition=[0.5, 0, 0])),
+                mbs.AddMarker(MarkerBodyPosition(bodyNumber=b2, localPosition=[-0.5, 0, 0]))],
+                constrainedAxes=[1, 0, 1]))
+        err, match = BridgeError, r"constrainedAxes=\[1, 0, 1\] between two bodies is not supported"
+    elif case == "joint violated":
+        extra, err, match = (lambda mbs, g, b: mbs.AddObject(ObjectJointSpherical(markerNumbers=[
+            mbs.AddMarker(MarkerBodyPosition(bodyNumber=g, localPosition=[1.5, 0, 0])),
+            mbs.AddMarker(MarkerBodyPosition(bodyNumber=b, localPosition=[0.2, 0, 0]))]))), \
+            ConstraintError, r"initial configuration violates"
+    elif case == "velocity violated":
+        extra, err, match = (lambda mbs, g, b: mbs.CreateSphericalJoint(itemNumbers=[g, b], position=[1.2, 0, 0])), \
+            ConstraintError, r"initial velocities violate"
+    elif case == "non-finite":
+        omega, err, match = (1.0, np.nan, 0.5), BridgeError, r"node 0 .*initial velocities are not finite"
+    elif case == "method":
+        kw, err, match = dict(method="RK5"), BridgeError, r"unknown method 'RK5'"
+    elif case == "liegroup":
+        kw, err, match = dict(liegroup={2: "SE3"}), BridgeError, r"object 2 is not an ObjectRigidBody"
+    elif case == "settings":
+        ss, err, match = quiet_settings(0.0, 10), BridgeError, r"endTime > startTime"
+    else:
+        kw, err, match = dict(substeps=3), BridgeError, r"substeps=3 must be a positive divisor"
+    mbs = _unassembled(extra, omega)
+    with pytest.raises(err, match=match):
+        exl.SolveDynamic(mbs, ss, **kw)
+    assert not mbs.systemIsConsistent and not mbs.sys
+    assert mbs.systemData.GetODE2Coordinates().size == 0                # never assembled
+
+
+def test_autoassemble_reads_what_assemble_sets():
+    """The check before assembling reads the model as Assemble() will set it: the solve
+    after it equals a solve of the same model assembled by the user."""
+    from exudyn_lie.bridge import SceneFromExudyn
+
+    def extra(mbs, g, b):
+        b2 = add_body(mbs, "EP", [2, 0.1, 0], RotationMatrixX(0.2), omega=(0.3, 0.1, -0.2), com=(0, 0.01, 0))
+        add_body(mbs, "Rxyz", [0, 2, 0.1], RotationMatrixX(-0.4), omega=(0.1, -0.3, 0.2))
+        mbs.CreateSpringDamper(itemNumbers=[b, b2], stiffness=30, damping=0.1)
+    mbs = _unassembled(extra)
+    items = SceneFromExudyn(mbs, "items")
+    with pytest.warns(RuntimeWarning, match="calling mbs.Assemble"):
+        assert exl.SolveDynamic(mbs, quiet_settings(0.05, 50))
+    mbs2 = _unassembled(extra)
+    mbs2.Assemble()
+    assembled = SceneFromExudyn(mbs2, "initial")
+    for a, b in zip(items.bodies, assembled.bodies):
+        for key in ("R0", "r0", "omega0", "vel0", "com", "inertia"):
+            np.testing.assert_allclose(getattr(a, key), getattr(b, key), rtol=0, atol=1e-15)
+    exl.SolveDynamic(mbs2, quiet_settings(0.05, 50))
+    np.testing.assert_array_equal(mbs.systemData.GetODE2Coordinates(), mbs2.systemData.GetODE2Coordinates())
+
+
+def test_store_solver_keeps_mbs_sys_when_exudyn_cannot_initialize(tmp_path):
+    """InitializeSolver fails (a solution file that cannot be opened): mbs.sys keeps what
+    it held before (nothing, or the previous run's solver and settings)."""
+    bad = quiet_settings(0.01, 10)
+    bad.solution.file.write = True
+    bad.solution.file.name = str(tmp_path / "afile" / "solution.txt")
+    (tmp_path / "afile").write_text("a file, not a directory")
+    mbs = model()
+    snap = snapshot(mbs)
+    with pytest.raises(Exception, match="solution file"):
+        exl.SolveDynamic(mbs, bad)
+    assert not mbs.sys
+    assert_unchanged(mbs, snap)
+    ok = quiet_settings(0.01, 10)
+    assert exl.SolveDynamic(mbs, ok)
+    before = {k: mbs.sys[k] for k in ("dynamicSolver", "simulationSettings", "lieGroupSolver")}
+    assert before["simulationSettings"] is ok
+    with pytest.raises(Exception, match="solution file"):
+        exl.SolveDynamic(mbs, bad)
+    assert sorted(mbs.sys) == sorted(before) and all(mbs.sys[k] is v for k, v in before.items())

@@ -10,11 +10,12 @@ import numpy as np
 import pytest
 
 from exudyn.utilities import (LoadForceVector, LoadMassProportional, LoadTorqueVector, MarkerBodyMass,
-                              MarkerBodyPosition, MarkerNodePosition, NodePointGround, ObjectJointGeneric,
+                              MarkerBodyPosition, MarkerNodePosition, NodePointGround,
+                              ObjectConnectorCartesianSpringDamper, ObjectConnectorSpringDamper, ObjectJointGeneric,
                               ObjectJointPrismaticX, ObjectJointRevoluteZ, ObjectJointSpherical, RotationMatrixX,
                               RotationMatrixY, RotationMatrixZ)
 
-from test_bridge_common import (NODE_TYPES, add_body, compare, new_mbs, position_marker, random_state,
+from test_bridge_common import (NODE_TYPES, add_body, compare, new_mbs, oracle, package, position_marker, random_state,
                                 rigid_marker)
 
 TOL = 1e-11
@@ -94,6 +95,23 @@ def _point_ground(mbs, g, b0, b1):
     mbs.AddObject(ObjectJointSpherical(markerNumbers=[mg, mb]))
 
 
+def _node_position_markers(mbs, g, b0, b1):
+    """MarkerNodePosition on the rigid-body nodes (the node = the body frame origin) in a
+    spherical joint, a spring, a Cartesian spring and a force."""
+    from test_bridge_common import body_frame
+    m0 = position_marker(mbs, b0, None, node=True)
+    m1 = position_marker(mbs, b1, None, node=True)
+    p0 = body_frame(mbs, b0)[0]
+    mg = mbs.AddMarker(MarkerBodyPosition(bodyNumber=g, localPosition=list(
+        body_frame(mbs, g)[1].T @ (p0 - body_frame(mbs, g)[0]))))
+    mbs.AddObject(ObjectJointSpherical(markerNumbers=[mg, m0]))
+    mbs.AddObject(ObjectConnectorSpringDamper(markerNumbers=[m0, m1], stiffness=80, damping=0.7,
+                                              referenceLength=0.3, force=0.4))
+    mbs.AddObject(ObjectConnectorCartesianSpringDamper(markerNumbers=[mg, m1], stiffness=[10, 20, 30],
+                                                       damping=[1, 2, 3], offset=[0.1, 0.2, 0.3]))
+    mbs.AddLoad(LoadForceVector(markerNumber=m1, loadVector=[0.5, -1, 2]))
+
+
 def _revolute_rm(mbs, g, b0, b1):
     p = [1.25, 0.15, 0.0]
     mA, rmA = rigid_marker(mbs, b0, p, RJ, markerRot=RM)
@@ -143,6 +161,7 @@ ITEMS = {
     "spherical_partial": lambda mbs, g, b0, b1: _spherical_partial(mbs, g, b0, b1, [1, 0, 1], False),
     "spherical_partial_swapped": lambda mbs, g, b0, b1: _spherical_partial(mbs, g, b0, b1, [0, 1, 1], True),
     "spherical_pointground_nodemarker": _point_ground,
+    "node_position_markers": _node_position_markers,
     "revolute_create": lambda mbs, g, b0, b1: mbs.CreateRevoluteJoint(itemNumbers=[b0, b1], position=[1.2, 0.1, 0],
                                                                       axis=[0, 1, 1]),
     "revolute_ground": lambda mbs, g, b0, b1: mbs.CreateRevoluteJoint(itemNumbers=[g, b1], position=[1.2, 0.1, 0],
@@ -225,12 +244,18 @@ def test_all_items_together_each_node_type_and_group(group, node, rng):
     _check(mbs, rng, group)
 
 
-def _torsional_compiled_model(node):
+def _torsional_compiled_model(node, turns=0, uf=False):
+    """Revolute joint + torsional spring between two bodies; the spring's data
+    node holds ``2 pi turns`` (the spring has turned ``turns`` times, e.g. in an earlier
+    run: Exudyn's angle is the branch of the principal angle nearest to that value)."""
     mbs, g, b0, b1 = two_bodies((node, "RotVecLG"))
     p = [1.2, 0.1, 0.0]
+    kw = dict(springTorqueUserFunction=uf_torsion) if uf else {}
     mbs.CreateRevoluteJoint(itemNumbers=[b0, b1], position=p, axis=[0, 1, 1])
-    mbs.CreateTorsionalSpringDamper(itemNumbers=[b0, b1], position=p, axis=[0, 1, 1], stiffness=7, damping=0.3,
-                                    offset=0.1, velocityOffset=0.2, torque=0.05)
+    ts = mbs.CreateTorsionalSpringDamper(itemNumbers=[b0, b1], position=p, axis=[0, 1, 1], stiffness=7, damping=0.3,
+                                         offset=0.1, velocityOffset=0.2, torque=0.05, **kw)
+    if turns:
+        mbs.SetNodeParameter(mbs.GetObject(ts)["nodeNumber"], "initialCoordinates", [2 * np.pi * turns])
     mbs.Assemble()
     return mbs
 
@@ -240,7 +265,8 @@ def _revolute_state(mbs, rng, phi):
     phi (the torsional spring's angle), other velocities random."""
     q, qt = random_state(mbs, rng)
     sd = mbs.systemData
-    d = mbs.GetObject(3)          # the torsional spring (object 3)
+    d = [mbs.GetObject(o) for o in range(mbs.systemData.NumberOfObjects())
+         if mbs.GetObject(o)["objectType"] == "ConnectorTorsionalSpringDamper"][0]
     m0, m1 = d["markerNumbers"]
     H0 = np.asarray(mbs.GetMarker(m0)["localHT"])[:3, :3]
     H1 = np.asarray(mbs.GetMarker(m1)["localHT"])[:3, :3]
@@ -257,26 +283,56 @@ def _revolute_state(mbs, rng, phi):
     return q, qt
 
 
+def _assert_compiled_torsion(mbs):
+    from exudyn_lie.bridge import SceneFromExudyn
+    sc = SceneFromExudyn(mbs)
+    assert len(sc.torsionalSprings) == 1 and not sc.pyItems      # the compiled spring is tested
+
+
+@pytest.mark.parametrize("turns", [0, 2])
+@pytest.mark.parametrize("group", ["SE3", "SO3xR3"])
 @pytest.mark.parametrize("phi", [0.3, -2.0, 3.0])
 @pytest.mark.parametrize("node", sorted(NODE_TYPES))
-def test_compiled_torsional_spring_about_its_axis(node, phi, rng):
+def test_compiled_torsional_spring_about_its_axis(node, phi, group, turns, rng):
     """The compiled torsional spring equals Exudyn's when the relative rotation is about
-    the spring axis (its use with a revolute joint)."""
-    from test_bridge_common import compare
-    mbs = _torsional_compiled_model(node)
+    the spring axis (its use with a revolute joint), in both groups, also when its data
+    node says it has turned twice already (Exudyn's angle then is phi + 4 pi)."""
+    mbs = _torsional_compiled_model(node, turns)
+    _assert_compiled_torsion(mbs)
     for trial in range(2):
         q, qt = _revolute_state(mbs, rng, phi)
-        c = compare(mbs, "SE3", q, qt, 0.2)
+        c = compare(mbs, group, q, qt, 0.2)
         for key in ("M", "f", "g", "J"):
             assert c[key] < TOL, f"{key}: {c[key]:.3g}"
 
 
-def test_compiled_torsional_spring_general_rotation(rng):
+@pytest.mark.parametrize("turns", [0, -1])
+@pytest.mark.parametrize("group", ["SE3", "SO3xR3"])
+def test_compiled_torsional_spring_general_rotation(group, turns, rng):
     """Also for relative rotations not about the spring axis (phi = z Tait-Bryan angle)."""
-    mbs = _torsional_compiled_model("RotVecLG")
+    mbs = _torsional_compiled_model("RotVecLG", turns)
+    _assert_compiled_torsion(mbs)
     for trial in range(3):
         q, qt = random_state(mbs, rng, scale=0.6)
-        c = compare(mbs, "SE3", q, qt, 0.2)
+        c = compare(mbs, group, q, qt, 0.2)
+        for key in ("M", "f", "g", "J"):
+            assert c[key] < TOL, f"{key}: {c[key]:.3g}"
+
+
+@pytest.mark.parametrize("group", ["SE3", "SO3xR3"])
+@pytest.mark.parametrize("turns", [3, -2])
+@pytest.mark.parametrize("uf", [False, True], ids=["compiled", "userfunction"])
+def test_torsional_spring_starts_from_the_turns_in_its_data_node(uf, turns, group, rng):
+    """A data node holding 2 pi turns (+ a bit): Exudyn's ComputeODE2RHS uses the angle
+    phi + 2 pi turns; so does the package, compiled (turns folded into the offset) and
+    with a user function (the Python item tracks from the stored angle)."""
+    mbs = _torsional_compiled_model("EP", turns, uf=uf)
+    from exudyn_lie.bridge import SceneFromExudyn
+    sc = SceneFromExudyn(mbs)
+    assert len(sc.torsionData) == 1 and (len(sc.pyItems) == 1) == uf
+    for phi in (0.4, -2.5):
+        q, qt = _revolute_state(mbs, rng, phi)
+        c = compare(mbs, group, q, qt, 0.2)
         for key in ("M", "f", "g", "J"):
             assert c[key] < TOL, f"{key}: {c[key]:.3g}"
 
@@ -303,3 +359,66 @@ def test_torsional_angle_tracking_follows_the_data_node():
             st = BodyStates(0.0, RotationMatrixZ(a)[None], np.zeros((1, 3)), np.zeros((1, 3)), np.zeros((1, 3)))
             phis.append(item.angle(st)[0])
         np.testing.assert_allclose(phis, [2.8, 3.0, 3.3 - 2 * np.pi, 3.6 - 2 * np.pi], atol=1e-12)
+
+
+# ---------------------------------------------------------------------------- gravity
+@pytest.mark.parametrize("group", ["SE3", "SO3xR3"])
+@pytest.mark.parametrize("nodes", NODE_PAIRS, ids=lambda p: "-".join(p))
+def test_uniform_mass_proportional_load_becomes_scene_gravity(nodes, group, rng):
+    """The same LoadMassProportional on every body (CreateRigidBody(gravity=...)) is read
+    as the scene's gravity (kernel gravity forces at the COMs, in the energy too), not as
+    per-body forces: f equals Exudyn's."""
+    from exudyn_lie.bridge import SceneFromExudyn
+    gv = [0.3, -9.81, 1.2]
+    mbs = new_mbs()
+    g = mbs.CreateGround()
+    b0 = add_body(mbs, nodes[0], [1, 0, 0], RA, gravity=gv)
+    b1 = add_body(mbs, nodes[1], [1.5, 0.3, 0.1], RB, omega=(-0.4, 0.6, 0.2), vel=(0.3, -0.1, 0.2),
+                  com=(-0.05, 0.03, 0.04), sides=(0.3, 0.2, 0.1), gravity=gv)
+    mbs.CreateSpringDamper(itemNumbers=[g, b1], localPosition0=[1, 1, 0], stiffness=50, damping=0.5)
+    mbs.Assemble()
+    assert [mbs.GetLoad(l)["loadType"] for l in range(mbs.systemData.NumberOfLoads())] == ["MassProportional"] * 2
+    sc = SceneFromExudyn(mbs)
+    np.testing.assert_array_equal(sc.gravity, gv)
+    assert not sc.loads and not sc.pyItems
+    _check(mbs, rng, group)
+
+
+# ---------------------------------------------------------------------------- partial spherical joints
+def _spherical_bodies(nodes, axes):
+    mbs, g, b0, b1 = two_bodies(nodes)
+    p = [1.2, 0.2, 0.0]
+    j = mbs.AddObject(ObjectJointSpherical(markerNumbers=[position_marker(mbs, b0, p), position_marker(mbs, b1, p)],
+                                           constrainedAxes=list(axes)))
+    mbs.Assemble()
+    return mbs, j
+
+
+@pytest.mark.parametrize("axes", [[1, 0, 1], [0, 1, 0], [1, 1, 0]])
+@pytest.mark.parametrize("group", ["SE3", "SO3xR3"])
+def test_partial_spherical_between_bodies_is_world_axis_rows(axes, group, rng):
+    """What Exudyn's spherical joint with partial ``constrainedAxes`` between two bodies
+    is (CObjectJointSpherical): rows (p1 - p0)_i in *world* components for the locked
+    axes i, AE rows ``lambda_i = 0`` for the others.  Those are exactly the kernel's
+    world-axis translation rows (ROW_TRANS_WORLD) of the fully locked joint, restricted
+    to the locked axes.  The scene can ask for world-axis rows only with all three axes
+    locked, so the bridge refuses this joint (test_bridge_errors); this test pins the
+    equations a scene option for it has to produce."""
+    nodes = ("RotVecLG", "EP")
+    mbs, j = _spherical_bodies(nodes, axes)
+    full, jf = _spherical_bodies(nodes, [1, 1, 1])
+    ae = np.asarray(mbs.systemData.GetObjectLTGAE(j))
+    locked = [i for i in range(3) if axes[i]]
+    free = [i for i in range(3) if not axes[i]]
+    for trial in range(2):
+        q, qt = random_state(mbs, rng)
+        Me, fe, ge, Ce = oracle(mbs, q, qt, 0.3)
+        pk = package(full, group, q, qt, 0.3)
+        ji = pk["scene"].joints_info[0]
+        r0, n = (int(x) for x in pk["sim"].sd.jint[ji.sceneJoint, 2:4])
+        assert n == 3 and list(pk["sim"].sd.rint[r0:r0 + 3, 0]) == [1, 1, 1]    # kernel.ROW_TRANS_WORLD
+        h, J = pk["h"][r0:r0 + 3], pk["J"][r0:r0 + 3]
+        scale = max(1.0, np.max(np.abs(J)))
+        np.testing.assert_allclose(ge[ae[locked]], h[locked], rtol=0, atol=1e-13)
+        np.testing.assert_allclose(Ce[ae[locked]] @ pk["P"], J[locked], rtol=0, atol=1e-12 * scale)
+        assert np.all(Ce[ae[free]] == 0)                  # the free axes' rows only hold lambda_i = 0

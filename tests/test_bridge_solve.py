@@ -7,7 +7,8 @@ import numpy as np
 import pytest
 
 import exudyn as exu
-from exudyn.utilities import RigidBodyInertia, RotationMatrixX, RotationMatrixZ, SensorBody, SensorObject
+from exudyn.utilities import (RigidBodyInertia, RotationMatrixX, RotationMatrixZ, SensorBody, SensorObject,
+                              SensorUserFunction)
 
 import exudyn_lie as exl
 from exudyn_lie.bridge import LieGroupSolver
@@ -135,17 +136,29 @@ def test_heavy_top_matches_native_generalized_alpha(node):
 
 
 def test_double_pendulum_matches_native_generalized_alpha():
+    """Position sensors and the angular velocity sensor of body 1.  Body 1 spins at up
+    to ~57 rad/s, and generalized-alpha's (2nd-order) error in the angular velocity is
+    about 1.5e-3 rad/s at h = 2.5e-4 (2.5e-5 of max |omega|): the bound is relative to
+    max |omega|, and the drop by ~16 from h = 1e-3 shows the deviation is that error."""
     T = 0.5
     mbs, sens = pendulum_chain("EP")
     exl.SolveDynamic(mbs, settings(T, 1e-3), liegroup="auto")
     ours = [data(mbs, s) for s in sens]
-    dev = []
+    wmax = np.max(np.abs(ours[2][:, 1:]))
+    assert wmax > 10
+    dev, devw = [], []
     for h in (1e-3, 2.5e-4):
         mbs2, sens2 = pendulum_chain("EP")
         mbs2.SolveDynamic(ga_settings(T, h))
-        dev.append(max(np.max(np.abs(data(mbs2, s2)[:, 1:] - o[:, 1:])) for s2, o in zip(sens2[:2], ours[:2])))
+        ref = [data(mbs2, s2) for s2 in sens2]
+        for r, o in zip(ref, ours):
+            np.testing.assert_allclose(r[:, 0], o[:, 0], atol=1e-12)
+        dev.append(max(np.max(np.abs(r[:, 1:] - o[:, 1:])) for r, o in zip(ref[:2], ours[:2])))
+        devw.append(np.max(np.abs(ref[2][:, 1:] - ours[2][:, 1:])) / wmax)
     assert dev[1] < 5e-5
     assert 10 < dev[0] / dev[1] < 22, dev
+    assert devw[1] < 5e-5, devw
+    assert 10 < devw[0] / devw[1] < 22, devw
 
 
 def test_free_body_so3xr3_equals_native_rk44():
@@ -213,6 +226,13 @@ def test_sensors_solution_file_and_final_state_like_native(tmp_path):
     np.testing.assert_allclose(solL[:, 0], solN[:, 0], atol=1e-12)          # same output times
     np.testing.assert_allclose(sensL[:, 0], sensN[:, 0], atol=1e-12)
     np.testing.assert_allclose(solL[:, 1:7], solN[:, 1:7], atol=1e-3)        # same motion (GA error)
+    # the velocity sensor file: generalized-alpha's error at h = 1e-3 is 4.3e-3 m/s (it drops
+    # to 2.7e-4 at h = 2.5e-4, second order) of a velocity up to 6.3 m/s
+    assert np.max(np.abs(sensL[:, 1:])) > 5
+    np.testing.assert_allclose(sensL[:, 1:], sensN[:, 1:], rtol=0, atol=1e-2)
+    # its last row is the final velocity left in mbs (file precision: 10 digits)
+    np.testing.assert_allclose(sensL[-1, 1:], mL.GetObjectOutputBody(1, O.Velocity, localPosition=[0, 0, 0]),
+                               rtol=1e-9, atol=1e-12)
     # final state left in mbs = last sensor row; the stored solver is there
     np.testing.assert_allclose(mL.GetObjectOutputBody(1, O.Position, localPosition=[0, 0, 0]), dL[-1, 1:],
                                atol=1e-14)
@@ -223,6 +243,45 @@ def test_sensors_solution_file_and_final_state_like_native(tmp_path):
     sim = mL.sys["lieGroupSolver"].sim
     Vdot, lam = sim.Accelerations()
     np.testing.assert_allclose(mL.systemData.GetODE2Coordinates_tt()[3:6], Vdot[0, :3], atol=1e-10)
+    # ... and Exudyn's own equations hold there: M q_tt + C_q^T lambda = f
+    assert exudyn_equations_residual(mL) < 1e-12
+
+
+def exudyn_equations_residual(mbs, state=None):
+    """Relative residual of Exudyn's equations of motion ``M q_tt + C_q^T lambda = f`` at
+    the state left in mbs (or ``state = (t, q, q_t, q_tt, lambda)``), with Exudyn's
+    ComputeMassMatrix / ComputeODE2RHS / ComputeJacobianAE (test_bridge_common.oracle)."""
+    from test_bridge_common import oracle
+    sd = mbs.systemData
+    if state is None:
+        state = (sd.GetTime(), sd.GetODE2Coordinates(), sd.GetODE2Coordinates_t(), sd.GetODE2Coordinates_tt(),
+                 sd.GetAECoordinates())
+    t, q, qt, qtt, lam = (np.array(x, float) for x in state)
+    M, f, g, C = oracle(mbs, q, qt, float(t))
+    r = M @ qtt - f
+    if lam.size:
+        r += C.T @ lam
+    assert np.max(np.abs(f)) > 1.0
+    return float(np.max(np.abs(r)) / np.max(np.abs(f)))
+
+
+@pytest.mark.parametrize("liegroup", ["SE3", "SO3xR3"])
+@pytest.mark.parametrize("model", ["free body", "heavy top", "double pendulum"])
+@pytest.mark.parametrize("node", sorted(NODE_TYPES))
+def test_written_back_accelerations_satisfy_exudyns_equations(node, model, liegroup):
+    """q_tt (and the joint multipliers in the AE coordinates) left in mbs satisfy Exudyn's
+    own equations at the final state: for the unconstrained body q_tt = M^-1 f, for the
+    constrained models M q_tt + C_q^T lambda = f (the EP nodes' normalisation multiplier
+    is 0 for exactly normalised parameters)."""
+    if model == "free body":
+        mbs = free_body(node)[0]
+    elif model == "heavy top":
+        mbs = heavy_top(node)[0]
+    else:
+        mbs = pendulum_chain(node)[0]
+    exl.SolveDynamic(mbs, settings(0.05, 1e-3, sensors=False), liegroup=liegroup)
+    assert (len(mbs.sys["lieGroupSolver"].scene.joints) > 0) == (model != "free body")
+    assert exudyn_equations_residual(mbs) < 1e-12
 
 
 def test_pre_and_post_step_functions_every_step_and_state_changes_are_used():
@@ -246,8 +305,10 @@ def test_pre_and_post_step_functions_every_step_and_state_changes_are_used():
     vs = mbs.AddSensor(SensorBody(bodyNumber=b, storeInternal=True, outputVariableType=O.AngularVelocity))
     mbs.Assemble()
     exl.SolveDynamic(mbs, settings(T, h))
+    # as natively (checked with exudyn 1.13.6): pre-step before each of the 100 steps,
+    # post-step once after the initialisation (t = 0) and after each step
     assert len(calls["pre"]) == 100 and calls["pre"][0] == pytest.approx(h)
-    assert len(calls["post"]) >= 100
+    assert len(calls["post"]) == 101 and calls["post"][0] == 0.0 and calls["post"][-1] == pytest.approx(T)
     w = data(mbs, vs)
     # the velocities set in the pre-step function at t = 0.05 were integrated from:
     # one step later the angular velocity is O(h) (only the torque and spring act)
@@ -455,7 +516,6 @@ def test_fast_path_is_used_for_compiled_scenes():
     """Chunks of outputs per kernel call (resolved entry points) and zero-copy coordinate
     views are active."""
     import warnings
-    from exudyn_lie.bridge.fast import entry_point
     from exudyn_lie.bridge.nodes import write_rows
     from exudyn_lie.mbs import kernel
     mbs, b, s, sj = heavy_top()
@@ -467,7 +527,31 @@ def test_fast_path_is_used_for_compiled_scenes():
     assert ch is not None and ch.size > 1 and ch.maxRows > 1
     assert ch._ep["mk"] is not kernel.mk_steps and ch._ep["write"] is not write_rows
     assert solver._live
-    assert entry_point(kernel.mk_steps, ()) is None            # no overload for these types
+    # the resolved entry point is the compiled overload of the chunk call's argument types
+    sig = [sg for sg in kernel.mk_steps.overloads if kernel.mk_steps.overloads[sg].entry_point is ch._ep["mk"]]
+    assert len(sig) == 1 and callable(ch._ep["mk"])
+
+
+def test_entry_point_resolves_only_compiled_signatures():
+    """entry_point: the compiled function of exactly the argument types it was called with
+    (same result as the dispatcher), None for types never compiled or no overload."""
+    from numba import njit
+
+    from exudyn_lie.bridge.fast import entry_point
+
+    @njit
+    def f(x, a):
+        return x * a.sum()
+
+    a = np.arange(3.0)
+    assert entry_point(f, (2.0, a)) is None                  # not compiled yet
+    assert f(2.0, a) == 6.0
+    ep = entry_point(f, (2.0, a))
+    assert ep is not None and ep is not f and ep(3.0, a) == 9.0
+    assert entry_point(f, (2.0, a)) is ep                    # cached
+    assert entry_point(f, (2, a)) is None                    # int64 x: a signature never compiled
+    assert entry_point(f, (2.0, a.astype(np.float32))) is None
+    assert entry_point(f, ()) is None
 
 
 @pytest.mark.parametrize("rows", [1, 3, None])
@@ -494,3 +578,158 @@ def test_chunked_outputs_equal_one_output_per_call(monkeypatch, rows):
             continue
         for a, x in zip(ref, out):
             np.testing.assert_allclose(x, a, rtol=0, atol=1e-12)
+
+
+# ---------------------------------------------------------------------------- restart file
+def read_restart(name):
+    """The state in an Exudyn restart file: {key: array or float}."""
+    out = {}
+    with open(name) as fh:
+        for line in fh:
+            if line.startswith("#") or "=" not in line:
+                continue
+            key, val = line.strip().split("=", 1)
+            if key in ("ODE2", "ODE2_t", "ODE2_tt", "AE"):
+                out[key] = np.array([float(x) for x in val.split(",")]) if val else np.zeros(0)
+            elif key == "time":
+                out[key] = float(val)
+    return out
+
+
+def test_restart_file_holds_the_final_accelerations_and_multipliers(tmp_path):
+    """A restart file written by exl.SolveDynamic stores q, q_t, q_tt and the AE coordinates
+    of the final state, consistent with each other: Exudyn's equations
+    M q_tt + C_q^T lambda = f hold for the stored values (nothing else reads q_tt here, so
+    without the restart file they would not be written every output)."""
+    T = 0.2
+    mbs, b, s, sj = heavy_top()
+    ss = settings(T, 1e-3, sensors=False)
+    ss.solution.restart.write = True
+    ss.solution.restart.name = str(tmp_path / "restart.txt")
+    ss.solution.restart.writePeriod = 0.05
+    exl.SolveDynamic(mbs, ss)
+    assert mbs.sys["lieGroupSolver"].timing["substeps"] == 50
+    rs = read_restart(ss.solution.restart.name)
+    assert rs["time"] == pytest.approx(T)
+    sd = mbs.systemData
+    np.testing.assert_allclose(rs["ODE2"], sd.GetODE2Coordinates(), rtol=1e-15, atol=1e-15)
+    np.testing.assert_allclose(rs["ODE2_tt"], sd.GetODE2Coordinates_tt(), rtol=1e-15, atol=1e-15)
+    np.testing.assert_allclose(rs["AE"], sd.GetAECoordinates(), rtol=1e-15, atol=1e-15)
+    assert np.max(np.abs(rs["AE"])) > 100                    # the joint force, not the initial zeros
+    res = exudyn_equations_residual(mbs, (rs["time"], rs["ODE2"], rs["ODE2_t"], rs["ODE2_tt"], rs["AE"]))
+    assert res < 1e-12
+
+
+# ---------------------------------------------------------------------------- settings
+def test_simulation_settings_are_not_changed_during_or_after_the_run():
+    """The run works on a copy: user functions reading the settings (the object passed,
+    also as mbs.sys['simulationSettings']) see the user's values, and afterwards they are
+    unchanged."""
+    seen = []
+    ss = settings(0.1, 1e-3)
+    ss.timeIntegration.solverType = exu.DynamicSolverType.RK44          # the user's own values
+    ss.timeIntegration.generalizedAlpha.computeInitialAccelerations = True
+    ss.timeIntegration.generalizedAlpha.useNewmark = True
+    ss.timeIntegration.generalizedAlpha.useIndex2Constraints = True
+    ss.timeIntegration.adaptiveStep = True
+    ss.timeIntegration.automaticStepSize = True
+    before = ss.GetDictionary()
+
+    def look(mbs, t):
+        s_ = mbs.sys["simulationSettings"]
+        assert s_ is ss
+        ti = s_.timeIntegration
+        ga = ti.generalizedAlpha
+        seen.append((ti.numberOfSteps, ti.solverType, ga.computeInitialAccelerations, ga.useNewmark,
+                     ga.useIndex2Constraints, ti.adaptiveStep, ti.automaticStepSize))
+
+    def sensor_uf(mbs, t, sensorNumbers, factors, configuration):
+        look(mbs, t)
+        return [t]
+
+    mbs, b, s = free_body()
+    mbs.AddSensor(SensorUserFunction(sensorNumbers=[s], storeInternal=True, sensorUserFunction=sensor_uf))
+    mbs.Assemble()
+    exl.SolveDynamic(mbs, ss)
+    assert mbs.sys["lieGroupSolver"].timing["substeps"] == 10        # numberOfSteps 10 for Exudyn's loop
+    mbs2, b2, s2 = free_body()
+    mbs2.SetPreStepUserFunction(lambda mbs, t: look(mbs, t) or True)
+    mbs2.Assemble()
+    exl.SolveDynamic(mbs2, ss)
+    assert len(seen) > 100
+    assert set(seen) == {(100, exu.DynamicSolverType.RK44, True, True, True, True, True)}
+    assert ss.GetDictionary() == before
+
+
+# ---------------------------------------------------------------------------- torsional spring turns
+def spinning_torsion(uf=False):
+    """A body spinning at ~20 rad/s about z, held by a weak torsional spring to ground
+    (turns several times in a second)."""
+    mbs = new_mbs()
+    g = mbs.CreateGround()
+    b = add_body(mbs, "RotVecLG", [0, 0, 0], np.eye(3), omega=(0.0, 0.0, 20.0), vel=(0, 0, 0), com=(0, 0, 0))
+    kw = dict(springTorqueUserFunction=lambda mbs, t, i, phi, om, k, d, off: k * (phi - off) + d * om) if uf else {}
+    o = mbs.CreateTorsionalSpringDamper(itemNumbers=[g, b], position=[0, 0, 0], axis=[0, 0, 1], stiffness=0.05,
+                                        damping=0.001, offset=0.2, **kw)
+    mbs.Assemble()
+    return mbs, o
+
+
+@pytest.mark.parametrize("uf", [False, True], ids=["compiled", "userfunction"])
+def test_torsional_spring_turns_carry_over_to_a_continued_run(uf):
+    """The turned angle is left in the spring's data node (as a native solve leaves it,
+    even when Exudyn's own update, once per output, would lose turns) and a run continued
+    with updateInitialValues starts from it: 0.5 s + 0.5 s = 1 s in one run."""
+    T = 0.5
+    ss = settings(T, 1e-3, sensors=False)          # no outputs: one Exudyn step of 500 steps
+    mbs, o = spinning_torsion(uf)
+    exl.SolveDynamic(mbs, ss, liegroup="SO3xR3")
+    assert mbs.sys["lieGroupSolver"].timing["exudynSteps"] == 1
+    nat, on = spinning_torsion(uf)
+    nss = settings(T, 1e-3, sensors=False)
+    nss.timeIntegration.solverType = exu.DynamicSolverType.RK44
+    nat.SolveDynamic(nss)
+    angle = float(nat.systemData.GetDataCoordinates()[0])
+    assert angle > 8                                       # turned more than once
+    np.testing.assert_allclose(mbs.systemData.GetDataCoordinates(), [angle], rtol=0, atol=1e-9)
+    np.testing.assert_allclose(mbs.GetObjectOutput(o, O.Rotation), angle, rtol=0, atol=1e-9)
+    # continued run == one run of 1 s
+    exl.SolveDynamic(mbs, settings(T, 1e-3, sensors=False), updateInitialValues=True, liegroup="SO3xR3")
+    exl.SolveDynamic(mbs, settings(T, 1e-3, sensors=False), liegroup="SO3xR3")
+    one, o1 = spinning_torsion(uf)
+    exl.SolveDynamic(one, settings(2 * T, 1e-3, sensors=False), liegroup="SO3xR3")
+    sd, sd1 = mbs.systemData, one.systemData
+    np.testing.assert_allclose(sd.GetDataCoordinates(), sd1.GetDataCoordinates(), rtol=0, atol=1e-9)
+    np.testing.assert_allclose(sd.GetODE2Coordinates_t(), sd1.GetODE2Coordinates_t(), rtol=0, atol=1e-9)
+    np.testing.assert_allclose(sd.GetODE2Coordinates(), sd1.GetODE2Coordinates(), rtol=0, atol=1e-9)
+
+
+@pytest.mark.parametrize("uf", [False, True], ids=["compiled", "userfunction"])
+def test_torsional_spring_turns_survive_a_state_change_in_a_pre_step_function(uf):
+    """A pre-step function changes the state after the spring has turned past pi: the
+    bridge re-reads the state and continues the angle from the spring's data node, as
+    Exudyn does; the run equals Exudyn's RK44 (= RK4 on SO3xR3 for this body)."""
+    T = 0.6
+
+    def pre(mbs, t):
+        if abs(t - 0.3) < 1e-9:                  # slow the spin down
+            mbs.systemData.SetODE2Coordinates_t(0.5 * mbs.systemData.GetODE2Coordinates_t())
+        return True
+
+    out = []
+    for native in (True, False):
+        mbs, o = spinning_torsion(uf)
+        mbs.SetPreStepUserFunction(pre)
+        mbs.Assemble()
+        ss = settings(T, 1e-3, sensors=False)
+        if native:
+            ss.timeIntegration.solverType = exu.DynamicSolverType.RK44
+            mbs.SolveDynamic(ss)
+        else:
+            exl.SolveDynamic(mbs, ss, liegroup="SO3xR3")
+        sd = mbs.systemData
+        out.append((np.array(sd.GetDataCoordinates()), np.array(sd.GetODE2Coordinates_t()),
+                    np.array(mbs.GetObjectOutputBody(1, O.RotationMatrix, localPosition=[0, 0, 0]))))
+    assert out[0][0][0] > 2 * np.pi                     # turned more than once
+    for a, b in zip(*out):
+        np.testing.assert_allclose(b, a, rtol=0, atol=1e-9)

@@ -16,7 +16,8 @@ The force laws are Exudyn's (checked against ``ComputeODE2RHS`` in
 * CartesianSpringDamper: ``f = uf(mbs, t, i, u, udot, k, d, offset)`` with
   ``u = p1 - p0 - offset``: ``-f`` on marker 1, ``+f`` on marker 0;
 * TorsionalSpringDamper: ``tau = uf(mbs, t, i, phi, phidot, k, d, offset)``, ``phi`` the z
-  Tait-Bryan angle of ``J0^T J1`` (tracked over turns), ``phidot = z0 . (w1 - w0)``;
+  Tait-Bryan angle of ``J0^T J1`` (tracked over turns from the angle stored in the data
+  node), ``phidot = z0 . (w1 - w0)``;
   torque ``-tau z0`` on marker 1, ``+tau z0`` on marker 0;
 * RigidBodySpringDamper, Tait-Bryan form: ``u = (J0^T (p1 - p0), xyz angles of J0^T J1) - offset``,
   ``udot = (J0^T (v1 - v0), J0^T (w1 - w0))``; intrinsic form: ``u = log_SE3(J0, J1) - offset``
@@ -130,15 +131,20 @@ class CartesianSpringDamperUF(_Connector):
 
 class TorsionalSpringDamperUF(_Connector):
     """Torsional spring with a user function (``uf``), or without a data node
-    (``track=False``: Exudyn's angle is then the principal one, in (-pi, pi])."""
+    (``track=False``: Exudyn's angle is then the principal one, in (-pi, pi]).
 
-    def __init__(self, mbs, o, d, A, B, rotA, rotB, uf, track=True):
+    With a data node (``track=True``) the angle is Exudyn's: the branch of the principal
+    angle nearest to the previous angle, starting from ``angle0``, the continuous angle
+    stored in the spring's NodeGenericData (0 for a new spring; after turns, e.g. in a
+    continued simulation, the turned angle)."""
+
+    def __init__(self, mbs, o, d, A, B, rotA, rotB, uf, track=True, angle0=0.0):
         super().__init__(mbs, o, d, A, B)
         self.rotA = rotA
         self.rotB = rotB
         self.uf = uf
         self.track = track
-        self.prev = None
+        self.prev = float(angle0) if track else None
 
     def angle(self, st):
         """(phi tracked, phidot, world z axis of the A frame, (pA, rA), (pB, rB))."""
@@ -149,8 +155,7 @@ class TorsionalSpringDamperUF(_Connector):
         Rrel = RA.T @ RB
         phi = np.arctan2(-Rrel[0, 1], Rrel[0, 0])
         if self.track:
-            if self.prev is not None:
-                phi += 2 * np.pi * np.round((self.prev - phi) / (2 * np.pi))
+            phi += 2 * np.pi * np.round((self.prev - phi) / (2 * np.pi))
             self.prev = phi
         z = RA[:, 2]
         return phi, z @ (wB - wA), z, (pA, rA), (pB, rB)

@@ -24,7 +24,18 @@ Mapping (Exudyn -> scene):
   :mod:`.pyforces` (``Scene.AddPythonForce``, evaluated in Python at every stage);
 * ``LoadForceVector / LoadTorqueVector / LoadMassProportional`` -> constant loads (a
   uniform mass-proportional load on every body becomes the scene's gravity), with a
-  ``loadVectorUserFunction`` -> :mod:`.pyforces`.
+  ``loadVectorUserFunction`` -> :mod:`.pyforces`.  As in Exudyn (which refuses them at
+  ``Assemble``), a torque, or a force with ``bodyFixed=True``, needs a marker with an
+  orientation.
+
+A torsional spring's ``NodeGenericData`` holds Exudyn's continuous angle of the last step
+(Exudyn takes the branch of the principal angle nearest to it); the reader starts from the
+stored value, so a spring that has already turned (e.g. a continued simulation) keeps its
+turn count (:class:`TorsionData`).
+
+``configuration='items'`` reads an mbs that is not assembled yet from its item
+dictionaries (the initial values ``mbs.Assemble()`` will set): ``SolveDynamic`` validates
+the model that way before it assembles anything.
 """
 from __future__ import annotations
 
@@ -85,6 +96,21 @@ class JointInfo:
     sign: float = 1.0
 
 
+@dataclass
+class TorsionData:
+    """A torsional spring with Exudyn's data node (continuous angle): ``dataNode`` the
+    NodeGenericData, ``angle0`` its value read; compiled springs (``spring`` = scene index)
+    have ``turns0`` turns folded into the offset (the kernel tracks the angle from the
+    principal one, so kernel angle + 2 pi turns0 = Exudyn's angle); Python items
+    (``item``) track from ``angle0`` themselves."""
+    objectIndex: int
+    dataNode: int
+    angle0: float
+    spring: Optional[int] = None
+    turns0: int = 0
+    item: object = None
+
+
 class ExudynScene(Scene):
     """A :class:`Scene` read from an Exudyn ``mbs``, with the maps back to Exudyn items."""
 
@@ -101,6 +127,8 @@ class ExudynScene(Scene):
         self.skipped = []                     # (item, index, reason)
         self.aeZero: List[int] = []           # AE coordinates that stay 0 (EP norm rows, inactive joints)
         self.nodeTypes = {}                   # node index -> Exudyn node type string
+        self.torsionData: List[TorsionData] = []   # torsional springs with a data node (turns)
+        self.configuration = "initial"        # what was read ('items': mbs not assembled yet)
 
     def body_of_object(self, obj):
         try:
@@ -172,21 +200,56 @@ class _Reader:
         self.exu = exu
         self.mbs = mbs
         self.sd = mbs.systemData
-        if not mbs.systemIsConsistent:
+        cfg = {"initial": exu.ConfigurationType.Initial, "current": exu.ConfigurationType.Current, "items": None}
+        if not isinstance(configuration, str) or configuration.lower() not in cfg:
+            raise BridgeError(f"configuration must be 'initial', 'current' or 'items', got {configuration!r}")
+        self.items = configuration.lower() == "items"
+        if not self.items and not mbs.systemIsConsistent:
             raise BridgeError("mbs is not assembled (mbs.systemIsConsistent is False); call mbs.Assemble() "
                               "first (SolveDynamic does that with autoAssemble=True)")
-        cfg = {"initial": exu.ConfigurationType.Initial, "current": exu.ConfigurationType.Current}
-        if configuration.lower() not in cfg:
-            raise BridgeError(f"configuration must be 'initial' or 'current', got {configuration!r}")
-        c = cfg[configuration.lower()]
-        self.q = np.asarray(self.sd.GetODE2Coordinates(configuration=c), float)
-        self.q_t = np.asarray(self.sd.GetODE2Coordinates_t(configuration=c), float)
+        self.config = cfg[configuration.lower()]
+        if self.items:
+            self._items_coordinates()
+        else:
+            self.q = np.asarray(self.sd.GetODE2Coordinates(configuration=self.config), float)
+            self.q_t = np.asarray(self.sd.GetODE2Coordinates_t(configuration=self.config), float)
         self.nObjects = self.sd.NumberOfObjects()
         self.objects = [mbs.GetObject(i) for i in range(self.nObjects)]
         self.markers = {}
         self.ground = {}          # object index -> (pos, rot) of ObjectGround
         self.rigidNodeBody = {}   # node index -> scene body
         self.badNodes = []
+
+    def _items_coordinates(self):
+        """mbs not assembled: the initial coordinates / velocities Assemble() will set (the
+        nodes' ``initialCoordinates`` / ``initialVelocities``) in a layout of our own."""
+        self.ltg = {}
+        q, qt = [], []
+        for n in range(self.sd.NumberOfNodes()):
+            d = self.mbs.GetNode(n)
+            if d["nodeType"] not in NODE_KINDS:
+                continue
+            nq = len(np.asarray(d["referenceCoordinates"]).reshape(-1))
+            start = sum(len(x) for x in q)
+            self.ltg[n] = list(range(start, start + nq))
+            for key, out in (("initialCoordinates", q), ("initialVelocities", qt)):
+                v = np.asarray(d.get(key, np.zeros(nq)), float).reshape(-1)
+                out.append(v if len(v) == nq else np.zeros(nq))
+        self.q = np.concatenate(q) if q else np.zeros(0)
+        self.q_t = np.concatenate(qt) if qt else np.zeros(0)
+
+    def node_ltg(self, n):
+        """ODE2 indices of node n (in the reader's own layout for 'items')."""
+        return self.ltg[n] if self.items else self.sd.GetNodeLTGODE2(n)
+
+    def data_coordinate(self, n):
+        """First data coordinate of NodeGenericData n in the configuration read."""
+        if self.items:
+            v = np.asarray(self.mbs.GetNode(n).get("initialCoordinates", [0.0]), float).reshape(-1)
+        else:
+            v = np.asarray(self.sd.GetDataCoordinates(configuration=self.config), float)[
+                np.asarray(self.sd.GetNodeLTGData(n), np.int64)]
+        return float(v[0]) if len(v) else 0.0
 
     # ------------------------------------------------------------------ nodes
     def read_nodes(self, sc: ExudynScene):
@@ -240,7 +303,7 @@ class _Reader:
             nodes = [n for n in nodes if n in bodyOfNode]
             if not nodes:
                 continue
-            idx = np.array([self.sd.GetNodeLTGODE2(n) for n in nodes], dtype=np.int64)
+            idx = np.array([self.node_ltg(n) for n in nodes], dtype=np.int64)
             qref = np.array([np.asarray(mbs.GetNode(n)["referenceCoordinates"], float) for n in nodes])
             for k, n in enumerate(nodes):
                 for name, arr in (("coordinates", self.q), ("velocities", self.q_t)):
@@ -274,7 +337,7 @@ class _Reader:
             raise BridgeError("the Exudyn model has no ObjectRigidBody; nothing to integrate")
         # EP normalisation rows stay 0
         for n, t in sc.nodeTypes.items():
-            if t == "RigidBodyEP":
+            if t == "RigidBodyEP" and not self.items:
                 try:
                     sc.aeZero.extend(int(i) for i in self.sd.GetNodeLTGAE(n))
                 except Exception:
@@ -349,7 +412,7 @@ class _Reader:
         t = d["objectType"]
         what = self._what("object", o, d)
         try:
-            aeAll = np.array(self.sd.GetObjectLTGAE(o), dtype=np.int64)
+            aeAll = np.zeros(0, np.int64) if self.items else np.array(self.sd.GetObjectLTGAE(o), dtype=np.int64)
         except Exception:
             aeAll = np.zeros(0, np.int64)
         if not d.get("activeConnector", True):
@@ -390,10 +453,18 @@ class _Reader:
                 if A.body != GROUND and B.body == GROUND:
                     A, B, sign = B, A, -1.0          # rows -(p0 - p1): same row space, lambda flips
                 elif A.body != GROUND:
+                    # Exudyn's rows are (p1 - p0)_i in world components, i the locked axes
+                    # (CObjectJointSpherical); the scene has world-axis translation rows only
+                    # for joints locking all three translations (compiled.joint_row_descriptors;
+                    # partial locks give rows along the axes of A's joint frame, which turn with A)
                     raise BridgeError(f"{what}: constrainedAxes={list(ca[:3])} between two bodies is not "
-                                      f"supported by the exudyn_lie kernel (world-frame rows for partially "
-                                      f"locked spherical joints); lock all three axes, or attach one side to "
-                                      f"ground")
+                                      f"supported by exudyn_lie: Exudyn constrains the world components "
+                                      f"(p1 - p0)_i of the locked axes i, and the exudyn_lie scene has "
+                                      f"world-axis translation rows only when all three translations are "
+                                      f"locked (partial locks are rows along the axes of body A's joint "
+                                      f"frame, which turns with the body); lock all three axes, attach one "
+                                      f"side to ground, or use an ObjectJointGeneric (rows in marker 0's "
+                                      f"joint frame)")
                 # A is ground: the kernel's rows in A's joint frame are world rows if rotA = I
                 rotA = np.eye(3)
         else:
@@ -447,18 +518,32 @@ class _Reader:
             uf = _userfunction(d, "springTorqueUserFunction", what)
             rotA = A.rot @ np.asarray(d.get("rotationMarker0", np.eye(3)), float)
             rotB = B.rot @ np.asarray(d.get("rotationMarker1", np.eye(3)), float)
-            track = int(d.get("nodeNumber", -1)) >= 0      # NodeGenericData: angle unwrapped over turns
+            dataNode = int(d.get("nodeNumber", -1))
+            track = dataNode >= 0      # NodeGenericData: Exudyn's continuous angle of the last step
+            angle0 = self.data_coordinate(dataNode) if track else 0.0
+            if track and not np.isfinite(angle0):
+                raise BridgeError(f"{what}: the angle stored in its NodeGenericData {dataNode} is not finite: "
+                                  f"{angle0}")
             if uf is None and track:
                 # Scene (= Exudyn's law): tau = k (phi - off) + d phidot + torque, -tau z_A on B;
-                # Exudyn's velocityOffset vo enters as d (phidot - vo): torque - d vo
-                sc.AddTorsionalSpringDamper(A.body, B.body, rotA=_orthonormal(rotA), rotB=_orthonormal(rotB),
-                                            stiffness=d["stiffness"], damping=d["damping"], offset=d["offset"],
-                                            torque=float(d["torque"]) - float(d["damping"]) * float(
-                                                d.get("velocityOffset", 0.0)), name=name)
+                # Exudyn's velocityOffset vo enters as d (phidot - vo): torque - d vo.  The kernel
+                # tracks phi from the principal angle; Exudyn's angle is the branch nearest to the
+                # stored one, turns0 turns away: folded into the offset
+                phi = _principal_torsion_angle(sc, A, B, rotA, rotB)
+                turns0 = int(np.round((angle0 - phi) / (2 * np.pi)))
+                s_ = sc.AddTorsionalSpringDamper(A.body, B.body, rotA=_orthonormal(rotA), rotB=_orthonormal(rotB),
+                                                 stiffness=d["stiffness"], damping=d["damping"],
+                                                 offset=float(d["offset"]) - 2 * np.pi * turns0,
+                                                 torque=float(d["torque"]) - float(d["damping"]) * float(
+                                                     d.get("velocityOffset", 0.0)), name=name)
+                sc.torsionData.append(TorsionData(o, dataNode, angle0, spring=s_, turns0=turns0))
             else:
                 # a user function, or no data node: Exudyn then uses the principal angle in
                 # (-pi, pi] (the torque jumps at +-pi), which the compiled spring does not do
-                self._py(sc, pyforces.TorsionalSpringDamperUF(self.mbs, o, d, A, B, rotA, rotB, uf, track))
+                item = pyforces.TorsionalSpringDamperUF(self.mbs, o, d, A, B, rotA, rotB, uf, track, angle0)
+                self._py(sc, item)
+                if track:
+                    sc.torsionData.append(TorsionData(o, dataNode, angle0, item=item))
         elif t == "ConnectorRigidBodySpringDamper":
             uf = _userfunction(d, "springForceTorqueUserFunction", what)
             if _userfunction(d, "postNewtonStepUserFunction", what) is not None:
@@ -492,11 +577,17 @@ class _Reader:
             mf = self.marker(d["markerNumber"], what, allow_mass=(t == "MassProportional"))
             if t == "MassProportional" and mf.markerType != "BodyMass":
                 raise BridgeError(f"{what}: needs a MarkerBodyMass, got Marker{mf.markerType}")
+            bodyFixed = bool(d.get("bodyFixed", False))
+            if mf.rot is None and t != "MassProportional" and (t == "TorqueVector" or bodyFixed):
+                # Exudyn's Assemble refuses both (a torque needs an orientation marker; a force
+                # with bodyFixed "must provide orientation"); set after Assemble, its solvers fail
+                raise BridgeError(f"{what}: {'a torque' if t == 'TorqueVector' else 'bodyFixed=True'} needs a "
+                                  f"marker with an orientation (MarkerBodyRigid or MarkerNodeRigid), got marker "
+                                  f"{mf.index} (Marker{mf.markerType}); Exudyn refuses this combination too")
             if mf.body == GROUND:
                 sc.skipped.append((what, "acts on ground"))
                 continue
             name = d.get("name", "") or f"load{l}"
-            bodyFixed = bool(d.get("bodyFixed", False))
             if uf is not None:
                 sc.pyItems.append(pyforces.LoadUF(self.mbs, l, t, lv, mf, bodyFixed, uf,
                                                   sc.bodies[mf.body].mass, sc.bodies[mf.body].com))
@@ -519,6 +610,15 @@ class _Reader:
                 sc.AddForce(b, B.mass * v, position=B.com, name=f"massProportional{b}")
 
 
+def _principal_torsion_angle(sc, A, B, rotA, rotB):
+    """Exudyn's principal torsion angle in (-pi, pi] (z Tait-Bryan angle of the relative
+    rotation of the two spring frames) in the configuration read."""
+    RA = rotA if A.body == GROUND else sc.bodies[A.body].R0 @ rotA
+    RB = rotB if B.body == GROUND else sc.bodies[B.body].R0 @ rotB
+    Rrel = RA.T @ RB
+    return float(np.arctan2(-Rrel[0, 1], Rrel[0, 0]))
+
+
 def _orthonormal(R):
     """Remove rounding noise (Exudyn stores 1e-16-accurate matrices; Scene wants 1e-8)."""
     R = np.asarray(R, float)
@@ -531,10 +631,14 @@ def _orthonormal(R):
 def SceneFromExudyn(mbs, configuration="initial") -> ExudynScene:
     """Read an assembled Exudyn ``mbs`` into an :class:`ExudynScene` (a :class:`Scene`).
 
-    ``configuration``: ``'initial'`` (what a solve starts from) or ``'current'``.
-    ``mbs`` is not modified.  Raises :class:`BridgeError` for unsupported items."""
+    ``configuration``: ``'initial'`` (what a solve starts from), ``'current'``, or
+    ``'items'`` (an mbs not assembled yet: the initial values ``mbs.Assemble()`` will set,
+    from the item dictionaries; the scene then has no Exudyn AE indices, it is for
+    validation).  ``mbs`` is not modified.  Raises :class:`BridgeError` for unsupported
+    items."""
     rd = _Reader(mbs, configuration)
     sc = ExudynScene(mbs)
+    sc.configuration = configuration.lower()
     rd.read_nodes(sc)
     rd.read_bodies(sc)
     rd.read_items(sc)

@@ -84,8 +84,11 @@ class LieGroupSolver:
     """
 
     def __init__(self, mbs, method="RK4", liegroup="auto", stabilization=None, projectInitial=False,
-                 verbose=False):
+                 verbose=False, *, _configuration="initial"):
+        # _configuration='items' (internal, SolveDynamic): validate an mbs that is not assembled
+        # yet from its item dictionaries; Solve() then re-reads it after mbs.Assemble()
         self.mbs = mbs
+        self._configuration = _configuration
         self.tableau = _check_method(method)
         self.method = method
         if stabilization not in (None, "none", "velocity", "position"):
@@ -149,7 +152,7 @@ class LieGroupSolver:
 
     def _prepare(self, announce=False):
         """(Re-)read the model and build the simulator from mbs' initial configuration."""
-        sc = SceneFromExudyn(self.mbs, "initial")
+        sc = SceneFromExudyn(self.mbs, self._configuration)
         groups, why = self._groups(sc)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", DeprecationWarning)
@@ -335,6 +338,7 @@ class LieGroupSolver:
             R[bodies], r[bodies], om[bodies], ve[bodies] = kind.read(q, qt)
         U, _, Vt = np.linalg.svd(R)
         self.sim.SetInitialState(U @ Vt, r, om, ve, t0=t)
+        self._seed_torsion()
         self._nodes.prev[:] = NodeTable(self.scene.nodeKinds, self.scene.kindBodies).prev
 
     # ------------------------------------------------------------------ planning
@@ -380,6 +384,8 @@ class LieGroupSolver:
         exp = ss.solution.file.export
         if ss.solution.file.write and (exp.accelerations or exp.algebraicCoordinates):
             return True
+        if ss.solution.restart.write:
+            return True                  # the restart file stores ODE2_tt and the AE coordinates
         mbs = self.mbs
         if ss.solution.sensors.active:
             jointObjects = {ji.objectIndex for ji in self.scene.joints_info}
@@ -394,25 +400,59 @@ class LieGroupSolver:
         return False
 
     # ------------------------------------------------------------------ solve
-    def Solve(self, simulationSettings=None, updateInitialValues=False, storeSolver=True, showProgress=True,
-              substeps=None, accelerations=None, refresh=True):
-        """Solve from ``startTime`` to ``endTime`` in ``numberOfSteps`` steps of the
-        simulation settings, inside Exudyn's time loop; returns True.
-
-        ``accelerations``: write ``q_tt`` and the joint multipliers every output step
-        (None: only if a sensor, the solution file or a user function can read them)."""
-        import exudyn as exu
-        self._exu = exu
-        ticTotal = time.perf_counter()
-        ss = exu.SimulationSettings() if simulationSettings is None else simulationSettings
+    @staticmethod
+    def _time_settings(ss):
+        """(numberOfSteps, startTime, endTime, step size) of the settings, checked."""
         ti = ss.timeIntegration
         nsteps = int(ti.numberOfSteps)
         t0, tEnd = float(ti.startTime), float(ti.endTime)
         if nsteps < 1 or not (np.isfinite(t0) and np.isfinite(tEnd)) or tEnd <= t0:
             raise BridgeError(f"timeIntegration: need numberOfSteps >= 1 and endTime > startTime, got "
                               f"numberOfSteps={ti.numberOfSteps}, startTime={t0}, endTime={tEnd}")
-        h = (tEnd - t0) / nsteps
-        if refresh or not self._fresh:
+        return nsteps, t0, tEnd, (tEnd - t0) / nsteps
+
+    def _check_run(self, ss, substeps):
+        """Raise for settings a run with ``Solve(ss, substeps=...)`` would refuse (changes
+        nothing; SolveDynamic calls it before it assembles mbs)."""
+        nsteps, t0, tEnd, h = self._time_settings(ss)
+        self._plan(ss, nsteps, h, substeps)
+
+    def _use_assembled(self):
+        """After SolveDynamic validated an unassembled mbs ('items') and assembled it: read
+        the assembled model (Exudyn's AE indices) from now on."""
+        if self._configuration == "items":
+            self._configuration = "initial"
+            return True
+        return False
+
+    def Solve(self, simulationSettings=None, updateInitialValues=False, storeSolver=True, showProgress=True,
+              substeps=None, accelerations=None, refresh=True):
+        """Solve from ``startTime`` to ``endTime`` in ``numberOfSteps`` steps of the
+        simulation settings, inside Exudyn's time loop; returns True.
+
+        ``accelerations``: write ``q_tt`` and the joint multipliers every output step
+        (None: only if a sensor, the solution or restart file or a user function can read
+        them).
+
+        ``simulationSettings`` is never changed, not even during the run: Exudyn's time
+        loop runs on a deep copy with the bridge's settings (``numberOfSteps`` = number of
+        output periods, the implicit solver type whose Newton iteration is replaced, ...),
+        so user functions reading ``mbs.sys['simulationSettings']`` (the object passed in,
+        as with ``exudyn.SolveDynamic``) see the user's values.  The flip side: changes a
+        user function makes to that object during the run are not seen by the run.
+
+        With ``storeSolver``, ``mbs.sys['dynamicSolver' / 'simulationSettings' /
+        'lieGroupSolver']`` are set for the run (as by ``exudyn.SolveDynamic``); if Exudyn's
+        ``InitializeSolver`` fails (e.g. a solution file that cannot be opened) the previous
+        entries are put back."""
+        import copy
+
+        import exudyn as exu
+        self._exu = exu
+        ticTotal = time.perf_counter()
+        ss = exu.SimulationSettings() if simulationSettings is None else simulationSettings
+        nsteps, t0, tEnd, h = self._time_settings(ss)
+        if self._use_assembled() or refresh or not self._fresh:
             self._prepare(announce=False)
         self._fresh = False
         sim = self.sim
@@ -425,17 +465,17 @@ class LieGroupSolver:
                   f"{k} step(s) per Exudyn step ({nsteps // k} Exudyn steps); accelerations "
                   f"{'written' if needAcc else 'not needed'}")
         # Exudyn runs nsteps / k steps of its implicit solver, whose Newton iteration is the
-        # hook; the settings are changed for the run and restored afterwards (as
-        # exudyn.SolveDynamic does with the solver type)
-        ss2 = ss
+        # hook, with these settings: on a deep copy (the user's object stays as it is)
+        ss2 = copy.deepcopy(ss)
         ti2 = ss2.timeIntegration
         ga = ti2.generalizedAlpha
-        changed = [(ti2, "numberOfSteps", nsteps // k),
-                   (ti2, "solverType", exu.DynamicSolverType.GeneralizedAlpha),
-                   (ga, "computeInitialAccelerations", False), (ga, "useNewmark", False),
-                   (ga, "useIndex2Constraints", False), (ti2, "adaptiveStep", False),
-                   (ti2, "automaticStepSize", False)]
-        restore = [(obj, name, getattr(obj, name)) for obj, name, _ in changed]
+        ti2.numberOfSteps = nsteps // k
+        ti2.solverType = exu.DynamicSolverType.GeneralizedAlpha
+        ga.computeInitialAccelerations = False
+        ga.useNewmark = False
+        ga.useIndex2Constraints = False
+        ti2.adaptiveStep = False
+        ti2.automaticStepSize = False
 
         solver = exu.MainSolverImplicitSecondOrder()
         self.solver = solver
@@ -443,16 +483,27 @@ class LieGroupSolver:
         state = dict(tic=time.perf_counter(), nextProgress=time.perf_counter() + PROGRESS_FIRST, t0=t0, tEnd=tEnd)
         self.timing = dict(integration=0.0, steps=nsteps, exudynSteps=nsteps // k, substeps=k)
 
-        if storeSolver:
-            self.mbs.sys["dynamicSolver"] = solver
-            self.mbs.sys["simulationSettings"] = ss
-            self.mbs.sys["lieGroupSolver"] = self
+        stored = {}
+        if storeSolver:                          # as exudyn.SolveDynamic: available from the start
+            sysd = self.mbs.sys
+            stored = {key: (key in sysd, sysd.get(key)) for key in ("dynamicSolver", "simulationSettings",
+                                                                     "lieGroupSolver")}
+            sysd["dynamicSolver"] = solver
+            sysd["simulationSettings"] = ss
+            sysd["lieGroupSolver"] = self
         try:
-            for obj, name, value in changed:
-                setattr(obj, name, value)
             ok = solver.InitializeSolver(self.mbs, ss2)
             if ok is False:
                 raise BridgeError(f"Exudyn's InitializeSolver failed: {solver.GetErrorString()}")
+        except BaseException:
+            for key, (had, value) in stored.items():     # bad input: mbs.sys as it was
+                if had:
+                    self.mbs.sys[key] = value
+                else:
+                    self.mbs.sys.pop(key, None)
+            raise
+        finalized = False
+        try:
             self._init_buffers_from_mbs()
             vmax = 1e6 * max(1.0, float(np.max(np.abs(sim.V))) if sim.V.size else 0.0)
             self._write(True)                    # initial state with accelerations / multipliers
@@ -508,19 +559,20 @@ class LieGroupSolver:
             ok = solver.SolveSteps(self.mbs, ss2)
             if ok and not needAcc:
                 self._write(True)                # final accelerations, as a native solve leaves them
+            if ok:
+                self._write_torsion_data()       # the exact turned angles (Exudyn tracks per output)
+            finalized = True
             solver.FinalizeSolver(self.mbs, ss2)
         except BaseException:
-            err = self._hookError
-            if err is not None:
+            if not finalized:
                 try:
                     solver.FinalizeSolver(self.mbs, ss2)
                 except Exception:
                     pass
+            err = self._hookError
+            if err is not None:
                 raise err from None
             raise
-        finally:
-            for obj, name, value in restore:
-                setattr(obj, name, value)
         if not ok:
             raise exu.SolverError(f"exudyn_lie: Exudyn's time loop terminated: {solver.GetErrorString()}")
         if updateInitialValues:
@@ -535,6 +587,53 @@ class LieGroupSolver:
             print(f"exudyn_lie: done in {total:.3g} s ({self.timing['integration']:.3g} s integration, "
                   f"bridge + Exudyn output {100 * self.timing['bridgeOverhead']:.1f} %)")
         return True
+
+    # ------------------------------------------------------------------ torsional springs' data nodes
+    def _torsion_angles(self):
+        """Exudyn's continuous angle of every torsional spring with a data node, at the
+        simulator's state (compiled springs: the kernel's tracked angle + the folded turns)."""
+        out = []
+        st = None
+        for td in self.scene.torsionData:
+            if td.spring is not None:
+                out.append(float(self.sim.wk.tphi[td.spring]) + 2.0 * math.pi * td.turns0)
+            else:
+                st = self.sim.states() if st is None else st
+                out.append(float(td.item.angle(st)[0]))
+        return out
+
+    def _write_torsion_data(self):
+        """Write the turned angles into the springs' data nodes (Current): Exudyn's own
+        update after each of its steps takes the branch nearest to the last angle, which
+        loses turns when a spring turns by more than pi between two outputs."""
+        tds = self.scene.torsionData
+        if not tds:
+            return
+        sd = self.mbs.systemData
+        cur = self._exu.ConfigurationType.Current
+        data = np.array(sd.GetDataCoordinates(configuration=cur), float)
+        for td, angle in zip(tds, self._torsion_angles()):
+            data[int(sd.GetNodeLTGData(td.dataNode)[0])] = angle
+        sd.SetDataCoordinates(data, configuration=cur)
+
+    def _seed_torsion(self):
+        """After the state was re-read from mbs: continue every tracked torsion angle from
+        the angle in its data node, as Exudyn does (the simulator restarts its tracking from
+        the principal angle)."""
+        tds = self.scene.torsionData
+        if not tds:
+            return
+        sd = self.mbs.systemData
+        data = np.asarray(sd.GetDataCoordinates(configuration=self._exu.ConfigurationType.Current), float)
+        tphi = self.sim.wk.tphi
+        for td in tds:
+            prev = float(data[int(sd.GetNodeLTGData(td.dataNode)[0])])
+            if td.spring is not None:
+                target = prev - 2.0 * math.pi * td.turns0           # in the kernel's frame
+                phi = float(tphi[td.spring])
+                tphi[td.spring] = phi + 2.0 * math.pi * round((target - phi) / (2.0 * math.pi))
+            else:
+                td.item.prev = prev
 
     def _progress(self, state, t):
         now = time.perf_counter()
@@ -562,7 +661,7 @@ class LieGroupSolver:
         accelerations) in mbs' Current configuration."""
         import exudyn as exu
         self._exu = exu
-        if refresh or not self._fresh:
+        if self._use_assembled() or refresh or not self._fresh:
             self._prepare(announce=False)
         self._fresh = False
         self.sim.t = float(startTime)
@@ -575,6 +674,7 @@ class LieGroupSolver:
             self._watch = False
             self._init_buffers_from_mbs()
             self._write(True)
+            self._write_torsion_data()
             self.mbs.systemData.SetTime(self.sim.t)
         return res
 
@@ -597,17 +697,27 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
     them).
 
     Honours ``timeIntegration.startTime / endTime / numberOfSteps``, sensors (stored and
-    files), the solution file, pre/post-step user functions, ``updateInitialValues`` and
-    ``storeSolver`` (``mbs.sys['dynamicSolver']``, ``mbs.sys['lieGroupSolver']``).  Bad
-    input raises before ``mbs`` is touched."""
+    files), the solution and restart files, pre/post-step user functions,
+    ``updateInitialValues`` and ``storeSolver`` (``mbs.sys['dynamicSolver']``,
+    ``mbs.sys['lieGroupSolver']``).  ``simulationSettings`` is not changed, not even
+    during the run (see :meth:`LieGroupSolver.Solve`).
+
+    Bad input raises before ``mbs`` is touched: the arguments, the settings and the whole
+    model (items, initial state, initial constraint consistency) are checked first; with
+    ``autoAssemble`` and an mbs that is not assembled, the model is checked from its item
+    dictionaries (what ``mbs.Assemble()`` will set) and only then assembled."""
+    import exudyn as exu
     if solverType is not None:
         raise BridgeError(f"solverType={solverType} is Exudyn's choice of solver; exudyn_lie integrates with "
                           f"explicit Munthe-Kaas methods: pass method=... (one of {', '.join(method_names())})")
-    if not mbs.systemIsConsistent and autoAssemble:
+    assemble = not mbs.systemIsConsistent and autoAssemble
+    solver = LieGroupSolver(mbs, method=method, liegroup=liegroup, stabilization=stabilization,
+                            projectInitial=projectInitial, verbose=verbose,
+                            _configuration="items" if assemble else "initial")
+    solver._check_run(exu.SimulationSettings() if simulationSettings is None else simulationSettings, substeps)
+    if assemble:
         warnings.warn("exudyn_lie.SolveDynamic: mbs is not assembled; calling mbs.Assemble()", RuntimeWarning,
                       stacklevel=2)
         mbs.Assemble()
-    solver = LieGroupSolver(mbs, method=method, liegroup=liegroup, stabilization=stabilization,
-                            projectInitial=projectInitial, verbose=verbose)
     return solver.Solve(simulationSettings, updateInitialValues=updateInitialValues, storeSolver=storeSolver,
-                        showProgress=showProgress, substeps=substeps, accelerations=accelerations, refresh=False)
+                        showProgress=showProgress, substeps=substeps, accelerations=accelerations, refresh=assemble)

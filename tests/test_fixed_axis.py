@@ -10,16 +10,26 @@ body-fixed twist (constant)  V = (omega0 xi, omega0 p x xi),
 mixed velocity (configuration dependent)  V^m(g) = (omega0 xi, R (p x omega0 xi)).
 
 The motion is a one-parameter subgroup of SE(3) (a revolute joint to the ground), so every
-MK step on SE3 reproduces it exactly for any step size (corollary 1).  On SO3xR3 the
-rotation is exact but the position is the quadrature r+ = r + h sum_j b_j R_j (p x omega0 xi),
-with error of the order of the quadrature (b, c) -- the method's order, except Kutta's RK3
-whose nodes/weights are Simpson's rule (quadrature order 4).
+MK step on SE3 reproduces it exactly (corollary 1) for any step size with |Psi_j| < 2 pi:
+with the constant body twist every stage has k_j = V and the stage arguments are
+Psi_j = c_j h V, so the domain is  max_j c_j h omega0 < 2 pi  over the stages with
+Psi_j != 0 (h omega0 < 2 pi for RK4, DOPRI5, RK6; < 4 pi for the midpoint rule; any h for
+explicit Euler, which has no such stage).  At |Psi| = 2 pi dexp_{-Psi} is singular and
+the stage equation of eq. (MK1) undefined; the stepper refuses stage arguments with
+|xi| >= mk.STAGE_ANGLE_MAX = 2 pi (1 - sqrt(eps)) (2 pi - 9.4e-8).  Measured: exact to
+round-off (<= 1.2e-13 over 12 steps) right up to that limit (h omega0 = 6.0, 6.2,
+2 pi - 1e-3, 2 pi - 1.04e-7); without the guard 4e-2 at exactly 2 pi and 1e7 at 4 pi.
+On SO3xR3 the rotation is exact but the position is the quadrature
+r+ = r + h sum_j b_j R_j (p x omega0 xi), with error of the order of the quadrature (b, c)
+-- the method's order, except Kutta's RK3 whose nodes/weights are Simpson's rule
+(quadrature order 4).
 """
 import numpy as np
 import pytest
 
-from exudyn_lie.groups import se3, so3xr3
+from exudyn_lie.groups import se3, so3, so3xr3
 from exudyn_lie.integrators import METHODS, get_method, mk
+from test_mk_convergence import memo, step_counts
 
 XI = np.array([1.0, 2.0, 2.0]) / 3.0          # unit axis, not a coordinate axis
 P = np.array([0.4, -0.3, 1.1])                # point on the axis (world), p x xi != 0
@@ -58,8 +68,32 @@ def joint_violation(R, r):
     return max(np.abs(r + R @ P - P).max(), np.abs(R @ XI - XI).max())
 
 
-# step sizes: tiny, moderate, 1 rad per step, > pi/2 per step, 3 rad per step
-STEP_SIZES = [1e-3, 0.1, 1.0 / OMEGA0, 2.0, 3.0 / OMEGA0]
+# step sizes: tiny, moderate, 1 rad per step, > pi/2 per step, 3, 6.0 and 6.2 rad per step
+# (6.0 and 6.2: stage arguments |Psi| up to 6.2 rad for the methods with c_j = 1)
+STEP_SIZES = [1e-3, 0.1, 1.0 / OMEGA0, 2.0, 3.0 / OMEGA0, 6.0 / OMEGA0, 6.2 / OMEGA0]
+
+
+def max_stage_node(method):
+    """max c_j over the evaluated stages with a nonzero stage argument Psi_j = c_j h V
+    (0 if there is none, e.g. explicit Euler)."""
+    return max([method.c[j] for j in method.active_stages if j > 0 and method.c[j] > 0.0],
+               default=0.0)
+
+
+def domain_limit(method):
+    """Largest h omega0 of the SE3 exactness domain: max_j c_j h omega0 < STAGE_ANGLE_MAX."""
+    cmax = max_stage_node(method)
+    return np.inf if cmax == 0.0 else mk.STAGE_ANGLE_MAX / cmax
+
+
+def assert_exact(traj, tol=1e-12):
+    scale = 1.0 + np.linalg.norm(P)
+    for k, t in enumerate(traj.t):
+        R_ex, r_ex = exact(t)
+        R, r = traj.R[k, 0], traj.r[k, 0]
+        assert np.abs(R - R_ex).max() <= tol
+        assert np.abs(r - r_ex).max() <= tol * scale
+        assert joint_violation(R, r) <= tol * scale
 
 
 @pytest.mark.parametrize("method", METHODS, ids=lambda m: m.name)
@@ -67,13 +101,60 @@ STEP_SIZES = [1e-3, 0.1, 1.0 / OMEGA0, 2.0, 3.0 / OMEGA0]
 def test_se3_update_exact_for_any_step(method, h):
     n_steps = 12
     traj = mk.integrate_kinematic(method, [se3], G0, vel_se3, (0.0, n_steps * h), n_steps)
-    scale = 1.0 + np.linalg.norm(P)
-    for k, t in enumerate(traj.t):
-        R_ex, r_ex = exact(t)
-        R, r = traj.R[k, 0], traj.r[k, 0]
-        assert np.abs(R - R_ex).max() <= 1e-12
-        assert np.abs(r - r_ex).max() <= 1e-12 * scale
-        assert joint_violation(R, r) <= 1e-12 * scale
+    assert_exact(traj)
+
+
+# distance of the largest stage argument c_max h omega0 from 2 pi: 1e-3, 1e-6, and just
+# inside the guard (2 pi - STAGE_ANGLE_MAX = 9.4e-8)
+GAPS = [1e-3, 1e-6, 2 * np.pi - mk.STAGE_ANGLE_MAX + 1e-8]
+
+
+@pytest.mark.parametrize("method", METHODS, ids=lambda m: m.name)
+@pytest.mark.parametrize("gap", GAPS)
+def test_se3_update_exact_up_to_the_domain_limit(method, gap):
+    """Exact to round-off for stage arguments right up to |Psi| = 2 pi - 1.04e-7."""
+    cmax = max_stage_node(method)
+    if cmax == 0.0:                          # no stage argument: no limit at all
+        h = (4 * np.pi - gap) / OMEGA0
+    else:
+        h = (2 * np.pi - gap) / (cmax * OMEGA0)
+        assert cmax * h * OMEGA0 < mk.STAGE_ANGLE_MAX
+    n_steps = 12
+    traj = mk.integrate_kinematic(method, [se3], G0, vel_se3, (0.0, n_steps * h), n_steps)
+    assert_exact(traj)
+
+
+@pytest.mark.parametrize("method", METHODS, ids=lambda m: m.name)
+def test_stage_argument_guard_beyond_the_domain(method):
+    """Stage arguments at (or beyond) 2 pi - 9.4e-8 are refused with a clear error naming
+    the stage, body, group and step size; explicit Euler has no stage argument."""
+    cmax = max_stage_node(method)
+    hw_list = [mk.STAGE_ANGLE_MAX + 1e-9, 2 * np.pi, 2 * np.pi + 0.1, 4 * np.pi]
+    if cmax == 0.0:
+        for hw in hw_list:
+            traj = mk.integrate_kinematic(method, [se3], G0, vel_se3, (0.0, 3 * hw / OMEGA0), 3)
+            assert_exact(traj)
+        return
+    for group, vel in (("SE3", vel_se3), ("SO3xR3", vel_mixed)):
+        for hw in hw_list:
+            h = hw / (cmax * OMEGA0)
+            with pytest.raises(ValueError) as exc:
+                mk.integrate_kinematic(method, [group], G0, vel, (0.0, 2 * h), 2)
+            msg = str(exc.value)
+            assert f"h = {h:.17g}" in msg and f"group {group}" in msg and "body 0" in msg
+            assert "stage" in msg and "2 pi" in msg and "reduce the step size" in msg
+            assert method.name in msg
+    # the guard sits exactly at STAGE_ANGLE_MAX: a hair inside still runs
+    h = (mk.STAGE_ANGLE_MAX - 1e-9) / (cmax * OMEGA0)
+    assert_exact(mk.integrate_kinematic(method, [se3], G0, vel_se3, (0.0, 2 * h), 2))
+
+
+def test_stage_angle_max_is_where_dexp_loses_half_the_digits():
+    """kappa(dexp_xi) = (t/2)/|sin(t/2)| (SO3 block) equals 1/sqrt(eps) at STAGE_ANGLE_MAX."""
+    t = mk.STAGE_ANGLE_MAX
+    kappa = np.linalg.cond(so3.dexp(t * XI))
+    assert kappa == pytest.approx((t / 2) / abs(np.sin(t / 2)), rel=1e-3)
+    assert kappa == pytest.approx(1.0 / np.sqrt(np.finfo(float).eps), rel=1e-3)
 
 
 @pytest.mark.parametrize("method", METHODS, ids=lambda m: m.name)
@@ -102,19 +183,22 @@ def test_so3xr3_rotation_exact_position_not(method):
 
 @pytest.mark.parametrize("method", METHODS, ids=lambda m: m.name)
 def test_so3xr3_position_error_order(method):
-    """Position error at T = 2 (2.6 rad, not a full turn) over N = 4..32 steps."""
+    """Position error at T = 2 (2.6 rad, not a full turn); step counts from the order rule
+    of test_mk_convergence.py (N = 4..32 for the catalogue)."""
     T = 2.0
-    Ns = np.array([4, 8, 16, 32])
     R_ex, r_ex = exact(T)
-    errs = []
-    for N in Ns:
+    q = method.quadrature_order                 # == order, except RK3 (Simpson): 4
+
+    @memo
+    def error_of(N):
         traj = mk.integrate_kinematic(method, [so3xr3], G0, vel_mixed, (0.0, T), int(N),
                                       every=int(N))
-        errs.append(np.abs(traj.r[-1, 0] - r_ex).max())
-    errs = np.array(errs)
+        return np.abs(traj.r[-1, 0] - r_ex).max()
+
+    Ns = np.array(step_counts(q, T, error_of, 32))
+    errs = np.array([error_of(N) for N in Ns])
     assert np.all(errs > 1e-13)
     slope = np.polyfit(np.log(T / Ns), np.log(errs), 1)[0]
-    q = method.quadrature_order                 # == order, except RK3 (Simpson): 4
     assert q >= method.order
     assert q - 0.3 <= slope <= q + 0.5, f"{method.name}: slope {slope:.3f}, expected {q}"
 

@@ -82,6 +82,18 @@ def test_exp_log_identity(kind, rng):
     np.testing.assert_allclose(r2, r, atol=1e-13)
 
 
+@pytest.mark.parametrize("kind", POINTS + ["exactly_pi"])
+def test_exp_log_identity_at_the_points(kind, rng):
+    """exp(log(g)) = g directly at g = exp(X) for the four points and |xi| = pi."""
+    X = np.r_[math.pi * unit(rng), rng.normal(size=3)] if kind == "exactly_pi" else point(kind, rng)
+    R, r = se3.exp(X)
+    Xl = se3.log(R, r)
+    assert np.linalg.norm(Xl[0:3]) <= math.pi + 1e-15
+    R2, r2 = se3.exp(Xl)
+    np.testing.assert_allclose(R2, R, atol=4e-15, rtol=0)
+    np.testing.assert_allclose(r2, r, atol=4e-15 * (1 + np.linalg.norm(r)), rtol=0)
+
+
 def test_log_at_exactly_pi(rng):
     for _ in range(10):
         n = unit(rng)

@@ -73,6 +73,19 @@ def test_exp_log_identity(kind, rng):
     np.testing.assert_allclose(so3.exp(x), R, atol=4e-15)
 
 
+@pytest.mark.parametrize("kind", POINTS + ["exactly_pi"])
+def test_exp_log_identity_at_the_points(kind, rng):
+    """exp(log(g)) = g directly at g = exp(x) for the four points and |x| = pi (in
+    floating point: the double nearest to pi); log lands on |xi| <= pi."""
+    x = math.pi * unit(rng) if kind == "exactly_pi" else point(kind, rng)
+    R = so3.exp(x)
+    xl = so3.log(R)
+    assert np.linalg.norm(xl) <= math.pi + 1e-15
+    np.testing.assert_allclose(so3.exp(xl), R, atol=4e-15, rtol=0)
+    if kind == "exactly_pi":          # log is defined up to the sign of the axis
+        assert min(np.abs(xl - x).max(), np.abs(xl + x).max()) < 1e-7
+
+
 def test_log_at_exactly_pi(rng):
     # exactly symmetric rotations by pi: R = 2 n n^T - I
     for _ in range(20):

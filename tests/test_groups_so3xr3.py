@@ -63,12 +63,27 @@ def test_log_exp_and_exp_log(kind, rng):
     np.testing.assert_allclose(r2, r, atol=1e-14)
 
 
+@pytest.mark.parametrize("kind", POINTS + ["exactly_pi"])
+def test_exp_log_identity_at_the_points(kind, rng):
+    """exp(log(g)) = g directly at g = exp(X) for the four points and |xi| = pi."""
+    X = np.r_[math.pi * unit(rng), rng.normal(size=3)] if kind == "exactly_pi" else point(kind, rng)
+    R, r = so3xr3.exp(X)
+    Xl = so3xr3.log(R, r)
+    assert np.linalg.norm(Xl[0:3]) <= math.pi + 1e-15
+    R2, r2 = so3xr3.exp(Xl)
+    np.testing.assert_allclose(R2, R, atol=4e-15, rtol=0)
+    np.testing.assert_array_equal(r2, r)
+    # the 7x7 matrix representation agrees (eq. MatrixSO3xR3)
+    np.testing.assert_allclose(C7(R2, r2), C7(R, r), atol=4e-15, rtol=0)
+
+
 def test_log_at_exactly_pi(rng):
     n = unit(rng)
     R = 2.0 * np.outer(n, n) - np.eye(3)
     X = so3xr3.log(R, np.ones(3))
     assert abs(np.linalg.norm(X[:3]) - math.pi) < 1e-14
     np.testing.assert_allclose(so3xr3.exp(X)[0], R, atol=1e-14)
+    np.testing.assert_array_equal(so3xr3.exp(X)[1], np.ones(3))
 
 
 @pytest.mark.parametrize("kind", POINTS)

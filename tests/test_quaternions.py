@@ -56,6 +56,20 @@ def test_rotvec_matrix_round_trips(kind, rng):
     np.testing.assert_allclose(qt.to_matrix(-Q), R, atol=4e-15)
 
 
+@pytest.mark.parametrize("kind", POINTS + ["exactly_pi"])
+def test_quaternion_exp_log_identity(kind, rng):
+    """from_rotvec (exp) after to_rotvec (log) returns the quaternion, directly at
+    Q = from_rotvec(x) for the four points, and at Q = (0, n) (a rotation by exactly pi)."""
+    if kind == "exactly_pi":
+        Q = np.r_[0.0, unit(rng)]
+    else:
+        Q = qt.from_rotvec(rotvec(kind, rng))
+    xi = qt.to_rotvec(Q)
+    assert np.linalg.norm(xi) <= math.pi + 1e-15
+    np.testing.assert_allclose(qt.from_rotvec(xi), Q, atol=4e-16 * 4, rtol=0)
+    np.testing.assert_allclose(so3.exp(xi), qt.to_matrix(Q), atol=4e-15, rtol=0)
+
+
 def test_from_matrix_at_pi_and_composition(rng):
     n = unit(rng)
     R = 2.0 * np.outer(n, n) - np.eye(3)
@@ -128,6 +142,44 @@ def test_pose_and_screw_round_trips(kind, rng):
     X = se3.log(R, r)
     np.testing.assert_allclose(dq.from_screw(X), Qh, atol=1e-14)
     np.testing.assert_allclose(dq.to_screw(Qh), X, atol=1e-13)
+
+
+def _same_dual_quaternion(Qh, Ph, atol):
+    """Qh == Ph up to the double cover (Qh and -Qh are the same pose)."""
+    sgn = 1.0 if Qh[:4] @ Ph[:4] >= 0 else -1.0
+    np.testing.assert_allclose(sgn * Qh, Ph, atol=atol, rtol=0)
+
+
+@pytest.mark.parametrize("kind", POINTS + ["exactly_pi"])
+def test_dual_quaternion_screw_round_trip(kind, rng):
+    """from_screw (exp) after to_screw (log) returns the dual quaternion, directly at
+    Qh = from_screw(X) for the four points and |xi| = pi."""
+    X = np.r_[math.pi * unit(rng) if kind == "exactly_pi" else rotvec(kind, rng),
+              rng.normal(size=3)]
+    Qh = dq.from_screw(X)
+    Xl = dq.to_screw(Qh)
+    assert np.linalg.norm(Xl[:3]) <= math.pi + 1e-15
+    _same_dual_quaternion(dq.from_screw(Xl), Qh, 1e-14)
+    R, r = dq.to_pose(Qh)
+    R2, r2 = se3.exp(Xl)
+    np.testing.assert_allclose(R2, R, atol=4e-15, rtol=0)
+    np.testing.assert_allclose(r2, r, atol=1e-14, rtol=0)
+
+
+def test_dual_quaternion_to_screw_at_exactly_pi(rng):
+    """to_screw of a pose rotated by exactly pi (q0 == 0 exactly: R = 2 n n^T - I)."""
+    for _ in range(10):
+        n = unit(rng)
+        R = 2.0 * np.outer(n, n) - np.eye(3)
+        r = rng.normal(size=3)
+        Qh = dq.from_pose(R, r)
+        assert Qh[0] == 0.0
+        X = dq.to_screw(Qh)
+        assert abs(np.linalg.norm(X[:3]) - math.pi) < 1e-14
+        R2, r2 = se3.exp(X)
+        np.testing.assert_allclose(R2, R, atol=4e-15, rtol=0)
+        np.testing.assert_allclose(r2, r, atol=1e-14, rtol=0)
+        _same_dual_quaternion(dq.from_screw(X), Qh, 1e-14)
 
 
 def test_dual_product_is_se3_product(rng):

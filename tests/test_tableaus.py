@@ -20,7 +20,9 @@ def test_catalogue_method_self_consistent(m):
     assert np.all(np.triu(m.A) == 0.0)                    # explicit
     np.testing.assert_allclose(m.A.sum(axis=1), m.c, atol=1e-15)
     assert m.b.sum() == pytest.approx(1.0, abs=1e-15)
-    # the claimed order is exactly the order (the conditions of order+1 fail)
+    # the claimed order is exactly the order (the conditions of order+1 fail; they are
+    # generated up to MAX_CHECK_ORDER, see test_achieved_order_up_to_max_check_order)
+    assert m.order < T.MAX_CHECK_ORDER
     assert m.achieved_order() == m.order
     assert m.exact                                          # catalogue is given in rationals
     A, b, c = m.arrays()
@@ -36,6 +38,34 @@ def test_tree_counts():
     # number of rooted trees of order 1..8 (OEIS A000081)
     counts = [sum(1 for n, _ in T.rooted_trees(8) if n == k) for k in range(1, 9)]
     assert counts == [1, 1, 2, 4, 9, 20, 48, 115]
+
+
+def test_achieved_order_checks_up_to_max_check_order():
+    """achieved_order() and the construction check use every generated order
+    (MAX_CHECK_ORDER), not one less."""
+    import inspect
+    assert inspect.signature(T.achieved_order).parameters["max_order"].default == T.MAX_CHECK_ORDER
+    assert (inspect.signature(ButcherTableau.achieved_order).parameters["max_order"].default
+            == T.MAX_CHECK_ORDER)
+    with pytest.raises(ValueError, match="up to order"):
+        T.achieved_order(T.RK4.A.tolist(), T.RK4.b.tolist(), T.MAX_CHECK_ORDER + 1)
+
+
+@pytest.mark.parametrize("k", range(1, T.MAX_CHECK_ORDER + 1))
+def test_achieved_order_up_to_max_check_order(k):
+    """Explicit Euler extrapolated on n = 1..k has order exactly k: the order is found for
+    every k up to MAX_CHECK_ORDER, and claiming k + 1 fails (by the order-(k+1) conditions,
+    or because k + 1 is beyond what can be checked)."""
+    m = T.extrapolated_euler(k)
+    assert m.stages == 1 + k * (k - 1) // 2 and m.exact
+    assert m.achieved_order() == k
+    A, b, c = m._exact_coeffs                     # the exact rationals of the tableau
+    if k < T.MAX_CHECK_ORDER:
+        with pytest.raises(ValueError, match=rf"order condition of order {k + 1}"):
+            ButcherTableau(name="overclaimed", A=A, b=b, c=c, order=k + 1)
+    else:
+        with pytest.raises(ValueError, match="exceeds the checkable maximum"):
+            ButcherTableau(name="overclaimed", A=A, b=b, c=c, order=k + 1)
 
 
 def test_dopri5_embedded_and_active_stages():

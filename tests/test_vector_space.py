@@ -11,6 +11,7 @@ import pytest
 from exudyn_lie.groups import dualquat, quaternion
 from exudyn_lie.integrators import METHODS, mk
 from exudyn_lie.integrators import vector_space as vs
+from test_mk_convergence import memo, step_counts
 
 GROUPS = ["SE3", "SO3xR3"]
 
@@ -108,13 +109,8 @@ def joint_violation(R, r):
     return max(np.abs(r + R @ P - P).max(), np.abs(R @ XI - XI).max())
 
 
-# step counts per order (asymptotic range, see test_mk_convergence.py)
-SCHEDULE = {1: 16, 2: 16, 3: 16, 4: 16, 5: 16, 6: 8}
-
-
-def step_counts(order):
-    n0 = SCHEDULE.get(order, 4)
-    return [n0 * 2 ** k for k in range(4)]
+# step counts: the order-derived rule of test_mk_convergence.py (pilot run + C h^p model)
+N_CAP = 128
 
 
 def slope(Ns, errs, T=1.0):
@@ -144,12 +140,17 @@ def test_canonical_recentred_every_step_is_mk(method):
 
 @pytest.mark.parametrize("method", METHODS, ids=lambda m: m.name)
 def test_canonical_order_and_agreement_with_mk(method):
-    Ns = step_counts(method.order)
     g0, V0 = top_exact(0.0)
+
+    @memo
+    def run(N):
+        return vs.canonical_integrate(method, GROUPS, g0, V0, top_rhs, (0.0, 1.0), N,
+                                      every=N // 2)
+
+    Ns = step_counts(method.order, 1.0, lambda N: top_errors(run(N)).min(), N_CAP)
     e_can, e_mk, diffs = [], [], []
     for N in Ns:
-        can = vs.canonical_integrate(method, GROUPS, g0, V0, top_rhs, (0.0, 1.0), N,
-                                     every=N // 2)
+        can = run(N)
         ref = mk.integrate(method, GROUPS, g0, V0, top_rhs, (0.0, 1.0), N, every=N // 2)
         assert can.info["n_recentred"] >= 2          # |xi| passes pi/2 within t <= 1
         e_can.append(top_errors(can))
@@ -181,17 +182,98 @@ def test_canonical_survives_many_turns():
     assert np.all(errs < 2 * ref + 1e-12)
 
 
-def test_canonical_global_chart_breaks_down():
-    """Without re-centring, the global chart (paper's remark, appendix B) runs into the
-    dexp^{-1} singularity at |xi| = 2 pi after about one turn: the result is garbage."""
+def test_canonical_global_chart_refused_at_pi():
+    """Without re-centring, the global chart (paper's remark, appendix B) would leave the
+    domain |xi| < pi of unique exponential coordinates after about half a turn (and run
+    into the dexp^{-1} singularity at 2 pi): the step that would carry |xi| to pi is
+    refused with a ValueError naming it."""
     T, N = MANY_TURNS_T, MANY_TURNS_N
     g0, V0 = top_exact(0.0)
-    with np.errstate(all="ignore"):
-        traj = vs.canonical_integrate("RK4", GROUPS, g0, V0, top_rhs, (0.0, T), N,
-                                      every=N // 8, recenter_angle=np.inf)
-        errs = top_errors(traj)
-    assert traj.info["n_recentred"] == 0
-    assert not np.all(np.isfinite(errs)) or errs.max() > 1e-1
+    with pytest.raises(ValueError, match=r"ODEvec1.*step t = .*h = 0\.02 .*body \d.*>= pi.*"
+                                         r"recenter_angle = inf"):
+        vs.canonical_integrate("RK4", GROUPS, g0, V0, top_rhs, (0.0, T), N,
+                               every=N // 8, recenter_angle=np.inf)
+
+
+# --- |xi| < pi at every stage: a fixed-axis rotation with growing angular speed
+# omega(t) = W_A + W_B t: the steps of h = 1 rotate by 1.4, 1.8, 2.2, 2.6, 3.0, 3.4 rad.
+# Step 1 ends at |xi| = 1.4 < pi/2 (no re-centring by rule 1), step 2 would carry it to
+# 3.2 > pi: the guard re-centres at the step start and redoes the step.  Step 6 rotates
+# by more than pi itself: refused.
+W_A, W_B = 1.2, 0.4
+
+
+def ramp_angle(t):
+    return W_A * t + 0.5 * W_B * t * t
+
+
+def ramp_exact(t):
+    R = rodrigues(ramp_angle(t) * XI)
+    return R, P - R @ P
+
+
+def ramp_vel(t, g):
+    return ((W_A + W_B * t) / OMEGA0 * V_BODY)[None, :]
+
+
+@pytest.fixture
+def stage_angles(monkeypatch):
+    """Spy on eq. (ODEvec1b): the |xi| of every chart coordinate at which dexp^{-1}_{-q}
+    (hence the velocity field / rhs) is evaluated."""
+    seen = []
+    qdot = vs._qdot
+
+    def spy(gms, q, V):
+        seen.extend(np.linalg.norm(q[:, :3], axis=1))
+        return qdot(gms, q, V)
+
+    monkeypatch.setattr(vs, "_qdot", spy)
+    return seen
+
+
+@pytest.mark.parametrize("method", METHODS, ids=lambda m: m.name)
+def test_canonical_chart_below_pi_at_every_stage(method, stage_angles):
+    traj = vs.canonical_integrate_kinematic(method, ["SE3"], G_ID, ramp_vel, (0.0, 4.0), 4)
+    assert len(stage_angles) >= 4 * len(method.active_stages)
+    assert max(stage_angles) < np.pi           # every evaluation, also of redone steps
+    assert 2.4 < traj.info["max_stage_angle"] < np.pi      # accepted stages + step ends
+    # rule 1 re-centres after steps 2, 3, 4; the guard once more at the start of step 2,
+    # where q would reach ramp_angle(2) = 3.2 (explicit Euler: 1.2 + 1.6 = 2.8 < pi)
+    assert traj.info["n_recentred"] == (3 if method.name == "ExplicitEuler" else 4)
+    if method.quadrature_order >= 2:                      # q' = V(t) linear in t: exact
+        for k, t in enumerate(traj.t):
+            R_ex, r_ex = ramp_exact(t)
+            assert np.abs(traj.R[k, 0] - R_ex).max() < 1e-12
+            assert np.abs(traj.r[k, 0] - r_ex).max() < 1e-12
+
+
+@pytest.mark.parametrize("method", ["RK4", "DOPRI5"])
+def test_canonical_oversized_step_refused(method, stage_angles):
+    """Step 6 (t = 5, h = 1) rotates by 3.4 rad > pi from a centred chart: ValueError."""
+    with pytest.raises(ValueError, match=r"ODEvec1 .*step t = 5, h = 1 .*body 0 .*>= pi "
+                                         r".*even in a chart centred at the start of the step"
+                                         r".*reduce the step size"):
+        vs.canonical_integrate_kinematic(method, ["SE3"], G_ID, ramp_vel, (0.0, 6.0), 6)
+    assert max(stage_angles) < np.pi
+    # the same with re-centring after every step (the MK-equivalent chart), and for a
+    # single step from the identity (h = 2.6 s: 4.5 rad)
+    with pytest.raises(ValueError, match="t = 5, h = 1 "):
+        vs.canonical_integrate_kinematic(method, ["SE3"], G_ID, ramp_vel, (0.0, 6.0), 6,
+                                         recenter_angle=0.0)
+    with pytest.raises(ValueError, match="t = 0, h = 2.6"):
+        vs.canonical_step_kinematic(method, ["SE3"], G_ID, 0.0, 2.6, ramp_vel)
+
+
+def test_canonical_dynamics_fast_rotation_below_pi(stage_angles):
+    """The symmetric top with steps of ~1.6 rad (h = 0.6 s): every stage keeps |xi| < pi,
+    and the result is still an RK4 approximation (sanity, not accuracy)."""
+    g0, V0 = top_exact(0.0)
+    traj = vs.canonical_integrate("RK4", GROUPS, g0, V0, top_rhs, (0.0, 12.0), 20)
+    assert max(stage_angles) < np.pi and traj.info["max_stage_angle"] < np.pi
+    assert max(stage_angles) > 0.5 * np.pi
+    assert np.all(np.isfinite(traj.R)) and np.all(np.isfinite(traj.V))
+    for R in traj.R[:, 0]:
+        np.testing.assert_allclose(R.T @ R, np.eye(3), atol=1e-13)
 
 
 @pytest.mark.parametrize("method", METHODS, ids=lambda m: m.name)
@@ -214,12 +296,17 @@ def test_canonical_fixed_axis(method):
 # --------------------------------------------------------------------------- ODEvec2
 @pytest.mark.parametrize("method", METHODS, ids=lambda m: m.name)
 def test_dependent_order_and_agreement_with_mk(method):
-    Ns = step_counts(method.order)
     g0, V0 = top_exact(0.0)
+
+    @memo
+    def run(N):
+        return vs.dependent_integrate(method, GROUPS, g0, V0, top_rhs, (0.0, 1.0), N,
+                                      every=N // 2)
+
+    Ns = step_counts(method.order, 1.0, lambda N: top_errors(run(N)).min(), N_CAP)
     e_dep, e_mk, diffs = [], [], []
     for N in Ns:
-        dep = vs.dependent_integrate(method, GROUPS, g0, V0, top_rhs, (0.0, 1.0), N,
-                                     every=N // 2)
+        dep = run(N)
         ref = mk.integrate(method, GROUPS, g0, V0, top_rhs, (0.0, 1.0), N, every=N // 2)
         e_dep.append(top_errors(dep))
         e_mk.append(top_errors(ref))

@@ -26,10 +26,20 @@ Conventions (fixed for the whole package)
 
 Module interface (so3 / se3 / so3xr3)
 -------------------------------------
-hat, vee, exp, log, dexp, dexpinv, ad, Ad, compose, inverse, exp_into,
-dexp_apply_into, dexpinv_apply_into (allocation-free scalar code; out may alias
-the input vector), dexp_series, dexpinv_series; se3 also dexpinv_selig, dexp_P,
-dexpinv_U; coefficient helpers (coef_*) and switch constants (T_SWITCH_*).
+hat, vee, exp, log, dexp, dexpinv, ad, Ad, compose, inverse, and their
+allocation-free variants for hot loops, which write into caller-provided arrays:
+
+    exp_into(X, R[, r])          log_into(R[, r], X)
+    dexp_apply_into(X, Y, out)   dexpinv_apply_into(X, Y, out)   (out may alias Y)
+    compose_into(R1[, r1], R2[, r2], R[, r])   (outputs may alias the inputs)
+    inverse_into(R[, r], Ri[, ri])             (outputs may alias the inputs)
+    Ad_into(R[, r], M)
+
+(so3 without the translation arguments), dexp_series, dexpinv_series; se3 also
+dexpinv_selig, dexp_P, dexpinv_U; coefficient helpers (coef_*) and switch
+constants (T_SWITCH_*).  Every public function of so3, se3, so3xr3, quaternion
+and dualquat is called from inside an njit function in tests/test_groups_njit.py,
+which also checks that the _into variants do not allocate.
 """
 from . import so3, se3, so3xr3, quaternion, dualquat
 

@@ -54,7 +54,7 @@ from numba import njit
 from . import _taylor
 from ._taylor import FM as _FM
 from . import so3
-from ._taylor import ad_series, horner, mm, mv, DEXP_SERIES_COEFFS, DEXPINV_SERIES_COEFFS
+from ._taylor import ad_series, horner, mm, DEXP_SERIES_COEFFS, DEXPINV_SERIES_COEFFS
 
 # ---------------------------------------------------------------- switch points
 T_SWITCH_DEXP, _NP = _taylor.plan(("B", "C", "Q3", "Q4"))
@@ -237,12 +237,18 @@ def exp(X):
 
 
 @njit(cache=True, fastmath=_FM)
+def log_into(R, r, X):
+    """X[:] = log(R, r) = (log R, dexpinv_xi r) (inverse of eq. expX), |xi| <= pi;
+    no allocation (X[3:6] is a view)."""
+    so3.log_into(R, X)                          # X[0:3] = xi
+    so3.dexpinv_apply_into(X, r, X[3:6])        # eta = dexp_xi^-1 r (eq. dexpInvSO3)
+
+
+@njit(cache=True, fastmath=_FM)
 def log(R, r):
     """X = (xi, eta) with exp(X) = (R, r), |xi| <= pi."""
     X = np.empty(6)
-    xi = so3.log(R)
-    X[0:3] = xi
-    so3.dexpinv_apply_into(xi, r, X[3:6])
+    log_into(R, r, X)
     return X
 
 
@@ -414,22 +420,75 @@ def ad(X):
 
 
 @njit(cache=True, fastmath=_FM)
+def Ad_into(R, r, M):
+    """M[:] = Ad_(R,r) = [[R, 0], [r^ R, R]] (6x6): hat(Ad_C X) = C hat(X) C^-1 with C
+    the 4x4 matrix of eq. C; no allocation, M must not alias R or r."""
+    for i in range(3):
+        for j in range(3):
+            a = R[i, j]
+            M[i, j] = a
+            M[i + 3, j + 3] = a
+            M[i, j + 3] = 0.0
+    r0 = r[0]
+    r1 = r[1]
+    r2 = r[2]
+    for j in range(3):                          # column j of r^ R = r x (R e_j)
+        M[3, j] = r1 * R[2, j] - r2 * R[1, j]
+        M[4, j] = r2 * R[0, j] - r0 * R[2, j]
+        M[5, j] = r0 * R[1, j] - r1 * R[0, j]
+
+
+@njit(cache=True, fastmath=_FM)
 def Ad(R, r):
     """6x6 [[R, 0], [r^ R, R]]: hat(Ad_C X) = C hat(X) C^-1."""
-    M = np.zeros((6, 6))
-    M[0:3, 0:3] = R
-    M[3:6, 3:6] = R
-    M[3:6, 0:3] = mm(so3.hat(r), R)
+    M = np.empty((6, 6))
+    Ad_into(R, r, M)
     return M
+
+
+@njit(cache=True, fastmath=_FM)
+def compose_into(R1, r1, R2, r2, R, r):
+    """(R, r) = (R1 R2, r1 + R1 r2) (eq. MultSE3), no allocation; the outputs may alias
+    the inputs (e.g. in-place update g := g exp(X): R is R1, r is r1)."""
+    x0 = r2[0]
+    x1 = r2[1]
+    x2 = r2[2]
+    s0 = r1[0] + R1[0, 0] * x0 + R1[0, 1] * x1 + R1[0, 2] * x2
+    s1 = r1[1] + R1[1, 0] * x0 + R1[1, 1] * x1 + R1[1, 2] * x2
+    s2 = r1[2] + R1[2, 0] * x0 + R1[2, 1] * x1 + R1[2, 2] * x2
+    so3.compose_into(R1, R2, R)
+    r[0] = s0
+    r[1] = s1
+    r[2] = s2
 
 
 @njit(cache=True, fastmath=_FM)
 def compose(R1, r1, R2, r2):
     """(R1, r1)(R2, r2) = (R1 R2, r1 + R1 r2) (eq. MultSE3)."""
-    return mm(R1, R2), r1 + mv(R1, r2)
+    R = np.empty((3, 3))
+    r = np.empty(3)
+    compose_into(R1, r1, R2, r2, R, r)
+    return R, r
+
+
+@njit(cache=True, fastmath=_FM)
+def inverse_into(R, r, Ri, ri):
+    """(Ri, ri) = (R, r)^-1 = (R^T, -R^T r), no allocation; outputs may alias inputs."""
+    x0 = r[0]
+    x1 = r[1]
+    x2 = r[2]
+    s0 = -(R[0, 0] * x0 + R[1, 0] * x1 + R[2, 0] * x2)
+    s1 = -(R[0, 1] * x0 + R[1, 1] * x1 + R[2, 1] * x2)
+    s2 = -(R[0, 2] * x0 + R[1, 2] * x1 + R[2, 2] * x2)
+    so3.inverse_into(R, Ri)
+    ri[0] = s0
+    ri[1] = s1
+    ri[2] = s2
 
 
 @njit(cache=True, fastmath=_FM)
 def inverse(R, r):
-    Rt = np.ascontiguousarray(R.T)
-    return Rt, -mv(Rt, r)
+    Ri = np.empty((3, 3))
+    ri = np.empty(3)
+    inverse_into(R, r, Ri, ri)
+    return Ri, ri

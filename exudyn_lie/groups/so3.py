@@ -18,8 +18,12 @@ s = sin(t/2), c = cos(t/2): A = 2sc/t, B = 2s^2/t^2 (no cancellation, no 1-cos).
 
 Convention: dexp is RIGHT-trivialised, d/de exp(x + e y) = hat(dexp_x y) exp(x);
 the body-fixed angular velocity of R = exp(xi(t)) is omega = dexp_{-xi} xidot.
-dexpinv_xi is singular at |xi| = 2 pi (expected: the coordinates break down there;
-the Munthe-Kaas stage only uses |Psi| << pi).
+dexpinv_xi is singular at |xi| = 2 pi (dexp_xi is: its smallest singular value is
+|sin(t/2)|/(t/2)); the Munthe-Kaas stepper refuses stage arguments that close to
+2 pi (``integrators.mk.STAGE_ANGLE_MAX``).
+
+Group operations: compose = R1 R2, inverse = R^T, Ad_R = R (hat(R x) = R hat(x) R^T);
+each has an allocation-free ``*_into`` variant, as have exp and log.
 
 Switch points (rule in ``_taylor``): exp/dexp share T_SWITCH_EXP (driven by C:
 K=12, p=2 -> sqrt(12/32) = 0.612; A, B, C keep 8, 7, 7 terms), dexpinv uses
@@ -251,8 +255,8 @@ def dexpinv_series(x, nterms):
 
 # ------------------------------------------------------------------------ log
 @njit(cache=True, fastmath=_FM)
-def quat_from_matrix(R):
-    """Unit quaternion (q0, q1, q2, q3), q0 >= 0, of R (Shepperd's method).
+def _quat_tuple(R):
+    """(q0, q1, q2, q3) of R as scalars (Shepperd's method), q0 >= 0, unit; no allocation.
 
     If q0 == 0 exactly (rotation by pi), the largest |q_i| is positive.
     """
@@ -260,56 +264,62 @@ def quat_from_matrix(R):
     r11 = R[1, 1]
     r22 = R[2, 2]
     tr = r00 + r11 + r22
-    q = np.empty(4)
     if tr >= r00 and tr >= r11 and tr >= r22:
         q0 = 0.5 * math.sqrt(max(1.0 + tr, 0.0))
         f = 0.25 / q0
-        q[0] = q0
-        q[1] = (R[2, 1] - R[1, 2]) * f
-        q[2] = (R[0, 2] - R[2, 0]) * f
-        q[3] = (R[1, 0] - R[0, 1]) * f
+        q1 = (R[2, 1] - R[1, 2]) * f
+        q2 = (R[0, 2] - R[2, 0]) * f
+        q3 = (R[1, 0] - R[0, 1]) * f
     elif r00 >= r11 and r00 >= r22:
         q1 = 0.5 * math.sqrt(max(1.0 + r00 - r11 - r22, 0.0))
         f = 0.25 / q1
-        q[0] = (R[2, 1] - R[1, 2]) * f
-        q[1] = q1
-        q[2] = (R[0, 1] + R[1, 0]) * f
-        q[3] = (R[0, 2] + R[2, 0]) * f
+        q0 = (R[2, 1] - R[1, 2]) * f
+        q2 = (R[0, 1] + R[1, 0]) * f
+        q3 = (R[0, 2] + R[2, 0]) * f
     elif r11 >= r22:
         q2 = 0.5 * math.sqrt(max(1.0 - r00 + r11 - r22, 0.0))
         f = 0.25 / q2
-        q[0] = (R[0, 2] - R[2, 0]) * f
-        q[1] = (R[0, 1] + R[1, 0]) * f
-        q[2] = q2
-        q[3] = (R[1, 2] + R[2, 1]) * f
+        q0 = (R[0, 2] - R[2, 0]) * f
+        q1 = (R[0, 1] + R[1, 0]) * f
+        q3 = (R[1, 2] + R[2, 1]) * f
     else:
         q3 = 0.5 * math.sqrt(max(1.0 - r00 - r11 + r22, 0.0))
         f = 0.25 / q3
-        q[0] = (R[1, 0] - R[0, 1]) * f
-        q[1] = (R[0, 2] + R[2, 0]) * f
-        q[2] = (R[1, 2] + R[2, 1]) * f
-        q[3] = q3
-    if q[0] < 0.0:
-        for i in range(4):
-            q[i] = -q[i]
-    n = math.sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3])
-    for i in range(4):
-        q[i] /= n
+        q0 = (R[1, 0] - R[0, 1]) * f
+        q1 = (R[0, 2] + R[2, 0]) * f
+        q2 = (R[1, 2] + R[2, 1]) * f
+    n = math.sqrt(q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3)
+    if q0 < 0.0:
+        n = -n
+    return q0 / n, q1 / n, q2 / n, q3 / n
+
+
+@njit(cache=True, fastmath=_FM)
+def quat_from_matrix(R):
+    """Unit quaternion (q0, q1, q2, q3), q0 >= 0, of R (Shepperd's method).
+
+    If q0 == 0 exactly (rotation by pi), the largest |q_i| is positive.
+    """
+    q = np.empty(4)
+    q[0], q[1], q[2], q[3] = _quat_tuple(R)
     return q
+
+
+@njit(cache=True, fastmath=_FM)
+def _rotvec_factor(q0, s):
+    """f with xi = f q, f = 2 atan2(s, q0)/s, s = |q| (vector part), q0 >= 0."""
+    if s < T_SWITCH_LOG * q0:
+        # 2 atan(x)/(x q0) with x = s/q0, atan(x)/x = 1 - x^2/3 + x^4/5 - x^6/7
+        x = s / q0
+        return 2.0 * horner(_CATAN, x * x) / q0
+    return 2.0 * math.atan2(s, q0) / s
 
 
 @njit(cache=True, fastmath=_FM)
 def rotvec_from_quat(q):
     """xi = 2 atan2(|q|, q0) q/|q| for q0 >= 0 (|xi| <= pi); q need not be unit."""
-    q0 = q[0]
-    s = math.sqrt(q[1] * q[1] + q[2] * q[2] + q[3] * q[3])
+    f = _rotvec_factor(q[0], math.sqrt(q[1] * q[1] + q[2] * q[2] + q[3] * q[3]))
     out = np.empty(3)
-    if s < T_SWITCH_LOG * q0:
-        # 2 atan(x)/(x q0) with x = s/q0, atan(x)/x = 1 - x^2/3 + x^4/5 - x^6/7
-        x = s / q0
-        f = 2.0 * horner(_CATAN, x * x) / q0
-    else:
-        f = 2.0 * math.atan2(s, q0) / s
     out[0] = f * q[1]
     out[1] = f * q[2]
     out[2] = f * q[3]
@@ -317,9 +327,21 @@ def rotvec_from_quat(q):
 
 
 @njit(cache=True, fastmath=_FM)
+def log_into(R, x):
+    """x[0:3] = log(R), |xi| <= pi, no allocation (x may be longer: only x[0:3] is written)."""
+    q0, q1, q2, q3 = _quat_tuple(R)
+    f = _rotvec_factor(q0, math.sqrt(q1 * q1 + q2 * q2 + q3 * q3))
+    x[0] = f * q1
+    x[1] = f * q2
+    x[2] = f * q3
+
+
+@njit(cache=True, fastmath=_FM)
 def log(R):
     """Rotation vector xi, |xi| <= pi, with exp(xi) = R."""
-    return rotvec_from_quat(quat_from_matrix(R))
+    x = np.empty(3)
+    log_into(R, x)
+    return x
 
 
 # ---------------------------------------------------------------- ad, Ad, group
@@ -329,15 +351,68 @@ def ad(x):
 
 
 @njit(cache=True, fastmath=_FM)
+def Ad_into(R, M):
+    """M[0:3, 0:3] = Ad_R = R (hat(R x) = R hat(x) R^T), no allocation."""
+    for i in range(3):
+        for j in range(3):
+            M[i, j] = R[i, j]
+
+
+@njit(cache=True, fastmath=_FM)
 def Ad(R):
-    return R.copy()
+    M = np.empty((3, 3))
+    Ad_into(R, M)
+    return M
+
+
+@njit(cache=True, fastmath=_FM)
+def compose_into(R1, R2, R):
+    """R[:] = R1 R2, no allocation; R may alias R1 and/or R2 (R2 is read first,
+    then R1 row by row)."""
+    b00 = R2[0, 0]
+    b01 = R2[0, 1]
+    b02 = R2[0, 2]
+    b10 = R2[1, 0]
+    b11 = R2[1, 1]
+    b12 = R2[1, 2]
+    b20 = R2[2, 0]
+    b21 = R2[2, 1]
+    b22 = R2[2, 2]
+    for i in range(3):
+        a0 = R1[i, 0]
+        a1 = R1[i, 1]
+        a2 = R1[i, 2]
+        R[i, 0] = a0 * b00 + a1 * b10 + a2 * b20
+        R[i, 1] = a0 * b01 + a1 * b11 + a2 * b21
+        R[i, 2] = a0 * b02 + a1 * b12 + a2 * b22
 
 
 @njit(cache=True, fastmath=_FM)
 def compose(R1, R2):
-    return mm(R1, R2)
+    R = np.empty((3, 3))
+    compose_into(R1, R2, R)
+    return R
+
+
+@njit(cache=True, fastmath=_FM)
+def inverse_into(R, Ri):
+    """Ri[:] = R^-1 = R^T, no allocation; Ri may alias R (in-place transpose)."""
+    a01 = R[0, 1]
+    a02 = R[0, 2]
+    a12 = R[1, 2]
+    Ri[0, 0] = R[0, 0]
+    Ri[1, 1] = R[1, 1]
+    Ri[2, 2] = R[2, 2]
+    Ri[0, 1] = R[1, 0]
+    Ri[0, 2] = R[2, 0]
+    Ri[1, 2] = R[2, 1]
+    Ri[1, 0] = a01
+    Ri[2, 0] = a02
+    Ri[2, 1] = a12
 
 
 @njit(cache=True, fastmath=_FM)
 def inverse(R):
-    return np.ascontiguousarray(R.T)
+    Ri = np.empty((3, 3))
+    inverse_into(R, Ri)
+    return Ri

@@ -24,7 +24,7 @@ import numpy as np
 from numba import njit
 
 from . import so3
-from ._taylor import ad_series, mm, DEXP_SERIES_COEFFS, DEXPINV_SERIES_COEFFS
+from ._taylor import ad_series, DEXP_SERIES_COEFFS, DEXPINV_SERIES_COEFFS
 
 
 @njit(cache=True)
@@ -89,10 +89,18 @@ def exp(X):
 
 
 @njit(cache=True)
+def log_into(R, r, X):
+    """X[:] = log(R, r) = (log R, r) (inverse of eq. expSO3xR3), no allocation."""
+    so3.log_into(R, X)      # writes X[0:3] only
+    X[3] = r[0]
+    X[4] = r[1]
+    X[5] = r[2]
+
+
+@njit(cache=True)
 def log(R, r):
     X = np.empty(6)
-    X[0:3] = so3.log(R)
-    X[3:6] = r
+    log_into(R, r, X)
     return X
 
 
@@ -136,9 +144,22 @@ def ad(X):
 
 
 @njit(cache=True)
+def Ad_into(R, r, M):
+    """M[:] = Ad_(R,r) = blockdiag(R, I) (6x6), no allocation (r is not used: the
+    translation part of a direct product acts trivially)."""
+    for i in range(6):
+        for j in range(6):
+            M[i, j] = 0.0
+    so3.Ad_into(R, M)       # M[0:3, 0:3] = R
+    M[3, 3] = 1.0
+    M[4, 4] = 1.0
+    M[5, 5] = 1.0
+
+
+@njit(cache=True)
 def Ad(R, r):
-    M = np.eye(6)
-    M[0:3, 0:3] = R
+    M = np.empty((6, 6))
+    Ad_into(R, r, M)
     return M
 
 
@@ -153,11 +174,34 @@ def dexpinv_series(X, nterms):
 
 
 @njit(cache=True)
+def compose_into(R1, r1, R2, r2, R, r):
+    """(R, r) = (R1 R2, r1 + r2) (eq. MultDirectProduct), no allocation; outputs may
+    alias inputs."""
+    so3.compose_into(R1, R2, R)
+    for i in range(3):
+        r[i] = r1[i] + r2[i]
+
+
+@njit(cache=True)
 def compose(R1, r1, R2, r2):
     """(R1 R2, r1 + r2) (eq. MultDirectProduct)."""
-    return mm(R1, R2), r1 + r2
+    R = np.empty((3, 3))
+    r = np.empty(3)
+    compose_into(R1, r1, R2, r2, R, r)
+    return R, r
+
+
+@njit(cache=True)
+def inverse_into(R, r, Ri, ri):
+    """(Ri, ri) = (R^T, -r), no allocation; outputs may alias inputs."""
+    so3.inverse_into(R, Ri)
+    for i in range(3):
+        ri[i] = -r[i]
 
 
 @njit(cache=True)
 def inverse(R, r):
-    return np.ascontiguousarray(R.T), -r
+    Ri = np.empty((3, 3))
+    ri = np.empty(3)
+    inverse_into(R, r, Ri, ri)
+    return Ri, ri

@@ -48,6 +48,7 @@ __all__ = [
     "RK38",
     "DOPRI5",
     "RK6",
+    "extrapolated_euler",
 ]
 
 #: Highest order for which order conditions are generated on demand (trees are cheap:
@@ -110,20 +111,44 @@ def _tree_str(t):
     return "[" + " ".join(_tree_str(ch) for ch in t) + "]"
 
 
-def _elementary_weight(t, A, b, one):
-    """Phi(t) = b . g(t), g(o) = 1, g([t1..tm]) = prod_k (A g(t_k)) (componentwise)."""
-    s = len(b)
+def _stage_weights(A, one):
+    """``g(t)`` of :func:`_elementary_weight` with a memo shared by all trees (subtrees
+    recur: this makes the 286 trees up to order 8 cheap even for many stages)."""
+    s = len(A)
+    memo = {}
 
     def g(tree):
-        v = [one] * s
-        for ch in tree:
-            gc = g(ch)
-            Agc = [sum((A[i][l] * gc[l] for l in range(s)), 0 * one) for i in range(s)]
-            v = [v[i] * Agc[i] for i in range(s)]
+        v = memo.get(tree)
+        if v is None:
+            v = [one] * s
+            for ch in tree:
+                gc = g(ch)
+                Agc = [sum((A[i][l] * gc[l] for l in range(s)), 0 * one) for i in range(s)]
+                v = [v[i] * Agc[i] for i in range(s)]
+            memo[tree] = v
         return v
 
+    return g
+
+
+def _elementary_weight(t, g, b, one):
+    """Phi(t) = b . g(t), g(o) = 1, g([t1..tm]) = prod_k (A g(t_k)) (componentwise)."""
     gv = g(t)
-    return sum((b[i] * gv[i] for i in range(s)), 0 * one)
+    return sum((b[i] * gv[i] for i in range(len(b))), 0 * one)
+
+
+def _residuals(A, b, max_order):
+    """Iterator over ``(order, tree_str, Phi(t) - 1/gamma(t))`` for all trees up to
+    ``max_order``, generated lazily, order by order (so a check can stop early)."""
+    if max_order > MAX_CHECK_ORDER:
+        raise ValueError(f"order conditions are generated up to order {MAX_CHECK_ORDER}")
+    exact = _is_exact(A) and _is_exact(b)
+    one = Fraction(1) if exact else 1.0
+    A_ = [[(Fraction(x) if exact else float(x)) for x in row] for row in A]
+    b_ = [(Fraction(x) if exact else float(x)) for x in b]
+    g = _stage_weights(A_, one)
+    return ((n, _tree_str(t), _elementary_weight(t, g, b_, one) - one / _tree_density(t))
+            for n in range(1, max_order + 1) for t in _trees_of_order(n))
 
 
 def order_condition_residuals(A, b, max_order):
@@ -131,16 +156,7 @@ def order_condition_residuals(A, b, max_order):
 
     ``A``, ``b`` may be nested lists of Fractions (exact) or floats.
     """
-    exact = _is_exact(A) and _is_exact(b)
-    one = Fraction(1) if exact else 1.0
-    A_ = [[(Fraction(x) if exact else float(x)) for x in row] for row in A]
-    b_ = [(Fraction(x) if exact else float(x)) for x in b]
-    out = []
-    for n, t in rooted_trees(max_order):
-        phi = _elementary_weight(t, A_, b_, one)
-        target = one / _tree_density(t)
-        out.append((n, _tree_str(t), phi - target))
-    return out
+    return list(_residuals(A, b, max_order))
 
 
 def _is_exact(x):
@@ -164,20 +180,21 @@ def _residual_ok(res, exact, scale=1.0):
     return abs(float(res)) <= _FLOAT_TOL * max(1.0, scale)
 
 
-def achieved_order(A, b, max_order=MAX_CHECK_ORDER - 1):
-    """Largest p <= max_order such that all order conditions up to p hold."""
+def achieved_order(A, b, max_order=MAX_CHECK_ORDER):
+    """Largest p <= max_order (default: every order whose conditions are generated,
+    ``MAX_CHECK_ORDER``) such that all order conditions up to p hold.
+
+    Orders are checked one after the other and the check stops at the first order with
+    a violated condition.
+    """
     A_ = [[_to_exact(x) for x in row] for row in A]
     b_ = [_to_exact(x) for x in b]
     exact = _is_exact(A_) and _is_exact(b_)
     scale = _coef_scale(A_, b_)
-    res = order_condition_residuals(A_, b_, max_order)
-    p = 0
-    for n in range(1, max_order + 1):
-        if all(_residual_ok(r, exact, scale) for (m, _, r) in res if m == n):
-            p = n
-        else:
-            break
-    return p
+    for n, _, r in _residuals(A_, b_, max_order):
+        if not _residual_ok(r, exact, scale):
+            return n - 1
+    return max_order
 
 
 def quadrature_order(b, c, max_order=12):
@@ -314,7 +331,7 @@ class ButcherTableau:
 
     @staticmethod
     def _check_order_conditions(A_raw, b_raw, order, exact, scale, wname, fail):
-        for n, tstr, res in order_condition_residuals(A_raw, b_raw, order):
+        for n, tstr, res in _residuals(A_raw, b_raw, order):
             if not _residual_ok(res, exact, scale):
                 fail(f"order condition of order {n} violated for weights {wname}, tree {tstr}: "
                      f"Phi(t) - 1/gamma(t) = {float(res):.3e}"
@@ -350,8 +367,9 @@ class ButcherTableau:
             return quadrature_order(b_raw, c_raw)
         return quadrature_order(self.b, self.c)
 
-    def achieved_order(self, max_order=MAX_CHECK_ORDER - 1):
-        """Highest order whose conditions are all satisfied (>= ``order`` by construction)."""
+    def achieved_order(self, max_order=MAX_CHECK_ORDER):
+        """Highest order <= ``max_order`` whose conditions are all satisfied (>= ``order``
+        by construction; a method of order ``MAX_CHECK_ORDER`` reports exactly that)."""
         if self._exact_coeffs is not None:
             A_raw, b_raw, _ = self._exact_coeffs
             return achieved_order(A_raw, b_raw, max_order)
@@ -470,6 +488,49 @@ RK6 = ButcherTableau(
 
 #: The catalogue.  Adding a method = appending a tableau here.
 METHODS = (ExplicitEuler, ExplicitMidpoint, Heun, RK3, RK4, RK38, DOPRI5, RK6)
+
+
+def extrapolated_euler(order, name=None):
+    """Explicit Euler with polynomial (Aitken-Neville) extrapolation on the harmonic
+    step sequence n_j = j, j = 1..order, written as one explicit RK tableau of the given
+    order with 1 + order (order - 1)/2 stages, in exact rationals.
+
+    Not part of the catalogue: a source of explicit methods of any order up to
+    ``MAX_CHECK_ORDER``, e.g. to check that order-dependent code (order conditions,
+    convergence tests) handles orders beyond the catalogue.  The result is
+    ``sum_j gamma_j T_j`` with ``T_j`` the result of ``n_j`` Euler substeps of size
+    ``h/n_j`` and the Lagrange weights at 0 of the nodes ``1/n_j``:
+    ``gamma_j = prod_{i != j} n_j/(n_j - n_i)``.
+    """
+    k = int(order)
+    if not 1 <= k <= MAX_CHECK_ORDER:
+        raise ValueError(f"extrapolated_euler: order must be in 1..{MAX_CHECK_ORDER}")
+    ns = list(range(1, k + 1))
+    gam = []
+    for j, nj in enumerate(ns):
+        g = Fraction(1)
+        for i, ni in enumerate(ns):
+            if i != j:
+                g *= Fraction(nj, nj - ni)
+        gam.append(g)
+    s = 1 + sum(n - 1 for n in ns)
+    A = [[Fraction(0)] * s for _ in range(s)]
+    b = [Fraction(0)] * s
+    c = [Fraction(0)] * s
+    row = 1
+    for nj, gj in zip(ns, gam):
+        w = Fraction(1, nj)
+        b[0] += gj * w                     # the first Euler substep of every sequence
+        first = row
+        for m in range(1, nj):             # substeps 2..n_j: stage value after m substeps
+            A[row][0] = w
+            for l in range(first, row):
+                A[row][l] = w
+            c[row] = m * w
+            b[row] = gj * w
+            row += 1
+    return ButcherTableau(name=name or f"ExtrapolatedEuler{k}", A=A, b=b, c=c, order=k,
+                          description=f"explicit Euler extrapolated on n = 1..{k}")
 
 
 def _check_catalogue(methods):

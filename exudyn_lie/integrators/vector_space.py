@@ -12,14 +12,25 @@ same step / integrate interface as :mod:`.mk` (results converted back to poses (
     ``q`` (n, 6) are exponential coordinates of every body relative to a chart origin
     ``g0``: ``g = g0 exp(q)`` -- screw coordinates ``(xi, eta)`` for SE3, ``(xi, r)`` for
     SO3xR3.  Exponential coordinates are only unique for ``|xi| < pi`` and ``dexp^{-1}``
-    blows up at ``|xi| = 2 pi``; therefore the chart is **re-centred** before it gets
-    there.  Rule: after every step, each body with ``|xi_i| >= recenter_angle`` (default
-    ``pi/2``) gets ``g0_i := g0_i exp(q_i)``, ``q_i := 0`` (exact: the pose is unchanged).
-    With a per-step rotation below ``pi/2`` the stage values then always stay within
-    ``|xi| < pi``.  ``recenter_angle = inf`` keeps one global chart (the paper's remark at
-    the end of appendix B: RK on (BH2) == MK with global coordinates
-    ``g_i = g0 exp(q^(i))``); ``recenter_angle = 0`` re-centres after every step, which
-    makes the scheme identical to the MK method (eq. MK1).
+    blows up at ``|xi| = 2 pi``; therefore the chart is **re-centred** (reparameterised)
+    before ``|xi|`` reaches ``pi`` (:data:`CHART_ANGLE_MAX`).  Re-centring body ``i`` means
+    ``g0_i := g0_i exp(q_i)``, ``q_i := 0`` (exact: the pose is unchanged).  Rules:
+
+    1. after every step, each body with ``|xi_i| >= recenter_angle`` (default ``pi/2``) is
+       re-centred (the usual case: keeps the charts small);
+    2. guarantee: ``|xi_i| < pi`` at every stage value the RK step evaluates and at the
+       step end.  If a step would carry a body's coordinate to ``|xi_i| >= pi`` (e.g. a
+       step that rotates more than ``pi/2`` starting from ``|xi_i|`` just below
+       ``recenter_angle``), that body is re-centred at the start of the step and the step
+       is redone; if the body's chart is already centred there (``q_i = 0``: the step
+       itself rotates by about ``pi`` or more) or re-centring is disabled
+       (``recenter_angle = inf``), a ``ValueError`` naming the step is raised.
+
+    ``recenter_angle = inf`` keeps one global chart (the paper's remark at the end of
+    appendix B: RK on (BH2) == MK with global coordinates ``g_i = g0 exp(q^(i))``), valid
+    until ``|xi|`` reaches ``pi``; ``recenter_angle = 0`` re-centres after every step,
+    which makes the scheme identical to the MK method (eq. MK1).  ``ChartState.max_angle``
+    (``info['max_stage_angle']`` of a trajectory) is the largest ``|xi|`` used.
 
 (b) **Dependent (redundant) coordinates**, eq. (ODEvec2)::
 
@@ -47,6 +58,7 @@ from .tableau import get_method
 
 __all__ = [
     "RECENTER_ANGLE",
+    "CHART_ANGLE_MAX",
     "rk_step",
     "rk_integrate",
     "ChartState",
@@ -67,6 +79,9 @@ __all__ = [
 
 #: Default re-centring threshold for the rotation part of the canonical coordinates.
 RECENTER_ANGLE = 0.5 * np.pi
+#: Bound on |xi| of the canonical coordinates at every stage and step end (exclusive):
+#: exp is one-to-one on |xi| < pi, the chart is reparameterised before |xi| reaches pi.
+CHART_ANGLE_MAX = np.pi
 
 
 # --------------------------------------------------------------------------- plain RK
@@ -111,12 +126,14 @@ def _split(y, n):
 class ChartState:
     """State of eq. (ODEvec1): chart origins ``origin`` (poses), coordinates ``q`` (n, 6).
 
-    The represented poses are ``origin_i exp(q_i)``; ``n_recentred`` counts re-centrings.
+    The represented poses are ``origin_i exp(q_i)``; ``n_recentred`` counts re-centrings,
+    ``max_angle`` is the largest ``|xi_i|`` of any stage value or step end so far.
     """
 
     origin: list
     q: np.ndarray
     n_recentred: int = 0
+    max_angle: float = 0.0
 
 
 def chart_from_poses(g):
@@ -143,25 +160,83 @@ def _qdot(gms, q, V):
     return out
 
 
-def _recentre(gms, state, q, recenter_angle):
-    """Exact chart change ``g0_i := g0_i exp(q_i), q_i := 0`` where ``|xi_i| >= angle``."""
+def _recentre(gms, state, q, recenter_angle, bodies=None):
+    """Exact chart change ``g0_i := g0_i exp(q_i), q_i := 0`` where ``|xi_i| >= angle``
+    (or for the listed ``bodies``)."""
     origin = list(state.origin)
     q = np.array(q)
     count = state.n_recentred
     for i, gm in enumerate(gms):
-        if q[i].any() and np.linalg.norm(q[i, :3]) >= recenter_angle:
+        if not q[i].any():
+            continue
+        if (i in bodies) if bodies is not None else np.linalg.norm(q[i, :3]) >= recenter_angle:
             Re, re = gm.exp(np.ascontiguousarray(q[i]))
             origin[i] = gm.compose(origin[i][0], origin[i][1], Re, re)
             q[i] = 0.0
             count += 1
-    return ChartState(origin=origin, q=q, n_recentred=count)
+    return ChartState(origin=origin, q=q, n_recentred=count, max_angle=state.max_angle)
+
+
+class _ChartLimit(Exception):
+    """A chart coordinate reached |xi| >= CHART_ANGLE_MAX (caught by _chart_rk_step)."""
+
+    def __init__(self, body, angle, where):
+        super().__init__(body, angle, where)
+        self.body, self.angle, self.where = body, angle, where
+
+
+def _chart_angles(q, where, record):
+    """|xi_i| of every body; raises _ChartLimit at the first body with |xi_i| >= pi."""
+    ang = np.sqrt(np.einsum("ij,ij->i", q[:, :3], q[:, :3]))
+    bad = np.flatnonzero(~(ang < CHART_ANGLE_MAX))
+    if bad.size:
+        raise _ChartLimit(int(bad[0]), float(ang[bad[0]]), where)
+    record[0] = max(record[0], float(ang.max(initial=0.0)))
+
+
+def _chart_rk_step(tab, gms, state, t, h, make_f, tail, recenter_angle):
+    """One plain RK step of ``y = (q, tail)`` with the chart guard (module docstring, rule 2).
+
+    ``make_f(origin)`` -> ``f(t, y)`` for the chart origins ``origin``.  Returns
+    ``(ChartState, y_new)`` (not yet re-centred by rule 1).
+    """
+    n = len(gms)
+    while True:
+        record = [0.0]
+        f = make_f(state.origin)
+
+        def guarded(tj, y, f=f, record=record):
+            _chart_angles(y[:6 * n].reshape(n, 6), "at a stage", record)
+            return f(tj, y)
+
+        try:
+            y = rk_step(tab, guarded, t, np.concatenate([state.q.ravel(), tail]), h)
+            _chart_angles(y[:6 * n].reshape(n, 6), "at the step end", record)
+        except _ChartLimit as e:
+            if np.isfinite(recenter_angle) and state.q[e.body].any():
+                state = _recentre(gms, state, state.q, recenter_angle, bodies=(e.body,))
+                continue                     # redo the step in the re-centred chart
+            why = ("re-centring is disabled (recenter_angle = inf: one global chart)"
+                   if not np.isfinite(recenter_angle) else
+                   "even in a chart centred at the start of the step: the step rotates the "
+                   "body by about pi or more")
+            raise ValueError(
+                f"ODEvec1 (local canonical coordinates) step t = {t:.17g}, h = {h:.17g} "
+                f"({tab.name}): the chart coordinate of body {e.body} would reach "
+                f"|xi| = {e.angle:.6g} rad >= pi {e.where}, {why}. Exponential coordinates "
+                f"are unique only for |xi| < pi and the chart must be reparameterised "
+                f"before |xi| reaches pi: reduce the step size") from None
+        state = ChartState(origin=state.origin, q=state.q, n_recentred=state.n_recentred,
+                           max_angle=max(state.max_angle, record[0]))
+        return state, y
 
 
 def canonical_step(tableau, groups, state, V, t, h, rhs, recenter_angle=RECENTER_ANGLE):
     """One plain RK step of eq. (ODEvec1) on ``(q, V)``, then chart re-centring.
 
     ``state``: a :class:`ChartState` (or a list of poses: a fresh chart is centred there).
-    Returns ``(ChartState, V_new)``; poses via :func:`chart_poses`.
+    Returns ``(ChartState, V_new)``; poses via :func:`chart_poses`.  Raises ``ValueError``
+    if the step would carry ``|xi|`` to ``pi`` (module docstring, rule 2).
     """
     tab = get_method(tableau)
     state = _as_chart(state)
@@ -169,13 +244,15 @@ def canonical_step(tableau, groups, state, V, t, h, rhs, recenter_angle=RECENTER
     gms = resolve_groups(groups, n)
     V = _as_velocity(V, n)
 
-    def f(tj, y):
-        q, Vj = _split(y, n)
-        gj = _translate(gms, state.origin, q)                        # g = g0 exp(q)
-        Vdot = _as_velocity(rhs(tj, gj, Vj), n, "rhs(t, g, V)")     # eq. (ODEvec1a)
-        return np.concatenate([_qdot(gms, q, Vj).ravel(), Vdot.ravel()])
+    def make_f(origin):
+        def f(tj, y):
+            q, Vj = _split(y, n)
+            gj = _translate(gms, origin, q)                              # g = g0 exp(q)
+            Vdot = _as_velocity(rhs(tj, gj, Vj), n, "rhs(t, g, V)")     # eq. (ODEvec1a)
+            return np.concatenate([_qdot(gms, q, Vj).ravel(), Vdot.ravel()])
+        return f
 
-    y = rk_step(tab, f, t, np.concatenate([state.q.ravel(), V.ravel()]), h)
+    state, y = _chart_rk_step(tab, gms, state, t, h, make_f, V.ravel(), recenter_angle)
     q, V_new = _split(y, n)
     return _recentre(gms, state, q, recenter_angle), V_new.copy()
 
@@ -187,20 +264,23 @@ def canonical_step_kinematic(tableau, groups, state, t, h, vel, recenter_angle=R
     n = len(state.origin)
     gms = resolve_groups(groups, n)
 
-    def f(tj, y):
-        q = y.reshape(n, 6)
-        Vj = _as_velocity(vel(tj, _translate(gms, state.origin, q)), n, "vel(t, g)")
-        return _qdot(gms, q, Vj).ravel()
+    def make_f(origin):
+        def f(tj, y):
+            q = y.reshape(n, 6)
+            Vj = _as_velocity(vel(tj, _translate(gms, origin, q)), n, "vel(t, g)")
+            return _qdot(gms, q, Vj).ravel()
+        return f
 
-    q = rk_step(tab, f, t, state.q.ravel(), h).reshape(n, 6)
-    return _recentre(gms, state, q, recenter_angle)
+    state, y = _chart_rk_step(tab, gms, state, t, h, make_f, np.empty(0), recenter_angle)
+    return _recentre(gms, state, y.reshape(n, 6), recenter_angle)
 
 
 def canonical_integrate(tableau, groups, g0, V0, rhs, t_span, n_steps, every=1,
                         recenter_angle=RECENTER_ANGLE):
     """Integrate eq. (ODEvec1) with fixed RK steps; returns a :class:`~exudyn_lie.integrators.mk.Trajectory`.
 
-    ``info['n_recentred']`` is the total number of chart re-centrings.
+    ``info['n_recentred']`` is the total number of chart re-centrings,
+    ``info['max_stage_angle']`` the largest ``|xi|`` of any stage value or step end.
     """
     tab = get_method(tableau)
     g0 = as_poses(g0)
@@ -211,7 +291,7 @@ def canonical_integrate(tableau, groups, g0, V0, rhs, t_span, n_steps, every=1,
 
     traj, st = _run(step, chart_from_poses(g0), _as_velocity(V0, len(g0)),
                     lambda s_: chart_poses(gms, s_), t_span, n_steps, every)
-    traj.info = {"n_recentred": st.n_recentred}
+    traj.info = {"n_recentred": st.n_recentred, "max_stage_angle": st.max_angle}
     return traj
 
 
@@ -227,7 +307,7 @@ def canonical_integrate_kinematic(tableau, groups, g0, vel, t_span, n_steps, eve
 
     traj, st = _run(step, chart_from_poses(g0), None, lambda s_: chart_poses(gms, s_),
                     t_span, n_steps, every)
-    traj.info = {"n_recentred": st.n_recentred}
+    traj.info = {"n_recentred": st.n_recentred, "max_stage_angle": st.max_angle}
     return traj
 
 

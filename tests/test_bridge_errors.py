@@ -1,5 +1,7 @@
 """Bad input: every refusal is a clear error naming the item, raised before mbs is
 touched (state, initial values, mbs.sys, stored sensor data unchanged)."""
+import os
+
 import numpy as np
 import pytest
 
@@ -63,11 +65,6 @@ def expect_error(mbs, exc, match, **kw):
     (lambda mbs, g, b: mbs.AddLoad(LoadCoordinate(markerNumber=mbs.AddMarker(
         MarkerNodeCoordinate(nodeNumber=0, coordinate=0)), load=1)),
      r"load 1 .*LoadCoordinate is not supported.*LoadForceVector"),
-    (lambda mbs, g, b: (add_body(mbs, "EP", [2, 0, 0], np.eye(3)), mbs.AddObject(ObjectJointSpherical(
-        markerNumbers=[mbs.AddMarker(MarkerBodyPosition(bodyNumber=b, localPosition=[0.5, 0, 0])),
-                       mbs.AddMarker(MarkerBodyPosition(bodyNumber=3, localPosition=[-0.5, 0, 0]))],
-        constrainedAxes=[1, 1, 0]))),
-     r"ObjectJointSpherical: constrainedAxes=\[1, 1, 0\] between two bodies is not supported"),
     (lambda mbs, g, b: mbs.CreateGenericJoint(itemNumbers=[g, b], position=[1, 0, 0],
                                               constrainedAxes=[1, 1, 1, 0, 0, 0]) and
      mbs.SetObjectParameter(3, "offsetUserFunction", lambda mbs, t, i, p: [0, 0, 0, 0, 0, 0]),
@@ -223,8 +220,22 @@ def test_body_fixed_force_on_a_position_marker_set_after_assemble():
     mbs.SetLoadParameter(1, "bodyFixed", True)
     assert mbs.systemIsConsistent
     expect_error(mbs, BridgeError, r"load 1 .*bodyFixed=True needs a marker with an orientation")
-    with pytest.raises(Exception):
-        exu.SolveDynamic(mbs, quiet_settings(0.01, 10))
+    # Exudyn's own solve fails on it in a fresh process.  (In a process that has already
+    # evaluated a MarkerNodeRigid of an Rxyz node - test_bridge_oracle - Exudyn 1.13.6 runs
+    # it without complaint, on whatever rotation it finds: undefined behaviour, which is
+    # why the bridge refuses the input instead of guessing a frame.)
+    import subprocess
+    import sys
+    code = ("import sys; sys.path.insert(0, 'tests'); import exudyn as exu; "
+            "from exudyn.itemInterface import LoadForceVector; "
+            "from test_bridge_errors import _position_marker_load, quiet_settings\n"
+            "mbs = _position_marker_load(LoadForceVector, False, 'body'); mbs.Assemble(); "
+            "mbs.SetLoadParameter(1, 'bodyFixed', True)\n"
+            "try:\n    exu.SolveDynamic(mbs, quiet_settings(0.01, 10))\nexcept Exception as e:\n"
+            "    print('EXUDYN-RAISED', type(e).__name__)\n")
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    out = subprocess.run([sys.executable, "-c", code], cwd=root, capture_output=True, text=True, timeout=120)
+    assert "EXUDYN-RAISED" in out.stdout, (out.stdout[-2000:], out.stderr[-2000:])
 
 
 # ---------------------------------------------------------------------------- mbs untouched
@@ -239,7 +250,7 @@ def _unassembled(extra=None, omega=(1.0, 2.0, 0.5)):
     return mbs
 
 
-@pytest.mark.parametrize("case", ["unsupported item", "partial spherical", "joint violated", "velocity violated",
+@pytest.mark.parametrize("case", ["unsupported item", "joint violated", "velocity violated",
                                   "non-finite", "method", "liegroup", "settings", "substeps"])
 def test_autoassemble_validates_before_assembling(case):
     """With autoAssemble and an mbs that is not assembled, bad input raises before
@@ -249,14 +260,6 @@ def test_autoassemble_validates_before_assembling(case):
     if case == "unsupported item":
         extra, err, match = (lambda mbs, g, b: mbs.CreateMassPoint(referencePosition=[2, 0, 0], mass=1)), \
             BridgeError, r"ObjectMassPoint is not supported"
-    elif case == "partial spherical":
-        def extra(mbs, g, b):
-            b2 = add_body(mbs, "EP", [2, 0, 0], np.eye(3))
-            mbs.AddObject(ObjectJointSpherical(markerNumbers=[
-                mbs.AddMarker(MarkerBodyPosition(bodyNumber=b, localPosition=[0.5, 0, 0])),
-                mbs.AddMarker(MarkerBodyPosition(bodyNumber=b2, localPosition=[-0.5, 0, 0]))],
-                constrainedAxes=[1, 0, 1]))
-        err, match = BridgeError, r"constrainedAxes=\[1, 0, 1\] between two bodies is not supported"
     elif case == "joint violated":
         extra, err, match = (lambda mbs, g, b: mbs.AddObject(ObjectJointSpherical(markerNumbers=[
             mbs.AddMarker(MarkerBodyPosition(bodyNumber=g, localPosition=[1.5, 0, 0])),

@@ -160,6 +160,9 @@ ITEMS = {
     "spherical_bodies": lambda mbs, g, b0, b1: mbs.CreateSphericalJoint(itemNumbers=[b0, b1], position=[1.2, 0.2, 0]),
     "spherical_partial": lambda mbs, g, b0, b1: _spherical_partial(mbs, g, b0, b1, [1, 0, 1], False),
     "spherical_partial_swapped": lambda mbs, g, b0, b1: _spherical_partial(mbs, g, b0, b1, [0, 1, 1], True),
+    "spherical_partial_bodies": lambda mbs, g, b0, b1: mbs.AddObject(ObjectJointSpherical(
+        markerNumbers=[position_marker(mbs, b0, [1.2, 0.2, 0]), position_marker(mbs, b1, [1.2, 0.2, 0])],
+        constrainedAxes=[1, 0, 1])),
     "spherical_pointground_nodemarker": _point_ground,
     "node_position_markers": _node_position_markers,
     "revolute_create": lambda mbs, g, b0, b1: mbs.CreateRevoluteJoint(itemNumbers=[b0, b1], position=[1.2, 0.1, 0],
@@ -397,28 +400,25 @@ def _spherical_bodies(nodes, axes):
 @pytest.mark.parametrize("axes", [[1, 0, 1], [0, 1, 0], [1, 1, 0]])
 @pytest.mark.parametrize("group", ["SE3", "SO3xR3"])
 def test_partial_spherical_between_bodies_is_world_axis_rows(axes, group, rng):
-    """What Exudyn's spherical joint with partial ``constrainedAxes`` between two bodies
-    is (CObjectJointSpherical): rows (p1 - p0)_i in *world* components for the locked
-    axes i, AE rows ``lambda_i = 0`` for the others.  Those are exactly the kernel's
-    world-axis translation rows (ROW_TRANS_WORLD) of the fully locked joint, restricted
-    to the locked axes.  The scene can ask for world-axis rows only with all three axes
-    locked, so the bridge refuses this joint (test_bridge_errors); this test pins the
-    equations a scene option for it has to produce."""
+    """Exudyn's spherical joint with partial ``constrainedAxes`` between two bodies
+    (CObjectJointSpherical): rows (p1 - p0)_i in *world* components for the locked axes
+    i, AE rows ``lambda_i = 0`` for the others.  The bridge reads it as a scene joint
+    with ``worldTranslation=True``: one world-axis row (ROW_TRANS_WORLD) per locked
+    axis, equal to Exudyn's rows and Jacobian at random states."""
     nodes = ("RotVecLG", "EP")
     mbs, j = _spherical_bodies(nodes, axes)
-    full, jf = _spherical_bodies(nodes, [1, 1, 1])
     ae = np.asarray(mbs.systemData.GetObjectLTGAE(j))
     locked = [i for i in range(3) if axes[i]]
     free = [i for i in range(3) if not axes[i]]
     for trial in range(2):
         q, qt = random_state(mbs, rng)
         Me, fe, ge, Ce = oracle(mbs, q, qt, 0.3)
-        pk = package(full, group, q, qt, 0.3)
+        pk = package(mbs, group, q, qt, 0.3)
         ji = pk["scene"].joints_info[0]
         r0, n = (int(x) for x in pk["sim"].sd.jint[ji.sceneJoint, 2:4])
-        assert n == 3 and list(pk["sim"].sd.rint[r0:r0 + 3, 0]) == [1, 1, 1]    # kernel.ROW_TRANS_WORLD
-        h, J = pk["h"][r0:r0 + 3], pk["J"][r0:r0 + 3]
+        assert n == len(locked) and list(pk["sim"].sd.rint[r0:r0 + n, 0]) == [1] * n    # kernel.ROW_TRANS_WORLD
+        h, J = pk["h"][r0:r0 + n], pk["J"][r0:r0 + n]
         scale = max(1.0, np.max(np.abs(J)))
-        np.testing.assert_allclose(ge[ae[locked]], h[locked], rtol=0, atol=1e-13)
-        np.testing.assert_allclose(Ce[ae[locked]] @ pk["P"], J[locked], rtol=0, atol=1e-12 * scale)
+        np.testing.assert_allclose(ge[ae[locked]], h, rtol=0, atol=1e-13)
+        np.testing.assert_allclose(Ce[ae[locked]] @ pk["P"], J, rtol=0, atol=1e-12 * scale)
         assert np.all(Ce[ae[free]] == 0)                  # the free axes' rows only hold lambda_i = 0

@@ -59,38 +59,79 @@ def double_pendulum():
 
 
 # --------------------------------------------------------------------------- free bodies
+C_BOX = np.array([0.4, 0, 0])
+OMEGA_BOX = np.array([10 * np.pi, 2 * np.pi, 0])
+VCOM_BOX = np.array([10.0, 0, 0])
+
+
 @pytest.mark.parametrize("group", ["SE3", "SO3xR3"])
-def test_free_body_off_com_conserves_momentum_and_matches_com_frame(group):
-    """Frame off the COM: momentum is conserved, and the motion equals that of the same
-    body described with its frame at the COM (an independent derivation: different
-    inertia matrix, no coupling terms)."""
+def test_free_body_off_com_conserves_momentum_at_order(group):
+    """Frame off the COM: the linear momentum m v_c and the angular momentum about the
+    world origin (x_c x m v_c + R Theta_c omega) are conserved by the exact motion; RK4
+    keeps them up to its truncation error, which must be small and fall at order 4 when
+    the step is halved -- checked for both, in both groups (measured: SE3 |dp|/|p| =
+    1.6e-7, |dL|/|L| = 1.6e-5; SO3xR3 1.7e-8, 1.0e-6 at h = 1e-3; ratios 15.5-16)."""
     T, h = 1.0, 1e-3
-    # RK4 conserves momentum only up to its truncation error: the drift must be small
-    # and fall at order 4 when the step is halved
     drift = []
     for hh in (2 * h, h):
-        simP = Simulator(free_body_off_com(), "RK4", group)
-        p0, L0 = simP.Momentum()
-        resP = simP.Run(T, hh, outputEvery=100)
-        p1, L1 = simP.Momentum()
+        sim = Simulator(free_body_off_com(), "RK4", group)
+        p0, L0 = sim.Momentum()
+        np.testing.assert_allclose(p0, M_BOX * VCOM_BOX, rtol=1e-14)
+        sim.Run(T, hh, outputEvery=100)
+        p1, L1 = sim.Momentum()
         drift.append((np.linalg.norm(p1 - p0) / np.linalg.norm(p0),
                       np.linalg.norm(L1 - L0) / np.linalg.norm(L0)))
     (dp2, dL2), (dp1, dL1) = drift
     # (the angular momentum about the world origin carries the COM position error of the
     # SE3 update for this fast-spinning translating body: ~1.6e-5 at h = 1e-3)
     assert dp1 < 1e-6 and dL1 < 1e-4, drift
-    if dp1 > 1e-13:     # SE3 may conserve linear momentum to round-off; else order 4
-        assert 12 < dp2 / dp1 < 22, drift
+    # the drifts are far above round-off (~1e-15), so the ratios measure the order
+    assert dp1 > 1e-12 and dL1 > 1e-12, drift
+    assert 12 < dp2 / dp1 < 22, drift
     assert 12 < dL2 / dL1 < 22, drift
 
+
+@pytest.mark.parametrize("group", ["SE3", "SO3xR3"])
+def test_free_body_off_com_matches_analytic_torque_free_solution(group):
+    """An independent derivation: the exact Euler-Poinsot motion (Jacobi elliptic
+    functions, models/_torque_free.py) of the body about its COM, which moves uniformly.
+    The kernel integrates the body with its frame 0.4 m off the COM (inertia about the
+    frame, coupling terms in M); its orientation, frame origin r = x_c - R c and body
+    angular velocity must match the exact ones along the whole run, with errors falling
+    at order 4 (measured at T = 1 s, h = 1e-3: |R - R_ex| 4.2e-8 in both groups, |r -
+    r_ex| 8.0e-7 (SE3) / 5.7e-8 (SO3xR3))."""
+    from models._torque_free import TorqueFreeRotation
+    T = 1.0
+    tf = TorqueFreeRotation(np.diag(THETA0), np.eye(3), OMEGA_BOX)
+    errs = []
+    for h in (2e-3, 1e-3):
+        sim = Simulator(free_body_off_com(), "RK4", group)
+        res = sim.Run(T, h, outputEvery=int(round(0.05 / h)))
+        Rex = tf.R(res.times)
+        wex = tf.omega(res.times)
+        xc = C_BOX + np.outer(res.times, VCOM_BOX)                     # the COM moves uniformly
+        rex = xc - np.einsum("nij,j->ni", Rex, C_BOX)
+        errs.append((np.max(np.abs(res.R[:, 0] - Rex)), np.max(np.abs(res.r[:, 0] - rex)),
+                     np.max(np.abs(res.omega[:, 0] - wex))))
+    (eR2, er2, ew2), (eR1, er1, ew1) = errs
+    assert eR1 < 1e-7 and er1 < 2e-6 and ew1 < 1e-6, errs
+    for a, b in ((eR2, eR1), (er2, er1), (ew2, ew1)):
+        assert 12 < a / b < 22, errs
+
+
+@pytest.mark.parametrize("group", ["SE3", "SO3xR3"])
+def test_free_body_off_com_matches_com_frame(group):
+    """The motion equals that of the same body described with its frame at the COM
+    (different inertia matrix, no coupling terms)."""
+    T, h = 1.0, 1e-3
+    resP = Simulator(free_body_off_com(), "RK4", group).Run(T, h, outputEvery=100)
     simC = Simulator(free_body_off_com(group_frame_at_com=True), "RK4", "SE3")
     resC = simC.Run(T, h / 4, outputEvery=400)
-    c = np.array([0.4, 0, 0])
-    xcP = resP.r[-1, 0] + resP.R[-1, 0] @ c
+    xcP = resP.r[-1, 0] + resP.R[-1, 0] @ C_BOX
     np.testing.assert_allclose(xcP, resC.r[-1, 0], atol=1e-6)
     np.testing.assert_allclose(resP.R[-1, 0], resC.R[-1, 0], atol=1e-6)
     # the COM moves uniformly: x_c(t) = x_c(0) + v_c t
-    np.testing.assert_allclose(xcP, c + np.array([10, 0, 0]) * T, atol=1e-6)
+    np.testing.assert_allclose(xcP, C_BOX + VCOM_BOX * T, atol=1e-6)
 
 
 def test_se3_update_is_frame_invariant():
@@ -122,37 +163,51 @@ def test_free_body_spatial_rotation_se3_keeps_com_fixed_off_com_frame():
 
 
 # --------------------------------------------------------------------------- energy order
+@pytest.mark.parametrize("group", ["SE3", "SO3xR3"])
 @pytest.mark.parametrize("method,order", [("RK4", 4), ("ExplicitMidpoint", 2)])
-def test_energy_error_converges_at_method_order(method, order):
-    """Heavy top without spring (conservative): |E(T) - E(0)| ~ h^order."""
+def test_energy_error_converges_at_method_order(method, order, group):
+    """Heavy top with its spring (undamped, so conservative): the largest energy error
+    over the run, max_t |E(t) - E(0)|, must fall by at least 2^order when h is halved.
+    SO3xR3 shows exactly the method's order (measured ratios 13.9, 15.0 for RK4 and 3.97,
+    3.98 for the midpoint rule); SE3, whose update keeps the top's rotation about the
+    pivot exactly, shows one order more for this mechanism (measured 31.0, 30.1 and 8.0,
+    7.5), so only the lower bound is asserted there.  (The error at the end time alone
+    is not monotone in h for SO3xR3 with the midpoint rule.)"""
+    T = 0.5
+    hs = [2e-3, 1e-3, 5e-4] if order == 4 else [1e-3, 5e-4, 2.5e-4]
     errs = []
-    hs = [4e-3, 2e-3, 1e-3] if order == 4 else [1e-3, 5e-4, 2.5e-4]
     for h in hs:
-        sim = Simulator(heavy_top(spring=True), method, "SO3xR3")
-        res = sim.Run(0.5, h, outputEvery=int(round(0.5 / h)))
+        sim = Simulator(heavy_top(spring=True), method, group)
+        res = sim.Run(T, h, outputEvery=max(1, int(round(2e-3 / h))))
         E = res.totalEnergy
-        errs.append(abs(E[-1] - E[0]))
-    slope = np.polyfit(np.log(hs), np.log(errs), 1)[0]
-    assert order - 0.5 < slope < order + 0.7, (errs, slope)
+        errs.append(np.max(np.abs(E - E[0])))
+    ratios = np.array(errs[:-1]) / np.array(errs[1:])
+    assert np.all(ratios > 0.75 * 2 ** order), (errs, ratios)
+    if group == "SO3xR3":
+        assert np.all(ratios < 1.3 * 2 ** order), (errs, ratios)
 
 
 # --------------------------------------------------------------------------- paper claims
 def max_violation(group, h, T=8.0, scene=heavy_top, joint=0):
+    """Largest position violation of one joint over every step of the run."""
     sim = Simulator(scene(), "RK4", group)
-    res = sim.Run(T, h, outputEvery=max(1, int(round(0.01 / h))))
+    res = sim.Run(T, h, outputEvery=1)
+    assert len(res.times) == int(round(T / h)) + 1
     return np.max(res.jointPositionViolation[:, joint])
 
 
 def test_heavy_top_se3_exact_so3xr3_drifts_at_order_4():
     """Corollary 1: the top's motion is a subgroup (rotation about the pivot) of SE3 but
-    not of SO3xR3."""
+    not of SO3xR3.  The paper's claims with RK4 at 1e-2 and 1e-3 s over 8 s, checked at
+    every step: SE3 <= 1e-12 throughout; SO3xR3 >= 1e-8, falling about 16x when the step
+    is halved (measured: 1.3e-2, 8.7e-4 at 1e-2, 5e-3 s (15.3x); 1.4e-6 at 1e-3 s)."""
     for h in (1e-2, 1e-3):
         assert max_violation("SE3", h) <= 1e-12
     v1 = max_violation("SO3xR3", 1e-2)
     v2 = max_violation("SO3xR3", 5e-3)
     v3 = max_violation("SO3xR3", 1e-3)
-    assert v1 >= 1e-8 and v3 >= 1e-12
-    assert 10 < v1 / v2 < 24, (v1, v2)
+    assert v1 >= 1e-8 and v3 >= 1e-8, (v1, v3)
+    assert 12 < v1 / v2 < 20, (v1, v2)
 
 
 def test_double_pendulum_joint1_exact_joint2_same_order():
@@ -194,7 +249,9 @@ def test_step_size_blow_up_is_stopped_with_a_suggestion():
 
 
 def test_redundant_planar_fourbar_runs_and_singular_names_joints():
-    """Four revolute joints close a planar four-bar: 3 redundant rows; it must run."""
+    """Four revolute joints close a planar four-bar: 3 redundant rows; the warning names
+    all four joints and the rank, and it runs.  (A system that becomes singular during a
+    run: test_full_rank_system_becoming_singular_mid_run_names_the_joints.)"""
     sc = Scene(gravity=[0, -9.81, 0])
     pts = [np.array([0, 0, 0.]), np.array([0, 0.2, 0]), np.array([0.5, 0.4, 0]), np.array([0.5, 0, 0])]
     bodies = []
@@ -208,7 +265,77 @@ def test_redundant_planar_fourbar_runs_and_singular_names_joints():
     with warnings.catch_warnings(record=True) as w:
         warnings.simplefilter("always")
         sim = Simulator(sc, "RK4", "SE3")
-    assert any("redundant" in str(x.message) for x in w)
+    msgs = [str(x.message) for x in w if "redundant" in str(x.message)]
+    assert msgs and all(f"rev{i}" in msgs[0] for i in (1, 2, 3, 4)), msgs
+    assert "rank 17 of 20" in msgs[0], msgs
+    assert sorted(sim.redundantJoints) == ["rev1", "rev2", "rev3", "rev4"]
     res = sim.Run(0.5, 1e-3, outputEvery=50)
     assert np.all(np.isfinite(res.r))
     assert np.max(res.jointViolation) < 1e-6
+
+
+def sliding_plane_pair(x0, v=1.0):
+    """A free body translating along x at speed v (no forces: the exact motion is
+    uniform), with three one-row generic joints that hold along that motion:
+
+    * planeA: the ground origin lies in the body's x-z plane, ``(R e_y) . (0 - r) = 0``
+      (row on the body side: J = (x e_z, -e_y) at R = I, r = (x, 0, 0));
+    * planeB: the body origin stays in the world plane y = 0 (J = (0, e_y));
+    * zlock: ... and in the world plane z = 0 (J = (0, e_z)).
+
+    planeA + planeB = (x e_z, 0): full rank except at x = 0, where planeA and planeB
+    become linearly dependent (zlock stays independent).  Near x = 0 the smallest pivot of
+    J M^-1 J^T is about 25 x^2 against a largest diagonal of 0.5 (m = 2 kg, Theta_z = 0.04)."""
+    sc = Scene()
+    b = sc.AddBody(2.0, np.diag([0.02, 0.03, 0.04]), r0=[x0, 0, 0], vel0=[v, 0, 0], name="slider")
+    sc.AddJoint(b, GROUND, (0, 1, 0, 0, 0, 0), name="planeA")
+    sc.AddJoint(GROUND, b, (0, 1, 0, 0, 0, 0), name="planeB")
+    sc.AddJoint(GROUND, b, (0, 0, 1, 0, 0, 0), name="zlock")
+    return sc
+
+
+@pytest.mark.parametrize("group", ["SE3", "SO3xR3"])
+def test_full_rank_system_becoming_singular_mid_run_names_the_joints(group):
+    """Full rank at the start (x = -0.05 m), singular when the body reaches x = 0 at
+    t = 0.05 s (the last stage of the step from 0.049 s lands there, to round-off): the
+    run stops with a ConstraintError naming the two dependent joints (not the third),
+    at the last accepted step."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")           # no redundancy warning at set-up
+        sim = Simulator(sliding_plane_pair(-0.05), "RK4", group)
+    assert not sim.redundantJoints and not sim.sd.redundant
+    with pytest.raises(ConstraintError, match="singular constraint Jacobian") as ei:
+        sim.Run(0.1, 1e-3, outputEvery=1)
+    msg = str(ei.value)
+    names = msg.split("constraints of joints ")[1].split(" are linearly dependent")[0].split(", ")
+    assert sorted(names) == ["planeA", "planeB"], msg
+    assert sim.t == pytest.approx(0.049, abs=1e-12), msg
+    assert "t = 0.049 s" in msg
+    # the state is the last accepted step: the exact uniform motion at t = 0.049 s
+    np.testing.assert_allclose(sim.r[0], [-0.05 + sim.t, 0, 0], atol=1e-14)
+    np.testing.assert_allclose(sim.R[0], np.eye(3), atol=1e-15)
+
+
+@pytest.mark.parametrize("group", ["SE3", "SO3xR3"])
+def test_near_singular_start_one_rank_rule(group):
+    """The set-up check and the time loop apply one rule (exudyn_lie/mbs/linalg.py): a
+    Cholesky pivot of J M^-1 J^T at or below 1e-10 x its largest diagonal.  Pivot ratio
+    50 x0^2 here: x0 = 1e-6 (ratio 5e-11) is numerically singular, so construction says
+    so (naming planeA and planeB, rank 2 of 3) and switches to the rank-revealing solve,
+    and the run -- moving away from x = 0 -- goes through; before, construction passed
+    (an SVD of the unweighted J with another tolerance found full rank) and the run
+    failed at its first stage.  x0 = 1e-5 (ratio 5e-9) is regular: no warning, band
+    path, and the run goes through too."""
+    for x0, singular in ((1e-6, True), (1e-5, False), (0.0, True)):
+        with warnings.catch_warnings(record=True) as rec:
+            warnings.simplefilter("always")
+            sim = Simulator(sliding_plane_pair(x0), "RK4", group)
+        msgs = [str(w.message) for w in rec if "constraints among joints" in str(w.message)]
+        assert bool(msgs) == singular, (x0, msgs)
+        assert sim.sd.redundant == singular
+        if singular:
+            assert "redundant" in msgs[0] and "rank 2 of 3" in msgs[0], msgs
+            assert sorted(sim.redundantJoints) == ["planeA", "planeB"], msgs
+        res = sim.Run(0.1, 1e-3, outputEvery=10)        # no ConstraintError at step 1
+        np.testing.assert_allclose(res.r[-1, 0], [x0 + 0.1, 0, 0], atol=1e-13)
+        assert np.max(res.jointViolation) < 1e-14

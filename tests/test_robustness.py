@@ -148,3 +148,82 @@ def test_bridge_warns_rxyz_singularity_with_output_every_step():
 
 def test_bridge_warns_rxyz_singularity_crossed_between_outputs():
     assert _rxyz_run(sensor=False)
+
+
+# --------------------------------------------------------------------------- stage-argument domain
+def spinner(omega=100.0, torque=0.0, python_force=False):
+    """A box spinning about its principal z axis, frame at the COM, no translation: the
+    exact motion R(t) = exp(omega t e_z) is a one-parameter subgroup of both groups, so
+    both MK updates reproduce it for any step (no stability limit from the spin).  A
+    body-fixed torque about z makes omega grow linearly."""
+    sc = Scene()
+    b = sc.AddBody(1.0, np.diag([0.1, 0.2, 0.3]), omega0=[0, 0, omega], name="spinner")
+    if torque:
+        sc.AddTorque(b, [0, 0, torque], bodyFixed=True)
+    if python_force:
+        sc.AddPythonForce(lambda t, st: (np.zeros((1, 3)), np.zeros((1, 3))), name="zero")
+    return sc
+
+
+def _suggestion(msg):
+    import re
+    return float(re.search(r"try a step size of ([0-9.eE+-]+) s", msg).group(1))
+
+
+@pytest.mark.parametrize("group", ["SE3", "SO3xR3"])
+def test_stage_argument_below_the_bound_runs_exactly(group):
+    """|omega| h = 6.2 < kernel.STAGE_ARG_MAX (2 pi - 9.4e-8): the stages' rotation arguments
+    reach 6.2 rad and the run goes on, on the exact motion."""
+    from exudyn_lie.groups import so3
+    from exudyn_lie.mbs import kernel
+    h = 6.2 / 100.0
+    assert 6.2 < kernel.STAGE_ARG_MAX < 2 * np.pi
+    sim = Simulator(spinner(), "RK4", group)
+    sim.Advance(20, h)
+    np.testing.assert_allclose(sim.R[0], so3.exp(np.array([0, 0, 100.0 * sim.t])), atol=1e-12)
+
+
+@pytest.mark.parametrize("python_force", [False, True])
+@pytest.mark.parametrize("group", ["SE3", "SO3xR3"])
+def test_stage_argument_near_2pi_is_stopped_with_step_size_error(group, python_force):
+    """|omega| h = 2 pi: dexp^-1 of the MK stage equation is singular at the last stage's
+    argument Psi_4 = h k_3 (|Psi_4| = |omega| h).  The compiled time loop (and the Python
+    stage loop of scenes with callbacks) stops before evaluating that stage, with a
+    StepSizeError stating the time, the step and a suggested step; the state is
+    untouched, and the suggested step runs."""
+    import re
+    from exudyn_lie.mbs import kernel
+    h = 2 * np.pi / 100.0
+    sim = Simulator(spinner(python_force=python_force), "RK4", group)
+    R0, V0 = sim.R.copy(), sim.V.copy()
+    bound = re.escape(f"{kernel.STAGE_ARG_MAX:.4g} = 2 pi - {2 * np.pi - kernel.STAGE_ARG_MAX:.2g}")
+    with pytest.raises(StepSizeError, match=r"\|Psi\| = 6.283 rad, is beyond " + bound + " .*"
+                                            r"at t = 0 s with step size 0.0628 s .*try a step size") as ei:
+        sim.Advance(20, h)
+    assert sim.t == 0.0 and np.array_equal(sim.R, R0) and np.array_equal(sim.V, V0)
+    sugg = _suggestion(str(ei.value))
+    assert 100.0 * sugg <= np.pi + 1e-9
+    Simulator(spinner(python_force=python_force), "RK4", group).Advance(int(1.0 / sugg), sugg)
+
+
+@pytest.mark.parametrize("group", ["SE3", "SO3xR3"])
+def test_stage_argument_guard_mid_run_keeps_last_accepted_step(group):
+    """A torque spins the box up from |omega| h = 6.0 (h = 0.06 s, domega/dt = 10/0.3
+    rad/s^2): the stage argument crosses the guard after two steps; the error gives
+    that time, and the simulator holds the last accepted step (equal to a twin advanced
+    to it)."""
+    h = 0.06
+    sim = Simulator(spinner(torque=10.0), "RK4", group)
+    with pytest.raises(StepSizeError, match=r"MK stage, \|Psi\| = 6\.[23]\d* rad.* at t = [0-9.]+ s") as ei:
+        sim.Advance(40, h)
+    from exudyn_lie.mbs import kernel
+    n = int(round(sim.t / h))
+    assert n >= 1 and f"at t = {sim.t:.6g} s" in str(ei.value)
+    # |Psi_4| = h |k_3| ~ h omega(t + h/2), omega(t) = 100 + (10 / 0.3) t: the failing step
+    # is the first whose mid-step rate crosses the bound (here the step from t = 0.12 s)
+    omega = lambda t: 100.0 + 10.0 / 0.3 * t
+    assert omega(sim.t + h / 2) * h > kernel.STAGE_ARG_MAX >= omega(sim.t - h / 2) * h, sim.t
+    twin = Simulator(spinner(torque=10.0), "RK4", group)
+    twin.Advance(n, h)
+    np.testing.assert_array_equal(sim.R, twin.R)
+    np.testing.assert_array_equal(sim.V, twin.V)

@@ -80,7 +80,19 @@ def test_largest_stable_steps_match_theory(suite):
     assert math.sqrt(3) * (1 - 2e-3) <= y["RK3"] <= math.sqrt(3) * 1.02
     lo, hi = cr.data["spin_SE3"]
     assert abs(lo * 150.0 / (2 * math.sqrt(2)) - 1) < 0.01          # SE3: |omega| h <= 2 sqrt(2)
-    assert not np.isfinite(cr.data["spin_SO3xR3"][1])               # SO3xR3: no limit for this motion
+    # SO3xR3: no stability limit for this motion; the stage-argument guard (dexp^-1 is
+    # singular at |Psi| = 2 pi) stops it at |omega| h = |Psi_4| = STAGE_ARG_MAX (2 pi - 9.4e-8)
+    from exudyn_lie.mbs import kernel
+    assert 2 * math.pi * (1 - 1e-2) < kernel.STAGE_ARG_MAX < 2 * math.pi
+    lo, hi = cr.data["spin_SO3xR3"]
+    assert lo * 150.0 <= kernel.STAGE_ARG_MAX < hi * 150.0 and lo * 150.0 > kernel.STAGE_ARG_MAX * (1 - 1e-3)
+
+
+def test_stage_argument_guard_stops_the_spinning_box(suite):
+    cr = suite[0]["groupmaps"]
+    guard = [c for c in cr.checks if "stage-argument guard" in c.name]
+    assert len(guard) == 3 and all(c.ok for c in guard), [c.detail for c in guard]
+    assert "2 pi - " in guard[0].detail and "t = 0 s" in guard[0].detail
 
 
 def test_stability_theory_known_values():
@@ -145,6 +157,37 @@ def test_bad_input_clear_and_unchanged(suite):
     scene_level = [c for c in cr.checks if c.name.startswith("scene:")]
     assert len(scene_level) >= 25
     _no_failures(cr)
+    # gravity: set on the existing scene (not a new Scene), which must stay as it was
+    assert any(c.name.startswith("scene: Scene.SetGravity on the existing scene") for c in scene_level)
+    ok, why = C.bridge_available()
+    if not ok:
+        return
+    rows = {r[1]: r for r in cr.tables[0].rows if r[0] == "Exudyn/bridge"}
+    # Exudyn's own range check refuses a negative mass before exudyn_lie sees it ...
+    r = rows["ObjectRigidBody mass -1: Exudyn's range check refuses it"]
+    assert r[2] == "Exudyn" and r[3].startswith("ExudynValueError") and "negative" in r[4] and r[5] == "yes"
+    # ... with the range checks off it reaches exl.SolveDynamic, which refuses it
+    r = rows["ObjectRigidBody mass -1, set with Exudyn's range checks off"]
+    assert r[2] == "exudyn_lie" and r[3] == "BridgeError" and "mass must be positive" in r[4] and r[5] == "yes"
+    r = rows["numberOfSteps 0, set with Exudyn's range checks off"]
+    assert r[2] == "exudyn_lie" and r[3] == "BridgeError"
+    import exudyn as exu
+    assert exu.special.exceptions.parameterRangeChecks        # restored after the probes
+
+
+def test_bridge_probe_unchanged_is_not_vacuous():
+    """The Exudyn-level 'unchanged' compares object parameters too: a probe whose
+    preparation changes mbs and then is refused by Exudyn reports a change."""
+    ok, why = C.bridge_available()
+    if not ok:
+        pytest.skip(why)
+
+    def change_then_refuse(mbs, H):
+        mbs.SetObjectParameter(H["body"], "mass", 3.0)
+        mbs.SetObjectParameter(H["body"], "mass", -1.0)
+
+    o = C.run_bridge_probe("change, then a refused value", change_then_refuse, "negative", "Exudyn")
+    assert o["refused_by"] == "Exudyn" and o["clear"] and not o["unchanged"]
 
 
 def test_command_writes_stress_md(tmp_path):

@@ -54,7 +54,9 @@ def joint_rows(joint, R, r):
     pB, FB = _side(R, r, joint.bodyB, joint.posB, joint.rotB)
     d = pB - pA
     lt = joint.lockedAxes[:3]
-    if all(lt):
+    if getattr(joint, "worldTranslation", False):
+        trans = d[:, [i for i in range(3) if lt[i]]]
+    elif all(lt):
         trans = d
     else:
         cols = [i for i in range(3) if lt[i]]
@@ -91,8 +93,8 @@ def joint_velocity_violations(joint, R, r, omega, vel):
     d, dd = pB - pA, vB - vA
     rows = []
     lt = joint.lockedAxes[:3]
-    if all(lt):
-        rows += [dd[:, i] for i in range(3)]
+    if all(lt) or getattr(joint, "worldTranslation", False):
+        rows += [dd[:, i] for i in range(3) if lt[i]]
     else:
         for i in range(3):
             if lt[i]:

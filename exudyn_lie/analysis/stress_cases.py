@@ -222,7 +222,8 @@ def collect_stage_arguments(sim, h, nsteps):
     out = []
     for n in range(nsteps):
         for j in range(len(b)):
-            kernel.mk_stage_state(sd, wk, A, j, h, sim.R, sim.r, sim.V)
+            if kernel.mk_stage_state(sd, wk, A, j, h, sim.R, sim.r, sim.V) != kernel.STATUS_OK:
+                raise RuntimeError(f"stage argument beyond the guard {kernel.STAGE_ARG_MAX:.4f}")
             if j > 0:
                 for i in range(sd.nb):
                     out.append((int(sd.gid[i]), "stage", wk.Psi[i].copy()))
@@ -465,6 +466,8 @@ def case_groupmaps(quick, outdir):
         ("free body SE3, RK4, |omega| h = 3.1 (> 2.83)", free, "RK4", "SE3", 3.1 / wn, 10.0, None),
         ("free body SE3, RK4, |omega| h = 7", free, "RK4", "SE3", 7.0 / wn, 10.0, None),
         ("free body SO3xR3, RK4, |omega| h = 7", free, "RK4", "SO3xR3", 7.0 / wn, 10.0, None),
+        ("spinning box SO3xR3 (no stability limit), RK4, |omega| h = 2 pi: stage-argument guard",
+         lambda: M.spinning_box(150.0), "RK4", "SO3xR3", 2 * math.pi / 150.0, 10.0, None),
     ]
     prow = []
     for name, make, m, group, h, Tmax, hlim in probes:
@@ -494,6 +497,13 @@ def case_groupmaps(quick, outdir):
                     "velocity of a spinning, translating body rotates at |omega| (v' = -omega x v + ...), a linear "
                     "oscillation the explicit RK stage must resolve (|omega| h <= y_max, 2.83 for RK4); SO3xR3 "
                     "carries the constant spatial velocity instead. See the stability case for the measured limits.")
+    cr.notes.append(f"Stage-argument guard: the MK stage needs dexp^-1 at the stage arguments Psi_j, singular at "
+                    f"|rotation part| = 2 pi; the compiled time loop stops a step whose stage rotation exceeds "
+                    f"{kernel.STAGE_ARG_MAX:.4f} = 2 pi - {2 * math.pi - kernel.STAGE_ARG_MAX:.2g} (condition number "
+                    f"of dexp^-1 ~ 2 pi / {2 * math.pi - kernel.STAGE_ARG_MAX:.2g} = "
+                    f"{2 * math.pi / (2 * math.pi - kernel.STAGE_ARG_MAX):.3g} there) "
+                    f"with a StepSizeError (time, step, suggested step) before evaluating the stage. It is what stops "
+                    f"the SO3xR3 spinning box, which has no stability limit.")
     cr.headline = (f"stage arguments up to |xi| = {maxnorm:.2f} and both sides of every Taylor switch: worst relative "
                    f"error of exp / dexpinv {max(worst, sworst, slog):.1e}; {len(prow)} steps beyond the stability "
                    f"limit stop with a StepSizeError at the last accepted step, every suggested step is stable")
@@ -735,15 +745,25 @@ def case_stability(quick, outdir):
             frows.append([group, e2(y4 / wspin), e2(ytol4 / wspin), e2(lo), f"{lo * wspin / ytol4:.5f}",
                           f"{lo * wspin:.4f}"])
         else:
-            cr.check("spinning box, SO3xR3: no step limit from the spin (exact for this motion)",
-                     not np.isfinite(hi), f"stable up to |omega| h = {lo * wspin:.1f}")
-            frows.append([group, "none (spatial velocity constant)", "-", e2(lo) + (" (cap)" if not np.isfinite(hi)
-                                                                                  else ""), "-", f"{lo * wspin:.1f}"])
+            # no stability limit (exact for this motion): the run goes on until the largest
+            # stage rotation, |Psi_4| = |omega| h for RK4, meets the stage-argument guard
+            # of the time loop (dexp^-1 is singular at 2 pi), which stops it
+            guard = kernel.STAGE_ARG_MAX
+            cr.check(f"spinning box, SO3xR3: no stability limit from the spin (exact for this motion); stopped only "
+                     f"by the stage-argument guard |omega| h <= 2 pi - {2 * math.pi - guard:.2g}",
+                     np.isfinite(hi) and lo * wspin <= guard < hi * wspin and lo * wspin > guard * (1 - 1e-3),
+                     f"stable up to |omega| h = {lo * wspin:.5f}, stopped from {hi * wspin:.5f} (guard {guard:.5f})")
+            frows.append([group, "none (spatial velocity constant)", "-",
+                          e2(lo) + (" (stage-argument guard)" if np.isfinite(hi) else " (cap)"), "-",
+                          f"{lo * wspin:.4f}"])
         cr.data[f"spin_{group}"] = (lo, hi)
     cr.tables.append(Table(f"Box spinning at {wspin:g} rad/s about a principal axis (frame at the COM) and translating "
                            f"at 2 m/s perpendicular to it, MK-RK4; stable = translational energy <= 2x over "
                            f"{spin_periods} spin periods. With SE3 the body-fixed v obeys v' = -omega x v: a linear "
-                           f"oscillation at |omega| the RK stages must resolve; with SO3xR3 rdot is constant.",
+                           f"oscillation at |omega| the RK stages must resolve; with SO3xR3 rdot is constant, and the "
+                           f"run is stopped only when the last stage's rotation |Psi_4| = |omega| h reaches the "
+                           f"stage-argument guard 2 pi - {2 * math.pi - kernel.STAGE_ARG_MAX:.2g} (dexp^-1 singular "
+                           f"at 2 pi).",
                            ["group", "y_max/|omega| [s]", f"theory h (2x, {spin_periods} periods) [s]",
                             "measured h [s]", "measured / theory", "|omega| h at the limit"], frows))
     if not quick:
@@ -1253,7 +1273,8 @@ def scene_probes():
         lambda sc, sim: sc.AddBody(1.0, J, com=[1.0, 0, 0]), "SceneError", "positive definite")
     add("AddBody: R0 not a rotation", lambda sc, sim: sc.AddBody(1.0, J, R0=np.diag([1.0, 1, -1])), "SceneError",
         "rotation")
-    add("Scene gravity with NaN", lambda sc, sim: Scene(gravity=[0, nan, 0]), "SceneError", "not finite")
+    add("Scene.SetGravity on the existing scene: NaN component", lambda sc, sim: sc.SetGravity([0, nan, 0]),
+        "SceneError", "not finite")
     add("AddJoint: both markers on body 0", lambda sc, sim: sc.AddSphericalJoint(0, 0, [0, 0, 0]), "SceneError",
         "same")
     add("AddJoint: ground to ground", lambda sc, sim: sc.AddJoint(GROUND, GROUND, (1, 1, 1, 0, 0, 0)), "SceneError",
@@ -1344,12 +1365,17 @@ def run_scene_probe(label, fn, exc, kw):
 
 
 def bridge_probes():
-    """(label, prepare(mbs, handles) -> call kwargs, keyword)."""
+    """(label, prepare(mbs, handles) -> None, keyword, refused by).  ``refused by`` is
+    ``'exudyn_lie'`` (the input reaches exl.SolveDynamic, which must refuse it) or
+    ``'Exudyn'`` (Exudyn's own parameter range check refuses it while it is set, before
+    exudyn_lie can see it; then the same input is also set with Exudyn's range checks
+    switched off -- ``exudyn.special.exceptions.parameterRangeChecks = False``, the route
+    by which it can reach exudyn_lie -- as a separate probe)."""
     nan = float("nan")
     P = []
 
-    def add(label, prep, kw):
-        P.append((label, prep, kw))
+    def add(label, prep, kw, by="exudyn_lie"):
+        P.append((label, prep, kw, by))
 
     add("node initialCoordinates with NaN",
         lambda mbs, H: mbs.SetNodeParameter(H["node"], "initialCoordinates", [nan, 0, 0, 0, 0, 0]), "not finite")
@@ -1357,12 +1383,15 @@ def bridge_probes():
         lambda mbs, H: mbs.SetNodeParameter(H["node"], "initialVelocities", [0, float("inf"), 0, 0, 0, 0]),
         "not finite")
     add("ObjectRigidBody mass 0", lambda mbs, H: mbs.SetObjectParameter(H["body"], "mass", 0.0), "mass")
-    add("ObjectRigidBody mass -1", lambda mbs, H: mbs.SetObjectParameter(H["body"], "mass", -1.0),
-        "mass")
+    neg_mass = lambda mbs, H: mbs.SetObjectParameter(H["body"], "mass", -1.0)
+    add("ObjectRigidBody mass -1: Exudyn's range check refuses it", neg_mass, "may not be negative", "Exudyn")
+    add("ObjectRigidBody mass -1, set with Exudyn's range checks off", _range_checks_off(neg_mass), "mass")
     add("ObjectRigidBody inertia not positive definite",
         lambda mbs, H: mbs.SetObjectParameter(H["body"], "inertia", [0.02, 0.03, -0.04, 0, 0, 0]),
         "positive definite")
-    add("numberOfSteps 0", lambda mbs, H: H["ss"].timeIntegration.__setattr__("numberOfSteps", 0), "numberOfSteps")
+    zero_steps = lambda mbs, H: H["ss"].timeIntegration.__setattr__("numberOfSteps", 0)
+    add("numberOfSteps 0: Exudyn's range check refuses it", zero_steps, "numberOfSteps", "Exudyn")
+    add("numberOfSteps 0, set with Exudyn's range checks off", _range_checks_off(zero_steps), "numberOfSteps")
     add("endTime before startTime", lambda mbs, H: (H["ss"].timeIntegration.__setattr__("startTime", 1.0),
                                                     H["ss"].timeIntegration.__setattr__("endTime", 0.5)), "endTime")
     add("unknown method 'RK5x'", lambda mbs, H: H["kw"].__setitem__("method", "RK5x"), "unknown method")
@@ -1371,6 +1400,20 @@ def bridge_probes():
     add("unsupported item: ObjectMassPoint", _mass_point, "not supported")
     add("unsupported item: revolute joint with offsetUserFunction", _offset_uf_joint, "not supported")
     return P
+
+
+def _range_checks_off(prep):
+    """``prep`` with Exudyn's parameter range checks switched off (restored after)."""
+    def run(mbs, H):
+        import exudyn as exu
+        flags = exu.special.exceptions
+        old = flags.parameterRangeChecks
+        flags.parameterRangeChecks = False
+        try:
+            prep(mbs, H)
+        finally:
+            flags.parameterRangeChecks = old
+    return run
 
 
 def _same_body_joint(mbs, H):
@@ -1408,7 +1451,20 @@ def _exu_small():
     return mbs, dict(ground=ground, body=d["bodyNumber"], node=d["nodeNumber"])
 
 
-def _mbs_snapshot(mbs):
+def _plain(v):
+    """A comparable, exact form of an item parameter (arrays by their bytes)."""
+    if isinstance(v, np.ndarray):
+        return ("array", v.shape, v.tobytes())
+    if isinstance(v, (list, tuple)):
+        return tuple(_plain(x) for x in v)
+    if isinstance(v, dict):
+        return tuple(sorted((k, _plain(x)) for k, x in v.items()))
+    return repr(v)
+
+
+def _mbs_snapshot(mbs, ss=None):
+    """Time, item counts, initial and current coordinates / velocities, every object's
+    parameters (not the visualisation ones), and the time-integration settings."""
     import exudyn as exu
     sd = mbs.systemData
     snap = [sd.GetTime(), sd.NumberOfObjects(), sd.NumberOfNodes(), sd.NumberOfMarkers(), sd.NumberOfLoads()]
@@ -1418,14 +1474,25 @@ def _mbs_snapshot(mbs):
                 snap.append(np.array(get(configuration=cfg), float).tobytes())
             except Exception:       # noqa: BLE001
                 snap.append(None)
+    for i in range(sd.NumberOfObjects()):
+        snap.append(_plain({k: v for k, v in mbs.GetObject(i).items() if not k.startswith("V")}))
+    if ss is not None:
+        ti = ss.timeIntegration
+        snap.append((ti.numberOfSteps, ti.startTime, ti.endTime))
     return snap
 
 
-def run_bridge_probe(label, prep, kw):
+def run_bridge_probe(label, prep, kw, by="exudyn_lie"):
+    """One Exudyn-level probe on a fresh model.  ``by = 'exudyn_lie'``: the input must
+    reach exl.SolveDynamic (Exudyn accepts it) and be refused there, leaving mbs and the
+    settings as they were before the call.  ``by = 'Exudyn'``: Exudyn itself must refuse
+    the input while it is set, and that refusal must leave mbs and the settings as they
+    were (exudyn_lie is never reached)."""
     from .. import bridge
     mbs, H = _exu_small()
     H["ss"] = _exu_settings(0.1, 100)
     H["kw"] = dict(method="RK4", liegroup="SE3")
+    initial = _mbs_snapshot(mbs, H["ss"])
     stage = "prepare"
     raised, msg = None, ""
     try:
@@ -1434,8 +1501,9 @@ def run_bridge_probe(label, prep, kw):
         mbs.Assemble()
     except Exception as e:      # noqa: BLE001
         raised, msg = f"{type(e).__name__} (Exudyn, at {stage})", str(e)
-    before = _mbs_snapshot(mbs) if raised is None else None
+    refused_by = "Exudyn" if raised is not None else None
     if raised is None:
+        before = _mbs_snapshot(mbs, H["ss"])
         try:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")
@@ -1443,38 +1511,56 @@ def run_bridge_probe(label, prep, kw):
             raised = "none"
         except Exception as e:      # noqa: BLE001
             raised, msg = type(e).__name__, str(e)
-    unchanged = before is None or _mbs_snapshot(mbs) == before
-    clear = raised not in ("none",) and (kw.lower() in msg.lower())
-    return dict(label=label, raised=raised, msg=msg, clear=clear, unchanged=unchanged)
+            refused_by = "exudyn_lie"
+        unchanged = _mbs_snapshot(mbs, H["ss"]) == before
+    else:
+        unchanged = _mbs_snapshot(mbs, H["ss"]) == initial
+    clear = refused_by == by and kw.lower() in msg.lower()
+    return dict(label=label, raised=raised, msg=msg, clear=clear, unchanged=unchanged,
+                refused_by=refused_by or "nobody")
 
 
 def case_badinput(quick, outdir):
     cr = CaseResult("badinput", "Bad input: a clear error (or warning), the scene / mbs left unchanged")
-    cr.intro = ("Scene / Simulator level: each probe runs on a fresh small scene (a hinged arm with a spring) and a "
-                "compiled Simulator; 'unchanged' compares the pickled scene data and the simulator state (t, R, r, V) "
-                "before and after. Exudyn level: an ordinary Exudyn model (CreateRigidBody, CreateRevoluteJoint, "
-                "CreateSpringDamper) is modified, assembled and passed to exl.SolveDynamic; 'unchanged' compares "
-                "time, item counts and the initial and current coordinates / velocities of mbs before and after the "
-                "call.")
+    cr.intro = ("Scene / Simulator level: each probe acts on an existing small scene (a hinged arm with a spring) "
+                "and its compiled Simulator, advanced by 5 steps; 'unchanged' compares the pickled scene data and the "
+                "simulator state (t, R, r, V) before and after. Exudyn level: an ordinary Exudyn model "
+                "(CreateRigidBody, CreateRevoluteJoint, CreateSpringDamper) is modified, assembled and passed to "
+                "exl.SolveDynamic; 'unchanged' compares time, item counts, the initial and current coordinates / "
+                "velocities, every object's parameters and the time-integration settings before and after the "
+                "refused call. 'refused by' says who raised: exudyn_lie, or Exudyn itself (its parameter range "
+                "checks refuse some input while it is being set, before exudyn_lie can see it; those inputs are "
+                "probed again with the range checks switched off, the route by which they reach exudyn_lie).")
     rows = []
     for label, fn, exc, kw in scene_probes():
         o = run_scene_probe(label, fn, exc, kw)
         ok = o["clear"] and o["unchanged"]
         cr.check(f"scene: {label}", ok, f"{o['raised']}: {o['msg'][:200]}" + ("" if o["unchanged"] else
                  "; the scene / simulator state changed"))
-        rows.append(["Scene/Simulator", label, o["raised"], o["msg"][:150],
-                     "yes" if o["unchanged"] else "NO", "pass" if ok else "FAIL"])
+        rows.append(["Scene/Simulator", label, "exudyn_lie" if o["raised"] not in ("none", "none (silent)") else "-",
+                     o["raised"], o["msg"][:150], "yes" if o["unchanged"] else "NO", "pass" if ok else "FAIL"])
     ok_b, why = bridge_available()
     if ok_b:
-        for label, prep, kw in bridge_probes():
-            o = run_bridge_probe(label, prep, kw)
+        for label, prep, kw, by in bridge_probes():
+            o = run_bridge_probe(label, prep, kw, by)
             ok = o["clear"] and o["unchanged"]
-            cr.check(f"exudyn: {label}", ok, f"{o['raised']}: {o['msg'][:200]}")
-            rows.append(["Exudyn/bridge", label, o["raised"], o["msg"][:150],
+            expect = ("Exudyn must refuse it (its range check)" if by == "Exudyn"
+                      else "must reach exl.SolveDynamic and be refused there")
+            cr.check(f"exudyn: {label}", ok, f"refused by {o['refused_by']} ({expect}); {o['raised']}: "
+                                             f"{o['msg'][:200]}" + ("" if o["unchanged"] else "; mbs changed"))
+            rows.append(["Exudyn/bridge", label, o["refused_by"], o["raised"], o["msg"][:150],
                          "yes" if o["unchanged"] else "NO", "pass" if ok else "FAIL"])
     else:
         cr.notes.append(f"Exudyn-level probes skipped: bridge not available ({why})")
-    cr.tables.append(Table("Bad input", ["level", "input", "raised", "message (start)", "unchanged", "check"], rows))
+    cr.tables.append(Table("Bad input", ["level", "input", "refused by", "raised", "message (start)", "unchanged",
+                                         "check"], rows))
+    cr.notes.append("Negative mass at the Exudyn level: Exudyn 1.13's own range check refuses "
+                    "SetObjectParameter(body, 'mass', -1) (and AddObject with a negative mass) with ExudynValueError, "
+                    "so with default settings it never reaches exudyn_lie; with "
+                    "exudyn.special.exceptions.parameterRangeChecks = False Exudyn accepts it, and exl.SolveDynamic "
+                    "refuses it (BridgeError naming the object) before touching mbs. The same holds for "
+                    "numberOfSteps = 0. At the Scene level negative and zero masses are refused by AddBody and, for a "
+                    "body record mutated afterwards, by the Simulator's re-validation.")
     cr.headline = (f"{len(rows)} kinds of bad input (scene and Exudyn level): each gives a clear error naming the "
                    f"item and leaves the scene / mbs unchanged")
     return cr

@@ -447,26 +447,9 @@ class _Reader:
             return
         sign = 1.0
         if spherical:
-            # Exudyn: world components of p1 - p0 for the locked axes
+            # Exudyn (CObjectJointSpherical): rows (p1 - p0)_i in world components for the
+            # locked axes i, whatever the lock - the scene's world translation rows
             rotA = rotB = np.eye(3)
-            if sum(ca[:3]) < 3:
-                if A.body != GROUND and B.body == GROUND:
-                    A, B, sign = B, A, -1.0          # rows -(p0 - p1): same row space, lambda flips
-                elif A.body != GROUND:
-                    # Exudyn's rows are (p1 - p0)_i in world components, i the locked axes
-                    # (CObjectJointSpherical); the scene has world-axis translation rows only
-                    # for joints locking all three translations (compiled.joint_row_descriptors;
-                    # partial locks give rows along the axes of A's joint frame, which turn with A)
-                    raise BridgeError(f"{what}: constrainedAxes={list(ca[:3])} between two bodies is not "
-                                      f"supported by exudyn_lie: Exudyn constrains the world components "
-                                      f"(p1 - p0)_i of the locked axes i, and the exudyn_lie scene has "
-                                      f"world-axis translation rows only when all three translations are "
-                                      f"locked (partial locks are rows along the axes of body A's joint "
-                                      f"frame, which turns with the body); lock all three axes, attach one "
-                                      f"side to ground, or use an ObjectJointGeneric (rows in marker 0's "
-                                      f"joint frame)")
-                # A is ground: the kernel's rows in A's joint frame are world rows if rotA = I
-                rotA = np.eye(3)
         else:
             rotA = A.rot @ np.asarray(d.get("rotationMarker0", np.eye(3)), float)
             rotB = B.rot @ np.asarray(d.get("rotationMarker1", np.eye(3)), float)
@@ -474,7 +457,8 @@ class _Reader:
                 "JointGeneric": "generic"}[t]
         try:
             j = sc.AddJoint(A.body, B.body, ca, posA=A.pos, rotA=_orthonormal(rotA), posB=B.pos,
-                            rotB=_orthonormal(rotB), kind=kind, name=d.get("name", "") or f"object{o}")
+                            rotB=_orthonormal(rotB), kind=kind, name=d.get("name", "") or f"object{o}",
+                            worldTranslation=spherical)
         except SceneError as e:
             raise BridgeError(f"{what}: {e}") from None
         local = joint_ae_map(t, ca)

@@ -20,7 +20,8 @@ Convention: dexp is RIGHT-trivialised, d/de exp(x + e y) = hat(dexp_x y) exp(x);
 the body-fixed angular velocity of R = exp(xi(t)) is omega = dexp_{-xi} xidot.
 dexpinv_xi is singular at |xi| = 2 pi (dexp_xi is: its smallest singular value is
 |sin(t/2)|/(t/2)); the Munthe-Kaas stepper refuses stage arguments that close to
-2 pi (``integrators.mk.STAGE_ANGLE_MAX``).
+2 pi (:data:`DEXP_ANGLE_MAX`, used by the reference stepper ``integrators.mk`` and the
+compiled time loop ``mbs.kernel`` alike).
 
 Group operations: compose = R1 R2, inverse = R^T, Ad_R = R (hat(R x) = R hat(x) R^T);
 each has an allocation-free ``*_into`` variant, as have exp and log.
@@ -43,6 +44,14 @@ from numba import njit
 from . import _taylor
 from ._taylor import FM as _FM
 from ._taylor import ad_series, horner, mm, DEXP_SERIES_COEFFS, DEXPINV_SERIES_COEFFS
+
+#: Largest rotation angle t = |xi| at which dexp_xi^-1 is used (the Munthe-Kaas stage
+#: equation k_j = dexp^-1_{-Psi_j} V_j, eq. MK1).  dexp_xi is singular at t = 2 pi: its
+#: singular values are 1 (along xi) and |sin(t/2)|/(t/2) (across), so its condition number
+#: is kappa(t) = (t/2)/|sin(t/2)|.  The rule: accept t while kappa <= 1/sqrt(eps), i.e. at
+#: most half of the digits of a stage velocity are lost; with t = 2 pi - d,
+#: kappa ~ 2 pi / d, so the bound is 2 pi (1 - sqrt(eps)) = 2 pi - 9.4e-8.
+DEXP_ANGLE_MAX = 2.0 * np.pi * (1.0 - np.sqrt(np.finfo(np.float64).eps))
 
 # ---------------------------------------------------------------- switch points
 T_SWITCH_EXP, _NE = _taylor.plan(("A", "B", "C"))

@@ -52,6 +52,7 @@ from typing import Optional
 
 import numpy as np
 
+from ..groups import so3
 from .tableau import get_method
 
 __all__ = [
@@ -71,7 +72,7 @@ _GROUP_API = ("exp", "compose", "dexpinv_apply_into")
 
 #: Largest rotation angle |xi| of an MK stage argument Psi_j accepted (see the module
 #: docstring): 2 pi - 2 pi sqrt(eps), where kappa(dexp) = (t/2)/|sin(t/2)| = 1/sqrt(eps).
-STAGE_ANGLE_MAX = 2.0 * np.pi * (1.0 - np.sqrt(np.finfo(np.float64).eps))
+STAGE_ANGLE_MAX = so3.DEXP_ANGLE_MAX
 
 
 # --------------------------------------------------------------------------- helpers

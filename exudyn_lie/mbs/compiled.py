@@ -53,17 +53,18 @@ def body_mass_matrix(mass, inertia, com):
     return M
 
 
-def joint_row_descriptors(constrainedAxes):
+def joint_row_descriptors(constrainedAxes, worldTranslation=False):
     """Rows of Exudyn's ObjectJointGeneric for the given locks, as (kind, ax, bx):
 
     * translations: in the A joint frame (``ROW_TRANS_LOCAL``), or in world
-      coordinates when all three translations are locked (``ROW_TRANS_WORLD``);
+      coordinates (``ROW_TRANS_WORLD``) when all three translations are locked or
+      ``worldTranslation`` (Exudyn's ObjectJointSpherical: world components of the locked axes);
     * rotations: 3 locked -> z0.y1, z0.x1, x0.y1; 2 locked (free axis f) -> f0 . l1 for
       both locked axes l; 1 locked (universal, free axes f1 < f2) -> f1_0 . f2_1.
     """
     ax = constrainedAxes
     rows = []
-    world = ax[0] and ax[1] and ax[2]
+    world = bool(worldTranslation) or (ax[0] and ax[1] and ax[2])
     for i in range(3):
         if ax[i]:
             rows.append((ROW_TRANS_WORLD if world else ROW_TRANS_LOCAL, i, 0))
@@ -176,7 +177,7 @@ def compile_scene(scene: Scene, groups):
     rkind, rax, rbx, rA, rB, rjoint = [], [], [], [], [], []
     for k in order:
         jt = J[k]
-        rows = joint_row_descriptors(jt.constrainedAxes)
+        rows = joint_row_descriptors(jt.constrainedAxes, jt.worldTranslation)
         jrow0[k] = len(rkind)
         jnrow[k] = len(rows)
         for kind, a, b in rows:

@@ -56,6 +56,21 @@ STATUS_SINGULAR = 1
 STATUS_NONFINITE = 2
 STATUS_BLOWUP = 3
 STATUS_PROJECTION = 4      # the position projection did not converge
+STATUS_STAGE_ARG = 5       # a stage argument Psi_j left the domain of dexpinv (wk.info[2] = body)
+
+# Domain of the MK stage equation k_j = dexpinv_{-Psi_j} V_j (eq. MK1): dexpinv of SO(3)
+# (and of SE(3), whose blocks share the coefficient) is singular at |rotation part| = 2 pi,
+# where D(t) = (1 - (t/2) cot(t/2)) / t^2 has a pole.  Near it, with t = 2 pi - delta, the
+# condition number of dexpinv (ratio of its singular values, 1 along the axis and
+# (t/2) / |sin(t/2)| across it) is about 2 pi / delta, and so is the relative condition
+# number of D(t) itself.  The time loop stops a step whose stage argument exceeds
+# STAGE_ARG_MAX = so3.DEXP_ANGLE_MAX = 2 pi (1 - sqrt(eps)) (condition number <= 1/sqrt(eps):
+# at most half the digits of the stage velocity lost), before evaluating that stage - the
+# same rule as the Python reference stepper (integrators/mk.py), so SE3's exactness for
+# motions in a subgroup holds on the same domain in both.  The test is one squared-norm
+# compare per body and stage.
+STAGE_ARG_MAX = so3.DEXP_ANGLE_MAX
+STAGE_ARG_MAX2 = STAGE_ARG_MAX * STAGE_ARG_MAX
 
 # stabilisation after each step (SceneData.stabilization)
 STAB_NONE = 0
@@ -683,7 +698,11 @@ def _exp_compose(gid, R, r, X, Rout, rout, ER, Er):
 
 @njit(cache=True, inline="always", _nrt=False)
 def stage_state(gid, A, j, h, R, r, V, K, Vd, Psi, Rs, rs, Vs, ER, Er):
-    """Stage configuration ``g exp(Psi_j)`` and velocity ``V + h sum a_jl Vdot_l`` (eq. MK1)."""
+    """Stage configuration ``g exp(Psi_j)`` and velocity ``V + h sum a_jl Vdot_l`` (eq. MK1).
+
+    Returns -1, or the first body whose stage argument has ``|rotation part of Psi_j|``
+    beyond STAGE_ARG_MAX (dexpinv_{-Psi_j} of the stage is singular at 2 pi); then the
+    stage is not evaluated."""
     for i in range(gid.shape[0]):
         Pi = Psi[i]
         for k in range(6):
@@ -700,7 +719,10 @@ def stage_state(gid, A, j, h, R, r, V, K, Vd, Psi, Rs, rs, Vs, ER, Er):
                 for b in range(3):
                     Rs[i, a, b] = R[i, a, b]
         else:
+            if Pi[0] * Pi[0] + Pi[1] * Pi[1] + Pi[2] * Pi[2] > STAGE_ARG_MAX2:   # (NaN: state_is_finite)
+                return i
             _exp_compose(gid[i], R[i], r[i], Pi, Rs[i], rs[i], ER, Er)
+    return -1
 
 
 @njit(cache=True, inline="always", _nrt=False)
@@ -817,7 +839,13 @@ def project_state(sd, wk, level, R, r, V):
 
 @njit(cache=True, inline="always", _nrt=False)
 def mk_stage_state(sd, wk, A, j, h, R, r, V):
-    stage_state(sd.gid, A, j, h, R, r, V, wk.K, wk.Vd, wk.Psi, wk.Rs, wk.rs, wk.Vs, wk.m3[0], wk.v3[0])
+    """:func:`stage_state` on the scene tuples; a stage argument out of the domain of
+    dexpinv gives STATUS_STAGE_ARG with the body in ``wk.info[2]``."""
+    bad = stage_state(sd.gid, A, j, h, R, r, V, wk.K, wk.Vd, wk.Psi, wk.Rs, wk.rs, wk.Vs, wk.m3[0], wk.v3[0])
+    if bad >= 0:
+        wk.info[2] = bad
+        return STATUS_STAGE_ARG
+    return STATUS_OK
 
 
 @njit(cache=True, inline="always", _nrt=False)
@@ -895,7 +923,9 @@ def mk_steps(sd, wk, A, b, c, t0, h, nsteps, R, r, V, vmax, every, Ro, ro, Vo, V
         if evalOnly and nsteps > 0 and pending < 0:
             return STATUS_OK, nsteps
         for j in range(s):
-            mk_stage_state(sd, wk, A, j, h, R, r, V)
+            st = mk_stage_state(sd, wk, A, j, h, R, r, V)
+            if st != STATUS_OK:          # only for j >= 1: any pending output is written
+                return st, n
             st = rhs(sd, wk, t + c[j] * h, wk.Rs, wk.rs, wk.Vs, Qext, wk.Vd[j])
             if st != STATUS_OK:
                 if pending >= 0:

@@ -8,13 +8,35 @@ redundant constraint set (e.g. a planar four-bar closed by four revolute joints)
 diagonal (complete) pivoting that drops the dependent rows.
 
 Band storage: ``B[i, k] = S[i, i-k]`` for ``k = 0..bw`` (lower band, row-wise).
+
+The rank rule (one rule for the set-up check, the time loop and the error messages)
+---------------------------------------------------------------------------------
+The constraints are numerically dependent at a state when a Cholesky pivot of
+``S = J M^-1 J^T`` (the mass-weighted Schur complement, in the bodies' group velocity
+coordinates) is ``<= REL_PIVOT_TOL * max(diag S)``:
+
+* the time loop's band Cholesky (no pivoting) applies it to its pivots and stops with
+  ``STATUS_SINGULAR`` (the Simulator raises ConstraintError naming the joints);
+* the rank-revealing path (redundant constraints) applies it to the complete-pivoted
+  Cholesky: the rows whose pivots fall below it are dropped (:func:`pivoted_cholesky_solve`);
+* the set-up check (``Simulator``) runs the time loop's own band Cholesky at the initial
+  state.  If that meets the rule, the rank is the complete-pivoted one (same rule),
+  the joints are named from the null space of S (:func:`schur_rank_and_null`), and the
+  simulator switches to the rank-revealing path.  So a start that the time loop would
+  reject at its first stage never passes construction, and a start that passes runs
+  the band path with every pivot above the threshold.
+
+Every Cholesky pivot of an SPD matrix is ``>= lambda_min(S)``, so a band pivot meeting
+the rule implies ``lambda_min(S) <= REL_PIVOT_TOL * max(diag S)``: the eigenvectors of S
+with eigenvalues below that bound, which name the joints involved, always exist.
 """
 import numpy as np
 from numba import njit
 
 # a pivot below REL_PIVOT_TOL * (largest diagonal of S) is treated as zero: with
 # entries of S computed to ~1e-16 relative, 1e-10 leaves a wide margin for
-# ill-conditioned but regular systems while catching genuine rank loss.
+# ill-conditioned but regular systems while catching genuine rank loss.  (S is J M^-1 J^T,
+# so this is sigma_min / sigma_max ~ 1e-5 for the mass-weighted J M^-1/2.)
 REL_PIVOT_TOL = 1e-10
 
 
@@ -133,6 +155,36 @@ def pivoted_cholesky_solve(S, m, x, perm, y, rel_tol):
     for i in range(rank):
         x[perm[i]] = y[i]
     return rank
+
+
+def schur_rank_and_null(S, rel_tol=REL_PIVOT_TOL, forced=False):
+    """The rank rule on a dense ``S = J M^-1 J^T`` (module docstring).
+
+    Returns ``(rank, null)``: ``rank`` from the complete-pivoted Cholesky with the
+    kernel's tolerance, ``null`` (m, k) orthonormal vectors spanning the numerical null
+    space of S (of J^T): the eigenvectors with eigenvalues ``<= rel_tol * max(diag S)``,
+    at least ``m - rank`` of them.  ``forced``: the band Cholesky met the rule at this
+    state, so at least one null vector is returned (the smallest eigenvalue's)."""
+    S = np.array(S, dtype=float)
+    m = S.shape[0]
+    if m == 0:
+        return 0, np.zeros((0, 0))
+    S = 0.5 * (S + S.T)
+    dmax = float(np.max(np.diag(S)))
+    rank = int(pivoted_cholesky_solve(np.ascontiguousarray(S.copy()), m, np.zeros(m), np.zeros(m, np.int64),
+                                      np.zeros(m), float(rel_tol)))
+    w, U = np.linalg.eigh(S)
+    k = max(int(np.sum(w <= rel_tol * dmax)), m - rank, 1 if forced else 0)
+    return rank, U[:, :k]
+
+
+def rows_in_null_space(null, rel=1e-6):
+    """Rows taking part in the dependencies spanned by the null vectors ``null`` (m, k):
+    those with a weight above ``rel`` times the largest."""
+    if null.size == 0:
+        return []
+    weight = np.linalg.norm(null, axis=1)
+    return [int(q) for q in np.nonzero(weight > rel * weight.max())[0]]
 
 
 def rcm_order(n, edges):

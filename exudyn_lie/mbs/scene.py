@@ -83,6 +83,7 @@ class Joint:
     constrainedAxes: tuple       # (tx, ty, tz, rx, ry, rz) in {0, 1}
     kind: str = "generic"
     name: str = ""
+    worldTranslation: bool = False   # translation rows along world axes (Exudyn's spherical joint)
 
 
 @dataclass
@@ -188,6 +189,12 @@ class Scene:
         self.loads: List[Load] = []
         self.pythonForces: List[PythonForce] = []
 
+    def SetGravity(self, gravity):
+        """Change the gravity vector (world frame).  Checked before it is assigned: a
+        rejected value leaves the scene unchanged.  Simulators created afterwards see it
+        (a Simulator compiles the scene once, at construction)."""
+        self.gravity = _vec3(gravity, "gravity")
+
     # ----------------------------------------------------------------- bodies
     def AddBody(self, mass, inertia, com=(0, 0, 0), R0=None, r0=(0, 0, 0),
                 omega0=(0, 0, 0), vel0=(0, 0, 0), name: str = "") -> int:
@@ -214,13 +221,15 @@ class Scene:
 
     # ----------------------------------------------------------------- joints
     def AddJoint(self, bodyA, bodyB, constrainedAxes, posA=(0, 0, 0), rotA=None,
-                 posB=(0, 0, 0), rotB=None, kind="generic", name="") -> int:
+                 posB=(0, 0, 0), rotB=None, kind="generic", name="", worldTranslation=False) -> int:
         """Generic joint: lock any subset of the six relative axes of the joint frame.
 
         The joint frame sits at ``posA``/``rotA`` on body A (world data if A is GROUND)
         and ``posB``/``rotB`` on B.  Equations are Exudyn's ``ObjectJointGeneric``:
         translations in A's joint frame (global if all three are locked), rotations by
-        dot products of joint frame axes."""
+        dot products of joint frame axes.  ``worldTranslation=True``: the locked
+        translations are the world components of ``pB - pA`` whatever the lock (Exudyn's
+        ``ObjectJointSpherical`` with some ``constrainedAxes`` free)."""
         idx = len(self.joints)
         label = name or f"joint{idx}({kind})"
         self._check_body(bodyA, label)
@@ -236,7 +245,7 @@ class Scene:
             raise SceneError(f"{label}: constrainedAxes locks nothing")
         self.joints.append(Joint(int(bodyA), int(bodyB), _vec3(posA, f"{label}: posA"),
                                  _rot(rotA, f"{label}: rotA"), _vec3(posB, f"{label}: posB"),
-                                 _rot(rotB, f"{label}: rotB"), ax, kind, label))
+                                 _rot(rotB, f"{label}: rotB"), ax, kind, label, bool(worldTranslation)))
         return idx
 
     def _joint_at(self, kind, bodyA, bodyB, position, rotation, name):

@@ -19,6 +19,7 @@ from ..groups import se3, so3
 from ..integrators.tableau import get_method
 from . import kernel
 from .compiled import compile_scene, make_work, resolve_groups, with_redundant
+from .linalg import REL_PIVOT_TOL, rows_in_null_space, schur_rank_and_null
 from .scene import Scene, SceneError
 from .state import BodyStates, twist_to_world_velocity, world_velocity_to_twist
 
@@ -32,7 +33,8 @@ class ConstraintError(SimulationError):
 
 
 class StepSizeError(SimulationError):
-    """The step size is beyond the stability limit of the method."""
+    """The step size is beyond the stability limit of the method, or a stage rotation
+    argument of the MK step left the domain of dexp^-1 (``kernel.STAGE_ARG_MAX``)."""
 
 
 # relative size of the constraint residual/velocity error accepted at the start
@@ -81,6 +83,33 @@ def constraint_jacobian(sd, wk, R, r, V):
         if b >= 0:
             J[q, 6 * b:6 * b + 6] += wk.Jr[q, 6:]
     return wk.h.copy(), J, wk.eta.copy()
+
+
+def schur_complement(sd, wk, R, r, V):
+    """Residuals h(g) and the dense ``S = J M^-1 J^T`` (m, m) at the state (R, r, V), in
+    the bodies' group velocity coordinates (``M^-1`` is ``D M^-1 D^T``, ``D = diag(I, R)``,
+    for SO3xR3 bodies, as in the kernel).  Assembled body by body from the row blocks:
+    O(m^2) memory, no (m, 6 nb) Jacobian.  Used only on the rare singular paths."""
+    m = sd.nrows
+    kernel.all_rows(sd, wk, np.ascontiguousarray(R, dtype=float), np.ascontiguousarray(r, dtype=float),
+                    np.ascontiguousarray(V, dtype=float), wk.h, wk.Jr, wk.eta, np.zeros(3))
+    S = np.zeros((m, m))
+    blocks = {}
+    for q in range(m):
+        for side, col in ((kernel.ROW_BODY_A, 0), (kernel.ROW_BODY_B, 6)):
+            b = int(sd.rint[q, side])
+            if b >= 0:
+                blocks.setdefault(b, []).append((q, col))
+    for b, lst in blocks.items():
+        Mi = sd.Minv[b]
+        if sd.gid[b] == kernel.GID_SO3xR3:
+            D = np.eye(6)
+            D[3:, 3:] = R[b]
+            Mi = D @ Mi @ D.T
+        rows = np.array([q for q, _ in lst])          # distinct: a row's two sides are different bodies
+        Jb = np.array([wk.Jr[q, c:c + 6] for q, c in lst])
+        S[np.ix_(rows, rows)] += Jb @ Mi @ Jb.T
+    return wk.h.copy(), S
 
 
 class Simulator:
@@ -200,38 +229,51 @@ class Simulator:
                 names.append(j.name)
         return names
 
-    def _dependent_rows(self, J, tol=1e-9):
-        """Rows taking part in a linear dependency of J (null space of J^T)."""
-        if J.shape[0] == 0:
-            return []
-        U, s, Vt = np.linalg.svd(J, full_matrices=True)
-        smax = s[0] if len(s) else 0.0
-        rank = int(np.sum(s > tol * max(smax, 1e-300)))
-        if rank == J.shape[0]:
-            return []
-        null = U[:, rank:]
-        weight = np.linalg.norm(null, axis=1)
-        return [int(q) for q in np.nonzero(weight > 1e-6)[0]]
+    def _dependent_rows(self, R, r, V, forced=False):
+        """``(rank, rows)``: the numerical rank of the constraints at the state (R, r, V)
+        and the rows taking part in their linear dependencies, by the one rank rule of
+        the kernel (:mod:`exudyn_lie.mbs.linalg`): Cholesky pivots of ``S = J M^-1 J^T``
+        at or below ``REL_PIVOT_TOL * max(diag S)``; the rows are the support of the
+        numerical null space of S (= that of J^T).  ``forced``: the kernel's band
+        Cholesky met the rule at this state (then at least one dependency is named)."""
+        if self.sd.nrows == 0:
+            return 0, []
+        h, S = schur_complement(self.sd, self.wk, R, r, V)
+        rank, null = schur_rank_and_null(S, REL_PIVOT_TOL, forced=forced)
+        return rank, rows_in_null_space(null)
 
     def _check_redundancy(self):
-        """Redundant rows switch the kernel to its rank-revealing solve.  The kernel's own
-        band Cholesky of J M^-1 J^T at the initial state decides (O(m b^2)); only a
-        singular system gets the dense SVD that names the joints (O(m^2 n))."""
+        """Redundant rows switch the kernel to its rank-revealing solve.
+
+        One rule decides, the kernel's (:mod:`exudyn_lie.mbs.linalg`): the time loop's own
+        band Cholesky of ``S = J M^-1 J^T`` at the initial state (O(m b^2)).  If a pivot
+        falls to ``<= REL_PIVOT_TOL * max(diag S)`` the time loop would stop at its first
+        stage, so the simulator switches to the rank-revealing (complete-pivoted
+        Cholesky) solve, which applies the same tolerance, and warns: "redundant" with
+        the rank when the pivoted factorisation drops rows, "ill-conditioned" when only
+        the band factorisation's ordering met the threshold.  The joints are named from
+        the null space of the dense S (O(m^3), only on this path)."""
         if self.sd.nrows == 0:
             return
         if self._evaluate(self.t, self.R, self.r, self.V) != kernel.STATUS_SINGULAR:
             return
-        h, J, eta = self.jacobian()
-        dep = self._dependent_rows(J)
-        if dep:
-            self.redundantJoints = self._joints_of_rows(dep)
-            self.sd = with_redundant(self.sd, True)
-            self.wk = make_work(self.sd, len(self.b))
-            kernel.update_torsion_tracking(self.sd, self.wk, self.R, self.r, self.V)
-            msg = (f"exudyn_lie: redundant constraints among joints {', '.join(self.redundantJoints)} "
-                   f"(rank of J < {self.sd.nrows} rows); using the rank-revealing (pivoted Cholesky) "
-                   f"solve")
-            warnings.warn(msg, RuntimeWarning, stacklevel=3)
+        m = self.sd.nrows
+        rank, dep = self._dependent_rows(self.R, self.r, self.V, forced=True)
+        self.redundantJoints = self._joints_of_rows(dep)
+        self.sd = with_redundant(self.sd, True)
+        self.wk = make_work(self.sd, len(self.b))
+        kernel.update_torsion_tracking(self.sd, self.wk, self.R, self.r, self.V)
+        names = ", ".join(self.redundantJoints)
+        rule = (f"Cholesky pivots of J M^-1 J^T at or below {REL_PIVOT_TOL:g} x its largest diagonal at the "
+                f"initial state")
+        if rank < m:
+            msg = (f"exudyn_lie: redundant constraints among joints {names} (numerical rank {rank} of {m} "
+                   f"rows: {rule}); using the rank-revealing (pivoted Cholesky) solve")
+        else:
+            msg = (f"exudyn_lie: ill-conditioned constraints among joints {names} (a band Cholesky pivot of "
+                   f"J M^-1 J^T at or below {REL_PIVOT_TOL:g} x its largest diagonal at the initial state, "
+                   f"full rank with pivoting); using the pivoted Cholesky solve")
+        warnings.warn(msg, RuntimeWarning, stacklevel=3)
 
     def _residuals_and_JV(self):
         """h(g) and J V at the current state, row by row (no dense Jacobian)."""
@@ -293,8 +335,10 @@ class Simulator:
     def Advance(self, nsteps, stepSize):
         """Integrate ``nsteps`` steps of size ``stepSize`` from the current state.
 
-        On a failure (singular constraints, blow-up) the state is left at the last
-        accepted step and the error says where and what to do."""
+        On a failure (singular constraints, blow-up, a stage rotation |Psi_j| beyond
+        ``kernel.STAGE_ARG_MAX`` (2 pi (1 - sqrt(eps)) = 2 pi - 9.4e-8), where dexp^-1 of the stage equation nears
+        its singularity at 2 pi) the state is left at the last accepted step and the error
+        says where and what to do."""
         h = float(stepSize)
         if not np.isfinite(h) or h <= 0:
             raise ValueError(f"step size must be positive and finite, got {stepSize}")
@@ -347,7 +391,9 @@ class Simulator:
         """One step with Python force callbacks between the compiled stages."""
         sd, wk = self.sd, self.wk
         for j in range(len(self.b)):
-            kernel.mk_stage_state(sd, wk, self.A, j, h, self.R, self.r, self.V)
+            st = kernel.mk_stage_state(sd, wk, self.A, j, h, self.R, self.r, self.V)
+            if st != kernel.STATUS_OK:
+                self._raise_status(st, h)
             tj = self.t + self.c[j] * h
             wk.Qext[:] = self._python_forces(tj, wk.Rs, wk.rs, wk.Vs)
             st = kernel.rhs(sd, wk, tj, wk.Rs, wk.rs, wk.Vs, wk.Qext, wk.Vd[j])
@@ -388,14 +434,27 @@ class Simulator:
     def _raise_status(self, st, h):
         """Raise the error for a kernel status (public as :meth:`RaiseStatus`)."""
         if st == kernel.STATUS_SINGULAR:
-            h_, J, eta = self.jacobian(self.wk.Rs, self.wk.rs, self.wk.Vs)
-            dep = self._dependent_rows(J)
+            # the failing stage's state (same rule as the kernel: linalg module docstring)
+            rank, dep = self._dependent_rows(self.wk.Rs, self.wk.rs, self.wk.Vs, forced=True)
             names = self._joints_of_rows(dep) if dep else self._joints_of_rows([int(self.wk.info[0])])
             raise ConstraintError(
                 f"singular constraint Jacobian at t = {self.t:.6g} s: the constraints of joints "
-                f"{', '.join(names)} are linearly dependent (a singular configuration, or redundant "
+                f"{', '.join(names)} are linearly dependent (a Cholesky pivot of J M^-1 J^T fell to "
+                f"{REL_PIVOT_TOL:g} x its largest diagonal or below: a singular configuration, or redundant "
                 f"joints); remove the redundant constraint axes (e.g. make one joint spherical) or "
                 f"check the joint frames")
+        if st == kernel.STATUS_STAGE_ARG:
+            i = int(self.wk.info[2])
+            psi = float(np.linalg.norm(self.wk.Psi[i, :3]))
+            # the stage arguments scale with h: aim the largest at pi, and keep the
+            # stability-based suggestion if that is smaller
+            sugg = min(self.suggest_step(h), h * np.pi / psi) if psi > 0 else self.suggest_step(h)
+            raise StepSizeError(
+                f"the rotation of body {i} ({self.scene.bodies[i].name}) in an MK stage, |Psi| = {psi:.4g} rad, "
+                f"is beyond {kernel.STAGE_ARG_MAX:.4g} = 2 pi - {2 * np.pi - kernel.STAGE_ARG_MAX:.2g} (dexp^-1 of "
+                f"the stage equation is singular "
+                f"at 2 pi) at t = {self.t:.6g} s with step size {h:.3g} s (method {self.tableau.name}); the "
+                f"rotation per step is too large: try a step size of {sugg:.3g} s or smaller")
         if st == kernel.STATUS_PROJECTION:
             hres = self.wk.h
             bad = np.nonzero(np.abs(hres) > kernel.PROJ_FAIL * kernel.PROJ_TOL)[0]

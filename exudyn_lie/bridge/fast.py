@@ -86,6 +86,8 @@ class OutputChunks:
         # (AE coordinates of no joint row) keep their values
         self.Q, self.Qt, self.Qtt = np.tile(q, (M, 1)), np.tile(qt, (M, 1)), np.tile(qtt, (M, 1))
         self.AE = np.tile(ae, (M, 1))
+        # one view per row, made once: the per-output copy then indexes a list
+        self.rowViews = (list(self.Q), list(self.Qt), list(self.Qtt), list(self.AE))
         self.size = 1                   # outputs in the next chunk (adapted to CHUNK_SECONDS)
         self.rows = self.next = 0
         self.tStart = sim.t
@@ -130,12 +132,13 @@ class OutputChunks:
         """Copy the next output row into the coordinate buffers."""
         o = self.next
         q, qt, qtt, ae = self.bufs
-        q[:] = self.Q[o]
-        qt[:] = self.Qt[o]
+        Qr, Qtr, Qttr, AEr = self.rowViews
+        q[:] = Qr[o]
+        qt[:] = Qtr[o]
         if self.doacc:
-            qtt[:] = self.Qtt[o]
+            qtt[:] = Qttr[o]
             if ae.size:
-                ae[:] = self.AE[o]
+                ae[:] = AEr[o]
         self.next = o + 1
 
 

@@ -555,7 +555,39 @@ class LieGroupSolver:
                     self._hookError = e
                     raise
 
-            solver.SetUserFunctionNewton(self.mbs, hook)
+            ch = self._chunks
+            if ch is not None and live and not watch:
+                # the common case, kept to a few operations per output (the bridge-overhead
+                # bench): the next row of the current chunk is copied straight into the
+                # live coordinate views, after checking Exudyn's time against the plan;
+                # refilling a chunk (and everything else) goes through ``hook``
+                q, qt, qtt, ae = self._q, self._qt, self._qtt, self._ae
+                Qr, Qtr, Qttr, AEr = ch.rowViews
+                doacc, hasAE = ch.doacc, ae.size > 0
+                dtOut, tolOut = ch.nsub * ch.h, 1e-6 * ch.nsub * ch.h
+
+                def fast_hook(mainSolver, mbs, settings):
+                    o = ch.next
+                    if o >= ch.rows:
+                        return hook(mainSolver, mbs, settings)
+                    t1 = it.currentTime
+                    if abs(ch.tStart + (o + 1) * dtOut - t1) > tolOut + 1e-12 * abs(t1):
+                        return hook(mainSolver, mbs, settings)       # raises the planning error
+                    q[:] = Qr[o]
+                    qt[:] = Qtr[o]
+                    if doacc:
+                        qtt[:] = Qttr[o]
+                        if hasAE:
+                            ae[:] = AEr[o]
+                    ch.next = o + 1
+                    count[0] += 1
+                    if showProgress and perf() > state["nextProgress"]:
+                        self._progress(state, t1)
+                    return True
+
+                solver.SetUserFunctionNewton(self.mbs, fast_hook)
+            else:
+                solver.SetUserFunctionNewton(self.mbs, hook)
             ok = solver.SolveSteps(self.mbs, ss2)
             if ok and not needAcc:
                 self._write(True)                # final accelerations, as a native solve leaves them

@@ -338,6 +338,23 @@ def native_settings(solver, stepSize, endTime, outputPeriod, redundant=False):
     return s
 
 
+def body_states_from_sensors(data, nt):
+    """(R, r, omega, vel), arrays over (time, body), from the stored data of each body's
+    four node sensors (Position, RotationMatrix, AngularVelocityLocal, Velocity; column 0
+    is the time), first ``nt`` rows."""
+    nb = len(data)
+    R = np.zeros((nt, nb, 3, 3))
+    r = np.zeros((nt, nb, 3))
+    om = np.zeros((nt, nb, 3))
+    ve = np.zeros((nt, nb, 3))
+    for i, (dp, dR, dw, dv) in enumerate(data):
+        r[:, i] = dp[:nt, 1:4]
+        R[:, i] = dR[:nt, 1:10].reshape(nt, 3, 3)
+        om[:, i] = dw[:nt, 1:4]
+        ve[:, i] = dv[:nt, 1:4]
+    return R, r, om, ve
+
+
 def run_native(info, solver, stepSize, endTime=None, outputPeriod=None):
     """Integrate the model with one of Exudyn's own solvers (fixed step) and return the
     body states at the output times (read from node sensors).
@@ -373,15 +390,7 @@ def run_native(info, solver, stepSize, endTime=None, outputPeriod=None):
         return NativeResult(solver, stepSize, np.zeros(0), np.zeros((0, nb, 3, 3)), np.zeros((0, nb, 3)),
                             np.zeros((0, nb, 3)), np.zeros((0, nb, 3)), cpu, False, msg or "no output")
     times = data[0][0][:nt, 0].copy()
-    R = np.zeros((nt, nb, 3, 3))
-    r = np.zeros((nt, nb, 3))
-    om = np.zeros((nt, nb, 3))
-    ve = np.zeros((nt, nb, 3))
-    for i, (dp, dR, dw, dv) in enumerate(data):
-        r[:, i] = dp[:nt, 1:4]
-        R[:, i] = dR[:nt, 1:10].reshape(nt, 3, 3)
-        om[:, i] = dw[:nt, 1:4]
-        ve[:, i] = dv[:nt, 1:4]
+    R, r, om, ve = body_states_from_sensors(data, nt)
     if ok and times[-1] < endTime - 0.5 * stepSize:
         ok, msg = False, f"stopped at t = {times[-1]:.4g} s"
     return NativeResult(solver, stepSize, times, R, r, om, ve, cpu, ok, msg)

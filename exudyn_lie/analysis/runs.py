@@ -271,22 +271,14 @@ def run_solve_dynamic(info, group, stepSize, endTime=None, keep_states=False, me
     cpu = float(lgs.timing.get("integration", wall)) if lgs is not None and ok else wall
     get = mbs.GetSensorStoredData
     data = [[np.asarray(get(x)) for x in s4] for s4 in sens.nodes]
-    nb = len(info.bodies)
     nt = min(len(d) for s4 in data for d in s4) if data else 0
     times = data[0][0][:nt, 0].copy() if nt else np.zeros(0)
     if ok and (nt != nsteps + 1 or np.max(np.abs(times - stepSize * np.arange(nt))) > 1e-9 * endTime):
         ok, msg = False, (f"the sensors did not record every step: {nt} rows for {nsteps} steps "
                           f"(t = {times[0] if nt else float('nan'):g} .. {times[-1] if nt else float('nan'):g})")
     rd = RunData(info.name, group, stepSize, ok, msg, cpu, times, via="SolveDynamic")
-    R = np.zeros((nt, nb, 3, 3))
-    r = np.zeros((nt, nb, 3))
-    om = np.zeros((nt, nb, 3))
-    ve = np.zeros((nt, nb, 3))
-    for i, (dp, dR, dw, dv) in enumerate(data):
-        r[:, i] = dp[:nt, 1:4]
-        R[:, i] = dR[:nt, 1:10].reshape(nt, 3, 3)
-        om[:, i] = dw[:nt, 1:4]
-        ve[:, i] = dv[:nt, 1:4]
+    from models._common import body_states_from_sensors
+    R, r, om, ve = body_states_from_sensors(data, nt)
     measure(info, rd, R, r, om, ve, keep_states)
     for j in info.joints:
         sides = []

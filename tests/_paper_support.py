@@ -23,10 +23,9 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 README = os.environ.get("EXUDYN_LIE_README") or os.path.join(ROOT, "README.md")
 
 
-@functools.lru_cache(maxsize=None)
-def exudyn_runs():
-    """{model: (info, {(group, dt): RunData})} through exl.SolveDynamic."""
-    from exudyn_lie.analysis.runs import run_solve_dynamic
+def _runs_of_every_model(runner):
+    """{model: (info, {(group, dt): RunData})}; ``runner(info, group)`` returns the
+    function that makes the run of one step size."""
     out = {}
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
@@ -34,28 +33,25 @@ def exudyn_runs():
             mbs, info = models.build(name)
             runs = {}
             for g in GROUPS:
+                run = runner(info, g)
                 for dt in DTS:
-                    runs[(g, dt)] = run_solve_dynamic(info, g, dt, keep_states=True)
+                    runs[(g, dt)] = run(dt)
             out[name] = (info, runs)
     return out
+
+
+@functools.lru_cache(maxsize=None)
+def exudyn_runs():
+    """{model: (info, {(group, dt): RunData})} through exl.SolveDynamic."""
+    from exudyn_lie.analysis.runs import run_solve_dynamic
+    return _runs_of_every_model(lambda info, g: lambda dt: run_solve_dynamic(info, g, dt, keep_states=True))
 
 
 @functools.lru_cache(maxsize=None)
 def lie_runs():
     """{model: (info, {(group, dt): RunData})} on the fast path (the paper command's)."""
     from exudyn_lie.analysis.runs import LieRunner
-    out = {}
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", RuntimeWarning)
-        for name in models.MODELS:
-            mbs, info = models.build(name)
-            runs = {}
-            for g in GROUPS:
-                lr = LieRunner(info, g)
-                for dt in DTS:
-                    runs[(g, dt)] = lr.run(dt, keep_states=True)
-            out[name] = (info, runs)
-    return out
+    return _runs_of_every_model(lambda info, g: lambda dt, lr=LieRunner(info, g): lr.run(dt, keep_states=True))
 
 
 def all_claims():

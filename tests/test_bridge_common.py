@@ -209,8 +209,8 @@ def compare(mbs, groups, q, qt, t=0.0):
     for ji in sc.joints_info:
         r0, n = (int(x) for x in sim.sd.jint[ji.sceneJoint, 2:4])
         rows = np.arange(r0, r0 + n)
-        out["g"] = max(out["g"], rel(pk["h"][rows], ji.sign * ge[ji.aeRows]))
-        out["J"] = max(out["J"], rel(pk["J"][rows], ji.sign * (Ce[ji.aeRows] @ P)))
+        out["g"] = max(out["g"], rel(pk["h"][rows], ge[ji.aeRows]))
+        out["J"] = max(out["J"], rel(pk["J"][rows], Ce[ji.aeRows] @ P))
         out["nrows"] += n
     out["fvals"] = (pk["Q"], fx)
     return out

@@ -19,7 +19,9 @@ from test_bridge_common import add_body, new_mbs, quiet_settings
 O = exu.OutputVariableType
 
 
-def model(extra=None, omega=(1.0, 2.0, 0.5)):
+def _unassembled(extra=None, omega=(1.0, 2.0, 0.5)):
+    """A body on a spring to the ground with a position sensor; ``extra(mbs, g, b)``
+    adds the item under test.  Not assembled."""
     mbs = new_mbs()
     g = mbs.CreateGround()
     b = add_body(mbs, "RotVecLG", [1, 0, 0], RotationMatrixX(0.3), omega=omega, gravity=[0, 0, -9.81])
@@ -27,6 +29,11 @@ def model(extra=None, omega=(1.0, 2.0, 0.5)):
     mbs.AddSensor(SensorBody(bodyNumber=b, storeInternal=True, outputVariableType=O.Position))
     if extra is not None:
         extra(mbs, g, b)
+    return mbs
+
+
+def model(extra=None, omega=(1.0, 2.0, 0.5)):
+    mbs = _unassembled(extra, omega)
     mbs.Assemble()
     return mbs
 
@@ -239,16 +246,6 @@ def test_body_fixed_force_on_a_position_marker_set_after_assemble():
 
 
 # ---------------------------------------------------------------------------- mbs untouched
-def _unassembled(extra=None, omega=(1.0, 2.0, 0.5)):
-    mbs = new_mbs()
-    g = mbs.CreateGround()
-    b = add_body(mbs, "RotVecLG", [1, 0, 0], RotationMatrixX(0.3), omega=omega, gravity=[0, 0, -9.81])
-    mbs.CreateSpringDamper(itemNumbers=[g, b], localPosition0=[1, 1, 0], stiffness=100)
-    mbs.AddSensor(SensorBody(bodyNumber=b, storeInternal=True, outputVariableType=O.Position))
-    if extra is not None:
-        extra(mbs, g, b)
-    return mbs
-
 
 @pytest.mark.parametrize("case", ["unsupported item", "joint violated", "velocity violated",
                                   "non-finite", "method", "liegroup", "settings", "substeps"])

@@ -110,9 +110,9 @@ class OutputChunks:
             rows -= 1                   # its accelerations failed: not an output
         nt = self.nodes
         q, qt, qtt, ae = self.bufs
-        jrow, jae, jsign = self.jac
+        jrow, jae = self.jac
         a2 = (rows, sim.sd.gid, self.Ro, self.ro, self.Vo, self.Vdo, self.lamo, self.doacc, nt.code, nt.body,
-              nt.idx, nt.nq, nt.qref, nt.prev, self.Q, self.Qt, self.Qtt, nt.flags, jrow, jae, jsign, self.AE)
+              nt.idx, nt.nq, nt.qref, nt.prev, self.Q, self.Qt, self.Qtt, nt.flags, jrow, jae, self.AE)
         nflag = _call(self._ep, "write", write_rows, a2)
         sim.t = t0 + done * h           # on a failure: the last accepted step
         self.tStart, self.rows, self.next = t0, rows, 0
@@ -127,6 +127,10 @@ class OutputChunks:
 
     def time_of_next(self):
         return self.tStart + (self.next + 1) * self.nsub * self.h
+
+    def on_plan(self, t1):
+        """Exudyn's step ends at ``t1``, the time of the next output row."""
+        return abs(self.time_of_next() - t1) <= 1e-6 * self.nsub * self.h + 1e-12 * abs(t1)
 
     def pop(self):
         """Copy the next output row into the coordinate buffers."""
@@ -170,12 +174,12 @@ class NodeTable:
 
     def write(self, sim, Vdot, lam, doacc, q, qt, qtt, multipliers):
         """Node coordinates of the simulator's state (and with ``doacc`` accelerations and
-        the joint multipliers ``(rows, AE slots, signs, AE buffer)``); returns the number
+        the joint multipliers ``(rows, AE slots, AE buffer)``); returns the number
         of nodes flagged (Rxyz near its singularity)."""
-        jrow, jae, jsign, ae = multipliers
+        jrow, jae, ae = multipliers
         return write_rows(1, sim.sd.gid, sim.R[None], sim.r[None], sim.V[None], Vdot[None], lam[None], bool(doacc),
                           self.code, self.body, self.idx, self.nq, self.qref, self.prev, q[None], qt[None], qtt[None],
-                          self.flags, jrow, jae, jsign, ae[None])
+                          self.flags, jrow, jae, ae[None])
 
     def warn_flags(self):
         for i in np.nonzero(self.flags)[0]:

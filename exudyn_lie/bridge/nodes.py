@@ -267,23 +267,22 @@ def write_nodes(gid, R, r, V, Vdot, doacc, code, body, idx, nq, qref, prev, firs
 
 
 @njit(cache=True)
-def write_multipliers(lam, jrow, jae, jsign, ae):
+def write_multipliers(lam, jrow, jae, ae):
     for i in range(jrow.shape[0]):
-        ae[jae[i]] = jsign[i] * lam[jrow[i]]
+        ae[jae[i]] = lam[jrow[i]]
 
 
 @njit(cache=True)
-def write_all(gid, R, r, V, Vdot, lam, doacc, code, body, idx, nq, qref, prev, q, qt, qtt, flags, jrow, jae, jsign,
-              ae):
+def write_all(gid, R, r, V, Vdot, lam, doacc, code, body, idx, nq, qref, prev, q, qt, qtt, flags, jrow, jae, ae):
     """write_nodes + write_multipliers of one state."""
     if doacc:
-        write_multipliers(lam, jrow, jae, jsign, ae)
+        write_multipliers(lam, jrow, jae, ae)
     return write_nodes(gid, R, r, V, Vdot, doacc, code, body, idx, nq, qref, prev, False, q, qt, qtt, flags)
 
 
 @njit(cache=True)
 def write_rows(nrows, gid, Rs, rs, Vs, Vdots, lams, doacc, code, body, idx, nq, qref, prev, Q, Qt, Qtt, flags, jrow,
-               jae, jsign, AE):
+               jae, AE):
     """:func:`write_all` of the states ``Rs[o], rs[o], Vs[o]`` (accelerations ``Vdots[o]``,
     multipliers ``lams[o]``) into rows ``o < nrows`` of ``Q, Qt, Qtt, AE``, in order (the
     rotation parameters stay continuous from row to row).  The single compiled entry of
@@ -292,7 +291,7 @@ def write_rows(nrows, gid, Rs, rs, Vs, Vdots, lams, doacc, code, body, idx, nq, 
     nflag = 0
     for o in range(nrows):
         nflag += write_all(gid, Rs[o], rs[o], Vs[o], Vdots[o], lams[o], doacc, code, body, idx, nq, qref, prev,
-                           Q[o], Qt[o], Qtt[o], flags, jrow, jae, jsign, AE[o])
+                           Q[o], Qt[o], Qtt[o], flags, jrow, jae, AE[o])
     return nflag
 
 

@@ -86,14 +86,13 @@ class MarkerFrame:
 @dataclass
 class JointInfo:
     """An Exudyn joint and where its kernel rows go: ``aeRows[k]`` is the Exudyn AE index
-    (global) of the scene joint's k-th row (kernel row order); ``sign`` flips lambda when
-    the sides had to be swapped; ``aeAll`` all AE indices of the object."""
+    (global) of the scene joint's k-th row (kernel row order); ``aeAll`` all AE indices
+    of the object."""
     objectIndex: int
     objectType: str
     sceneJoint: Optional[int]
     aeRows: np.ndarray
     aeAll: np.ndarray
-    sign: float = 1.0
 
 
 @dataclass
@@ -445,7 +444,6 @@ class _Reader:
             sc.skipped.append((what, "constrains no axis"))
             sc.aeZero.extend(aeAll.tolist())
             return
-        sign = 1.0
         if spherical:
             # Exudyn (CObjectJointSpherical): rows (p1 - p0)_i in world components for the
             # locked axes i, whatever the lock - the scene's world translation rows
@@ -465,7 +463,7 @@ class _Reader:
         if spherical:
             local = [ax for ax in range(3) if ca[ax]]
         aeRows = aeAll[local] if len(aeAll) else np.zeros(0, np.int64)
-        sc.joints_info.append(JointInfo(o, t, j, aeRows, aeAll, sign))
+        sc.joints_info.append(JointInfo(o, t, j, aeRows, aeAll))
         # AE rows of unlocked axes (g = lambda) stay 0
         sc.aeZero.extend(sorted(set(aeAll.tolist()) - set(aeRows.tolist())))
 

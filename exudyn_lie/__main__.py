@@ -4,16 +4,16 @@
 * ``bench``  - work-precision and per-step benchmarks against Exudyn's native solvers;
 * ``stress`` - numerical stability stress suite.
 
-Each command lives in its own module (``exudyn_lie.paper``, ``.bench``, ``.stress``)
+Each command lives in its own module (``exudyn_lie.apps.paper``, ``.bench``, ``.stress``)
 with a ``main(argv)`` function; ``--help`` after a command lists its options.
 """
 import importlib
 import sys
 
 COMMANDS = {
-    "paper": ("exudyn_lie.paper", "reproduce the paper's comparison, write REPRODUCTION.md and figures"),
-    "bench": ("exudyn_lie.bench", "work-precision / per-step benchmarks, write BENCHMARKS.md"),
-    "stress": ("exudyn_lie.stress", "numerical stability stress suite, write STRESS.md"),
+    "paper": ("exudyn_lie.apps.paper", "reproduce the paper's comparison, write REPRODUCTION.md and figures"),
+    "bench": ("exudyn_lie.apps.bench", "work-precision / per-step benchmarks, write BENCHMARKS.md"),
+    "stress": ("exudyn_lie.apps.stress", "numerical stability stress suite, write STRESS.md"),
 }
 
 

@@ -1,12 +1,12 @@
 """The examples of Müller & Terze as Exudyn model builders.
 
 Every module has ``NAME`` and ``build(mbs=None, nodeType=..., endTime=...) -> (mbs, info)``
-(:class:`models._common.ModelInfo`): an ordinary Exudyn model, built with Exudyn's own
+(:class:`exudyn_lie.models._common.ModelInfo`): an ordinary Exudyn model, built with Exudyn's own
 ``Create*`` helpers, plus the data needed to judge it (bodies, joints ``joint1``...,
 springs, time span, exact solutions for the free bodies, the paper's numbers and
 claims, and every choice made where the paper leaves a gap).
 
->>> import models
+>>> from exudyn_lie import models
 >>> mbs, info = models.build("heavy_top")
 >>> res = models.run_native(info, "GeneralizedAlpha", stepSize=1e-3)
 

@@ -1,6 +1,6 @@
 """Shared pieces of the paper's model builders.
 
-Every builder in :mod:`models` creates an ordinary Exudyn model with Exudyn's own
+Every builder in :mod:`exudyn_lie.models` creates an ordinary Exudyn model with Exudyn's own
 ``MainSystem.Create*`` helpers and returns ``(mbs, info)``.  :class:`ModelInfo` records
 what is needed to run and to judge the model without re-reading Exudyn's internals:
 
@@ -10,7 +10,7 @@ what is needed to run and to judge the model without re-reading Exudyn's interna
 * per joint (named ``joint1``, ``joint2``... as in the paper): object index, kind, the
   two bodies (``GROUND = -1``) and the joint frames on both sides (read back from the
   markers Exudyn created, so that the violation measures of
-  :mod:`exudyn_lie.analysis.geometry` use exactly Exudyn's joint frames);
+  :mod:`exudyn_lie.models.geometry` use exactly Exudyn's joint frames);
 * springs, gravity, the time span, analytic reference solutions (free bodies),
   numbers quoted by the paper, and the claims the paper makes about the model;
 * ``choices``: every value the paper does not give, with the reason.
@@ -99,7 +99,7 @@ class SpringData:
 class Claim:
     """What the paper says about one joint (or, for a free body, its COM / rotation).
 
-    ``kind`` (judged by :func:`exudyn_lie.analysis.claims.judge`): ``'exact_SE3'`` /
+    ``kind`` (judged by :func:`exudyn_lie.apps.claims.judge`): ``'exact_SE3'`` /
     ``'exact_SO3xR3'`` (that group at round-off, the other >= 1e3 worse at dt = 1e-2),
     ``'exact_both'``, ``'SE3_exact'`` (nothing claimed for SO3xR3), ``'same_order'``,
     ``'SO3xR3_better'``, ``'SE3_better'``, ``'SE3_better_large_step'``,
@@ -158,7 +158,7 @@ class ModelInfo:
 
     def initial_energy(self):
         """(kinetic, gravity, spring) energy of the initial state, from the info data."""
-        from exudyn_lie.analysis.energy import energies
+        from .energy import energies
         R = np.array([b.R0 for b in self.bodies])[None]
         r = np.array([b.r0 for b in self.bodies])[None]
         om = np.array([b.omega0 for b in self.bodies])[None]
@@ -251,7 +251,7 @@ def rot_z(a):
 def check_initial_consistency(info, tol=1e-12):
     """Position and velocity residuals of every joint at t = 0 (from the info data);
     raises if the builder produced an inconsistent initial state."""
-    from exudyn_lie.analysis.geometry import joint_violations, joint_velocity_violations
+    from .geometry import joint_violations, joint_velocity_violations
     R = np.array([b.R0 for b in info.bodies])[None]
     r = np.array([b.r0 for b in info.bodies])[None]
     om = np.array([b.omega0 for b in info.bodies])[None]

@@ -14,7 +14,7 @@ Four cases:
   (10, 0, 0).
 
 Exact solution: the COM moves uniformly, ``x_c(t) = x_c(0) + v_c t``; the rotation is
-the torque-free (Euler-Poinsot) motion, :class:`models._torque_free.TorqueFreeRotation`
+the torque-free (Euler-Poinsot) motion, :class:`exudyn_lie.models._torque_free.TorqueFreeRotation`
 (Jacobi elliptic functions; a steady spin for ``com_translation``); the frame origin is
 ``r(t) = x_c(t) - R(t) r0``.
 

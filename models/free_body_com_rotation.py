@@ -5,7 +5,7 @@ omega0 = (10 pi, 2 pi, 0) rad/s, v0 = 0, 10 s, no gravity.  The COM must stay at
 both groups keep it exactly and rotate identically (pure rotation about the frame
 origin is a subgroup of both SE(3) and SO(3)xR3).
 
-Data and the filled gaps: see :mod:`models._free_body` and ``info.choices``.
+Data and the filled gaps: see :mod:`exudyn_lie.models._free_body` and ``info.choices``.
 """
 import exudyn as exu
 

@@ -6,7 +6,7 @@ R(t) = Rz(2 pi t) (the paper prints r(t) = (t, 0, 0); see choices).  Decoupled r
 and translation is a subgroup of SO(3)xR3 but not of SE(3): SO(3)xR3 is exact, SE(3)
 converges with 4th order.
 
-Data and the filled gaps: see :mod:`models._free_body` and ``info.choices``.
+Data and the filled gaps: see :mod:`exudyn_lie.models._free_body` and ``info.choices``.
 """
 import exudyn as exu
 

@@ -6,7 +6,7 @@ v0 = r0 x omega0; 10 s.  The frame rotates about the fixed COM: an SO(3) subgrou
 SE(3) (exact), only a submanifold of SO(3)xR3 (step-size dependent COM drift).
 Kinetic energy T0 = 696.399 J (paper).
 
-Data and the filled gaps: see :mod:`models._free_body` and ``info.choices``.
+Data and the filled gaps: see :mod:`exudyn_lie.models._free_body` and ``info.choices``.
 """
 import exudyn as exu
 

@@ -5,7 +5,7 @@ omega0 = (10 pi, 2 pi, 0) rad/s, v0 = r0 x omega0 + (10, 0, 0) m/s, 10 s.  The m
 the frame is a subgroup of neither group; both updates are step-size dependent, the
 paper reports SO(3)xR3 as the more accurate.
 
-Data and the filled gaps: see :mod:`models._free_body` and ``info.choices``.
+Data and the filled gaps: see :mod:`exudyn_lie.models._free_body` and ``info.choices``.
 """
 import exudyn as exu
 

@@ -1,7 +1,7 @@
 """Spherical three-bar pendulum in the gravity field: 3 aluminium boxes 0.2 x 0.1 x 0.05 m connected by
 spherical joints, joint 1 to the ground (mentioned by the paper ("similar results were obtained for a spherical three-bar and a four-bar pendulum")).
 
-Data, initial conditions and the filled gaps: :mod:`models._spherical_chain` and
+Data, initial conditions and the filled gaps: :mod:`exudyn_lie.models._spherical_chain` and
 ``info.choices``.  Claims: joint 1 exact with SE(3) (corollary 1); the other joints
 the same order with both groups (corollary 3).
 """

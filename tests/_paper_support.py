@@ -4,9 +4,9 @@
   SO3xR3 at dt = 1e-2 and 1e-3 through the drop-in ``exl.SolveDynamic(mbs,
   simulationSettings, method='RK4', liegroup=...)`` (Exudyn's own time loop), every step
   recorded by Exudyn sensors and measured from them
-  (:func:`exudyn_lie.analysis.runs.run_solve_dynamic`).  The claims are asserted on these.
+  (:func:`exudyn_lie.apps.runs.run_solve_dynamic`).  The claims are asserted on these.
 * ``lie_runs()`` - the same runs on the compiled fast path
-  (:class:`exudyn_lie.analysis.runs.LieRunner`, ``LieGroupSolver.Run``), exactly the runs
+  (:class:`exudyn_lie.apps.runs.LieRunner`, ``LieGroupSolver.Run``), exactly the runs
   of ``python -m exudyn_lie paper --quick``: the README / report are compared with these,
   and they must equal the SolveDynamic runs to round-off.
 """
@@ -14,8 +14,7 @@ import functools
 import os
 import warnings
 
-import models
-
+from exudyn_lie import models
 DTS = (1e-2, 1e-3)
 GROUPS = ("SE3", "SO3xR3")
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
@@ -43,14 +42,14 @@ def _runs_of_every_model(runner):
 @functools.lru_cache(maxsize=None)
 def exudyn_runs():
     """{model: (info, {(group, dt): RunData})} through exl.SolveDynamic."""
-    from exudyn_lie.analysis.runs import run_solve_dynamic
+    from exudyn_lie.apps.runs import run_solve_dynamic
     return _runs_of_every_model(lambda info, g: lambda dt: run_solve_dynamic(info, g, dt, keep_states=True))
 
 
 @functools.lru_cache(maxsize=None)
 def lie_runs():
     """{model: (info, {(group, dt): RunData})} on the fast path (the paper command's)."""
-    from exudyn_lie.analysis.runs import LieRunner
+    from exudyn_lie.apps.runs import LieRunner
     return _runs_of_every_model(lambda info, g: lambda dt, lr=LieRunner(info, g): lr.run(dt, keep_states=True))
 
 

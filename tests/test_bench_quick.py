@@ -6,9 +6,9 @@ import os
 import numpy as np
 import pytest
 
-from exudyn_lie import bench
-from exudyn_lie.analysis import bench_runs as BR
-from exudyn_lie.analysis import bench_wp as WP
+from exudyn_lie.apps import bench
+from exudyn_lie.apps import bench_runs as BR
+from exudyn_lie.apps import bench_wp as WP
 
 
 @pytest.fixture(scope="module")
@@ -140,7 +140,7 @@ def test_overhead_and_group_sections(tmp_path):
     assert set(data["groups"]) == {"0.05", "1.0", "3.0"} and all(v > 0 for v in data["groups"].values())
     text = (tmp_path / "BENCHMARKS.md").read_text()
     assert "## 5. Bridge overhead" in text and "## 6. Group maps" in text
-    from exudyn_lie.analysis.generated import read_block
+    from exudyn_lie.apps.generated import read_block
     cmd, ok, body = read_block(readme.read_text(), "bench")
     assert ok and cmd.startswith("python -m exudyn_lie bench --quick") and "(6) bridge" in body
 

@@ -11,6 +11,7 @@ from exudyn.utilities import (RigidBodyInertia, RotationMatrixX, RotationMatrixZ
                               SensorUserFunction)
 
 import exudyn_lie as exl
+from exudyn_lie.models import heavy_top as HT
 from exudyn_lie.bridge import LieGroupSolver
 
 from test_bridge_common import NODE_TYPES, add_body, new_mbs, quiet_settings
@@ -49,17 +50,9 @@ def rk44_settings(T, h):
 
 # ---------------------------------------------------------------------------- models
 def heavy_top(node="RotVecLG"):
-    """The paper's heavy top (frame at the COM, pivot 0.5 m away, spring to p0)."""
-    mbs = new_mbs()
-    g = mbs.CreateGround()
-    inertia = RigidBodyInertia(mass=21.6, inertiaTensor=np.diag([0.36, 0.306, 0.09]))
-    om = np.array([0, 0, 0.5])
-    rC = np.array([0.5, 0, 0])
-    b = mbs.CreateRigidBody(inertia=inertia, nodeType=NODE_TYPES[node], referencePosition=rC,
-                            initialVelocity=np.cross(om, rC), initialAngularVelocity=om, gravity=[0, 0, -9.81])
-    j = mbs.CreateSphericalJoint(itemNumbers=[g, b], position=[0, 0, 0])
-    mbs.CreateSpringDamper(itemNumbers=[g, b], localPosition0=[1, 0, 0.5], localPosition1=[0, 0, 0], stiffness=1e4,
-                           referenceLength=0.0)
+    """The paper's heavy top (the models' one builder) with a position and a joint-force sensor."""
+    mbs, info = HT.build(mbs=new_mbs(), nodeType=NODE_TYPES[node])
+    b, j = info.bodies[0].objectIndex, info.joints[0].objectIndex
     s = mbs.AddSensor(SensorBody(bodyNumber=b, storeInternal=True, outputVariableType=O.Position))
     sj = mbs.AddSensor(SensorObject(objectNumber=j, storeInternal=True, outputVariableType=O.Force))
     mbs.Assemble()
@@ -418,24 +411,6 @@ def test_verbose_prints_the_group_choice(capsys):
     assert "SO3xR3 (auto: unconstrained, frame at COM)" in out and out.count("SE3 (auto") == 2
     solver = LieGroupSolver(mbs, liegroup={free: "SE3", 1: "SO3xR3"})
     assert solver.groups == ["SO3xR3", "SE3", "SE3"]
-
-
-def test_example_script_runs(capsys):
-    from exudyn_lie.bridge import example_heavytop
-    assert example_heavytop.main(["--endTime", "0.05"]) == 0
-    out = capsys.readouterr().out
-    assert "SolveDynamic -> True" in out and "pivot constraint violation" in out
-
-
-@pytest.mark.slow
-def test_example_script_runs_as_module():
-    import subprocess
-    import sys
-    r = subprocess.run([sys.executable, "-m", "exudyn_lie.bridge.example_heavytop", "--endTime", "0.1"],
-                       capture_output=True, text=True, timeout=900,
-                       cwd=os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-    assert r.returncode == 0, r.stderr[-2000:]
-    assert "SolveDynamic -> True" in r.stdout
 
 
 def rp_mechanism(node):

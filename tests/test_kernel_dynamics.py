@@ -5,6 +5,7 @@ import warnings
 import numpy as np
 import pytest
 
+from exudyn_lie.models import heavy_top as HT
 from exudyn_lie.mbs import GROUND, ConstraintError, Scene, Simulator, StepSizeError
 
 # --------------------------------------------------------------------------- scenes
@@ -29,17 +30,8 @@ def free_body_off_com(group_frame_at_com=False, omega0=(10 * np.pi, 2 * np.pi, 0
 
 
 def heavy_top(spring=True):
-    """Heavy top (section "Heavy Top"): frame at the COM, pivot at r0 = (-0.5, 0, 0) in
-    the body frame, so the COM starts at (0.5, 0, 0) (DESIGN.md: the text's C0 = (I, r0)
-    contradicts h = r + R r0 = 0)."""
-    sc = Scene(gravity=[0, 0, -9.81])
-    om = np.array([0, 0, 0.5])
-    b = sc.AddBody(21.6, np.diag([0.36, 0.306, 0.09]), r0=[0.5, 0, 0], omega0=om,
-                   vel0=np.cross(om, [0.5, 0, 0]))
-    sc.AddSphericalJoint(GROUND, b, [0, 0, 0])
-    if spring:
-        sc.AddSpringDamper(GROUND, [1, 0, 0.5], b, [0, 0, 0], stiffness=1e4, referenceLength=0.0)
-    return sc
+    """Heavy top (section "Heavy Top"), the one builder of the models."""
+    return HT.scene(spring=spring)
 
 
 def double_pendulum():
@@ -100,7 +92,7 @@ def test_free_body_off_com_matches_analytic_torque_free_solution(group):
     angular velocity must match the exact ones along the whole run, with errors falling
     at order 4 (measured at T = 1 s, h = 1e-3: |R - R_ex| 4.2e-8 in both groups, |r -
     r_ex| 8.0e-7 (SE3) / 5.7e-8 (SO3xR3))."""
-    from models._torque_free import TorqueFreeRotation
+    from exudyn_lie.models._torque_free import TorqueFreeRotation
     T = 1.0
     tf = TorqueFreeRotation(np.diag(THETA0), np.eye(3), OMEGA_BOX)
     errs = []

@@ -13,9 +13,9 @@ import numpy as np
 import pytest
 
 import exudyn as exu
-import models
-from exudyn_lie.analysis.energy import energies
-from exudyn_lie.analysis.geometry import joint_velocity_violations, joint_violations
+from exudyn_lie import models
+from exudyn_lie.models.energy import energies
+from exudyn_lie.models.geometry import joint_velocity_violations, joint_violations
 
 ALL = models.MODELS
 
@@ -94,6 +94,31 @@ def test_paper_data():
     np.testing.assert_allclose(dp.bodies[1].omega0, [10 * np.pi, 10 * np.pi, 20 * np.pi])
 
 
+@pytest.mark.parametrize("kw", [{}, dict(spring=False, tilt=0.3, omega0=[150.0, 0.4, -0.3])])
+def test_heavy_top_scene_is_the_exudyn_model(kw):
+    """The one heavy-top builder: the kernel scene of heavy_top.scene() is the Exudyn model
+    of heavy_top.build() as the bridge reads it (inertia to 1 ulp; the initial state to round-off: Exudyn stores the angular
+    velocity in world components)."""
+    from exudyn_lie.bridge import SceneFromExudyn
+    from exudyn_lie.models import heavy_top
+    mbs, info = heavy_top.build(**kw)
+    mbs.Assemble()
+    read, own = SceneFromExudyn(mbs), heavy_top.scene(**kw)
+    a, b = read.bodies[0], own.bodies[0]
+    assert a.mass == pytest.approx(b.mass, rel=1e-15)
+    np.testing.assert_allclose(a.inertia, b.inertia, rtol=1e-15, atol=0)
+    for key in ("com", "R0", "r0", "omega0", "vel0"):
+        np.testing.assert_allclose(getattr(a, key), getattr(b, key), rtol=1e-13, atol=1e-14, err_msg=key)
+    np.testing.assert_array_equal(read.gravity, own.gravity)
+    assert len(read.springs) == len(own.springs) == (1 if kw.get("spring", True) else 0)
+    for x, y in zip(read.springs, own.springs):
+        assert (x.bodyA, x.bodyB, x.stiffness, x.referenceLength) == (y.bodyA, y.bodyB, y.stiffness, y.referenceLength)
+        np.testing.assert_array_equal(x.posA, y.posA)
+    (ja,), (jb,) = read.joints, own.joints
+    assert ja.constrainedAxes == jb.constrainedAxes == (1, 1, 1, 0, 0, 0)
+    np.testing.assert_allclose(ja.posB, jb.posB, atol=1e-15)
+
+
 def test_rp_mechanism_subgroup_geometry():
     """Prismatic axis parallel to the revolute axis, both COMs off the revolute axis."""
     info = models.build("rp_mechanism")[1]
@@ -106,7 +131,7 @@ def test_rp_mechanism_subgroup_geometry():
 
 
 def test_planar_four_bar_is_a_grashof_crank_rocker():
-    from models import planar_four_bar as pf
+    from exudyn_lie.models import planar_four_bar as pf
     L0, L1, L2, L3 = pf.L0, pf.L1, pf.L2, pf.L3
     s, l = min(L0, L1, L2, L3), max(L0, L1, L2, L3)
     assert s + l <= L0 + L1 + L2 + L3 - s - l and s == L1 and L0 == 0.5
@@ -118,7 +143,7 @@ def test_planar_four_bar_is_a_grashof_crank_rocker():
 def test_cardan_shaft_frames():
     """Body 1's COM frame on the revolute axis; body 2's frame away from the cross centre,
     which lies on the revolute axis."""
-    from models import cardan_shaft as cs
+    from exudyn_lie.models import cardan_shaft as cs
     info = cs.build()[1]
     j1, j2 = info.joints
     b1, b2 = info.bodies

@@ -5,8 +5,8 @@ momentum, and 4th-order convergence of MK-RK4 towards it."""
 import numpy as np
 import pytest
 
-import models
-from models._torque_free import TorqueFreeRotation, agm_K, carlson_rf, ellipf, ellipj
+from exudyn_lie import models
+from exudyn_lie.models._torque_free import TorqueFreeRotation, agm_K, carlson_rf, ellipf, ellipj
 
 
 def test_jacobi_elliptic_functions():
@@ -88,7 +88,7 @@ def test_exact_solution_of_the_models(name):
 def test_mk_rk4_converges_to_the_exact_rotation_with_order_4():
     """An independent check of the exact solution (and of the kernel): the orientation
     error eps_r of MK-RK4 against it falls by ~1e4 per decade of step size."""
-    from exudyn_lie.analysis.runs import LieRunner
+    from exudyn_lie.apps.runs import LieRunner
     mbs, info = models.build("free_body_com_rotation", endTime=2.0)
     lr = LieRunner(info, "SE3")
     e = [lr.run(dt).orientation.max() for dt in (4e-3, 2e-3, 1e-3)]

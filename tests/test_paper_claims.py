@@ -10,17 +10,17 @@ the package's arrays (``_paper_support.exudyn_runs``).
   group's is >= 1e3 times larger;
 * 'same order' claims: both above 1e-12 at dt = 1e-2, within 1.5 decades of each
   other at both step sizes;
-* energy and identical-update claims as stated in ``models`` (see analysis/claims.py).
-The report's own verdict logic (``analysis.claims.judge``) must agree, and the runs must
+* energy and identical-update claims as stated in ``models`` (see exudyn_lie/apps/claims.py).
+The report's own verdict logic (``exudyn_lie.apps.claims.judge``) must agree, and the runs must
 equal those of the compiled fast path used by ``python -m exudyn_lie paper`` to round-off.
 """
 import numpy as np
 import pytest
 
-import models
+from exudyn_lie import models
 from _paper_support import DTS, GROUPS, all_claims, exudyn_runs, lie_runs
-from exudyn_lie.analysis.claims import judge, length_scale, run_max
-from exudyn_lie.analysis.geometry import so3_log_angle
+from exudyn_lie.apps.claims import judge, length_scale, run_max
+from exudyn_lie.models.geometry import so3_log_angle
 
 TOL = 1e-12
 SEP = 1e3
@@ -117,7 +117,7 @@ def test_solve_dynamic_equals_the_fast_path():
 
 def test_marker_measure_equals_the_node_measure():
     """The joint violations from Exudyn's marker outputs (world position / rotation of
-    both joint markers) equal those of analysis.geometry on the node states: the joint
+    both joint markers) equal those of models.geometry on the node states: the joint
     frames recorded in ``models`` are Exudyn's."""
     for name, (info, runs) in exudyn_runs().items():
         for key, rd in runs.items():
@@ -129,8 +129,8 @@ def test_marker_measure_equals_the_node_measure():
 
 
 def test_kernel_diagnostics_match_the_independent_formulas():
-    """The kernel's joint violations and energy (fast path) equal analysis.geometry /
-    analysis.energy evaluated on the same states (two independent implementations of the
+    """The kernel's joint violations and energy (fast path) equal models.geometry /
+    models.energy evaluated on the same states (two independent implementations of the
     joint rows)."""
     for name, (info, runs) in lie_runs().items():
         for rd in runs.values():

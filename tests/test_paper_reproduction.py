@@ -4,7 +4,7 @@ README.md`` (the full run) and not edited by hand.
 * the block names the command and holds the SHA-256 of its text (checked);
 * its verdict counts (overall and per result of the paper, with the models each is
   checked on, and the heavy top's E(0)) equal those of a fresh evaluation of the quick
-  command's runs (``_paper_support.lie_runs``, judged by ``exudyn_lie.paper.evaluate``);
+  command's runs (``_paper_support.lie_runs``, judged by ``exudyn_lie.apps.paper.evaluate``);
 * its Table 1 (MK-RK4 maxima) equals the runs of the quick command (the same runs) at
   dt = 1e-2 and 1e-3;
 * (slow) the command itself, ``--quick --out <tmp>``, writes REPRODUCTION.md with a valid
@@ -25,10 +25,11 @@ import numpy as np
 import pytest
 
 from _paper_support import DTS, README, ROOT, lie_runs
-from exudyn_lie.analysis.generated import check_hash, read_block, replace_block, with_header
-from exudyn_lie.analysis.report import (cell, measure_rows, parse_cell, parse_tables, parse_verdict_summary,
+from exudyn_lie.apps.generated import check_hash, read_block, replace_block, with_header
+from exudyn_lie.apps.report import (cell, measure_rows, parse_cell, parse_tables, parse_verdict_summary,
                                         verdict_summary)
-from exudyn_lie.paper import README_BLOCK, Context, _versions, evaluate
+from exudyn_lie.apps import versions
+from exudyn_lie.apps.paper import README_BLOCK, Context, evaluate
 
 
 def same(a, b):
@@ -72,7 +73,7 @@ def test_hash_detects_edits():
 def fresh_quick_verdicts():
     """The verdict summary of a fresh quick evaluation (dt = 1e-2, 1e-3) of the runs of
     ``python -m exudyn_lie paper --quick``, judged by the command's own code."""
-    ctx = Context(command="python -m exudyn_lie paper --quick", dts=DTS, jobs=1, versions=_versions())
+    ctx = Context(command="python -m exudyn_lie paper --quick", dts=DTS, jobs=1, versions=versions())
     runs = lie_runs()
     ctx.infos = [runs[n][0] for n in runs]
     ctx.results = {n: dict(runs[n][1]) for n in runs}
@@ -98,7 +99,7 @@ def test_readme_verdicts_match_a_fresh_quick_run():
 def test_failed_runs_cannot_be_read_as_values():
     """A run that stopped early shows 'failed' first, and no number at all when not one
     step succeeded."""
-    from exudyn_lie.analysis.runs import RunData
+    from exudyn_lie.apps.runs import RunData
     rd = RunData("m", "GeneralizedAlpha", 1e-2, False, "Newton", 0.0, np.array([0.0]), native=True)
     assert cell(rd, 0.0) == "failed at t=0"
     rd = RunData("m", "GeneralizedAlpha", 1e-2, False, "Newton", 0.0, np.zeros(0), native=True)

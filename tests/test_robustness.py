@@ -9,7 +9,7 @@ import warnings
 import numpy as np
 import pytest
 
-from exudyn_lie.analysis import stress_models as M
+from exudyn_lie.apps import stress_models as M
 from exudyn_lie.mbs import GROUND, Scene, SceneError, SimulationError, Simulator, StepSizeError
 
 
@@ -130,7 +130,7 @@ def _rxyz_run(sensor):
     from exudyn.itemInterface import SensorNode
 
     from exudyn_lie import bridge
-    from exudyn_lie.analysis.stress_cases import _exu_settings
+    from exudyn_lie.apps.stress_cases import _exu_settings
     mbs, b, node = M.exudyn_tumbling_body(exu.NodeType.RotationRxyz, omega0=(0.3, 3.0, 0.2))
     if sensor:
         mbs.AddSensor(SensorNode(nodeNumber=node, storeInternal=True,

@@ -6,9 +6,9 @@ import math
 import numpy as np
 import pytest
 
-from exudyn_lie import stress
-from exudyn_lie.analysis import stress_cases as C
-from exudyn_lie.analysis import stress_theory as T
+from exudyn_lie.apps import stress
+from exudyn_lie.apps import stress_cases as C
+from exudyn_lie.apps import stress_theory as T
 from exudyn_lie.integrators.tableau import method_names
 
 
@@ -200,7 +200,7 @@ def test_command_writes_stress_md(tmp_path):
 
 
 def test_command_writes_readme_block(tmp_path):
-    from exudyn_lie.analysis.generated import read_block
+    from exudyn_lie.apps.generated import read_block
     readme = tmp_path / "README.md"
     readme.write_text("intro\n")
     assert stress.main(["--quick", "--out", str(tmp_path), "--cases", "badinput", "--readme", str(readme)]) == 0
@@ -229,7 +229,7 @@ def test_dispatch_through_main_module(tmp_path):
 @pytest.mark.slow
 def test_million_steps_orthonormal_heavy_top():
     """10^6 compiled steps of the heavy top (a few seconds per group)."""
-    from exudyn_lie.analysis import stress_models as M
+    from exudyn_lie.apps import stress_models as M
     from exudyn_lie.mbs import Simulator
     for group in ("SE3", "SO3xR3"):
         sim = Simulator(M.heavy_top(), "RK4", group)

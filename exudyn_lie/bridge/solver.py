@@ -56,9 +56,13 @@ def _group_name(g, what):
 
 
 def _check_method(method):
-    if not isinstance(method, str) or method not in method_names():
-        raise BridgeError(f"unknown method {method!r}; available: {', '.join(method_names())}")
-    return get_method(method)
+    """The catalogue tableau of a method name (case-insensitive, aliases: ``get_method``)."""
+    if isinstance(method, str):
+        try:
+            return get_method(method)
+        except ValueError as e:
+            raise BridgeError(f"unknown method {method!r}; available: {str(e).partition('available: ')[2]}") from None
+    raise BridgeError(f"unknown method {method!r}; available: {', '.join(method_names())}")
 
 
 class LieGroupSolver:
@@ -90,7 +94,7 @@ class LieGroupSolver:
         self.mbs = mbs
         self._configuration = _configuration
         self.tableau = _check_method(method)
-        self.method = method
+        self.method = self.tableau.name
         if stabilization not in (None, "none", "velocity", "position"):
             raise BridgeError(f"unknown stabilization {stabilization!r}; use None, 'velocity' or 'position'")
         self.stabilization = stabilization

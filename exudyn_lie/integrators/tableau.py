@@ -552,8 +552,15 @@ def method_names():
     return tuple(m.name for m in METHODS)
 
 
+def _name_key(name):
+    """A method name as compared: case, blanks, '-' and '_' ignored ('rk-4' = 'RK4')."""
+    return "".join(ch for ch in name.lower() if ch not in " \t-_")
+
+
 def get_method(name):
-    """The catalogue tableau called ``name`` (case-insensitive; aliases accepted).
+    """The catalogue tableau called ``name``: case-insensitive, ignoring blanks, '-' and
+    '_', and accepting every tableau's aliases (``'rk4'``, ``'RK44'`` -> RK4, ``'RK45'``,
+    ``'dopri5'`` -> DOPRI5).  An unknown name raises ValueError with the catalogue.
 
     A :class:`ButcherTableau` passed in is returned unchanged.
     """
@@ -561,8 +568,10 @@ def get_method(name):
         return name
     if not isinstance(name, str):
         raise TypeError(f"method name must be a string or ButcherTableau, got {type(name)}")
+    key = _name_key(name)
     for m in METHODS:
-        if m.matches(name):
+        if key in (_name_key(n) for n in (m.name,) + tuple(m.aliases)):
             return m
     raise ValueError(f"unknown integration method '{name}'; available: "
-                     + ", ".join(method_names()))
+                     + ", ".join(method_names()) + " (case-insensitive; aliases: "
+                     + ", ".join(f"{a} = {m.name}" for m in METHODS for a in m.aliases) + ")")

@@ -24,6 +24,7 @@ import numpy as np
 
 from ..groups import so3
 from ..mbs.scene import GROUND, JOINT_TYPES, Scene
+from ..models import heavy_top as HT
 
 # the paper's free body (section "Unconstrained Rigid Body"): box 0.8 x 0.4 x 0.1 m
 BOX_MASS = 86.4
@@ -47,19 +48,11 @@ def spring_mass(stiffness=1e6, mass=1.0, x0=1e-2):
 
 
 def fast_top(spin=150.0, tilt=0.3):
-    """Heavy top (the paper's body: m = 21.6 kg, Theta = diag(0.36, 0.306, 0.09), frame at
-    the COM, pivot at body point (-0.5, 0, 0)) tilted by ``tilt`` about y and spinning at
-    ``spin`` rad/s about its pivot-COM axis, plus a small transverse rate: fast precession
-    and nutation under gravity."""
-    sc = Scene(gravity=[0, 0, -9.81])
-    R0 = so3.exp(np.array([0.0, -tilt, 0.0]))
-    s = np.array([-0.5, 0.0, 0.0])                 # pivot in body coordinates
-    r0 = -R0 @ s                                  # pivot at the world origin
-    om = np.array([spin, 0.4, -0.3])              # body-fixed
-    vel = np.cross(R0 @ om, r0)                   # v_COM = omega x (COM - pivot)
-    b = sc.AddBody(21.6, np.diag([0.36, 0.306, 0.09]), R0=R0, r0=r0, omega0=om, vel0=vel, name="top")
-    sc.AddSphericalJoint(GROUND, b, [0, 0, 0], name="pivot")
-    return sc
+    """The paper's heavy top (:func:`exudyn_lie.models.heavy_top.build`) without its
+    spring, tilted by ``tilt`` and spinning at ``spin`` rad/s about its pivot-COM axis,
+    plus a small transverse rate (body-fixed (spin, 0.4, -0.3)): fast precession and
+    nutation under gravity."""
+    return HT.scene(spring=False, tilt=tilt, omega0=[spin, 0.4, -0.3])
 
 
 def fast_free_body(omega0=(120.0, 15.0, 10.0), vcom=(2.0, 0.0, 1.0)):
@@ -83,17 +76,9 @@ def spinning_box(spin=150.0, speed=2.0):
 
 
 def heavy_top(spring=True):
-    """The paper's heavy top (DESIGN.md): COM at (0.5, 0, 0), pivot at the origin,
-    omega0 = (0, 0, 0.5), spring c = 1e4 to (1, 0, 0.5), gravity."""
-    sc = Scene(gravity=[0, 0, -9.81])
-    om = np.array([0, 0, 0.5])
-    b = sc.AddBody(21.6, np.diag([0.36, 0.306, 0.09]), r0=[0.5, 0, 0], omega0=om,
-                   vel0=np.cross(om, [0.5, 0, 0]), name="top")
-    sc.AddSphericalJoint(GROUND, b, [0, 0, 0], name="pivot")
-    if spring:
-        sc.AddSpringDamper(GROUND, [1, 0, 0.5], b, [0, 0, 0], stiffness=1e4, referenceLength=0.0,
-                           name="spring")
-    return sc
+    """The paper's heavy top (:func:`exudyn_lie.models.heavy_top.build`): COM at (0.5, 0, 0),
+    pivot at the origin, omega0 = (0, 0, 0.5), spring c = 1e4 to (1, 0, 0.5), gravity."""
+    return HT.scene(spring=spring)
 
 
 FOURBAR_POINTS = (np.array([0, 0, 0.]), np.array([0, 0.2, 0]), np.array([0.5, 0.4, 0]),

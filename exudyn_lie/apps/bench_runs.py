@@ -125,7 +125,7 @@ class _Model:
             self.redundant = False
             self.info = None
         else:
-            import models
+            from exudyn_lie import models
             self.mbs, self.info = models.build(BENCH_MODELS[name], endTime=T)
             self.SC = self.info.SC
             self.nodes = list(self.info.nodes)

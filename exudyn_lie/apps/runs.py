@@ -31,8 +31,8 @@ from typing import Dict, Optional
 
 import numpy as np
 
-from .energy import energies
-from .geometry import com_positions, joint_violations, orientation_error
+from ..models.energy import energies
+from ..models.geometry import com_positions, joint_violations, orientation_error
 
 LIE_GROUPS = ("SE3", "SO3xR3")
 
@@ -277,7 +277,7 @@ def run_solve_dynamic(info, group, stepSize, endTime=None, keep_states=False, me
         ok, msg = False, (f"the sensors did not record every step: {nt} rows for {nsteps} steps "
                           f"(t = {times[0] if nt else float('nan'):g} .. {times[-1] if nt else float('nan'):g})")
     rd = RunData(info.name, group, stepSize, ok, msg, cpu, times, via="SolveDynamic")
-    from models._common import body_states_from_sensors
+    from exudyn_lie.models._common import body_states_from_sensors
     R, r, om, ve = body_states_from_sensors(data, nt)
     measure(info, rd, R, r, om, ve, keep_states)
     for j in info.joints:
@@ -293,7 +293,7 @@ def run_solve_dynamic(info, group, stepSize, endTime=None, keep_states=False, me
 # --------------------------------------------------------------------------- native
 def run_native(info, solver, stepSize, endTime=None, outputPeriod=1e-3, keep_states=False):
     """Exudyn's own solver on the model (see :func:`models.run_native`)."""
-    from models import run_native as _run
+    from exudyn_lie.models import run_native as _run
     period = max(stepSize, outputPeriod)
     res = _run(info, solver, stepSize, endTime=endTime, outputPeriod=period)
     rd = RunData(info.name, solver, stepSize, res.ok, res.message, res.cpuTime, res.times, native=True, via="native")

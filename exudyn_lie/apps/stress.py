@@ -1,6 +1,6 @@
 """``python -m exudyn_lie stress``: the numerical stability stress suite.
 
-Runs the cases of :mod:`exudyn_lie.analysis.stress_cases` and writes ``STRESS.md`` (every
+Runs the cases of :mod:`exudyn_lie.apps.stress_cases` and writes ``STRESS.md`` (every
 number from this run) plus PNG figures to ``--out`` (default ``./stress_results``):
 
 * ``spin``        fast spinning tops / free bodies: convergence order (fit slopes), boundedness;
@@ -32,23 +32,16 @@ import time
 import traceback
 from pathlib import Path
 
+from . import versions
+
 CASE_ORDER = ("spin", "groupmaps", "longrun", "stability", "rxyz", "constraints", "fuzz", "badinput")
 
 
-def _versions():
-    out = {}
-    for mod in ("exudyn_lie", "exudyn", "numpy", "numba"):
-        try:
-            m = __import__(mod)
-            out[mod] = getattr(m, "__version__", "?")
-        except Exception:       # noqa: BLE001
-            out[mod] = "not installed"
-    return out
 
 
 def run_suite(quick=False, outdir="stress_results", cases=None, log=print):
     """Run the cases; returns the list of :class:`CaseResult` (also used by the tests)."""
-    from .analysis.stress_cases import CASES, CaseResult, Check
+    from .stress_cases import CASES, CaseResult, Check
     outdir = Path(outdir)
     outdir.mkdir(parents=True, exist_ok=True)
     keys = list(CASE_ORDER) if not cases else list(cases)
@@ -88,7 +81,7 @@ def _md_table(t):
 
 
 def render(results, command, quick, wall):
-    v = _versions()
+    v = versions()
     total = sum(len(r.checks) for r in results)
     failed = sum(len(r.failed()) for r in results)
     L = ["# STRESS.md - numerical stability stress suite", "",
@@ -166,7 +159,7 @@ def main(argv=None):
     out = Path(args.out) / "STRESS.md"
     out.write_text(text)
     if args.readme:
-        from .analysis.generated import update_file_block
+        from .generated import update_file_block
         update_file_block(args.readme, "stress", command.strip(), readme_summary(results, args.quick))
     failed = sum(len(r.failed()) for r in results)
     print(f"exudyn_lie stress: wrote {out} ({wall:.1f} s): {failed} failed checks")

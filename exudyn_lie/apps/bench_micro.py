@@ -74,7 +74,7 @@ def _settings(T, h, period, file, solution_path):
 
 def _heavy_top_with_sensor():
     import exudyn as exu
-    import models
+    from exudyn_lie import models
     mbs, info = models.build("heavy_top")
     mbs.AddSensor(exu.itemInterface.SensorBody(bodyNumber=info.bodies[0].objectIndex, storeInternal=True,
                                                outputVariableType=exu.OutputVariableType.Position))

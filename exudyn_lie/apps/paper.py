@@ -1,6 +1,6 @@
 """``python -m exudyn_lie paper``: reproduce the examples of Müller & Terze.
 
-Runs every model of :mod:`models` (the paper's mechanisms as Exudyn models) with
+Runs every model of :mod:`exudyn_lie.models` (the paper's mechanisms as Exudyn models) with
 MK-RK4 on SE(3) and on SO(3)xR3 (through :class:`exudyn_lie.bridge.LieGroupSolver`,
 compiled ``Run`` path) and with Exudyn's own solvers, at dt = 1e-2, 1e-3, 1e-4 s over
 the paper's time spans; at dt >= 1e-3 the MK-RK4 runs are repeated through the drop-in
@@ -32,6 +32,8 @@ import warnings
 from dataclasses import dataclass, field
 from typing import Dict
 
+from . import versions
+
 DTS_FULL = (1e-2, 1e-3, 1e-4)
 DTS_QUICK = (1e-2, 1e-3)
 GROUPS = ("SE3", "SO3xR3")
@@ -56,22 +58,14 @@ class Context:
     wallTime: float = 0.0
 
 
-def _versions():
-    import exudyn
-    import numba
-    import numpy
-    from exudyn_lie import __version__
-    return dict(exudyn_lie=__version__, exudyn=exudyn.__version__, numpy=numpy.__version__, numba=numba.__version__)
-
-
 def _task(args):
     """Worker: one model, either both MK-RK4 groups (``kind='lie'``) or its native solvers
     (``kind='native'``), all step sizes; draws that part's figures if ``out`` is given.
     Returns (model, kind, runs, figure names, wall time)."""
     name, kind, dts, out = args
     import exudyn as exu
-    import models
-    from exudyn_lie.analysis.runs import LieRunner, run_native, run_solve_dynamic
+    from exudyn_lie import models
+    from exudyn_lie.apps.runs import LieRunner, run_native, run_solve_dynamic
     tic = time.perf_counter()
     runs = {}
     with warnings.catch_warnings():
@@ -100,15 +94,15 @@ def _task(args):
             solvers = ()
         figs = []
         if out is not None:
-            from exudyn_lie.analysis.plots import plot_model
+            from exudyn_lie.apps.plots import plot_model
             figs = [os.path.basename(p) for p in plot_model(info, runs, dts, out, solvers=solvers, natives=natives)]
     return name, kind, runs, figs, time.perf_counter() - tic
 
 
 def _warm_up():
     """Load (or compile) the numba kernel once in the parent, before the workers fork."""
-    import models
-    from exudyn_lie.analysis.runs import LieRunner
+    from exudyn_lie import models
+    from exudyn_lie.apps.runs import LieRunner
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         for name in ("heavy_top", "planar_four_bar"):
@@ -123,7 +117,7 @@ def _say(msg):
 def run_all(model_names=None, dts=DTS_FULL, jobs=2, native=True, out=None, progress=_say):
     """Run everything (and draw the figures into ``out`` unless it is None).
     Returns (infos, results, natives, figures)."""
-    import models
+    from exudyn_lie import models
     names = list(model_names or models.MODELS)
     infos = [models.build(n)[1] for n in names]
     natives = {i.name: (models.native_solvers_for(i) if native else []) for i in infos}
@@ -163,7 +157,7 @@ def run_all(model_names=None, dts=DTS_FULL, jobs=2, native=True, out=None, progr
 
 
 def evaluate(ctx: Context):
-    from exudyn_lie.analysis.claims import heavy_top_energy_verdict, judge_model
+    from exudyn_lie.apps.claims import heavy_top_energy_verdict, judge_model
     ctx.verdicts = []
     for info in ctx.infos:
         runs = {k: v for k, v in ctx.results[info.name].items() if k[0] in GROUPS}
@@ -177,8 +171,8 @@ def evaluate(ctx: Context):
 
 def write(ctx: Context, out, readme=None):
     """REPRODUCTION.md into ``out``; with ``readme`` also the summary block of that file."""
-    from exudyn_lie.analysis.generated import update_file_block, with_header
-    from exudyn_lie.analysis.report import readme_summary, write_report
+    from exudyn_lie.apps.generated import update_file_block, with_header
+    from exudyn_lie.apps.report import readme_summary, write_report
     text = with_header(ctx.command, write_report(ctx))
     path = os.path.join(out, "REPRODUCTION.md")
     with open(path, "w", encoding="utf-8") as f:
@@ -206,7 +200,7 @@ def parse_args(argv):
 
 
 def _model_names():
-    import models
+    from exudyn_lie import models
     return models.MODELS
 
 
@@ -227,7 +221,7 @@ def main(argv=None):
     tic = time.perf_counter()
     dts = DTS_QUICK if args.quick else DTS_FULL
     command = "python -m exudyn_lie paper" + ("" if not argv else " " + " ".join(shlex.quote(a) for a in argv))
-    ctx = Context(command=command, dts=dts, jobs=max(1, args.jobs), versions=_versions())
+    ctx = Context(command=command, dts=dts, jobs=max(1, args.jobs), versions=versions())
     ctx.infos, ctx.results, ctx.natives, ctx.figures = run_all(
         names, dts, ctx.jobs, native=not args.no_native, out=None if args.no_figures else args.out)
     evaluate(ctx)

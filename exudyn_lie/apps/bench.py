@@ -19,7 +19,7 @@ Sections (``--sections``, default all):
 * ``groups``  one compiled SE(3) exp + dexpinv evaluation (the group work per body and stage).
 
 Every sweep runs through Exudyn's ``exudyn.processing.ParameterVariation`` with
-multiprocessing (:func:`exudyn_lie.analysis.bench_runs.sweep`); every time is the
+multiprocessing (:func:`exudyn_lie.apps.bench_runs.sweep`); every time is the
 median over repeated runs inside one worker; competitors are compared as ratios of
 times measured in the same invocation.  Writes ``BENCHMARKS.md``, ``bench_results.json``
 and PNG figures into ``--out``.
@@ -38,8 +38,8 @@ import time
 
 import numpy as np
 
-from .analysis import bench_runs as BR
-from .analysis import bench_wp as WP
+from . import bench_runs as BR
+from . import bench_wp as WP
 
 EXL_GROUPS = ("SE3", "SO3xR3", "auto")
 EXL_METHODS = ("RK4", "DOPRI5", "RK6")
@@ -472,7 +472,7 @@ t0 = time.perf_counter()
 import numpy as np
 import exudyn as exu
 import exudyn_lie
-import models
+from exudyn_lie import models
 from exudyn_lie.bridge import SceneFromExudyn
 from exudyn_lie.mbs import Simulator
 t_import = time.perf_counter() - t0
@@ -635,7 +635,7 @@ def targets_lines(cfg, out):
         A("| (g) one compiled SE(3) exp + dexpinv (group work of one body in one MK stage) | "
           + ", ".join(f"{us:.3g} us at \\|xi\\| = {float(a):g}" for a, us in gm.items()) + " | - |")
     A(f"| (5) sweeps in parallel through exudyn.processing.ParameterVariation | "
-      f"`exudyn_lie.analysis.bench_runs.sweep`, {cfg.jobs} processes | yes |")
+      f"`exudyn_lie.apps.bench_runs.sweep`, {cfg.jobs} processes | yes |")
     return L
 
 
@@ -1008,11 +1008,11 @@ def main(argv=None):
     if "scaling" in cfg.sections:
         run_scaling(cfg, log, out)
     if "overhead" in cfg.sections:
-        from .analysis.bench_micro import bridge_overhead
+        from .bench_micro import bridge_overhead
         log("bridge overhead (heavy top, SolveDynamic vs the integration alone)")
         out["overhead"] = bridge_overhead(T=2.0 if cfg.quick else 8.0, repeats=3 if cfg.quick else 11)
     if "groups" in cfg.sections:
-        from .analysis.bench_micro import group_maps
+        from .bench_micro import group_maps
         log("group maps (SE3 exp + dexpinv)")
         out["groups"] = group_maps(n=10 ** 5 if cfg.quick else 10 ** 6)
     out["env"]["loadEnd"] = loadavg()
@@ -1021,7 +1021,7 @@ def main(argv=None):
     out["figures"] = make_plots(cfg, out)
     write_report(cfg, out, cmdline)
     if args.readme:
-        from .analysis.generated import update_file_block
+        from .generated import update_file_block
         update_file_block(args.readme, "bench", cmdline, readme_summary(cfg, out))
     dump = {k: v for k, v in out.items() if k not in ("refs", "perstep")}
     dump["refs"] = {m: {k: dict(time=r["time"], steps=r["steps"]) for k, r in d.items()} for m, d in out.get("refs", {}).items()}

@@ -1,6 +1,6 @@
 """Judge the paper's claims on measured runs.
 
-Every :class:`models.Claim` names a target (joint or body), a measure (position /
+Every :class:`exudyn_lie.models.Claim` names a target (joint or body), a measure (position /
 rotation rows of a joint, COM drift, orientation error, energy drift) and a kind:
 
 * ``exact_SE3`` / ``exact_SO3xR3``: that group keeps the measure at round-off level for
@@ -41,7 +41,7 @@ from typing import Dict, Tuple
 
 import numpy as np
 
-from .geometry import GROUND, so3_log_angle
+from ..models.geometry import GROUND, so3_log_angle
 
 EXACT_TOL = 1e-12            # the issue's bound (per metre of L) at dt >= STRICT_DT
 EXACT_PER_STEP = 1e-15       # round-off allowance per step (per metre of L), only below STRICT_DT

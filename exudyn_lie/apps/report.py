@@ -107,7 +107,7 @@ def parse_tables(text: str):
 
 
 def write_report(ctx) -> str:
-    """The REPRODUCTION.md body (without the header line). ``ctx``: exudyn_lie.paper.Context."""
+    """The REPRODUCTION.md body (without the header line). ``ctx``: exudyn_lie.apps.paper.Context."""
     infos, results, dts, verdicts = ctx.infos, ctx.results, ctx.dts, ctx.verdicts
     L = []
     L += ["# Reproduction: Müller & Terze, the c-space Lie group and constraint satisfaction", ""]
@@ -130,7 +130,7 @@ def write_report(ctx) -> str:
           "nodes (Exudyn's default node type); free bodies with the explicit RK44 and DOPRI5 (fixed step) on "
           "RotVecLG nodes (Exudyn's explicit Lie group update). The planar four-bar needs the full-pivoting "
           "EigenDense solver (one redundant constraint row).",
-          "* All violation measures are computed from the body states by `exudyn_lie.analysis.geometry` "
+          "* All violation measures are computed from the body states by `exudyn_lie.models.geometry` "
           "(the same formulas for every solver): a joint's position violation is the norm of its "
           "translational rows, its rotation violation the norm of its rotation rows (Exudyn's "
           "`ObjectJointGeneric` equations). Maxima are over all stored outputs: every step for dt >= 1e-3, "
@@ -209,7 +209,7 @@ def write_report(ctx) -> str:
     L += ["## Cross-check of the kernel's diagnostics", "",
           "Largest difference between the kernel's own joint violations / energy (`Result."
           "jointPositionViolation`, `jointRotationViolation`, `totalEnergy`) and the independent formulas of "
-          "`exudyn_lie.analysis` over all exudyn_lie runs:", ""]
+          "`exudyn_lie.apps` over all exudyn_lie runs:", ""]
     dp = dr = de = 0.0
     for info in infos:
         for (s, dt), rd in results[info.name].items():

@@ -4,6 +4,8 @@
 * ``bench``  - work-precision and per-step benchmarks against Exudyn's native solvers;
 * ``stress`` - numerical stability stress suite.
 
+``--version`` prints the versions of exudyn_lie, exudyn, numpy and numba.
+
 Each command lives in its own module (``exudyn_lie.apps.paper``, ``.bench``, ``.stress``)
 with a ``main(argv)`` function; ``--help`` after a command lists its options.
 """
@@ -18,15 +20,27 @@ COMMANDS = {
 
 
 def usage():
-    lines = ["usage: python -m exudyn_lie COMMAND [options]", "", "commands:"]
+    lines = ["usage: python -m exudyn_lie COMMAND [options]   (or: exudyn_lie COMMAND [options])", "",
+             "commands:"]
     lines += [f"  {name:8s} {text}" for name, (_, text) in COMMANDS.items()]
+    lines += ["", "options:", "  -h, --help     show this help", "  --version      print the versions of exudyn_lie,",
+              "                 exudyn, numpy and numba", "",
+              "Run 'python -m exudyn_lie COMMAND --help' for the options of a command."]
     return "\n".join(lines)
+
+
+def version_text():
+    from .apps import versions
+    return ", ".join(f"{name} {v}" for name, v in versions().items())
 
 
 def main(argv=None):
     argv = sys.argv[1:] if argv is None else list(argv)
     if not argv or argv[0] in ("-h", "--help"):
         print(usage())
+        return 0
+    if argv[0] in ("-V", "--version"):
+        print(version_text())
         return 0
     cmd = argv[0]
     if cmd not in COMMANDS:

@@ -10,6 +10,9 @@ from exudyn_lie.apps import bench
 from exudyn_lie.apps import bench_runs as BR
 from exudyn_lie.apps import bench_wp as WP
 
+# not in the quick subset (pytest -m "not slow"): runs the bench command's sections
+pytestmark = pytest.mark.slow
+
 
 @pytest.fixture(scope="module")
 def quick_run(tmp_path_factory):

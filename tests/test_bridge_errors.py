@@ -127,14 +127,33 @@ def test_non_unit_euler_parameters():
     expect_error(mbs, BridgeError, r"NodeRigidBodyEP 1: Euler parameters .* not 1")
 
 
-def test_inconsistent_initial_velocity_is_reported_or_projected():
+def test_inconsistent_initial_velocity_is_projected_with_a_warning_or_refused():
+    """Exudyn's habit: CreateRigidBody(initialAngularVelocity=...) without the matching COM
+    velocity.  The drop-in projects it (warning with the joint and the size of the
+    correction, pointing at the caller's line); projectInitial=False refuses it."""
     def joint(mbs, g, b):
         mbs.CreateSphericalJoint(itemNumbers=[g, b], position=[1.2, 0, 0])
     mbs = model(joint, omega=(1.0, 2.0, 0.5))     # the body's velocity (0) violates the joint
-    expect_error(mbs, ConstraintError, r"initial velocities violate .*projectInitial=True")
-    assert exl.SolveDynamic(mbs, quiet_settings(0.01, 10), projectInitial=True)
+    expect_error(mbs, ConstraintError, r"initial velocities violate .*projectInitial=True", projectInitial=False)
+    with pytest.warns(RuntimeWarning, match=r"projected onto them: velocities of joints \S+ \(max \|J V\| = "
+                      r"[0-9.e+-]+\): velocities changed by up to [0-9.e+-]+ m/s") as rec:
+        assert exl.SolveDynamic(mbs, quiet_settings(0.01, 10))
+    (w,) = [w for w in rec if "projected onto them" in w.message.args[0]]
+    assert w.filename == __file__                 # stacklevel: the user's line, not the package's
     p = mbs.GetObjectOutputBody(1, O.Position, localPosition=[0.2, 0, 0])
     np.testing.assert_allclose(p, [1.2, 0, 0], atol=1e-10)
+
+
+def test_inconsistent_initial_position_is_projected_with_a_warning():
+    def joint(mbs, g, b):
+        mbs.AddObject(ObjectJointSpherical(markerNumbers=[
+            mbs.AddMarker(MarkerBodyPosition(bodyNumber=g, localPosition=[1.203, 0, 0])),
+            mbs.AddMarker(MarkerBodyPosition(bodyNumber=b, localPosition=[0.2, 0, 0]))]))
+    mbs = model(joint, omega=(0.0, 0.0, 0.0))
+    with pytest.warns(RuntimeWarning, match=r"positions of joints .* bodies moved by up to [0-9.e+-]+ m") as rec:
+        assert exl.SolveDynamic(mbs, quiet_settings(0.01, 10))
+    assert all(w.filename == __file__ for w in rec)
+    expect_error(mbs, ConstraintError, r"initial configuration violates", projectInitial=False)
 
 
 def test_step_size_blow_up_is_raised_through_exudyn():
@@ -262,9 +281,11 @@ def test_autoassemble_validates_before_assembling(case):
             mbs.AddMarker(MarkerBodyPosition(bodyNumber=g, localPosition=[1.5, 0, 0])),
             mbs.AddMarker(MarkerBodyPosition(bodyNumber=b, localPosition=[0.2, 0, 0]))]))), \
             ConstraintError, r"initial configuration violates"
+        kw = dict(projectInitial=False)
     elif case == "velocity violated":
         extra, err, match = (lambda mbs, g, b: mbs.CreateSphericalJoint(itemNumbers=[g, b], position=[1.2, 0, 0])), \
             ConstraintError, r"initial velocities violate"
+        kw = dict(projectInitial=False)
     elif case == "non-finite":
         omega, err, match = (1.0, np.nan, 0.5), BridgeError, r"node 0 .*initial velocities are not finite"
     elif case == "method":

@@ -6,6 +6,9 @@ node, joint, connector and load type, in both c-space groups.
 Exudyn's quantities are transformed into the package's velocity coordinates with the
 node maps ``q_t = P V`` (see ``test_bridge_common``): ``P^T M P``, ``P^T (f - M Pdot V)``,
 ``C P``.  The joint rows coincide one by one (same equations, Exudyn's AE order)."""
+import contextlib
+import warnings
+
 import numpy as np
 import pytest
 
@@ -63,13 +66,23 @@ D6 = np.diag([1, 2, 3, .4, .5, .6]) + 0.1 * np.ones((6, 6))
 OFF6 = [0.01, 0.02, 0.03, 0.1, 0.2, 0.3]
 
 
+@contextlib.contextmanager
+def deprecated_rotation_markers():
+    """These cases use Exudyn's deprecated rotationMarker0/1 on purpose: Exudyn still reads
+    them (until 2031), so the bridge must too.  Only that deprecation is silenced."""
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", message=r".*rotationMarker[01] is deprecated", category=DeprecationWarning)
+        yield
+
+
 def _generic(mbs, g, b0, b1, axes, node=False, ground=False):
     p = np.array([1.2, 0.1, 0.05]) if not node else body_origin(mbs, b1)
     A = g if ground else b0
     mA, rmA = rigid_marker(mbs, A, p, RJ, markerRot=RM)
     mB, rmB = rigid_marker(mbs, b1, p, RJ, markerRot=RotationMatrixY(0.3), node=node)
-    mbs.AddObject(ObjectJointGeneric(markerNumbers=[mA, mB], constrainedAxes=list(axes), rotationMarker0=rmA,
-                                     rotationMarker1=rmB))
+    with deprecated_rotation_markers():
+        mbs.AddObject(ObjectJointGeneric(markerNumbers=[mA, mB], constrainedAxes=list(axes), rotationMarker0=rmA,
+                                         rotationMarker1=rmB))
 
 
 def body_origin(mbs, b):
@@ -116,7 +129,8 @@ def _revolute_rm(mbs, g, b0, b1):
     p = [1.25, 0.15, 0.0]
     mA, rmA = rigid_marker(mbs, b0, p, RJ, markerRot=RM)
     mB, rmB = rigid_marker(mbs, b1, p, RJ @ RotationMatrixZ(0.4), markerRot=RotationMatrixX(0.2))
-    mbs.AddObject(ObjectJointRevoluteZ(markerNumbers=[mA, mB], rotationMarker0=rmA, rotationMarker1=rmB))
+    with deprecated_rotation_markers():
+        mbs.AddObject(ObjectJointRevoluteZ(markerNumbers=[mA, mB], rotationMarker0=rmA, rotationMarker1=rmB))
 
 
 def _prismatic_rm(mbs, g, b0, b1):
@@ -124,7 +138,8 @@ def _prismatic_rm(mbs, g, b0, b1):
     mA, rmA = rigid_marker(mbs, g, p, RJ, markerRot=RM)
     mB, rmB = rigid_marker(mbs, b1, [1.35, 0.15, 0.0], RJ, markerRot=RotationMatrixX(0.2))
     # B's frame origin must lie on A's x axis: move it along the A x axis
-    mbs.AddObject(ObjectJointPrismaticX(markerNumbers=[mA, mB], rotationMarker0=rmA, rotationMarker1=rmB))
+    with deprecated_rotation_markers():
+        mbs.AddObject(ObjectJointPrismaticX(markerNumbers=[mA, mB], rotationMarker0=rmA, rotationMarker1=rmB))
 
 
 def _torsional(mbs, g, b0, b1, uf):

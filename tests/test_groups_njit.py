@@ -20,6 +20,9 @@ from numba.core.runtime import rtsys
 
 from exudyn_lie.groups import dualquat, quaternion, se3, so3, so3xr3
 
+# not in the quick subset (pytest -m "not slow"): compiles every public group map inside an njit wrapper (about 25 s per run)
+pytestmark = pytest.mark.slow
+
 MODULES = {"so3": so3, "se3": se3, "so3xr3": so3xr3, "quaternion": quaternion,
            "dualquat": dualquat}
 

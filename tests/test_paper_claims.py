@@ -22,6 +22,9 @@ from _paper_support import DTS, GROUPS, all_claims, exudyn_runs, lie_runs
 from exudyn_lie.apps.claims import judge, length_scale, run_max
 from exudyn_lie.models.geometry import so3_log_angle
 
+# not in the quick subset (pytest -m "not slow"): integrates every paper model in both groups, also through SolveDynamic
+pytestmark = pytest.mark.slow
+
 TOL = 1e-12
 SEP = 1e3
 SAME_ORDER = 1.5

@@ -11,6 +11,9 @@ from exudyn_lie.apps import stress_cases as C
 from exudyn_lie.apps import stress_theory as T
 from exudyn_lie.integrators.tableau import method_names
 
+# not in the quick subset (pytest -m "not slow"): runs the stress suite's cases
+pytestmark = pytest.mark.slow
+
 
 @pytest.fixture(scope="module")
 def suite(tmp_path_factory):

@@ -83,7 +83,7 @@ class Config:
 
 
 def parse_args(argv):
-    p = argparse.ArgumentParser(prog="python -m exudyn_lie bench", description=__doc__.split("\n\n")[0],
+    p = argparse.ArgumentParser(prog="python -m exudyn_lie bench", description=__doc__.split("\n\n")[0].replace("``", ""),
                                 formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--quick", action="store_true", help="short version: T = 0.1 s, heavy top and double "
                    "pendulum, small budgets, chains up to N = 8, warm start only")
@@ -489,7 +489,7 @@ else:
     ss.timeIntegration.endTime = 1e-3
     ss.solution.file.write = False
     ss.solution.sensors.active = False
-    exudyn_lie.SolveDynamic(mbs, ss, method="RK4", liegroup="SE3", showProgress=False)
+    exudyn_lie.SolveDynamic(mbs, ss, method="RK4", liegroup="SE3", showProgress=False, projectInitial=False)
 t_first = time.perf_counter() - t1
 print("BENCHJSON" + json.dumps(dict(imports=t_import, firstStep=t_first, total=time.perf_counter() - t0)))
 """

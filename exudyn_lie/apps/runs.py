@@ -123,7 +123,7 @@ class LieRunner:
         with warnings.catch_warnings():
             # the planar four-bar's redundant row is reported by the kernel; it is documented
             warnings.simplefilter("ignore", RuntimeWarning)
-            self.solver = LieGroupSolver(info.mbs, method=method, liegroup=group)
+            self.solver = LieGroupSolver(info.mbs, method=method, liegroup=group, projectInitial=False)  # paper: strict
         sc = self.solver.scene
         objs = list(sc.bodyObject)
         self.bodyMap = [objs.index(b.objectIndex) for b in info.bodies]
@@ -263,7 +263,7 @@ def run_solve_dynamic(info, group, stepSize, endTime=None, keep_states=False, me
     with warnings.catch_warnings(), contextlib.redirect_stdout(io.StringIO()):
         warnings.simplefilter("ignore", RuntimeWarning)
         try:
-            exl.SolveDynamic(mbs, s, method=method, liegroup=group, showProgress=False)
+            exl.SolveDynamic(mbs, s, method=method, liegroup=group, showProgress=False, projectInitial=False)
         except Exception as e:       # SimulationError (blow-up), ConstraintError, Exudyn's SolverError
             ok, msg = False, f"{type(e).__name__}: {str(e).strip().splitlines()[0] if str(e).strip() else ''}"
     wall = time.perf_counter() - tic

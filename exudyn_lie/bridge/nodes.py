@@ -21,11 +21,11 @@ nodes (and the joint multipliers) in one call.  Adding a node type = one subclas
 row writer + a branch in :func:`write_row`, one line in :data:`NODE_KINDS`.
 """
 import math
-import warnings
 
 import numpy as np
 from numba import njit
 
+from ..userwarn import warn_user
 from . import rotations as rot
 
 CODE_ROTVEC = 0
@@ -420,9 +420,9 @@ class RotVecLGNode(NodeKind):
     def check_params(self, p, quiet=False):
         big = np.linalg.norm(p, axis=1) > rot.TWO_PI
         if np.any(big) and not quiet:
-            warnings.warn(f"exudyn_lie: RotVecLG node(s) {self.ids[big].tolist()} have a rotation vector "
-                          f"with |theta| > 2 pi; Exudyn 1.13.6 evaluates such vectors incorrectly, "
-                          f"exudyn_lie uses the exact rotation exp(theta)", RuntimeWarning, stacklevel=4)
+            warn_user(f"exudyn_lie: RotVecLG node(s) {self.ids[big].tolist()} have a rotation vector "
+                      f"with |theta| > 2 pi; Exudyn 1.13.6 evaluates such vectors incorrectly, "
+                      f"exudyn_lie uses the exact rotation exp(theta)")
         return np.array(p, float, copy=True)
 
     def rotation(self, p):
@@ -487,11 +487,10 @@ class RxyzNode(NodeKind):
         if self.warned[i]:
             return
         self.warned[i] = True
-        warnings.warn(f"exudyn_lie: NodeRigidBodyRxyz {int(self.ids[i])}: the middle Tait-Bryan angle is "
+        warn_user(f"exudyn_lie: NodeRigidBodyRxyz {int(self.ids[i])}: the middle Tait-Bryan angle is "
                       f"within 5 deg of +-90 deg (singularity of Rxyz); the angle rates written to Exudyn, "
                       f"GR^-1 omega, become large and are infinite at 90 deg. The Lie group integration is "
-                      f"not affected; use NodeRigidBodyRotVecLG or EP nodes to avoid this",
-                      RuntimeWarning, stacklevel=3)
+                      f"not affected; use NodeRigidBodyRotVecLG or EP nodes to avoid this")
 
     def rotation(self, p):
         return rot.rxyz_to_matrix(p)

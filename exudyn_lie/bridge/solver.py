@@ -34,9 +34,12 @@ import warnings
 
 import numpy as np
 
+from .. import __version__
+from ..compiling import compile_timer
 from ..integrators.tableau import get_method, method_names
 from ..mbs.compiled import auto_groups
 from ..mbs.simulator import Simulator
+from ..userwarn import warn_user
 from .fast import CHUNK_ROWS, NodeTable, OutputChunks
 from .reader import BridgeError, ExudynScene, SceneFromExudyn
 
@@ -77,9 +80,12 @@ class LieGroupSolver:
         ``'auto'``: SO3xR3 for an unconstrained body whose frame is at its COM, SE3 for
         every other body.
     stabilization : None (the paper: none), ``'velocity'`` or ``'position'``
-    projectInitial : project inconsistent initial states onto the constraints instead of
-        raising :class:`~exudyn_lie.mbs.ConstraintError`
-    verbose : print the group of every body, skipped items and the run plan
+    projectInitial : True (default, as Exudyn's own solvers, which accept an inconsistent
+        initial state): project inconsistent initial positions and velocities onto the
+        constraints, with a warning naming the joints and the size of the correction;
+        False: raise :class:`~exudyn_lie.mbs.ConstraintError` instead
+    verbose : print the group of every body, skipped items, the run plan and the time
+        spent (numba's one-off compilation separately)
 
     ``Solve(simulationSettings)`` runs inside Exudyn's time loop (sensors, files, user
     functions); ``Run(endTime, stepSize)`` is the fast path without any Exudyn output
@@ -87,7 +93,7 @@ class LieGroupSolver:
     (cheap) so that changed parameters or initial values are used.
     """
 
-    def __init__(self, mbs, method="RK4", liegroup="auto", stabilization=None, projectInitial=False,
+    def __init__(self, mbs, method="RK4", liegroup="auto", stabilization=None, projectInitial=True,
                  verbose=False, *, _configuration="initial"):
         # _configuration='items' (internal, SolveDynamic): validate an mbs that is not assembled
         # yet from its item dictionaries; Solve() then re-reads it after mbs.Assemble()
@@ -104,6 +110,7 @@ class LieGroupSolver:
         self.timing = {}
         self.scene = None
         self.sim = None
+        self._compileSeconds = 0.0           # numba compilation since the last run (a cold start)
         self._prepare(announce=self.verbose)
 
     # ------------------------------------------------------------------ set-up
@@ -158,15 +165,34 @@ class LieGroupSolver:
         """(Re-)read the model and build the simulator from mbs' initial configuration."""
         sc = SceneFromExudyn(self.mbs, self._configuration)
         groups, why = self._groups(sc)
-        with warnings.catch_warnings():
+        with warnings.catch_warnings(), compile_timer() as ct:
             warnings.simplefilter("ignore", DeprecationWarning)
             sim = Simulator(sc, self.method, groups, self.stabilization, self.projectInitial, verbose=False)
+        self._compileSeconds += ct.seconds
         self.scene, self.sim, self.groups = sc, sim, groups
         self._watch_singular_nodes()
         self._fresh = True
         self._build_buffers()
         if announce:
             self._announce(why)
+
+    def _warn_projection(self):
+        """The warning for an initial state that ``projectInitial`` corrected (once per run)."""
+        what = self.sim.describe_initial_projection()
+        if what:
+            warn_user(f"exudyn_lie: the initial state does not satisfy the constraints; projected onto them: "
+                      f"{what} (Exudyn's own solvers start from it unchanged; pass projectInitial=False to "
+                      f"raise instead)")
+
+    def _solution_information(self, nsteps, h, t0, tEnd, k):
+        """What was integrated, for the solution file's header and the log."""
+        groups = ", ".join(f"{g} ({self.groups.count(g)} {'body' if self.groups.count(g) == 1 else 'bodies'})"
+                           for g in dict.fromkeys(self.groups))
+        tab = self.tableau
+        return (f"exudyn_lie {__version__}: explicit Munthe-Kaas {tab.name} (order {tab.order}, {tab.stages} stages), "
+                f"Lie group {groups or 'none'}, step size h = {h:.6g} s, {nsteps} steps from t = {t0:g} to "
+                f"{tEnd:g} s; Exudyn's time loop made {nsteps // k} steps of {k} integration step(s) each (the "
+                f"header's 'number of time steps (planned)' counts those)")
 
     def _announce(self, why):
         sc = self.scene
@@ -448,6 +474,13 @@ class LieGroupSolver:
         'lieGroupSolver']`` are set for the run (as by ``exudyn.SolveDynamic``); if Exudyn's
         ``InitializeSolver`` fails (e.g. a solution file that cannot be opened) the previous
         entries are put back."""
+        with compile_timer() as ct:
+            ok = self._solve(simulationSettings, updateInitialValues, storeSolver, showProgress, substeps,
+                             accelerations, refresh, ct)
+        return ok
+
+    def _solve(self, simulationSettings, updateInitialValues, storeSolver, showProgress, substeps,
+               accelerations, refresh, ct):
         import copy
 
         import exudyn as exu
@@ -458,15 +491,16 @@ class LieGroupSolver:
         if self._use_assembled() or refresh or not self._fresh:
             self._prepare(announce=False)
         self._fresh = False
+        self._warn_projection()
         sim = self.sim
         sim.t = t0
         k, userStep = self._plan(ss, nsteps, h, substeps)
         needAcc = self._needs_accelerations(ss, userStep) if accelerations is None else bool(accelerations)
         self._watch = userStep          # a pre/post-step function may change the state
-        if self.verbose:
-            print(f"exudyn_lie: {self.tableau.name}, h = {h:.6g} s, {nsteps} steps from t = {t0:g} to {tEnd:g} s; "
-                  f"{k} step(s) per Exudyn step ({nsteps // k} Exudyn steps); accelerations "
-                  f"{'written' if needAcc else 'not needed'}")
+        info = self._solution_information(nsteps, h, t0, tEnd, k)
+        log = self.verbose or ss.timeIntegration.verboseMode >= 1
+        if log:
+            print(f"{info}; accelerations {'written' if needAcc else 'not needed'}")
         # Exudyn runs nsteps / k steps of its implicit solver, whose Newton iteration is the
         # hook, with these settings: on a deep copy (the user's object stays as it is)
         ss2 = copy.deepcopy(ss)
@@ -479,6 +513,11 @@ class LieGroupSolver:
         ga.useIndex2Constraints = False
         ti2.adaptiveStep = False
         ti2.automaticStepSize = False
+        # Exudyn's log would count its own (output) steps and Newton iterations (none): the
+        # bridge logs the integration instead; the solution file's header says what ran
+        ti2.verboseMode = 0
+        userInfo = ss2.solution.file.information
+        ss2.solution.file.information = f"{userInfo}; {info}" if userInfo else info
 
         solver = exu.MainSolverImplicitSecondOrder()
         self.solver = solver
@@ -619,11 +658,19 @@ class LieGroupSolver:
             sd.SetODE2Coordinates_tt(coordinates=sd.GetODE2Coordinates_tt(),
                                      configuration=exu.ConfigurationType.Initial)
         total = time.perf_counter() - ticTotal
+        compiled = ct.seconds + self._compileSeconds
+        self._compileSeconds = 0.0
+        rest = max(total - ct.seconds, 0.0)              # the run without numba's one-off compilation
         self.timing["total"] = total
-        self.timing["bridgeOverhead"] = 1.0 - self.timing["integration"] / total if total > 0 else 0.0
-        if self.verbose:
-            print(f"exudyn_lie: done in {total:.3g} s ({self.timing['integration']:.3g} s integration, "
-                  f"bridge + Exudyn output {100 * self.timing['bridgeOverhead']:.1f} %)")
+        self.timing["compile"] = compiled
+        self.timing["bridgeOverhead"] = (max(rest - self.timing["integration"], 0.0) / rest) if rest > 0 else 0.0
+        if log:
+            comp = (f"numba compilation {compiled:.3g} s (first run on this machine, cached from now on), "
+                    if compiled > 0.05 else "")
+            print(f"exudyn_lie: {nsteps} steps done in {total:.3g} s: {comp}integration "
+                  f"{self.timing['integration']:.3g} s ({1e6 * self.timing['integration'] / nsteps:.3g} us/step), "
+                  f"bridge + Exudyn output {100 * self.timing['bridgeOverhead']:.1f} % of the run without "
+                  f"compilation")
         return True
 
     # ------------------------------------------------------------------ torsional springs' data nodes
@@ -702,6 +749,7 @@ class LieGroupSolver:
         if self._use_assembled() or refresh or not self._fresh:
             self._prepare(announce=False)
         self._fresh = False
+        self._warn_projection()
         self.sim.t = float(startTime)
         tic = time.perf_counter()
         res = self.sim.Run(endTime, stepSize, outputEvery=outputEvery, startTime=float(startTime),
@@ -719,7 +767,7 @@ class LieGroupSolver:
 
 def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialValues=False, storeSolver=True,
                  showHints=False, showCausingItems=True, autoAssemble=True, *, method="RK4", liegroup="auto",
-                 stabilization=None, projectInitial=False, verbose=False, showProgress=True, substeps=None,
+                 stabilization=None, projectInitial=True, verbose=False, showProgress=True, substeps=None,
                  accelerations=None):
     """Drop-in for ``exudyn.SolveDynamic``: integrate ``mbs`` with an explicit Munthe-Kaas
     Lie group method inside Exudyn's time loop; returns True.
@@ -754,8 +802,7 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
                             _configuration="items" if assemble else "initial")
     solver._check_run(exu.SimulationSettings() if simulationSettings is None else simulationSettings, substeps)
     if assemble:
-        warnings.warn("exudyn_lie.SolveDynamic: mbs is not assembled; calling mbs.Assemble()", RuntimeWarning,
-                      stacklevel=2)
+        warn_user("exudyn_lie.SolveDynamic: mbs is not assembled; calling mbs.Assemble()")
         mbs.Assemble()
     return solver.Solve(simulationSettings, updateInitialValues=updateInitialValues, storeSolver=storeSolver,
                         showProgress=showProgress, substeps=substeps, accelerations=accelerations, refresh=assemble)

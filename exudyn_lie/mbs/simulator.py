@@ -10,13 +10,14 @@ with Python force callbacks runs a Python stage loop around the same compiled pi
 from __future__ import annotations
 
 import time as _time
-import warnings
 from dataclasses import dataclass
 
 import numpy as np
 
+from ..compiling import announce_cold_compile
 from ..groups import se3, so3
 from ..integrators.tableau import get_method
+from ..userwarn import warn_user
 from . import kernel
 from .compiled import compile_scene, make_work, resolve_groups, with_redundant
 from .linalg import REL_PIVOT_TOL, rows_in_null_space, schur_rank_and_null
@@ -133,6 +134,7 @@ class Simulator:
             raise SceneError(f"Simulator needs an exudyn_lie Scene, got {type(scene).__name__}")
         self.scene = scene
         scene.validate()
+        announce_cold_compile(kernel.mk_steps)      # one line on the first run on a machine (numba compiles)
         self.tableau = get_method(method)
         self.groups = resolve_groups(scene, liegroup)
         if stabilization not in (None, "none", "velocity", "position"):
@@ -273,7 +275,7 @@ class Simulator:
             msg = (f"exudyn_lie: ill-conditioned constraints among joints {names} (a band Cholesky pivot of "
                    f"J M^-1 J^T at or below {REL_PIVOT_TOL:g} x its largest diagonal at the initial state, "
                    f"full rank with pivoting); using the pivoted Cholesky solve")
-        warnings.warn(msg, RuntimeWarning, stacklevel=3)
+        warn_user(msg)
 
     def _residuals_and_JV(self):
         """h(g) and J V at the current state, row by row (no dense Jacobian)."""
@@ -286,8 +288,14 @@ class Simulator:
         return wk.h.copy(), JV
 
     def _check_initial_consistency(self):
+        """Raise for an inconsistent initial state, or (``projectInitial``) project it onto
+        the constraints and record what was corrected in ``self.initialProjection``
+        (None if nothing was): the joints, the residuals and the size of the correction."""
+        self.initialProjection = None
         if self.sd.nrows == 0:
             return
+        before = (self.R.copy(), self.r.copy(), self.V.copy())
+        fixed = {}
         h, JV = self._residuals_and_JV()
         scale = max(1.0, float(np.max(np.abs(self.r))) if self.r.size else 1.0)
         bad_pos = np.nonzero(np.abs(h) > INITIAL_TOL * scale)[0]
@@ -297,6 +305,8 @@ class Simulator:
                     f"initial configuration violates joints {', '.join(self._joints_of_rows(bad_pos))} "
                     f"(max |h| = {np.max(np.abs(h)):.3g}); fix the initial poses or pass "
                     f"projectInitial=True to project them onto the constraints first")
+            fixed["positionJoints"] = self._joints_of_rows(bad_pos)
+            fixed["maxPositionResidual"] = float(np.max(np.abs(h)))
             self.ProjectPositions()
         h, JV = self._residuals_and_JV()
         vscale = max(1.0, float(np.max(np.abs(self.V))))
@@ -307,7 +317,35 @@ class Simulator:
                     f"initial velocities violate the velocity constraints of joints "
                     f"{', '.join(self._joints_of_rows(bad_vel))} (max |J V| = {np.max(np.abs(JV)):.3g}); "
                     f"pass projectInitial=True to project them onto J V = 0 first")
+            fixed["velocityJoints"] = self._joints_of_rows(bad_vel)
+            fixed["maxVelocityResidual"] = float(np.max(np.abs(JV)))
             self.ProjectVelocities()
+        if fixed:
+            R0, r0, V0 = before
+            fixed["maxPositionChange"] = float(np.max(np.linalg.norm(self.r - r0, axis=1)))
+            fixed["maxRotationChange"] = float(max(np.linalg.norm(so3.log(R0[i].T @ self.R[i]))
+                                                   for i in range(len(self.R))))
+            om0, ve0 = twist_to_world_velocity(self.gid, R0, V0)      # body-fixed omega, world velocity
+            om1, ve1 = twist_to_world_velocity(self.gid, self.R, self.V)
+            fixed["maxAngularVelocityChange"] = float(np.max(np.linalg.norm(om1 - om0, axis=1)))
+            fixed["maxVelocityChange"] = float(np.max(np.linalg.norm(ve1 - ve0, axis=1)))
+            self.initialProjection = fixed
+
+    def describe_initial_projection(self):
+        """One sentence on the correction ``projectInitial`` made (None if none was made)."""
+        p = self.initialProjection
+        if not p:
+            return None
+        parts = []
+        if "positionJoints" in p:
+            parts.append(f"positions of joints {', '.join(p['positionJoints'])} (max |h| = "
+                         f"{p['maxPositionResidual']:.3g}): bodies moved by up to {p['maxPositionChange']:.3g} m "
+                         f"and turned by up to {p['maxRotationChange']:.3g} rad")
+        if "velocityJoints" in p:
+            parts.append(f"velocities of joints {', '.join(p['velocityJoints'])} (max |J V| = "
+                         f"{p['maxVelocityResidual']:.3g}): velocities changed by up to "
+                         f"{p['maxVelocityChange']:.3g} m/s and {p['maxAngularVelocityChange']:.3g} rad/s")
+        return "; ".join(parts)
 
     def ProjectVelocities(self):
         """Mass-orthogonal projection of V onto J V = 0 (compiled, banded)."""
@@ -613,9 +651,8 @@ class Simulator:
         if hlast <= 1e-9 * max(1.0, abs(endTime)):
             hlast = 0.0
         if hlast > 0:
-            warnings.warn(f"exudyn_lie: endTime - startTime = {span:.6g} s is not a multiple of stepSize = {h:.6g} s; "
-                          f"{nsteps} steps of {h:.6g} s and a last step of {hlast:.6g} s end exactly at endTime",
-                          RuntimeWarning, stacklevel=2)
+            warn_user(f"exudyn_lie: endTime - startTime = {span:.6g} s is not a multiple of stepSize = {h:.6g} s; "
+                      f"{nsteps} steps of {h:.6g} s and a last step of {hlast:.6g} s end exactly at endTime")
         self.t = t0
         every = max(1, int(outputEvery))
         nout = nsteps // every + 1 + (1 if nsteps % every else 0) + (1 if hlast > 0 else 0)

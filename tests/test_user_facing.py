@@ -77,7 +77,7 @@ def test_solve_dynamic_accepts_lower_case_method_and_logs_it(tmp_path, capsys):
     assert "Nit/step" not in out                     # Exudyn's Newton count means nothing here
     expected = ("explicit Munthe-Kaas DOPRI5 (order 5, 7 stages), Lie group SE3 (1 body), step size h = 0.001 s, "
                 "200 steps from t = 0 to 0.2 s; Exudyn's time loop made 20 steps of 10 integration step(s) each")
-    assert expected in out and "200 steps done in" in out
+    assert expected in out and "200 steps in " in out and "set-up" in out
     header = [line for line in open(ss.solution.file.name) if line.startswith("#")]
     info_lines = [line for line in header if line.startswith("#solution information = ")]
     assert len(info_lines) == 1 and expected in info_lines[0]

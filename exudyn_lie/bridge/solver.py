@@ -110,7 +110,8 @@ class LieGroupSolver:
         self.timing = {}
         self.scene = None
         self.sim = None
-        self._compileSeconds = 0.0           # numba compilation since the last run (a cold start)
+        self._compileSeconds = 0.0           # numba compilation in set-ups since the last run (cold start)
+        self._prepareSeconds = 0.0           # wall time of those set-ups
         self._prepare(announce=self.verbose)
 
     # ------------------------------------------------------------------ set-up
@@ -163,12 +164,14 @@ class LieGroupSolver:
 
     def _prepare(self, announce=False):
         """(Re-)read the model and build the simulator from mbs' initial configuration."""
+        tic = time.perf_counter()
         sc = SceneFromExudyn(self.mbs, self._configuration)
         groups, why = self._groups(sc)
         with warnings.catch_warnings(), compile_timer() as ct:
             warnings.simplefilter("ignore", DeprecationWarning)
             sim = Simulator(sc, self.method, groups, self.stabilization, self.projectInitial, verbose=False)
         self._compileSeconds += ct.seconds
+        self._prepareSeconds += time.perf_counter() - tic
         self.scene, self.sim, self.groups = sc, sim, groups
         self._watch_singular_nodes()
         self._fresh = True
@@ -488,10 +491,13 @@ class LieGroupSolver:
         ticTotal = time.perf_counter()
         ss = exu.SimulationSettings() if simulationSettings is None else simulationSettings
         nsteps, t0, tEnd, h = self._time_settings(ss)
+        # set-ups before this call (SolveDynamic builds the solver first) count to this run
+        pendingCompile, pendingPrepare = self._compileSeconds, self._prepareSeconds
         if self._use_assembled() or refresh or not self._fresh:
             self._prepare(announce=False)
         self._fresh = False
         self._warn_projection()
+        ticLoop, compileSetUp = time.perf_counter(), ct.seconds
         sim = self.sim
         sim.t = t0
         k, userStep = self._plan(ss, nsteps, h, substeps)
@@ -657,20 +663,21 @@ class LieGroupSolver:
             sd.SetSystemState(systemStateList=sd.GetSystemState(), configuration=exu.ConfigurationType.Initial)
             sd.SetODE2Coordinates_tt(coordinates=sd.GetODE2Coordinates_tt(),
                                      configuration=exu.ConfigurationType.Initial)
-        total = time.perf_counter() - ticTotal
-        compiled = ct.seconds + self._compileSeconds
-        self._compileSeconds = 0.0
-        rest = max(total - ct.seconds, 0.0)              # the run without numba's one-off compilation
-        self.timing["total"] = total
-        self.timing["compile"] = compiled
-        self.timing["bridgeOverhead"] = (max(rest - self.timing["integration"], 0.0) / rest) if rest > 0 else 0.0
+        now = time.perf_counter()
+        loop, setUp = now - ticLoop, (ticLoop - ticTotal) + pendingPrepare
+        compiled, compileLoop = ct.seconds + pendingCompile, ct.seconds - compileSetUp
+        self._compileSeconds = self._prepareSeconds = 0.0
+        loopNet = max(loop - compileLoop, 0.0)           # the time loop without numba's compilation
+        integ = self.timing["integration"]
+        self.timing.update(total=setUp + loop, setUp=setUp, loop=loop, compile=compiled,
+                           bridgeOverhead=max(loopNet - integ, 0.0) / loopNet if loopNet > 0 else 0.0)
         if log:
-            comp = (f"numba compilation {compiled:.3g} s (first run on this machine, cached from now on), "
-                    if compiled > 0.05 else "")
-            print(f"exudyn_lie: {nsteps} steps done in {total:.3g} s: {comp}integration "
-                  f"{self.timing['integration']:.3g} s ({1e6 * self.timing['integration'] / nsteps:.3g} us/step), "
-                  f"bridge + Exudyn output {100 * self.timing['bridgeOverhead']:.1f} % of the run without "
-                  f"compilation")
+            print(f"exudyn_lie: {nsteps} steps in {setUp + loop:.3g} s: set-up {setUp:.3g} s (reading the model, "
+                  f"building the simulator), time loop {loop:.3g} s (integration {integ:.3g} s = "
+                  f"{1e6 * integ / nsteps:.3g} us/step, bridge + Exudyn output "
+                  f"{100 * self.timing['bridgeOverhead']:.1f} %)"
+                  + (f"; numba compilation {compiled:.3g} s of it (first run on this machine, cached from now on)"
+                     if compiled > 0.05 else ""))
         return True
 
     # ------------------------------------------------------------------ torsional springs' data nodes
@@ -755,6 +762,7 @@ class LieGroupSolver:
         res = self.sim.Run(endTime, stepSize, outputEvery=outputEvery, startTime=float(startTime),
                            progress=progress)
         self.timing = dict(integration=res.cpuTime, total=time.perf_counter() - tic)
+        self._compileSeconds = self._prepareSeconds = 0.0
         self._warn_watched_nodes()
         if writeBack:
             self._watch = False

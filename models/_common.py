@@ -355,6 +355,19 @@ def body_states_from_sensors(data, nt):
     return R, r, om, ve
 
 
+def _native_failure(mbs, error):
+    """Why a native solve stopped, in Exudyn's words: its solver's error string and the step
+    it failed in (``mbs.sys['dynamicSolver']``, stored by ``SolveDynamic``)."""
+    solver = mbs.sys.get("dynamicSolver")
+    text = str(error).strip().splitlines()[0] if str(error).strip() else type(error).__name__
+    if solver is None:
+        return f"{type(error).__name__}: {text}"
+    it = solver.it
+    h = it.currentStepSize
+    return (f"Exudyn: '{solver.GetErrorString().strip()}' in the step from t = {it.currentTime - h:.4g} s to "
+            f"{it.currentTime:.4g} s ({it.newtonStepsCount} Newton iterations in all)")
+
+
 def run_native(info, solver, stepSize, endTime=None, outputPeriod=None):
     """Integrate the model with one of Exudyn's own solvers (fixed step) and return the
     body states at the output times (read from node sensors).
@@ -381,7 +394,7 @@ def run_native(info, solver, stepSize, endTime=None, outputPeriod=None):
         if res is False:
             ok, msg = False, "SolveDynamic returned False"
     except Exception as e:  # Exudyn raises on Newton failure etc.
-        ok, msg = False, f"{type(e).__name__}: {str(e).strip().splitlines()[0] if str(e).strip() else ''}"
+        ok, msg = False, _native_failure(mbs, e)
     cpu = time.perf_counter() - tic
     nb = len(info.bodies)
     data = [[mbs.GetSensorStoredData(x) for x in s4] for s4 in sens]

@@ -159,7 +159,7 @@ def plot_work_precision(path, title, curves, eps_band=(1e-8, 1e-4)):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    fig, ax = plt.subplots(figsize=(7.5, 5.2))
+    fig, ax = plt.subplots(figsize=(9.8, 5.4))
     colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
     ci = 0
     for label, kind, solver, group, pts in curves:
@@ -175,15 +175,15 @@ def plot_work_precision(path, title, curves, eps_band=(1e-8, 1e-4)):
             ax.loglog(e, t, "-.", marker=_NATIVE_MARK.get(solver, "x"), color="0.25" if "Alpha" in solver
                       else ("0.55" if "Trap" in solver or solver == "RK67" else "0.75"),
                       label=f"Exudyn {label}", ms=5, lw=1.3)
-    ax.axvspan(eps_band[0], eps_band[1], color="0.92", zorder=0)
+    ax.axvspan(eps_band[0], eps_band[1], color="0.92", zorder=0, label="accuracy range of the speed targets")
     ax.set_xlabel("final configuration error (max over bodies of |dr| [m], |dR| [rad])")
     ax.set_ylabel("CPU time of the time loop [s] (median)")
     ax.set_title(title, fontsize=10)
     ax.invert_xaxis()
     ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=7, ncol=2)
+    ax.legend(fontsize=7, ncol=1, loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    fig.savefig(path, dpi=150)
     plt.close(fig)
 
 
@@ -204,7 +204,7 @@ def plot_scaling(path, series, title):
     ax.set_ylabel("CPU time per step [us] (median)")
     ax.set_title(title, fontsize=10)
     ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=8)
+    ax.legend(fontsize=8, loc="upper left")
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    fig.savefig(path, dpi=150)
     plt.close(fig)

@@ -12,7 +12,8 @@ cross-check.  Then it writes to ``--out`` (default ``./paper_results``):
   the heavy top's E(0), a cross-check of the kernel's diagnostics, the choices made
   where the paper has gaps, and run times.  Its first line names the command and
   holds the SHA-256 of the rest.
-* PNG figures like the paper's (SE(3) beside SO(3)xR3, one curve per step size).
+* one PNG figure per model: every measure over time, one column per step size, MK-RK4 on
+  SE(3) and SO(3)xR3 and Exudyn's solvers on the same axes (:mod:`.plots`).
 
 Options: ``--quick`` (dt = 1e-2 and 1e-3 only), ``--out DIR``, ``--jobs N`` (worker
 processes, default 2), ``--models a,b`` (a subset), ``--no-figures``, ``--no-native``,
@@ -60,9 +61,8 @@ class Context:
 
 def _task(args):
     """Worker: one model, either both MK-RK4 groups (``kind='lie'``) or its native solvers
-    (``kind='native'``), all step sizes; draws that part's figures if ``out`` is given.
-    Returns (model, kind, runs, figure names, wall time)."""
-    name, kind, dts, out = args
+    (``kind='native'``), all step sizes.  Returns (model, kind, runs, wall time)."""
+    name, kind, dts = args
     import exudyn as exu
     from exudyn_lie import models
     from exudyn_lie.apps.runs import LieRunner, run_native, run_solve_dynamic
@@ -81,7 +81,6 @@ def _task(args):
                 for dt in dts:
                     if dt >= CROSSCHECK_MIN_DT * (1 - 1e-9):
                         runs[(g + VIA_SOLVE_DYNAMIC, dt)] = run_solve_dynamic(info, g, dt)
-            solvers, natives = GROUPS, ()
         else:
             mbs, info = models.build(name)
             natives = tuple(models.native_solvers_for(info))
@@ -91,12 +90,17 @@ def _task(args):
                 for dt in dts:
                     with contextlib.redirect_stdout(io.StringIO()):    # Exudyn's failure banners
                         runs[(s, dt)] = run_native(info, s, dt)
-            solvers = ()
-        figs = []
-        if out is not None:
-            from exudyn_lie.apps.plots import plot_model
-            figs = [os.path.basename(p) for p in plot_model(info, runs, dts, out, solvers=solvers, natives=natives)]
-    return name, kind, runs, figs, time.perf_counter() - tic
+    return name, kind, runs, time.perf_counter() - tic
+
+
+def _figure_task(args):
+    """Worker: the figure of one model (all solvers on the same axes); returns (model, file names)."""
+    name, runs, dts, natives, out = args
+    from exudyn_lie import models
+    from exudyn_lie.apps.plots import plot_model
+    info = models.build(name)[1]
+    paths = plot_model(info, runs, dts, out, solvers=GROUPS, natives=natives)
+    return name, [os.path.basename(p) for p in paths]
 
 
 def _warm_up():
@@ -124,7 +128,7 @@ def run_all(model_names=None, dts=DTS_FULL, jobs=2, native=True, out=None, progr
     kinds = ("lie", "native") if native else ("lie",)
     # longest first (the implicit solvers on the pendulum chains, then the big MK runs)
     cost = {i.name: len(i.bodies) * i.endTime for i in infos}
-    tasks = sorted([(i.name, k, tuple(dts), out) for i in infos for k in kinds],
+    tasks = sorted([(i.name, k, tuple(dts)) for i in infos for k in kinds],
                    key=lambda t: -cost[t[0]] * (1.5 if t[1] == "native" and natives[t[0]][0] in IMPLICIT else 1))
     results = {i.name: {} for i in infos}
     figures = {i.name: [] for i in infos}
@@ -136,23 +140,31 @@ def run_all(model_names=None, dts=DTS_FULL, jobs=2, native=True, out=None, progr
     progress(f"  kernel ready ({time.perf_counter() - tic:.1f} s)")
 
     def collect(k, res):
-        name, kind, runs, figs, wall = res
+        name, kind, runs, wall = res
         results[name].update(runs)
-        figures[name] += figs
         bad = [f"{s} dt={dt:g}" + (f" at t={rd.times[-1]:.3g} s" if len(rd.times) else "")
                for (s, dt), rd in runs.items() if not rd.ok]
         label = "MK-RK4 SE3+SO3xR3" if kind == "lie" else "Exudyn " + "+".join(natives[name])
         progress(f"  [{k:2d}/{len(tasks)}] {name:27s} {label:38s} {wall:6.1f} s"
                  + (f"  (stopped: {', '.join(bad)})" if bad else ""))
 
+    fig_tasks = lambda: [(i.name, {key: rd for key, rd in results[i.name].items() if key[0] in GROUPS
+                                   or key[0] in natives[i.name]}, tuple(dts), tuple(natives[i.name]), out)
+                         for i in infos]
     if jobs > 1 and len(tasks) > 1:
         ctx = mp.get_context("fork")
         with ctx.Pool(jobs) as pool:
             for k, res in enumerate(pool.imap_unordered(_task, tasks), 1):
                 collect(k, res)
+            if out is not None:                  # one figure per model, once all its runs are in
+                for name, figs in pool.imap_unordered(_figure_task, fig_tasks()):
+                    figures[name] += figs
     else:
         for k, t in enumerate(tasks, 1):
             collect(k, _task(t))
+        if out is not None:
+            for name, figs in map(_figure_task, fig_tasks()):
+                figures[name] += figs
     return infos, results, natives, figures
 
 
@@ -225,9 +237,6 @@ def main(argv=None):
     ctx.infos, ctx.results, ctx.natives, ctx.figures = run_all(
         names, dts, ctx.jobs, native=not args.no_native, out=None if args.no_figures else args.out)
     evaluate(ctx)
-    order = ("_joints", "_com", "_orientation", "_energy", "_native")
-    for k, v in ctx.figures.items():
-        v.sort(key=lambda f: next((i for i, o in enumerate(order) if f.endswith(o + ".png")), 9))
     ctx.wallTime = time.perf_counter() - tic
     path = write(ctx, args.out, args.readme)
     counts = {}

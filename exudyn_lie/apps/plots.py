@@ -1,12 +1,22 @@
-"""Figures like the paper's: SE(3) beside SO(3)xR3, one curve per step size.
+"""The figures of the paper's comparison: one figure per model, every solver on the same axes.
 
-* ``<model>_joints.png``   - position (and rotation) violation of every joint over time;
-* ``<model>_com.png``      - COM drift from the exact solution (free bodies);
-* ``<model>_orientation.png`` - eps_r = ||log(R^T R_num)|| against the exact rotation;
-* ``<model>_energy.png``   - drift of the total energy |E(t) - E(0)|;
-* ``<model>_native.png``   - the same violation / drift measures for Exudyn's solvers.
+``<model>.png``: one row per measure (the position and rotation rows of every joint, or
+for a free body the COM drift and the orientation error eps_r, then the energy drift),
+one column per step size; each panel shows MK-RK4 on SE(3), MK-RK4 on SO(3)xR3 and
+Exudyn's own solvers for that model.  The panels of a row share their y axis, so the
+columns compare at a glance.
 
-Log scales with a floor of 1e-17 (exact zeros are drawn on the floor).
+Reading aids (log axes cannot show zero):
+
+* the sample at t = 0 is left out (the initial state is exact for every solver);
+* a curve that is exactly 0 over the whole run is not drawn; the panel says
+  "exactly 0: ..." for it;
+* samples exactly 0 inside a curve are ticks on the lower edge of the panel, in the
+  curve's colour;
+* a run that stopped (Exudyn's Newton iteration failed) ends with an x, and the panel
+  says where it stopped; a run without any data has no legend entry.
+
+Saved at 150 dpi.
 """
 from __future__ import annotations
 
@@ -14,9 +24,18 @@ import os
 
 import numpy as np
 
-FLOOR = 1e-17
+DPI = 150
 MAXPOINTS = 1500
-COLORS = {1e-2: "tab:red", 1e-3: "tab:blue", 1e-4: "tab:green"}
+STYLE = {        # label, colour, line style, width
+    "SE3": ("MK-RK4 SE(3)", "tab:blue", "-", 1.4),
+    "SO3xR3": ("MK-RK4 SO(3)xR3", "tab:orange", "--", 1.4),
+    "GeneralizedAlpha": ("Exudyn generalized-alpha", "black", "-", 0.8),
+    "TrapezoidalIndex2": ("Exudyn trapezoidal index 2", "tab:green", ":", 1.6),
+    "RK44": ("Exudyn RK44", "tab:purple", "-.", 1.1),
+    "DOPRI5": ("Exudyn DOPRI5", "tab:brown", ":", 1.6),
+}
+SHORT = {"SE3": "SE(3)", "SO3xR3": "SO(3)xR3", "GeneralizedAlpha": "gen.-alpha",
+         "TrapezoidalIndex2": "trapezoidal", "RK44": "RK44", "DOPRI5": "DOPRI5"}
 
 
 def _mpl():
@@ -39,108 +58,140 @@ def envelope(t, y, n=MAXPOINTS):
     return tt, yy
 
 
-def _curve(ax, rd, y, label):
-    """One curve; a failed run is marked in the legend (and its last value with an x),
-    also when it has no data to draw."""
-    c = COLORS.get(rd.stepSize)
-    if not rd.ok:
-        t_end = float(rd.times[-1]) if len(rd.times) else 0.0
-        label += " (failed at t=0, no data)" if t_end <= 0.0 else f" (failed at t={t_end:.3g} s)"
-    if y is None or len(y) == 0 or len(rd.times) <= 1:
-        if not rd.ok:
-            ax.semilogy([], [], color=c, lw=1.0, ls="--", label=label)
-        return
-    t, yy = envelope(rd.times, y)
-    ax.semilogy(t, np.maximum(yy, FLOOR), color=c, lw=1.0, label=label)
-    if not rd.ok:
-        ax.semilogy([t[-1]], [max(float(yy[-1]), FLOOR) if np.isfinite(yy[-1]) else FLOOR], "x", color=c, ms=6)
-
-
-def _grid(plt, nrows, ncols, title):
-    h = 2.4 * nrows + 1.0
-    fig, axes = plt.subplots(nrows, ncols, figsize=(5.2 * ncols, h), squeeze=False, sharex=True)
-    fig.suptitle(title, fontsize=10, y=1 - 0.12 / h)
-    # fixed margins: tight_layout costs seconds per figure on log axes
-    fig.subplots_adjust(left=0.09, right=0.98, bottom=0.6 / h, top=1 - 0.75 / h, hspace=0.4, wspace=0.2)
-    return fig, axes
-
-
-def _finish(fig, axes, path):
-    from matplotlib.ticker import LogLocator, NullLocator
-    for ax in axes.ravel():
-        ax.grid(True, which="major", alpha=0.3)
-        if ax.lines:
-            ax.yaxis.set_major_locator(LogLocator(base=10, numticks=6))
-            ax.yaxis.set_minor_locator(NullLocator())
-            ax.legend(fontsize=7, loc="best")
-        ax.tick_params(labelsize=7)
-    for ax in axes[-1]:
-        ax.set_xlabel("t [s]", fontsize=8)
-    fig.savefig(path, dpi=80)
-    import matplotlib.pyplot as plt
-    plt.close(fig)
-    return path
-
-
 def _rows(info):
+    """(label of the y axis, panel title, getter) of every measure of a model."""
     rows = []
     for j in info.joints:
-        rows.append((j, "position"))
+        rows.append(("position violation [m]", f"{j.name} ({j.kind}), position rows",
+                     (lambda rd, j=j: rd.position.get(j.name))))
         if any(j.lockedAxes[3:]):
-            rows.append((j, "rotation"))
+            rows.append(("rotation violation [-]", f"{j.name} ({j.kind}), rotation rows",
+                         (lambda rd, j=j: rd.rotation.get(j.name))))
+    if info.exact is not None:
+        rows.append(("COM drift |x_c - x_c,exact| [m]", "COM drift from the exact solution",
+                     lambda rd: rd.comDrift))
+        rows.append(("eps_r = ||log(R_exact^T R)|| [rad]", "orientation error", lambda rd: rd.orientation))
+    rows.append(("energy drift |E(t) - E(0)| [J]", "total energy", lambda rd: np.abs(rd.energy_drift())))
     return rows
 
 
+def _series(rd, y):
+    """(t, y) for a log plot: t > 0 only, finite values (None if there is no sample)."""
+    if y is None or rd is None or len(rd.times) == 0:
+        return None
+    t = np.asarray(rd.times, float)
+    y = np.asarray(y, float)
+    n = min(len(t), len(y))
+    t, y = t[:n], y[:n]
+    keep = (t > 0) & np.isfinite(y)
+    if not keep.any():
+        return None
+    return t[keep], y[keep]
+
+
+def _names(rows):
+    """'rotation rows of joint1, joint2; ...' for rows given by their panel titles."""
+    groups = {}
+    for _, title, _ in rows:
+        what, _, rest = title.rpartition(", ")
+        groups.setdefault(rest, []).append(what.split(" (")[0] if what else title)
+    return "; ".join(f"{rest} of {', '.join(names)}" if names != [rest] else rest for rest, names in groups.items())
+
+
+def _all_zero(runs, solvers, dts, get):
+    """True if every solver's curve of this measure is exactly 0 (or absent) at every step."""
+    for s in solvers:
+        for dt in dts:
+            ser = _series(runs.get((s, dt)), get(runs[(s, dt)]) if (s, dt) in runs else None)
+            if ser is not None and np.any(ser[1] != 0.0):
+                return False
+    return True
+
+
+def _stopped(runs, solvers, dt):
+    out = []
+    for s in solvers:
+        rd = runs.get((s, dt))
+        if rd is not None and not rd.ok:
+            t_end = float(rd.times[-1]) if len(rd.times) else 0.0
+            out.append(f"{SHORT[s]} at t = {t_end:.3g} s" if t_end > 0 else f"{SHORT[s]} in its first step")
+    return out
+
+
+def _panel(ax, runs, solvers, dt, get, handles):
+    """Draw one panel; returns the note for its title (curves exactly 0 over the run)."""
+    from matplotlib.transforms import blended_transform_factory
+    zero_all = []
+    edge = blended_transform_factory(ax.transData, ax.transAxes)
+    for s in solvers:
+        rd = runs.get((s, dt))
+        if rd is None:
+            continue
+        label, color, ls, lw = STYLE[s]
+        ser = _series(rd, get(rd))
+        if ser is None:
+            continue
+        t, y = ser
+        if np.all(y == 0.0):
+            zero_all.append(SHORT[s])
+            continue
+        tt, yy = envelope(t, y)
+        pos = yy > 0
+        (line,) = ax.semilogy(tt, np.where(pos, yy, np.nan), color=color, ls=ls, lw=lw, label=label)
+        handles.setdefault(s, line)
+        if not pos.all():                               # exact zeros inside the curve: ticks on the edge
+            ax.plot(tt[~pos], np.full((~pos).sum(), 0.0), "|", color=color, ms=6, transform=edge, clip_on=False)
+        if not rd.ok:
+            ax.semilogy([tt[-1]], [yy[-1] if yy[-1] > 0 else np.nan], "x", color=color, ms=7, mew=1.5)
+    return ["exactly 0: " + ", ".join(zero_all)] if zero_all else []
+
+
 def plot_model(info, runs, dts, outdir, solvers=("SE3", "SO3xR3"), natives=()):
-    """All figures of one model; ``runs``: {(solver, dt): RunData}. Returns the paths.
-    ``solvers=()`` skips the MK-RK4 figures, ``natives=()`` the native one."""
+    """The figure of one model (``<name>.png``); ``runs``: {(solver, dt): RunData}.
+    Returns the list of paths written."""
     plt = _mpl()
-    paths = []
-    name = info.name
-
-    def panel_set(cols, fname, title, measures):
-        fig, axes = _grid(plt, len(measures), len(cols), title)
-        for ci, sol in enumerate(cols):
-            for ri, (ylabel, get) in enumerate(measures):
-                ax = axes[ri, ci]
-                for dt in dts:
-                    rd = runs.get((sol, dt))
-                    if rd is None:
-                        continue
-                    _curve(ax, rd, get(rd), f"dt={dt:g}")
-                lab = f"MK-RK4 {sol}" if sol in ("SE3", "SO3xR3") else sol
-                ax.set_title(f"{lab}: {ylabel}", fontsize=9)
-        paths.append(_finish(fig, axes, os.path.join(outdir, fname)))
-
-    if solvers and info.joints:
-        meas = []
-        for j, what in _rows(info):
-            unit = "[m]" if what == "position" else "[-]"
-            meas.append((f"{j.name} ({j.kind}) {what} violation {unit}",
-                         (lambda rd, j=j, w=what: (rd.position if w == "position" else rd.rotation).get(j.name))))
-        panel_set(solvers, f"{name}_joints.png", f"{info.title}: constraint violation per joint", meas)
-    if solvers and info.exact is not None:
-        panel_set(solvers, f"{name}_com.png", f"{info.title}: COM drift from the exact solution",
-                  [("|x_c - x_c,exact| [m]", lambda rd: rd.comDrift)])
-        panel_set(solvers, f"{name}_orientation.png", f"{info.title}: orientation error",
-                  [("eps_r = ||log(R^T R_num)|| [rad]", lambda rd: rd.orientation)])
-    if solvers:
-        panel_set(solvers, f"{name}_energy.png", f"{info.title}: energy drift (E(0) = {_E0(runs):.6g} J)",
-                  [("|E(t) - E(0)| [J]", lambda rd: np.abs(rd.energy_drift()))])
-    if natives:
-        if info.joints:
-            meas = [(f"{j.name} ({j.kind}) position violation [m]",
-                     (lambda rd, j=j: rd.position.get(j.name))) for j in info.joints]
-        else:
-            meas = [("|x_c - x_c,exact| [m]", lambda rd: rd.comDrift),
-                    ("eps_r [rad]", lambda rd: rd.orientation)]
-        meas.append(("|E(t) - E(0)| [J]", lambda rd: np.abs(rd.energy_drift())))
-        panel_set(natives, f"{name}_native.png", f"{info.title}: Exudyn's native solvers", meas)
-    return paths
-
-
-def _E0(runs):
-    for rd in runs.values():
-        if rd.energy is not None and len(rd.energy):
-            return float(rd.energy[0])
-    return float("nan")
+    from matplotlib.ticker import LogLocator, NullFormatter
+    order = [s for s in tuple(solvers) + tuple(natives) if s in STYLE]
+    rows, zero_rows = [], []
+    for row in _rows(info):                     # rows exactly 0 everywhere: named, not drawn
+        (zero_rows if _all_zero(runs, order, dts, row[2]) else rows).append(row)
+    nr, nc = len(rows), len(dts)
+    h = 2.3 * nr + 1.3 + 0.2 * bool(zero_rows)
+    fig, axes = plt.subplots(nr, nc, figsize=(4.6 * nc + 0.9, h), squeeze=False, sharex=True, sharey="row")
+    handles = {}
+    for ri, (ylabel, title, get) in enumerate(rows):
+        for ci, dt in enumerate(dts):
+            ax = axes[ri, ci]
+            notes = _panel(ax, runs, order, dt, get, handles)
+            if ri == 0:                         # where runs stopped: once per column
+                stop = _stopped(runs, order, dt)
+                notes += ["stopped: " + ", ".join(stop)] if stop else []
+            ax.set_title(f"{title}, dt = {dt:g} s" + "".join("\n" + n for n in notes), fontsize=8.5)
+            ax.grid(True, which="major", alpha=0.3)
+            ax.tick_params(labelsize=8)
+            if ci == 0:
+                ax.set_ylabel(ylabel, fontsize=8.5)
+            if ri == nr - 1:
+                ax.set_xlabel("t [s]", fontsize=8.5)
+        row = axes[ri, 0]
+        if any(a.get_lines() for a in axes[ri]):
+            row.yaxis.set_major_locator(LogLocator(base=10, numticks=7))
+            row.yaxis.set_minor_formatter(NullFormatter())
+        else:                                           # nothing to draw on a log axis: every curve is 0
+            for a in axes[ri]:
+                a.set_yscale("linear")
+                a.set_ylim(-1, 1)
+                a.set_yticks([0])
+    title = f"{info.title}: MK-RK4 on SE(3) and SO(3)xR3 and Exudyn's own solvers"
+    if zero_rows:
+        title += "\nexactly 0 for every solver and step size (not drawn): " + _names(zero_rows)
+    fig.suptitle(title, fontsize=10, y=1 - 0.1 / h)
+    legend = [handles[s] for s in order if s in handles]
+    fig.legend(legend, [STYLE[s][0] for s in order if s in handles], loc="upper center", ncol=len(legend),
+               fontsize=8.5, frameon=False, bbox_to_anchor=(0.5, 1 - (0.45 + 0.2 * bool(zero_rows)) / h))
+    fig.subplots_adjust(left=0.8 / (4.6 * nc + 0.9), right=0.985, bottom=0.55 / h, top=1 - (1.1 + 0.2 * bool(zero_rows)) / h,
+                        hspace=0.42 + 0.12 * (nr > 4), wspace=0.08)
+    path = os.path.join(outdir, f"{info.name}.png")
+    fig.savefig(path, dpi=DPI)
+    plt.close(fig)
+    return [path]

@@ -224,7 +224,12 @@ def write_report(ctx) -> str:
     L += solve_dynamic_crosscheck(infos, results)
 
     # ------------------------------------------------------------------ figures, choices, timings
-    L += ["## Figures", "", "SE(3) (left) beside SO(3)xR3 (right), one curve per step size:", ""]
+    L += ["## Figures", "", "One figure per model: a row per measure (every joint's position and rotation rows, "
+          "or a free body's COM drift and orientation error, then the energy drift), a column per step size; "
+          "MK-RK4 on SE(3) and on SO(3)xR3 and Exudyn's own solvers on the same axes, the y axis shared along "
+          "a row. The sample at t = 0 is left out; a curve that is exactly 0 over the whole run is named in "
+          "the panel ('exactly 0: ...'), zeros inside a curve are ticks on the lower edge; a run that stopped "
+          "ends with an x and the panel says where.", ""]
     for info in infos:
         figs = ctx.figures.get(info.name, [])
         if figs:

@@ -106,6 +106,9 @@ def _slope(hs, errs):
     return float(np.polyfit(np.log(hs), np.log(errs), 1)[0])
 
 
+FIG_DPI = 150
+
+
 def _plt():
     import matplotlib
     matplotlib.use("Agg")
@@ -184,7 +187,7 @@ def case_spin(quick, outdir):
     # figure
     try:
         plt = _plt()
-        fig, axes = plt.subplots(1, 2, figsize=(10, 4), sharey=True)
+        fig, axes = plt.subplots(1, 2, figsize=(11, 4.4), sharey=True)
         colors = {m: f"C{k}" for k, m in enumerate(methods)}
         for ax, sname in zip(axes, scenes):
             for (sn, group, m), (hs, errs) in conv.items():
@@ -195,10 +198,11 @@ def case_spin(quick, outdir):
             ax.set_title(sname)
             ax.set_xlabel("h [s]")
             ax.grid(True, which="both", alpha=0.3)
-        axes[0].set_ylabel("error at t_end")
-        axes[1].legend(fontsize=7, ncol=2)
-        fig.tight_layout()
-        fig.savefig(outdir / "stress_spin_convergence.png", dpi=110)
+        axes[0].set_ylabel("error at t_end: max(|R - R_ref|, |x_c - x_c,ref| [m])")
+        handles, labels = axes[0].get_legend_handles_labels()
+        fig.legend(handles, labels, fontsize=7, ncol=1, loc="center right", frameon=False)
+        fig.tight_layout(rect=(0, 0, 0.84, 1))
+        fig.savefig(outdir / "stress_spin_convergence.png", dpi=FIG_DPI)
         plt.close(fig)
         cr.figures.append(("stress_spin_convergence.png", "Fast spin: error vs step size, SE3 (solid) and SO3xR3 (dashed)"))
     except Exception as e:      # figures are optional
@@ -573,22 +577,32 @@ def case_longrun(quick, outdir):
                     "Gauss-Newton iteration (usually one or two per step).")
     try:
         plt = _plt()
-        fig, axes = plt.subplots(1, 2, figsize=(11, 4))
+        fig, axes = plt.subplots(1, 2, figsize=(12, 4.4))
+        zeros = set()
         for (name, group, stab), (t, viol, dE) in series.items():
             if name != "heavy top":
                 continue
-            lab = f"{group} {stab or 'none'}"
-            axes[0].semilogy(t, np.maximum(viol, 1e-17), label=lab)
-            axes[1].semilogy(t, np.maximum(dE, 1e-17), label=lab)
-        axes[0].set_title("heavy top: joint position violation [m]")
-        axes[1].set_title("heavy top: |E - E0| / E0")
+            lab = f"{group}, stabilization {stab or 'none'}"
+            t = np.asarray(t)
+            keep = t > 0                          # log axes: no t = 0 sample
+            for ax, y in ((axes[0], np.asarray(viol)), (axes[1], np.asarray(dE))):
+                y = y[keep]
+                if np.all(y == 0):
+                    zeros.add(lab)
+                    continue
+                ax.semilogy(t[keep], np.where(y > 0, y, np.nan), label=lab)
+        axes[0].set_ylabel("pivot position violation [m]")
+        axes[1].set_ylabel("energy drift |E - E0| / E0 [-]")
+        axes[0].set_title("heavy top, h = 1e-3 s; gaps in a curve: samples exactly 0"
+                          + (f"; exactly 0 throughout: {', '.join(sorted(zeros))}" if zeros else ""), fontsize=9)
         for ax in axes:
             ax.set_xlabel("t [s]")
-            ax.set_xscale("symlog", linthresh=1.0)
+            ax.set_xscale("log")
             ax.grid(True, alpha=0.3)
-        axes[1].legend(fontsize=7)
-        fig.tight_layout()
-        fig.savefig(outdir / "stress_longrun.png", dpi=110)
+        handles, labels = axes[0].get_legend_handles_labels()
+        fig.legend(handles, labels, fontsize=7, loc="center right", frameon=False)
+        fig.tight_layout(rect=(0, 0, 0.8, 1))
+        fig.savefig(outdir / "stress_longrun.png", dpi=FIG_DPI)
         plt.close(fig)
         cr.figures.append(("stress_longrun.png", "Long runs of the heavy top: violation and energy drift"))
     except Exception as e:
@@ -786,7 +800,7 @@ def case_stability(quick, outdir):
                                 "measured h [s]", "measured / (2 sqrt(2)/freq)", "|omega| h at the limit"], grows))
     try:
         plt = _plt()
-        fig, ax = plt.subplots(figsize=(7, 4))
+        fig, ax = plt.subplots(figsize=(8.2, 4.2))
         y = np.linspace(1e-3, 4.0, 800)
         styles = ["-", "--", ":", "-.", "-", "--", "-", ":"]
         for k, name in enumerate(methods):
@@ -797,10 +811,10 @@ def case_stability(quick, outdir):
         ax.set_xlabel("y = omega h")
         ax.set_ylabel("|R(i y)|")
         ax.set_title("Stability on the imaginary axis; dots: measured largest stable step")
-        ax.legend(fontsize=7, ncol=2)
+        ax.legend(fontsize=7, ncol=1, loc="center left", bbox_to_anchor=(1.01, 0.5), frameon=False)
         ax.grid(True, alpha=0.3)
         fig.tight_layout()
-        fig.savefig(outdir / "stress_stability.png", dpi=110)
+        fig.savefig(outdir / "stress_stability.png", dpi=FIG_DPI)
         plt.close(fig)
         cr.figures.append(("stress_stability.png", "|R(iy)| of every catalogue method and the measured limits"))
     except Exception as e:

@@ -1,4 +1,6 @@
-"""The paper's unconstrained rigid body (sections secFreeBody and the following one).
+"""The paper's unconstrained rigid body (sections "Unconstrained Rigid Body -- Reference Frame at
+COM", with its case "rotation about fixed axis plus linear translation", and "Unconstrained
+Rigid Body -- Arbitrary Body-Fixed Reference Frame").
 
 A homogeneous aluminium box 0.8 x 0.4 x 0.1 m: m = 86.4 kg, Theta_0 = diag(1.224, 4.68,
 5.76) kg m^2 about the COM.  No gravity, no applied forces, C0 = (I, 0), 10 s.
@@ -100,22 +102,22 @@ def build_free_body(case, mbs=None, nodeType=exu.NodeType.RotationRotationVector
     if case == "com_rotation":
         info.paper["T0"] = 696.399   # same motion as the off-COM case, quoted there
         info.claims += [
-            Claim("body1", "com", "exact_both", "secFreeBody",
+            Claim("body1", "com", "exact_both", "free body, reference frame at the COM",
                   "Both formulations exactly preserve the COM position r = 0."),
-            Claim("body1", "orientation", "identical_rotation", "secFreeBody",
+            Claim("body1", "orientation", "identical_rotation", "free body, reference frame at the COM",
                   "Both formulations perform identically (pure rotation about the COM: SE(3) reduces "
                   "to SO(3)xR3)."),
-            Claim("body1", "energy", "identical_drift", "secFreeBody",
+            Claim("body1", "energy", "identical_drift", "free body, reference frame at the COM",
                   "Same kinetic-energy drift with both formulations."),
         ]
     elif case == "com_translation":
         info.choices.append("The paper's analytic COM path r(t) = (t, 0, 0) is a typo: with v0 = (10, 0, 0) m/s "
                             "it is (10 t, 0, 0), used as reference.")
         info.claims += [
-            Claim("body1", "com", "exact_SO3xR3", "secRot+LinVel / corollary 1",
+            Claim("body1", "com", "exact_SO3xR3", "free body at the COM: rotation about a fixed axis plus translation / corollary 1",
                   "SO(3)xR3 reproduces the translation for any step size; SE(3) accuracy depends on the step "
                   "size (4th order)."),
-            Claim("body1", "orientation", "exact_both", "secRot+LinVel",
+            Claim("body1", "orientation", "exact_both", "free body at the COM: rotation about a fixed axis plus translation",
                   "The rotation update performs equally for both variants, within computation precision."),
         ]
     elif case == "offset_rotation":

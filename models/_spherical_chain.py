@@ -11,7 +11,7 @@ obtained") share this builder.
   (body k-1 - body k) at ((k - 1) a, 0, 0).
 * Gravity (0, 0, -9.81).
 * Initial angular velocities (body-fixed): omega_1 = (10, 0, 0), omega_2 = (10 pi, 10 pi,
-  20 pi) rad/s (paper); for the three- and four-bar pendulums omega_3 = (-10 pi, 0, 10 pi),
+  20 pi) rad/s (paper); the three-bar adds omega_3 = (-10 pi, 0, 10 pi), the four-bar also
   omega_4 = (0, 10 pi, -10 pi) rad/s (chosen: same magnitude class, not in the paper).
 * Initial COM velocities from the joint velocity constraints, outward along the chain:
   v_i = v(joint i) + omega_i x (x_i - p_i).
@@ -32,6 +32,11 @@ from ._common import (ALUMINIUM, G, GROUND, Claim, ModelInfo, add_body, new_syst
 SIDES = (0.2, 0.1, 0.05)
 OMEGAS = [np.array([10.0, 0.0, 0.0]), np.array([10 * np.pi, 10 * np.pi, 20 * np.pi]),
           np.array([-10 * np.pi, 0.0, 10 * np.pi]), np.array([0.0, 10 * np.pi, -10 * np.pi])]
+
+
+def _pi_text(w):
+    """(-10 pi, 0, 10 pi) for a vector of multiples of pi."""
+    return ", ".join("0" if x == 0 else f"{x / np.pi:g} pi" for x in w)
 
 
 def build_chain(n, name, title, mbs=None, nodeType=exu.NodeType.RotationRotationVector, endTime=5.0):
@@ -57,7 +62,10 @@ def build_chain(n, name, title, mbs=None, nodeType=exu.NodeType.RotationRotation
         record_joint(mbs, joints, f"joint{i + 1}", oJ, "spherical", GROUND if i == 0 else i - 1, i,
                      "ground - link1" if i == 0 else f"link{i} - link{i + 1}")
         vjoint = point_velocity(bodies, i, np.array([a / 2, 0.0, 0.0]))
-    info = ModelInfo(name=name, title=title, section="Spherical Double Pendulum in the Gravity Field",
+    section = ("Spherical Double Pendulum in the Gravity Field" if n <= 2 else
+               "named at the end of 'Spherical Double Pendulum in the Gravity Field' ('similar results were "
+               "obtained'), no section or data of its own")
+    info = ModelInfo(name=name, title=title, section=section,
                      mbs=mbs, SC=SC, bodies=bodies, joints=joints, springs=[], gravity=gravity,
                      endTime=float(endTime), nodeType=nodeType, ground=int(oGround))
     info.computed["E0"] = float(info.initial_energy().sum())
@@ -70,8 +78,9 @@ def build_chain(n, name, title, mbs=None, nodeType=exu.NodeType.RotationRotation
         f"Time span {endTime:g} s (the paper does not give it).",
     ]
     if n > 2:
-        info.choices.append("omega_3 = (-10 pi, 0, 10 pi), omega_4 = (0, 10 pi, -10 pi) rad/s (the paper only "
-                            "says 'similar results were obtained'; values chosen).")
+        chosen = ", ".join(f"omega_{i + 1} = ({_pi_text(OMEGAS[i])}) rad/s" for i in range(2, n))
+        info.choices.append(f"{chosen} (the paper only says 'similar results were obtained' for a three-bar and "
+                            f"a four-bar pendulum; values chosen, same magnitude class as omega_2).")
     info.claims.append(Claim("joint1", "position", "exact_SE3", "corollary 1",
                              "Joint 1 restricts body 1 to a subgroup (rotations about a fixed point): SE(3) "
                              "satisfies it to computation precision, SO(3)xR3 does not."))

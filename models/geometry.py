@@ -123,7 +123,7 @@ def so3_log_angle(Q):
 
 
 def orientation_error(R_exact, R_num):
-    """eps_r = ||log(R^T R_num)|| (paper, section secRot+LinVel)."""
+    """eps_r = ||log(R^T R_num)|| (paper, section "Unconstrained Rigid Body -- Reference Frame at COM")."""
     return so3_log_angle(np.einsum("...ji,...jk->...ik", R_exact, R_num))
 
 

@@ -145,7 +145,7 @@ def test_overhead_and_group_sections(tmp_path):
     assert "## 5. Bridge overhead" in text and "## 6. Group maps" in text
     from exudyn_lie.apps.generated import read_block
     cmd, ok, body = read_block(readme.read_text(), "bench")
-    assert ok and cmd.startswith("python -m exudyn_lie bench --quick") and "(6) bridge" in body
+    assert ok and cmd.startswith("python -m exudyn_lie bench --quick") and "SolveDynamic bridge: sensor machinery" in body
 
 
 def _comp(kind, solver, runs, group=None):

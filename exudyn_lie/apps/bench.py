@@ -48,7 +48,7 @@ NATIVE_FREE = ("RK44", "RK67", "DOPRI5")
 EPS_LEVELS = (1e-4, 1e-5, 1e-6, 1e-7, 1e-8)
 SECTIONS = ("wp", "perstep", "scaling", "startup", "overhead", "groups")
 TARGET_RATIO = 10.0
-# absolute per-step targets of the kernel issue (MK-RK4, SE3, median step, this 2-core machine)
+# absolute per-step targets (MK-RK4, SE3, median step, this 2-core machine)
 KERNEL_STEP_TARGETS_US = {"heavytop": 3.0, "doublependulum": 6.0}
 OUTPUT_KINDS = {"sensor": "a position sensor", "sensor+file": "sensor + solution file"}
 
@@ -562,7 +562,7 @@ Profile before optimising; this records what was measured and changed (or propos
 
 
 def targets_lines(cfg, out):
-    """The targets table of issue 'Performance' (shared by BENCHMARKS.md and the README)."""
+    """The table of speed targets (shared by BENCHMARKS.md and the README)."""
     L = []
     A = L.append
     summ = out.get("wpSummary", {})
@@ -574,7 +574,7 @@ def targets_lines(cfg, out):
             rs = [r["ratio"] for r in summ[m]]
             worst = min(rs) if rs and all(np.isfinite(rs)) else np.nan
             ok = np.isfinite(worst) and worst >= TARGET_RATIO
-            A(f"| (1) {m}: exudyn_lie reaches 1e-4 ... 1e-8 in <= 1/10 of the fastest native time | smallest ratio "
+            A(f"| work-precision, {m}: exudyn_lie reaches 1e-4 ... 1e-8 in <= 1/10 of the fastest native time | smallest ratio "
               f"{_fmt_r(worst)} ({', '.join(_fmt_r(r['ratio'], r['ratioBound']) + ' at ' + format(r['eps'], '.0e') for r in summ[m])}) "
               f"| {'yes' if ok else 'no'} |")
     for m, dh in ps.items():
@@ -587,14 +587,14 @@ def targets_lines(cfg, out):
                 holds = holds and a <= g
             else:
                 cells.append(f"h = {h:g}: GA failed")
-        A(f"| (2) {m}: MK-RK4 (SE3) step <= one GA step (cheaper of full / modified Newton) | {'; '.join(cells)} | "
+        A(f"| cost per step, {m}: MK-RK4 (SE3) step <= one GA step (cheaper of full / modified Newton) | {'; '.join(cells)} | "
           f"{'yes' if holds and any('vs' in c for c in cells) else 'no'} |")
     for m, target in KERNEL_STEP_TARGETS_US.items():
         if m not in ps:
             continue
         us = {h: d.get("RK4 SE3", {}).get("us", np.nan) for h, d in ps[m].items()}
         ok = all(np.isfinite(u) and u <= target for u in us.values())
-        A(f"| (k) {m}: median MK-RK4 (SE3) step <= {target:g} us (kernel issue) | "
+        A(f"| cost per step, {m}: median MK-RK4 (SE3) step <= {target:g} us (absolute target) | "
           + "; ".join(f"h = {h:g}: {u:.3g} us" for h, u in sorted(us.items(), reverse=True))
           + f" | {'yes' if ok else 'no'} |")
     sc = out.get("scaling")
@@ -602,7 +602,7 @@ def targets_lines(cfg, out):
         p = sc["fits"]["exl"]["large"]
         if not np.isfinite(p):
             p = sc["fits"]["exl"]["all"]
-        A(f"| (3) chain: cost per step ~ N^p, p <= 1.2 | p = {sc['fits']['exl']['large']:.3f} (N >= 10), "
+        A(f"| scaling, chain: cost per step ~ N^p, p <= 1.2 | p = {sc['fits']['exl']['large']:.3f} (N >= 10), "
           f"{sc['fits']['exl']['all']:.3f} (all N); N = {min(sc['rows'])} ... {max(sc['rows'])} | "
           f"{'yes' if np.isfinite(p) and p <= 1.2 else 'no'} |")
     su = out.get("startup")
@@ -610,31 +610,31 @@ def targets_lines(cfg, out):
         for path, d in su.items():
             if "cold" in d:
                 c = d["cold"]
-                A(f"| (4) first run, empty numba cache ({path} path) <= 30 s | "
+                A(f"| start-up: first run, empty numba cache ({path} path) <= 30 s | "
                   f"{c['wall']:.3g} s wall ({c.get('firstStep', np.nan):.3g} s to the first step after imports) | "
                   f"{'yes' if c.get('ok') and c['wall'] <= 30 else 'no'} |")
             w = d["warm"]
             if "wall" in w:
-                A(f"| (4) warm start to the first step ({path} path) <= 2 s | {w['wall']:.3g} s wall "
+                A(f"| start-up: warm start to the first step ({path} path) <= 2 s | {w['wall']:.3g} s wall "
                   f"(imports {w['imports']:.3g} s, first step {w['firstStep']:.3g} s) | {'yes' if w['wall'] <= 2 else 'no'} |")
     ov = out.get("overhead")
     if ov:
         for period, d in ov["periods"].items():
             x = d["sensor"]
-            A(f"| (6) bridge: sensor machinery < 10 % of a SolveDynamic run (heavy top, h = {ov['h']:g} s, a sensor "
+            A(f"| SolveDynamic bridge: sensor machinery < 10 % of a SolveDynamic run (heavy top, h = {ov['h']:g} s, a sensor "
               f"every {d['steps']} steps) | {100 * x['outputs']:.1f} % of {1e3 * x['bridge']:.3g} ms "
               f"(Exudyn's own sensor loop {100 * x['exudyn'] / x['bridge']:.1f} %, the bridge's per-output calls "
               f"{100 * x['bridgeOnly']:.1f} %) | {'yes' if x['outputs'] < 0.10 else 'no'} |")
             x = d["sensor+file"]
-            A(f"| (6) bridge: its own part of the sensor and solution-file machinery < 10 % (the file alone costs "
+            A(f"| SolveDynamic bridge: its own part of the sensor and solution-file machinery < 10 % (the file alone costs "
               f"Exudyn {1e3 * x['gaFile']:.3g} ms in a native generalized-alpha solve of the same run; a sensor and "
               f"the file every {d['steps']} steps) | {100 * x['bridgeOnly']:.1f} % of {1e3 * x['bridge']:.3g} ms "
               f"(all outputs {100 * x['outputs']:.1f} %) | {'yes' if x['bridgeOnly'] < 0.10 else 'no'} |")
     gm = out.get("groups")
     if gm:
-        A("| (g) one compiled SE(3) exp + dexpinv (group work of one body in one MK stage) | "
+        A("| group maps: one compiled SE(3) exp + dexpinv (group work of one body in one MK stage) | "
           + ", ".join(f"{us:.3g} us at \\|xi\\| = {float(a):g}" for a, us in gm.items()) + " | - |")
-    A(f"| (5) sweeps in parallel through exudyn.processing.ParameterVariation | "
+    A(f"| parallel sweeps through exudyn.processing.ParameterVariation | "
       f"`exudyn_lie.apps.bench_runs.sweep`, {cfg.jobs} processes | yes |")
     return L
 

@@ -43,7 +43,7 @@ import numpy as np
 
 from ..models.geometry import GROUND, so3_log_angle
 
-EXACT_TOL = 1e-12            # the issue's bound (per metre of L) at dt >= STRICT_DT
+EXACT_TOL = 1e-12            # the bound (per metre of L) at dt >= STRICT_DT, no allowance
 EXACT_PER_STEP = 1e-15       # round-off allowance per step (per metre of L), only below STRICT_DT
 STRICT_DT = 1e-3             # at this step size and above: EXACT_TOL, no allowance
 UNIT_ROUNDOFF = 2.0 ** -53
@@ -167,7 +167,7 @@ def n_steps(info, dt):
 
 def exact_tol(info, claim, dt):
     """The round-off bound of an exactness claim at step size ``dt``: ``1e-12 L`` for
-    dt >= 1e-3 (the issue's bound), ``max(1e-12, 1e-15 N) L`` below (round-off
+    dt >= 1e-3 (no allowance), ``max(1e-12, 1e-15 N) L`` below (round-off
     accumulated over N uncorrected steps, at most linearly; see the module docstring)."""
     L = length_scale(info, claim)
     if dt >= STRICT_DT * (1.0 - 1e-9):

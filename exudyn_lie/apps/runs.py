@@ -130,10 +130,11 @@ class LieRunner:
         jmap = {ji.objectIndex: ji.sceneJoint for ji in sc.joints_info}
         self.jointMap = {j.name: jmap[j.objectIndex] for j in info.joints}
 
-    def run(self, stepSize, endTime=None, outputPeriod=1e-3, keep_states=False):
+    def run(self, stepSize, endTime=None, outputPeriod=None, keep_states=False):
+        """One run; ``outputPeriod`` None: every step is stored (the maxima are over the whole run)."""
         info = self.info
         endTime = info.endTime if endTime is None else endTime
-        every = output_every(stepSize, outputPeriod)
+        every = 1 if outputPeriod is None else output_every(stepSize, outputPeriod)
         ok, msg = True, ""
         tic = time.perf_counter()
         with warnings.catch_warnings():
@@ -155,7 +156,7 @@ class LieRunner:
         return rd
 
 
-def run_lie(info, group, stepSize, endTime=None, outputPeriod=1e-3, keep_states=False):
+def run_lie(info, group, stepSize, endTime=None, outputPeriod=None, keep_states=False):
     """A single MK-RK4 run (see :class:`LieRunner` for several step sizes)."""
     return LieRunner(info, group).run(stepSize, endTime, outputPeriod, keep_states)
 
@@ -291,10 +292,11 @@ def run_solve_dynamic(info, group, stepSize, endTime=None, keep_states=False, me
 
 
 # --------------------------------------------------------------------------- native
-def run_native(info, solver, stepSize, endTime=None, outputPeriod=1e-3, keep_states=False):
-    """Exudyn's own solver on the model (see :func:`models.run_native`)."""
+def run_native(info, solver, stepSize, endTime=None, outputPeriod=None, keep_states=False):
+    """Exudyn's own solver on the model (see :func:`models.run_native`); ``outputPeriod``
+    None: sensors record every step."""
     from exudyn_lie.models import run_native as _run
-    period = max(stepSize, outputPeriod)
+    period = stepSize if outputPeriod is None else max(stepSize, outputPeriod)
     res = _run(info, solver, stepSize, endTime=endTime, outputPeriod=period)
     rd = RunData(info.name, solver, stepSize, res.ok, res.message, res.cpuTime, res.times, native=True, via="native")
     return measure(info, rd, res.R, res.r, res.omega, res.vel, keep_states)

@@ -463,13 +463,18 @@ def run_section(cfg, log):
     if mujoco is None:
         log(msg)
         return dict(skipped=msg)
-    res = dict(version=mujoco.__version__, xml={})
+    names = [m for m in MODELS if m in getattr(cfg, "models", MODELS)]
+    if not names:
+        msg = f"MuJoCo peer skipped: none of its models ({', '.join(MODELS)}) is selected by --models"
+        log(msg)
+        return dict(skipped=msg)
+    res = dict(version=mujoco.__version__, xml={}, models=names)
     log(f"MuJoCo peer ({msg}): agreement on the heavy top, {AGREE_T:g} s at h = {AGREE_H:g}")
     ag = agreement()
     res["agreement"] = ag
     log(f"MuJoCo RK4 vs MK-RK4 SE3: |dr| = {ag['dr']:.2g} m, |dR| = {ag['dR']:.2g} rad (tolerance {AGREE_TOL:g}; "
         f"discretisation error {ag['discretisation']:.2g})")
-    for name in MODELS:
+    for name in names:
         res["xml"][name] = mjcf_from_info(build_info(name)[1], PERSTEP_H[0])
     if not ag["ok"]:
         res["failed"] = (f"MuJoCo's RK4 and MK-RK4 SE3 differ by {max(ag['dr'], ag['dR']):.2g} > {AGREE_TOL:g} "
@@ -479,7 +484,7 @@ def run_section(cfg, log):
     n = 200 if cfg.quick else 2000
     rep = 5 if cfg.quick else 15
     res["perstep"] = {}
-    for name in MODELS:
+    for name in names:
         for h in PERSTEP_H:
             d = time_interleaved(name, h, n, rep)
             res["perstep"].setdefault(name, {})[h] = d
@@ -489,7 +494,7 @@ def run_section(cfg, log):
                 f"rollout {d['mujocoRollout']:.3g} us")
     res["nsteps"], res["repeat"] = n, rep
     res["wp"] = {}
-    for name in MODELS:
+    for name in names:
         res["wp"][name] = work_precision(name, cfg.T, cfg.href, 3 if cfg.quick else 5, kmax=5 if cfg.quick else 11,
                                          budget=0.3 if cfg.quick else 2.5, log=log)
     return res
@@ -511,8 +516,8 @@ def target_lines(res):
          f"(either run is {ag['discretisation']:.2g} from RK6 at h/10) | {'yes' if ag['ok'] else 'no'} |"]
     if "failed" in res:
         return L + [f"| (m) per-step targets against MuJoCo | not measured: {res['failed']} | no |"]
-    for name, target in TARGET_RATIO.items():
-        dh = res["perstep"][name]
+    for name, dh in res["perstep"].items():
+        target = TARGET_RATIO[name]
         cells = [f"h = {h:g}: {d['exl']:.3g} us vs {d['mujoco']:.3g} us ({d['ratio']:.2f}x)"
                  for h, d in sorted(dh.items(), reverse=True)]
         ok = all(d["ratio"] >= target for d in dh.values())

@@ -16,7 +16,10 @@ Sections (``--sections``, default all):
   fresh interpreters;
 * ``overhead`` the drop-in ``exl.SolveDynamic`` (Exudyn's loop, sensors, solution file,
   write-back) against the integration alone, on the heavy top;
-* ``groups``  one compiled SE(3) exp + dexpinv evaluation (the group work per body and stage).
+* ``groups``  one compiled SE(3) exp + dexpinv evaluation (the group work per body and stage);
+* ``mujoco``  MuJoCo (optional, ``pip install .[bench]``) as a peer on the heavy top and the
+  double pendulum: agreement, cost per step, work-precision
+  (:mod:`exudyn_lie.apps.bench_mujoco`; skipped with one line without MuJoCo).
 
 Every sweep runs through Exudyn's ``exudyn.processing.ParameterVariation`` with
 multiprocessing (:func:`exudyn_lie.apps.bench_runs.sweep`); every time is the
@@ -46,7 +49,7 @@ EXL_METHODS = ("RK4", "DOPRI5", "RK6")
 NATIVE_CONSTRAINED = ("GeneralizedAlpha", "GeneralizedAlpha-mN", "TrapezoidalIndex2")
 NATIVE_FREE = ("RK44", "RK67", "DOPRI5")
 EPS_LEVELS = (1e-4, 1e-5, 1e-6, 1e-7, 1e-8)
-SECTIONS = ("wp", "perstep", "scaling", "startup", "overhead", "groups")
+SECTIONS = ("wp", "perstep", "scaling", "startup", "overhead", "groups", "mujoco")
 TARGET_RATIO = 10.0
 # absolute per-step targets (MK-RK4, SE3, median step, this 2-core machine)
 KERNEL_STEP_TARGETS_US = {"heavytop": 3.0, "doublependulum": 6.0}
@@ -634,6 +637,8 @@ def targets_lines(cfg, out):
     if gm:
         A("| group maps: one compiled SE(3) exp + dexpinv (group work of one body in one MK stage) | "
           + ", ".join(f"{us:.3g} us at \\|xi\\| = {float(a):g}" for a, us in gm.items()) + " | - |")
+    from .bench_mujoco import target_lines as mujoco_target_lines
+    L += mujoco_target_lines(out.get("mujoco"))
     A(f"| parallel sweeps through exudyn.processing.ParameterVariation | "
       f"`exudyn_lie.apps.bench_runs.sweep`, {cfg.jobs} processes | yes |")
     return L
@@ -913,6 +918,9 @@ def write_report(cfg, out, cmdline):
     A("")
     A(PROFILE_NOTES.format(extra=out.get("profileExtra", "")))
     A("")
+    if out.get("mujoco"):
+        from .bench_mujoco import report_lines as mujoco_report_lines
+        L += mujoco_report_lines(out["mujoco"], out["mujoco"].get("figure"))
     with open(os.path.join(cfg.out, "BENCHMARKS.md"), "w") as f:
         f.write("\n".join(L))
 
@@ -1015,10 +1023,17 @@ def main(argv=None):
         from .bench_micro import group_maps
         log("group maps (SE3 exp + dexpinv)")
         out["groups"] = group_maps(n=10 ** 5 if cfg.quick else 10 ** 6)
+    if "mujoco" in cfg.sections:
+        from . import bench_mujoco
+        out["mujoco"] = bench_mujoco.run_section(cfg, log)
     out["env"]["loadEnd"] = loadavg()
     out["profileExtra"] = PROFILE_EXTRA
     os.makedirs(cfg.out, exist_ok=True)
     out["figures"] = make_plots(cfg, out)
+    if out.get("mujoco", {}).get("wp"):
+        from .bench_mujoco import plot as mujoco_plot
+        out["figures"].append(mujoco_plot(out["mujoco"], os.path.join(cfg.figdir, "wp_mujoco.png")))
+        out["mujoco"]["figure"] = "bench_figures/wp_mujoco.png"
     write_report(cfg, out, cmdline)
     if args.readme:
         from .generated import update_file_block

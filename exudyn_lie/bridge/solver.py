@@ -38,6 +38,7 @@ from ..integrators.tableau import get_method, method_names
 from ..mbs.compiled import auto_groups
 from ..mbs.simulator import Simulator
 from .fast import CHUNK_ROWS, NodeTable, OutputChunks
+from .params import ParameterWatch
 from .reader import BridgeError, ExudynScene, SceneFromExudyn
 
 GROUP_ALIASES = {"se3": "SE3", "so3xr3": "SO3xR3", "so3r3": "SO3xR3", "auto": "auto"}
@@ -318,9 +319,31 @@ class LieGroupSolver:
             if rows == 0:
                 self.sim.RaiseStatus(ch.failure, ch.h)
         if not ch.on_plan(t1):
-            raise BridgeError(f"internal: Exudyn's step ends at t = {t1!r}, the planned output at "
-                              f"t = {ch.time_of_next()!r}")
+            raise BridgeError(f"Exudyn's time loop asks for the step ending at t = {t1!r} s, exudyn_lie planned its "
+                              f"output at t = {ch.time_of_next()!r} s: Exudyn changed its step size (after a failed "
+                              f"discontinuous iteration or a step reduction), which exudyn_lie's fixed steps do not "
+                              f"follow; check timeIntegration.discontinuous and the step settings")
         ch.pop()
+
+    def _restart_from_mbs(self, t):
+        """Continue from the state in mbs at time ``t`` (Exudyn's start of the step): a user
+        function changed the coordinates, Exudyn's discontinuous iteration repeats the step
+        (it resets the ODE2 coordinates to the start of the step), or changed parameters
+        invalidate the outputs integrated ahead."""
+        self._reread_current(t)
+        ch = self._chunks
+        if ch is not None:
+            ch.rows = ch.next = 0
+            ch.failure = None
+
+    def _apply_parameters(self, t):
+        """Parameters changed by user functions since the last step: the simulator must not
+        be ahead of Exudyn (outputs integrated with the old values are dropped), then only
+        the changed items are re-read (:class:`~.params.ParameterWatch`)."""
+        ch = self._chunks
+        if ch is not None and ch.next < ch.rows:
+            self._restart_from_mbs(t)
+        self._params.apply(t)
 
     def _reread_current(self, t):
         """A pre-step user function changed the coordinates: continue from them."""
@@ -523,22 +546,39 @@ class LieGroupSolver:
             push = self._push
             nExudyn = nsteps // k
             count = [0]
+            params = self._params = ParameterWatch(self)
+            marks = params.marks                 # non-empty: a user function changed parameters
+            steps = [t0, t0]                     # start and end time of the current Exudyn step
 
             it = solver.it                       # Exudyn's iteration data (live), read once per step
 
             def hook(mainSolver, mbs, settings):
                 try:
                     t1 = it.currentTime
-                    if watch and self._written is not None and not (
-                            np.array_equal(sdat.GetODE2Coordinates(configuration=cur), self._written[0])
-                            and np.array_equal(sdat.GetODE2Coordinates_t(configuration=cur), self._written[1])):
-                        self._reread_current(sim.t)
-                    count[0] += 1
+                    repeat = t1 == steps[1]
+                    if repeat:
+                        # Exudyn's discontinuous iteration calls the hook again for the same step,
+                        # with the ODE2 coordinates reset to the start of the step
+                        self._restart_from_mbs(steps[0])
+                    else:
+                        steps[0] = steps[1]
+                        steps[1] = t1
+                        count[0] += 1
+                        if watch and self._written is not None and not (
+                                np.array_equal(sdat.GetODE2Coordinates(configuration=cur), self._written[0])
+                                and np.array_equal(sdat.GetODE2Coordinates_t(configuration=cur), self._written[1])):
+                            self._restart_from_mbs(steps[0])     # a user function changed the state
+                    if marks or params.late:
+                        self._apply_parameters(steps[0])
                     if nextOutput is not None:
                         nextOutput(t1, nExudyn - count[0] + 1)
                     else:
                         tic = perf()
-                        nflag = advance(int(round((t1 - sim.t) / h)), h, needAcc)
+                        params.busy = True
+                        try:
+                            nflag = advance(int(round((t1 - sim.t) / h)), h, needAcc)
+                        finally:
+                            params.busy = False
                         timing["integration"] += perf() - tic
                         sim.t = t1
                         if nflag:
@@ -570,7 +610,7 @@ class LieGroupSolver:
 
                 def fast_hook(mainSolver, mbs, settings):
                     o = ch.next
-                    if o >= ch.rows:
+                    if o >= ch.rows or marks:
                         return hook(mainSolver, mbs, settings)
                     t1 = it.currentTime
                     if abs(ch.tStart + (o + 1) * dtOut - t1) > tolOut + 1e-12 * abs(t1):
@@ -583,6 +623,8 @@ class LieGroupSolver:
                             ae[:] = AEr[o]
                     ch.next = o + 1
                     count[0] += 1
+                    steps[0] = steps[1]
+                    steps[1] = t1
                     if showProgress and perf() > state["nextProgress"]:
                         self._progress(state, t1)
                     return True
@@ -590,7 +632,8 @@ class LieGroupSolver:
                 solver.SetUserFunctionNewton(self.mbs, fast_hook)
             else:
                 solver.SetUserFunctionNewton(self.mbs, hook)
-            ok = solver.SolveSteps(self.mbs, ss2)
+            with params:                         # Set*Parameter / Modify* recorded during the loop
+                ok = solver.SolveSteps(self.mbs, ss2)
             if ok and not needAcc:
                 self._write(True)                # final accelerations, as a native solve leaves them
             if ok:

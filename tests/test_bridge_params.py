@@ -1,0 +1,258 @@
+"""Parameters changed during a solve, refused system-level features, repeated hook calls.
+
+Models in the style of Exudyn's TestModels (``serialRobotTest``, ``movingGroundRobotTest``,
+``Examples/serialRobotTSD``): user functions set item parameters while Exudyn's time loop
+runs.  Every run is compared with Exudyn's own generalized-alpha solve of the same script
+at a fine step.  The controllers are *sampled* (a new value every ``TS`` seconds, held in
+between), so the model does not depend on the step size: a native run at a fine step then
+is the truth of that model, and exudyn_lie at any step that divides ``TS`` must converge to
+it (set at a step's start time, a value acts on the whole step in both solvers: Exudyn
+calls the pre-step function before the step's Newton iteration).
+"""
+import numpy as np
+import pytest
+
+import exudyn as exu
+from exudyn.utilities import (InertiaCuboid, LoadForceVector, MarkerBodyRigid, MarkerNodePosition, NodePointGround,
+                              ObjectConnectorSpringDamper, ObjectGround, RotationMatrixX, SensorBody, SensorLoad,
+                              SensorObject)
+
+import exudyn_lie as exl
+from exudyn_lie.bridge import BridgeError
+from exudyn_lie.bridge.params import FIELDS, IGNORED, field_status
+
+O = exu.OutputVariableType
+TS = 1e-3                 # sampling period of the controllers [s]
+
+
+def settings(T, h, sensors=True):
+    ss = exu.SimulationSettings()
+    ss.timeIntegration.endTime = T
+    ss.timeIntegration.numberOfSteps = int(round(T / h))
+    ss.timeIntegration.verboseMode = 0
+    ss.solution.file.write = False
+    ss.solution.sensors.writePeriod = TS
+    ss.timeIntegration.newton.relativeTolerance = 1e-9
+    ss.timeIntegration.newton.absoluteTolerance = 1e-10
+    ss.timeIntegration.generalizedAlpha.spectralRadius = 0.6      # damps the start-up error after a jump
+    ss.timeIntegration.generalizedAlpha.computeInitialAccelerations = True
+    ss.show.statistics = False
+    ss.show.computationTime = False
+    return ss
+
+
+def sampled(t):
+    """Pre-step functions get the end time t of the step about to be computed: the sampling
+    instant at or before the step's start (a value computed there is held for the period)."""
+    return (np.ceil(t / TS - 1e-6) - 1) * TS
+
+
+def sampled_after(t):
+    """Post-step functions get the end time t of the step just computed: the sampling
+    instant at or before t (the next step starts there)."""
+    return np.floor(t / TS + 1e-6) * TS
+
+
+def solve(build, T, h, native, **kw):
+    mbs, out = build()
+    mbs.Assemble()
+    ss = settings(T, h)
+    if native:
+        mbs.SolveDynamic(ss)
+    else:
+        exl.SolveDynamic(mbs, ss, showProgress=False, **kw)
+    return mbs, {k: mbs.GetSensorStoredData(s) for k, s in out.items()}
+
+
+# ----------------------------------------------------------------------------- models
+def pd_robot():
+    """serialRobotTest: a 6-link robot (exudyn.robotics, redundant coordinates), joint torques
+    of 12 LoadTorqueVectors set by a PD controller with static-torque compensation in a
+    pre-step function (sampled every TS)."""
+    from exudyn.robotics import Robot, RobotBase, RobotLink, RobotTool, StdDH2HT
+    from exudyn.robotics.motion import ProfileConstantAcceleration, Trajectory
+    from exudyn.rigidBodyUtilities import HT2translation, HTtranslate
+    SC = exu.SystemContainer()
+    mbs = SC.AddSystem()
+    robot = Robot(gravity=[0, 0, 9.81], base=RobotBase(), tool=RobotTool(HT=HTtranslate([0, 0, 0.1])),
+                  referenceConfiguration=[])
+    for m, com, J, dh in ((20, [0, 0, 0], [1e-8, 0.35, 1e-8], [0, 0, 0, np.pi / 2]),
+                          (17.4, [-0.3638, 0.006, 0.2275], [0.13, 0.524, 0.539], [0, 0, 0.4318, 0]),
+                          (4.8, [-0.0203, -0.0141, 0.07], [0.066, 0.086, 0.0125], [0, 0.15, 0.0203, -np.pi / 2]),
+                          (0.82, [0, 0.019, 0], [0.0018, 0.0013, 0.0018], [0, 0.4318, 0, np.pi / 2]),
+                          (0.34, [0, 0, 0], [0.0003, 0.0004, 0.0003], [0, 0, 0, -np.pi / 2]),
+                          (0.09, [0, 0, 0.032], [0.00015, 0.00015, 4e-5], [0, 0, 0, 0])):
+        robot.AddLink(RobotLink(mass=m, COM=com, inertia=np.diag(J), localHT=StdDH2HT(dh)))
+    traj = Trajectory([0] * 6, 0)
+    traj.Add(ProfileConstantAcceleration([0, np.pi / 8, np.pi * 0.25, 0, np.pi / 8, 0], 0.25))
+    P = np.array([40000, 40000, 40000, 100, 100, 10])
+    D = np.array([400, 400, 100, 1, 1, 0.05])
+    g = mbs.AddObject(ObjectGround(referencePosition=HT2translation(robot.GetBaseHT())))
+    base = mbs.AddMarker(MarkerBodyRigid(bodyNumber=g, localPosition=[0, 0, 0]))
+    rd = robot.CreateRedundantCoordinateMBS(mbs, baseMarker=base)
+    joints, u0, u1 = rd["jointList"], rd["unitTorque0List"], rd["unitTorque1List"]
+    l0, l1 = rd["jointTorque0List"], rd["jointTorque1List"]
+    last = [-1.0]
+
+    def pre_step(mbs, t):
+        ts = sampled(t)            # the step (t - h, t] starts in sampling period ts
+        if ts == last[0]:
+            return True
+        last[0] = ts
+        q = [mbs.GetObjectOutput(j, O.Rotation)[2] for j in joints]
+        static = robot.StaticTorques(robot.JointHT(q))
+        for i, j in enumerate(joints):
+            om = mbs.GetObjectOutput(j, O.AngularVelocityLocal)[2]
+            u, v, a = traj.EvaluateCoordinate(ts, i)
+            tau = -(P[i] * (q[i] - u) + D[i] * (om - v)) - static[i]
+            mbs.SetLoadParameter(l0[i], "loadVector", list(tau * u0[i]))
+            mbs.SetLoadParameter(l1[i], "loadVector", list(tau * u1[i]))
+        return True
+
+    mbs.SetPreStepUserFunction(pre_step)
+    out = {f"rot{i}": mbs.AddSensor(SensorObject(objectNumber=j, storeInternal=True, outputVariableType=O.Rotation))
+           for i, j in enumerate(joints)}
+    out.update({f"tau{i}": mbs.AddSensor(SensorLoad(loadNumber=l, storeInternal=True)) for i, l in enumerate(l0)})
+    return mbs, out
+
+
+def pendulum(mbs, nodeType=exu.NodeType.RotationRotationVector):
+    """A rigid bar hanging from a revolute joint about the world z axis (gravity along -y)."""
+    g = mbs.CreateGround()
+    b = mbs.CreateRigidBody(inertia=InertiaCuboid(1000, [0.4, 0.05, 0.05]), referencePosition=[0.2, 0, 0],
+                            gravity=[0, -9.81, 0], nodeType=nodeType)
+    j = mbs.CreateRevoluteJoint(itemNumbers=[g, b], position=[0, 0, 0], axis=[0, 0, 1])
+    return g, b, j
+
+
+def torsional_offset():
+    """serialRobotTSD: a torsional spring whose offset, velocityOffset and torque are moved by
+    a pre-step function (sampled every TS)."""
+    mbs = exu.SystemContainer().AddSystem()
+    g, b, j = pendulum(mbs)
+    tsd = mbs.CreateTorsionalSpringDamper(itemNumbers=[g, b], position=[0, 0, 0], axis=[0, 0, 1], stiffness=200,
+                                          damping=2)
+
+    def pre_step(mbs, t):
+        ts = sampled(t)
+        mbs.SetObjectParameter(tsd, "offset", 0.8 * np.sin(20 * ts))
+        mbs.SetObjectParameter(tsd, "velocityOffset", 16 * np.cos(20 * ts))
+        mbs.SetObjectParameter(tsd, "torque", 0.5 * np.cos(7 * ts))
+        return True
+
+    mbs.SetPreStepUserFunction(pre_step)
+    out = {"pos": mbs.AddSensor(SensorBody(bodyNumber=b, storeInternal=True, outputVariableType=O.Position,
+                                           localPosition=[0.2, 0, 0])),
+           "vel": mbs.AddSensor(SensorBody(bodyNumber=b, storeInternal=True, outputVariableType=O.AngularVelocity))}
+    return mbs, out
+
+
+def switched_spring():
+    """A spring switched off and on through activeConnector (post-step function), and a
+    Cartesian spring whose stiffness changes."""
+    mbs = exu.SystemContainer().AddSystem()
+    g, b, j = pendulum(mbs, exu.NodeType.RotationEulerParameters)
+    sp = mbs.CreateSpringDamper(itemNumbers=[g, b], localPosition0=[0.3, 0.3, 0], localPosition1=[0.2, 0, 0],
+                                stiffness=4000, damping=5, referenceLength=0.2)
+    cs = mbs.CreateCartesianSpringDamper(itemNumbers=[g, b], localPosition0=[0.4, -0.1, 0],
+                                         localPosition1=[0.2, 0, 0], stiffness=[100, 100, 100], damping=[1, 1, 1])
+
+    def post_step(mbs, t):
+        ms = int(round(sampled_after(t) / TS))
+        mbs.SetObjectParameter(sp, "activeConnector", not (30 <= ms < 70 or 100 <= ms < 130))
+        mbs.SetObjectParameter(cs, "stiffness", [100 + 1000 * (ms >= 50), 100, 100])
+        return True
+
+    mbs.SetPostStepUserFunction(post_step)
+    out = {"pos": mbs.AddSensor(SensorBody(bodyNumber=b, storeInternal=True, outputVariableType=O.Position,
+                                           localPosition=[0.2, 0, 0]))}
+    return mbs, out
+
+
+def moving_ground():
+    """movingGroundRobotTest: ground markers that move (a MarkerBodyRigid's localPosition on
+    an ObjectGround, a ground node's referenceCoordinates and an ObjectGround's
+    referencePosition), each pulling the pendulum through a spring."""
+    mbs = exu.SystemContainer().AddSystem()
+    g, b, j = pendulum(mbs)
+    mB = mbs.AddMarker(MarkerBodyRigid(bodyNumber=b, localPosition=[0.2, 0, 0]))
+    mG = mbs.AddMarker(MarkerBodyRigid(bodyNumber=g, localPosition=[0.5, 0.2, 0]))
+    n = mbs.AddNode(NodePointGround(referenceCoordinates=[0.2, -0.4, 0]))
+    mN = mbs.AddMarker(MarkerNodePosition(nodeNumber=n))
+    g2 = mbs.AddObject(ObjectGround(referencePosition=[-0.3, 0, 0]))
+    mG2 = mbs.AddMarker(MarkerBodyRigid(bodyNumber=g2, localPosition=[0, 0, 0]))
+    for m, k in ((mG, 3000), (mN, 1500), (mG2, 800)):
+        mbs.AddObject(ObjectConnectorSpringDamper(markerNumbers=[m, mB], stiffness=k, damping=3, referenceLength=0.1))
+    lf = mbs.AddLoad(LoadForceVector(markerNumber=mG, loadVector=[0, 0, 0]))       # on ground: no effect
+
+    def pre_step(mbs, t):
+        ts = sampled(t)
+        mbs.SetMarkerParameter(mG, "localPosition", [0.5, 0.2 + 0.1 * np.sin(30 * ts), 0])
+        mbs.SetNodeParameter(n, "referenceCoordinates", [0.2 + 0.1 * np.sin(20 * ts), -0.4, 0])
+        mbs.SetObjectParameter(g2, "referencePosition", [-0.3, 0.1 * ts, 0])
+        mbs.SetLoadParameter(lf, "loadVector", [ts, 0, 0])
+        return True
+
+    mbs.SetPreStepUserFunction(pre_step)
+    out = {"pos": mbs.AddSensor(SensorBody(bodyNumber=b, storeInternal=True, outputVariableType=O.Position,
+                                           localPosition=[0.2, 0, 0]))}
+    return mbs, out
+
+
+def native_truth(build, T, h):
+    """Exudyn's generalized-alpha at steps 2h and h, extrapolated to step 0.  The sampled
+    values jump, and after a jump generalized-alpha's algorithmic accelerations carry an
+    O(h) error (measured: halving h halves the native difference to exudyn_lie), so the
+    two fine runs are combined as Richardson's first-order extrapolation ``2 y(h) - y(2h)``."""
+    _, coarse = solve(build, T, 2 * h, native=True)
+    _, fine = solve(build, T, h, native=True)
+    return {k: np.hstack([fine[k][:, :1], 2 * fine[k][:, 1:] - coarse[k][:, 1:]]) for k in fine}
+
+
+def _compare(build, T, hLie, hNative, tol, **kw):
+    """Every stored sensor value over the run: ``|exudyn_lie - native| <= tol(key) * scale``
+    (``tol`` a number or a function of the sensor's key)."""
+    ref = native_truth(build, T, hNative)
+    mbs, got = solve(build, T, hLie, native=False, **kw)
+    for k in ref:
+        assert got[k].shape == ref[k].shape
+        np.testing.assert_allclose(got[k][:, 0], ref[k][:, 0], atol=1e-12)
+        err = np.max(np.abs(got[k][:, 1:] - ref[k][:, 1:]))
+        scale = max(1.0, np.max(np.abs(ref[k][:, 1:])))
+        print(f"{build.__name__} {k}: max |exudyn_lie - native| = {err:.3g} (scale {scale:.3g})")
+        assert err <= (tol(k) if callable(tol) else tol) * scale, (k, err, scale)
+    return mbs, ref, got
+
+
+# ----------------------------------------------------------------------------- honoured changes
+def test_pd_robot_load_vectors_set_every_step_match_native():
+    # joint angles to 1e-8 rad; the torques are the PD law of them, P = 4e4 N m / rad
+    mbs, ref, got = _compare(pd_robot, 0.1, 1e-4, 1e-5, lambda k: 4e4 * 1e-8 if k.startswith("tau") else 1e-8)
+    # the controller moved the robot: the test would fail with frozen loads
+    assert np.max(np.abs(ref["rot1"][:, 3])) > 0.05
+    solver = mbs.sys["lieGroupSolver"]
+    # only the 12 loads set by the controller were re-read: 11 of the 12 are compiled rows
+    # (one acts on ground), once per sampling period
+    assert solver._params.updates == 12 * 100
+
+
+def test_torsional_spring_offset_moved_every_step_matches_native():
+    _compare(torsional_offset, 0.2, 1e-4, 1e-5, 1e-6)
+
+
+def test_spring_switched_off_and_on_matches_native():
+    mbs, ref, got = _compare(switched_spring, 0.2, 1e-4, 1e-5, 1e-6)
+
+
+def test_moving_ground_markers_match_native():
+    _compare(moving_ground, 0.2, 1e-4, 1e-5, 1e-6)
+
+
+def test_without_the_change_the_result_differs():
+    """The comparison can fail: freezing the controller's first values gives another motion."""
+    _, ref = solve(torsional_offset, 0.1, 1e-4, native=False)
+    mbs, out = torsional_offset()
+    mbs.SetPreStepUserFunction(0)
+    mbs.Assemble()
+    exl.SolveDynamic(mbs, settings(0.1, 1e-4), showProgress=False)
+    assert np.max(np.abs(mbs.GetSensorStoredData(out["pos"])[:, 1:] - ref["pos"][:, 1:])) > 1e-3

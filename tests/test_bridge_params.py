@@ -256,3 +256,220 @@ def test_without_the_change_the_result_differs():
     mbs.Assemble()
     exl.SolveDynamic(mbs, settings(0.1, 1e-4), showProgress=False)
     assert np.max(np.abs(mbs.GetSensorStoredData(out["pos"])[:, 1:] - ref["pos"][:, 1:])) > 1e-3
+
+
+# ----------------------------------------------------------------------------- a changed structure stops the run
+def _stop_at(change, t_change=0.05):
+    """The torsional model with ``change(mbs, items)`` made by a pre-step function from
+    t_change on; returns the BridgeError's message and the time Exudyn reached."""
+    mbs = exu.SystemContainer().AddSystem()
+    g, b, j = pendulum(mbs)
+    tsd = mbs.CreateTorsionalSpringDamper(itemNumbers=[g, b], position=[0, 0, 0], axis=[0, 0, 1], stiffness=200)
+
+    def pre_step(mbs, t):
+        if t > t_change + 1e-9:
+            change(mbs, dict(g=g, b=b, j=j, tsd=tsd))
+        return True
+
+    mbs.SetPreStepUserFunction(pre_step)
+    mbs.Assemble()
+    with pytest.raises(BridgeError) as e:
+        exl.SolveDynamic(mbs, settings(0.1, 1e-3), showProgress=False)
+    return str(e.value), mbs.systemData.GetTime()
+
+
+def test_joint_switched_off_stops_the_solve_naming_item_and_field():
+    msg, t = _stop_at(lambda mbs, it: mbs.SetObjectParameter(it["j"], "activeConnector", False))
+    assert "ObjectJointRevoluteZ" in msg and "'activeConnector'" in msg and "t = 0.05" in msg
+    assert t == pytest.approx(0.051)         # stopped in the step (0.05, 0.051] whose pre-step function changed it
+
+
+@pytest.mark.parametrize("change, words", [
+    (lambda mbs, it: mbs.SetObjectParameter(it["b"], "physicsMass", 2.0), ("ObjectRigidBody", "'mass'")),
+    (lambda mbs, it: mbs.SetMarkerParameter(mbs.GetObject(it["j"])["markerNumbers"][0], "localPosition",
+                                            [0, 0.01, 0]), ("ObjectJointRevoluteZ", "moved")),
+    (lambda mbs, it: mbs.ModifyObject(it["tsd"], {"markerNumbers": mbs.GetObject(it["j"])["markerNumbers"]}),
+     ("ObjectConnectorTorsionalSpringDamper", "'markerNumbers'")),
+    (lambda mbs, it: mbs.SetNodeParameter(0, "referenceCoordinates", [0.3, 0, 0, 0, 0, 0]),
+     ("NodeRigidBodyRotVecLG", "'referenceCoordinates'")),
+])
+def test_structural_changes_stop_the_solve(change, words):
+    msg, t = _stop_at(change)
+    for w in words:
+        assert w in msg, msg
+    assert t == pytest.approx(0.051)
+
+
+def test_change_inside_a_force_user_function_is_refused():
+    mbs = exu.SystemContainer().AddSystem()
+    g, b, j = pendulum(mbs)
+    tsd = mbs.CreateTorsionalSpringDamper(itemNumbers=[g, b], position=[0, 0, 0], axis=[0, 0, 1], stiffness=200)
+
+    def uf(mbs, t, load):
+        mbs.SetObjectParameter(tsd, "offset", t)
+        return [0, 0, 0]
+
+    mbs.CreateForce(bodyNumber=b, loadVector=[0, 0, 0], loadVectorUserFunction=uf)
+    mbs.Assemble()
+    with pytest.raises(BridgeError, match="pre-step user function"):
+        exl.SolveDynamic(mbs, settings(0.01, 1e-3), showProgress=False)
+
+
+def test_unchanged_values_and_visualization_cost_nothing():
+    """Setting a fixed field to its own value, or a visualization field, is no change."""
+    mbs = exu.SystemContainer().AddSystem()
+    g, b, j = pendulum(mbs)
+    ref = None
+    for touch in (False, True):
+        mbs2 = exu.SystemContainer().AddSystem()
+        g, b, j = pendulum(mbs2)
+        s = mbs2.AddSensor(SensorBody(bodyNumber=b, storeInternal=True, outputVariableType=O.Position))
+
+        def pre_step(mbs, t, j=j, touch=touch):
+            if touch:
+                mbs.SetObjectParameter(j, "activeConnector", True)
+                mbs.SetObjectParameter(j, "Vshow", False)
+            return True
+
+        mbs2.SetPreStepUserFunction(pre_step)
+        mbs2.Assemble()
+        exl.SolveDynamic(mbs2, settings(0.05, 1e-3), showProgress=False)
+        data = mbs2.GetSensorStoredData(s)
+        if ref is None:
+            ref = data
+    np.testing.assert_array_equal(data, ref)
+
+
+# ----------------------------------------------------------------------------- refused before mbs is touched
+def _state(mbs):
+    sd = mbs.systemData
+    out = {"consistent": mbs.systemIsConsistent, "sys": sorted(mbs.sys.keys())}
+    for kind, n in (("Object", sd.NumberOfObjects()), ("Node", sd.NumberOfNodes()), ("Marker", sd.NumberOfMarkers()),
+                    ("Load", sd.NumberOfLoads()), ("Sensor", sd.NumberOfSensors())):
+        out[kind] = [repr({k: v for k, v in getattr(mbs, "Get" + kind)(i).items() if not k.startswith("V")})
+                     for i in range(n)]
+    if mbs.systemIsConsistent:
+        out["state"] = repr(sd.GetSystemState()) + repr(sd.GetSystemState(exu.ConfigurationType.Initial))
+        out["time"] = sd.GetTime()
+    return out
+
+
+@pytest.mark.parametrize("assemble", [True, False])
+@pytest.mark.parametrize("what", ["GeneralContact", "PostNewtonUserFunction", "PreNewtonResidualUserFunction",
+                                  "SystemJacobianUserFunction"])
+def test_unhonoured_system_features_are_refused_with_mbs_unchanged(what, assemble):
+    mbs, out = torsional_offset()
+    if what == "GeneralContact":
+        gc = mbs.AddGeneralContact()             # a sphere on the pendulum (object 1), as generalContactImplicit1
+        gc.SetFrictionPairings(np.zeros((1, 1)))
+        gc.SetSearchTreeCellSize(numberOfCells=[2, 2, 2])
+        gc.SetSearchTreeBox(pMin=[-1, -1, -1], pMax=[1, 1, 1])
+        gc.AddSphereWithMarker(mbs.AddMarker(MarkerBodyRigid(bodyNumber=1)), radius=0.05, contactStiffness=1e4,
+                               contactDamping=10, frictionMaterialIndex=0)
+    elif what == "PostNewtonUserFunction":
+        mbs.SetPostNewtonUserFunction(lambda mbs, t: [0, -1])
+    elif what == "PreNewtonResidualUserFunction":
+        mbs.SetPreNewtonResidualUserFunction(lambda mbs, t, newtonIt, discIt: None)
+    else:
+        mbs.SetSystemJacobianUserFunction(lambda mbs, t, factorODE2, factorODE2_t: None)
+    if assemble:
+        mbs.Assemble()
+    before = _state(mbs)
+    with pytest.raises(BridgeError) as e:
+        exl.SolveDynamic(mbs, settings(0.01, 1e-3), showProgress=False)
+    assert what in str(e.value) and "exudyn.SolveDynamic" in str(e.value)
+    assert _state(mbs) == before
+
+
+# ----------------------------------------------------------------------------- a repeated hook call
+@pytest.mark.parametrize("model", ["chunks", "preStep", "python"])
+def test_discontinuous_iteration_repeating_the_step_gives_the_same_result(model):
+    """Exudyn's discontinuous iteration calls the Newton hook again for the same step (it
+    resets the ODE2 coordinates to the start of the step) whenever its post-Newton error
+    exceeds ``discontinuous.iterationTolerance``; a negative tolerance forces every step to
+    be repeated ``maxIterations`` times.  The result must be the single-call one."""
+    results = []
+    for repeat in (False, True):
+        mbs = exu.SystemContainer().AddSystem()
+        g, b, j = pendulum(mbs)
+        mbs.CreateTorsionalSpringDamper(itemNumbers=[g, b], position=[0, 0, 0], axis=[0, 0, 1], stiffness=200)
+        if model == "preStep":
+            mbs.SetPreStepUserFunction(lambda mbs, t: True)
+        elif model == "python":
+            mbs.CreateForce(bodyNumber=b, loadVector=[0, 0, 0], loadVectorUserFunction=lambda mbs, t, v: [0, 0, t])
+        s = mbs.AddSensor(SensorBody(bodyNumber=b, storeInternal=True, outputVariableType=O.Position,
+                                     localPosition=[0.2, 0, 0]))
+        mbs.Assemble()
+        ss = settings(0.05, 1e-3)
+        ss.solution.sensors.writePeriod = 1e-2
+        checks = exu.special.exceptions.parameterRangeChecks
+        exu.special.exceptions.parameterRangeChecks = False      # a negative tolerance (also in the copy)
+        try:
+            if repeat:
+                ss.timeIntegration.discontinuous.iterationTolerance = -1.0
+                ss.timeIntegration.discontinuous.maxIterations = 3
+                ss.timeIntegration.discontinuous.ignoreMaxIterations = True
+            exl.SolveDynamic(mbs, ss, showProgress=False)
+        finally:
+            exu.special.exceptions.parameterRangeChecks = checks
+        it = mbs.sys["dynamicSolver"].it
+        calls = it.discontinuousIterationsCount      # Newton (hook) calls
+        steps = mbs.sys["lieGroupSolver"].timing["exudynSteps"]
+        assert calls == (3 if repeat else 1) * steps, (calls, steps)
+        results.append(mbs.GetSensorStoredData(s))
+    np.testing.assert_allclose(results[1], results[0], rtol=0, atol=1e-12)
+
+
+# ----------------------------------------------------------------------------- the field audit
+def _models_with_every_item():
+    mbs = exu.SystemContainer().AddSystem()
+    g = mbs.CreateGround()
+    bodies = [mbs.CreateRigidBody(inertia=InertiaCuboid(1000, [0.4, 0.1, 0.1]), referencePosition=[i, 0, 0],
+                                  nodeType=nt, gravity=[0, 0, -9.81])
+              for i, nt in enumerate((exu.NodeType.RotationRotationVector, exu.NodeType.RotationEulerParameters,
+                                      exu.NodeType.RotationRxyz))]
+    mbs.CreateSphericalJoint(itemNumbers=[g, bodies[0]], position=[0, 0, 0])
+    mbs.CreateRevoluteJoint(itemNumbers=[bodies[0], bodies[1]], position=[0.5, 0, 0], axis=[0, 1, 0])
+    mbs.CreatePrismaticJoint(itemNumbers=[bodies[1], bodies[2]], position=[1.5, 0, 0], axis=[1, 0, 0])
+    mbs.CreateGenericJoint(itemNumbers=[g, bodies[2]], position=[2, 0, 0], constrainedAxes=[0, 0, 1, 0, 0, 0])
+    mbs.CreateSpringDamper(itemNumbers=[g, bodies[1]], localPosition0=[1, 1, 0], stiffness=10)
+    mbs.CreateCartesianSpringDamper(itemNumbers=[g, bodies[1]], localPosition0=[1, 1, 0], stiffness=[1, 1, 1])
+    mbs.CreateTorsionalSpringDamper(itemNumbers=[bodies[0], bodies[1]], position=[0.5, 0, 0], axis=[0, 1, 0],
+                                    stiffness=1)
+    mbs.CreateRigidBodySpringDamper(itemNumbers=[g, bodies[2]], localPosition0=[2, 0, 0],
+                                    stiffness=np.eye(6), damping=np.zeros((6, 6)))
+    mbs.CreateForce(bodyNumber=bodies[0], loadVector=[1, 0, 0])
+    mbs.CreateTorque(bodyNumber=bodies[0], loadVector=[1, 0, 0])
+    n = mbs.AddNode(NodePointGround(referenceCoordinates=[0, 0, 0]))
+    mbs.AddMarker(MarkerNodePosition(nodeNumber=n))
+    mbs.AddMarker(exu.utilities.MarkerNodeRigid(nodeNumber=0))
+    mbs.AddMarker(exu.utilities.MarkerBodyPosition(bodyNumber=bodies[0]))
+    return mbs
+
+
+def test_every_field_of_every_supported_item_has_a_status():
+    """A new Exudyn field must be classified (honoured, fixed, refused, initial, ignored)
+    before the bridge can read a model that has it: the dictionaries of real items and
+    Exudyn's defaults of every supported type are checked."""
+    mbs = _models_with_every_item()
+    mbs.Assemble()
+    exl.LieGroupSolver(mbs)                  # the model is supported
+    seen = set()
+    for kind, count, getter, tkey in (("object", mbs.systemData.NumberOfObjects(), mbs.GetObject, "objectType"),
+                                      ("node", mbs.systemData.NumberOfNodes(), mbs.GetNode, "nodeType"),
+                                      ("marker", mbs.systemData.NumberOfMarkers(), mbs.GetMarker, "markerType"),
+                                      ("load", mbs.systemData.NumberOfLoads(), mbs.GetLoad, "loadType")):
+        for i in range(count):
+            d = getter(i)
+            seen.add((kind, d[tkey]))
+            for key in d:
+                assert field_status(kind, d[tkey], key) is not None, (kind, d[tkey], key)
+    assert seen == set(FIELDS), set(FIELDS) ^ seen
+    defaults = {"object": mbs.GetObjectDefaults, "node": mbs.GetNodeDefaults, "marker": mbs.GetMarkerDefaults,
+                "load": mbs.GetLoadDefaults}
+    for (kind, t), table in FIELDS.items():
+        keys = set(defaults[kind](t))
+        for key in keys:
+            assert field_status(kind, t, key) is not None, (kind, t, key)
+        assert set(table) <= keys, (kind, t, set(table) - keys)        # no stale entries
+        assert all(field_status(kind, t, k)[0] == IGNORED for k in keys if k.startswith("V"))

@@ -78,9 +78,9 @@ FIELDS = {
     ("object", "RigidBody"): {
         "mass": (FIXED, "compiled mass matrix"), "inertia": (FIXED, "compiled mass matrix"),
         "centerOfMass": (FIXED, "compiled mass matrix"), "nodeNumber": (FIXED, "the body's node")},
-    ("object", "JointSpherical"): dict(_JOINT),
-    ("object", "JointRevoluteZ"): dict(_JOINT),
-    ("object", "JointPrismaticX"): dict(_JOINT),
+    ("object", "JointSpherical"): {k: v for k, v in _JOINT.items() if not k.startswith("rotationMarker")},
+    ("object", "JointRevoluteZ"): {k: v for k, v in _JOINT.items() if k != "constrainedAxes"},
+    ("object", "JointPrismaticX"): {k: v for k, v in _JOINT.items() if k != "constrainedAxes"},
     ("object", "JointGeneric"): dict(_JOINT, **{
         "alternativeConstraints": (REFUSED, "True is refused (default rotation constraints only)"),
         "offsetUserFunction": (REFUSED, "a moving joint offset is refused"),
@@ -149,8 +149,9 @@ _UF_KEY = {"ConnectorSpringDamper": "springForceUserFunction",
 
 
 def is_visualization(key):
-    """Exudyn's convention: visualization fields are ``V`` + a capital letter."""
-    return len(key) > 1 and key[0] == "V" and key[1].isupper()
+    """Exudyn's convention: visualization fields start with a capital ``V`` (``Vshow``,
+    ``VgraphicsData``); every other field starts with a lower-case letter."""
+    return key[:1] == "V"
 
 
 def field_status(kind, itemType, key):
@@ -283,8 +284,10 @@ class ParameterWatch:
             new = getter(i)
             old = self.snap[(kind, i)]
             itemType = new[_KINDS[kind][1]]
-            keys = [field] if field is not None else [k for k in new if not is_visualization(k)
-                                                      and not _same(new[k], old.get(k))]
+            # a named field is checked directly; Modify*, and names that are aliases of a
+            # dictionary key (SetObjectParameter(i, 'physicsMass', ...) sets 'mass'), by a diff
+            keys = [field] if field in new else [k for k in new if not is_visualization(k)
+                                                 and not _same(new[k], old.get(k))]
             for key in keys:
                 st = field_status(kind, itemType, key)
                 if st is None:

@@ -579,6 +579,8 @@ class LieGroupSolver:
                             nflag = advance(int(round((t1 - sim.t) / h)), h, needAcc)
                         finally:
                             params.busy = False
+                        if params.late:
+                            params.apply(t1)         # refused: changed inside the step
                         timing["integration"] += perf() - tic
                         sim.t = t1
                         if nflag:

@@ -16,7 +16,9 @@ Sections (``--sections``, default all):
   fresh interpreters;
 * ``overhead`` the drop-in ``exl.SolveDynamic`` (Exudyn's loop, sensors, solution file,
   write-back) against the integration alone, on the heavy top;
-* ``groups``  one compiled SE(3) exp + dexpinv evaluation (the group work per body and stage).
+* ``groups``  one compiled SE(3) exp + dexpinv evaluation (the group work per body and stage);
+* ``params``  parameters changed during a solve: serialRobotTest's PD controller (12 load
+  vectors per step) against the same model without it (:mod:`.analysis.bench_params`).
 
 Every sweep runs through Exudyn's ``exudyn.processing.ParameterVariation`` with
 multiprocessing (:func:`exudyn_lie.analysis.bench_runs.sweep`); every time is the
@@ -46,7 +48,7 @@ EXL_METHODS = ("RK4", "DOPRI5", "RK6")
 NATIVE_CONSTRAINED = ("GeneralizedAlpha", "GeneralizedAlpha-mN", "TrapezoidalIndex2")
 NATIVE_FREE = ("RK44", "RK67", "DOPRI5")
 EPS_LEVELS = (1e-4, 1e-5, 1e-6, 1e-7, 1e-8)
-SECTIONS = ("wp", "perstep", "scaling", "startup", "overhead", "groups")
+SECTIONS = ("wp", "perstep", "scaling", "startup", "overhead", "groups", "params")
 TARGET_RATIO = 10.0
 # absolute per-step targets of the kernel issue (MK-RK4, SE3, median step, this 2-core machine)
 KERNEL_STEP_TARGETS_US = {"heavytop": 3.0, "doublependulum": 6.0}
@@ -908,6 +910,8 @@ def write_report(cfg, out, cmdline):
                       "closed-form exp, Taylor dexpinv" if float(a) < 2.59 else "closed forms of both")
             A(f"| {float(a):g} | {branch} | {us:.4f} |")
         A("")
+    from .analysis.bench_params import report_lines as _params_lines
+    L += _params_lines(out.get("params"))
     # ---- profile notes
     A("## 7. Profile and optimisation record")
     A("")
@@ -1015,6 +1019,10 @@ def main(argv=None):
         from .analysis.bench_micro import group_maps
         log("group maps (SE3 exp + dexpinv)")
         out["groups"] = group_maps(n=10 ** 5 if cfg.quick else 10 ** 6)
+    if "params" in cfg.sections:
+        from .analysis.bench_params import parameter_updates
+        log("parameters changed during a solve (serialRobotTest PD controller)")
+        out["params"] = parameter_updates(T=0.1 if cfg.quick else 0.5, repeats=3 if cfg.quick else 7)
     out["env"]["loadEnd"] = loadavg()
     out["profileExtra"] = PROFILE_EXTRA
     os.makedirs(cfg.out, exist_ok=True)

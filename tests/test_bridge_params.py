@@ -473,3 +473,13 @@ def test_every_field_of_every_supported_item_has_a_status():
             assert field_status(kind, t, key) is not None, (kind, t, key)
         assert set(table) <= keys, (kind, t, set(table) - keys)        # no stale entries
         assert all(field_status(kind, t, k)[0] == IGNORED for k in keys if k.startswith("V"))
+
+
+def test_bench_section_reports_the_parameter_update_cost():
+    """``bench --sections params`` runs and reports (no timing asserted)."""
+    from exudyn_lie.analysis.bench_params import parameter_updates, report_lines
+    p = parameter_updates(T=0.01, repeats=1)
+    for key in ("none", "empty", "compute", "control", "native", "exudynSet", "watched", "bridgeOwn"):
+        assert np.isfinite(p[key])
+    text = "\n".join(report_lines(p))
+    assert "## 8. Parameters changed during a solve" in text and "12 load vectors" in text

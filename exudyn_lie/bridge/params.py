@@ -201,6 +201,7 @@ class ParameterWatch:
         self.late = []               # changes recorded while busy
         self._saved = {}
         self.updates = 0             # items re-read (for the bench and tests)
+        self._fastLoad = {}          # compiled load -> (its lvec row view, marker rotation if bodyFixed)
         self._build_maps()
 
     # ------------------------------------------------------------------ set-up
@@ -277,7 +278,11 @@ class ParameterWatch:
         marks = list(dict.fromkeys(self.marks))
         del self.marks[:]
         rebuild = {}
+        fast = self._fastLoad
         for kind, i, field in marks:
+            if field == "loadVector" and kind == "load" and i in fast:
+                self._load_vector(i, fast[i], t)
+                continue
             if i >= self.nItems[kind] or i < 0:
                 continue                 # Exudyn raised for this index; nothing was changed
             getter = getattr(self.mbs, _KINDS[kind][0])
@@ -372,6 +377,23 @@ class ParameterWatch:
         sd.lvec[k, 0] = mf.rotation() @ lv if bodyFixed else lv
         sd.lvec[k, 1] = mf.pos if lt == "ForceVector" else 0.0
         sd.lint[k, 2] = int(bodyFixed)
+        # from now on a new loadVector alone takes the short path (a controller's every step)
+        self._fastLoad[l] = (sd.lvec[k, 0], mf.rotation() if bodyFixed else None)
+
+    def _load_vector(self, l, row, t):
+        """Only ``loadVector`` of a compiled load changed: the new vector into its row (its
+        marker frame and bodyFixed are as at the last full re-read, :meth:`_load`)."""
+        target, Rm = row
+        v = np.asarray(self.mbs.GetLoadParameter(l, "loadVector"), float)
+        if not (v.shape == (3,) and np.isfinite(v).all()):
+            self._load(l, self.mbs.GetLoad(l), t)          # raises with the full message
+            return
+        if Rm is None:
+            target[:] = v
+        else:
+            np.dot(Rm, v, out=target)
+        self.snap[("load", l)]["loadVector"] = v
+        self.updates += 1
 
     def _connector(self, o, d, t):
         sc, rd = self.scene, self.reader

@@ -14,8 +14,8 @@ import pytest
 
 import exudyn as exu
 from exudyn.utilities import (InertiaCuboid, LoadForceVector, MarkerBodyRigid, MarkerNodePosition, NodePointGround,
-                              ObjectConnectorSpringDamper, ObjectGround, RotationMatrixX, SensorBody, SensorLoad,
-                              SensorObject)
+                              ObjectConnectorSpringDamper, ObjectGround, SensorBody, SensorLoad, SensorObject,
+                              SensorUserFunction)
 
 import exudyn_lie as exl
 from exudyn_lie.bridge import BridgeError
@@ -199,6 +199,55 @@ def moving_ground():
     return mbs, out
 
 
+def python_items():
+    """Items evaluated in Python: a torsional spring with a springTorqueUserFunction whose
+    offset is changed through ModifyObject, and a load with a loadVectorUserFunction whose
+    loadVector (scaled by the function) is set, by a pre-step function."""
+    mbs = exu.SystemContainer().AddSystem()
+    g, b, j = pendulum(mbs)
+
+    def torque(mbs, t, itemNumber, rotation, angularVelocity, stiffness, damping, offset):
+        return stiffness * (rotation - offset) + damping * angularVelocity + 0.1 * np.sin(rotation)
+
+    tsd = mbs.CreateTorsionalSpringDamper(itemNumbers=[g, b], position=[0, 0, 0], axis=[0, 0, 1], stiffness=200,
+                                          damping=2, springTorqueUserFunction=torque)
+    f = mbs.CreateForce(itemNumber=b, localPosition=[0.4, 0, 0], loadVector=[0, 0, 0],
+                        loadVectorUserFunction=lambda mbs, t, v: [2 * v[0], 2 * v[1], 0])
+
+    def pre_step(mbs, t):
+        ts = sampled(t)
+        mbs.ModifyObject(tsd, {"offset": 0.8 * np.sin(20 * ts)})
+        mbs.SetLoadParameter(f, "loadVector", [0, 5 * np.cos(15 * ts), 0])
+        return True
+
+    mbs.SetPreStepUserFunction(pre_step)
+    out = {"pos": mbs.AddSensor(SensorBody(bodyNumber=b, storeInternal=True, outputVariableType=O.Position,
+                                           localPosition=[0.2, 0, 0]))}
+    return mbs, out
+
+
+def sensor_switch():
+    """No pre- or post-step function: a sensor user function (evaluated by Exudyn at every
+    output, here every TS) moves a torsional spring's offset; the bridge integrates several
+    outputs ahead on its compiled path, and must go back when the offset changes."""
+    mbs = exu.SystemContainer().AddSystem()
+    g, b, j = pendulum(mbs)
+    tsd = mbs.CreateTorsionalSpringDamper(itemNumbers=[g, b], position=[0, 0, 0], axis=[0, 0, 1], stiffness=200,
+                                          damping=2)
+    sp = mbs.AddSensor(SensorBody(bodyNumber=b, storeInternal=True, outputVariableType=O.Position,
+                                  localPosition=[0.2, 0, 0]))
+
+    def moving_offset(mbs, t, sensorNumbers, factors, configuration):
+        k = int(round(t / TS))
+        if k % 7 == 3:                   # not at every output: the chunk must be cut where it changes
+            mbs.SetObjectParameter(tsd, "offset", 0.5 * np.sin(0.03 * k))
+        return [k]
+
+    out = {"pos": sp, "uf": mbs.AddSensor(SensorUserFunction(sensorNumbers=[sp], storeInternal=True,
+                                                             sensorUserFunction=moving_offset))}
+    return mbs, out
+
+
 def native_truth(build, T, h):
     """Exudyn's generalized-alpha at steps 2h and h, extrapolated to step 0.  The sampled
     values jump, and after a jump generalized-alpha's algorithmic accelerations carry an
@@ -246,6 +295,15 @@ def test_spring_switched_off_and_on_matches_native():
 
 def test_moving_ground_markers_match_native():
     _compare(moving_ground, 0.2, 1e-4, 1e-5, 1e-6)
+
+
+def test_python_items_changed_through_modify_and_set_match_native():
+    _compare(python_items, 0.2, 1e-4, 1e-5, 1e-6)
+
+
+def test_change_from_a_sensor_user_function_cuts_the_chunk_integrated_ahead():
+    mbs, ref, got = _compare(sensor_switch, 0.2, 1e-4, 1e-5, 1e-6)
+    assert mbs.sys["lieGroupSolver"]._params.updates == len([k for k in range(201) if k % 7 == 3])
 
 
 def test_without_the_change_the_result_differs():

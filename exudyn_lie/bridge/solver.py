@@ -325,6 +325,22 @@ class LieGroupSolver:
                               f"follow; check timeIntegration.discontinuous and the step settings")
         ch.pop()
 
+    def _finalize(self, solver, ss2):
+        """Exudyn's FinalizeSolver.  A user function's ``mbs.Modify*`` marks mbs as not
+        assembled (``systemIsConsistent = False``) although it changed only live fields (the
+        parameter watch stops the run otherwise); Exudyn's own solve finalizes such a run in
+        C++ and leaves the flag False, but the Python FinalizeSolver refuses: it runs with
+        the flag set, which is then put back."""
+        mbs = self.mbs
+        consistent = mbs.systemIsConsistent
+        if not consistent:
+            mbs.systemIsConsistent = True
+        try:
+            solver.FinalizeSolver(mbs, ss2)
+        finally:
+            if not consistent:
+                mbs.systemIsConsistent = False
+
     def _restart_from_mbs(self, t):
         """Continue from the state in mbs at time ``t`` (Exudyn's start of the step): a user
         function changed the coordinates, Exudyn's discontinuous iteration repeats the step
@@ -641,7 +657,7 @@ class LieGroupSolver:
             if ok:
                 self._write_torsion_data()       # the exact turned angles (Exudyn tracks per output)
             finalized = True
-            solver.FinalizeSolver(self.mbs, ss2)
+            self._finalize(solver, ss2)
         except BaseException:
             if not finalized:
                 try:

@@ -541,3 +541,40 @@ def test_bench_section_reports_the_parameter_update_cost():
         assert np.isfinite(p[key])
     text = "\n".join(report_lines(p))
     assert "## 8. Parameters changed during a solve" in text and "12 load vectors" in text
+
+
+def _settings_fields(obj, prefix=""):
+    out = []
+    for a in dir(obj):
+        if a.startswith("_") or a in ("GetDictionary", "SetDictionary", "ToString", "Print"):
+            continue
+        v = getattr(obj, a)
+        if hasattr(v, "GetDictionary"):
+            out += _settings_fields(v, prefix + a + ".")
+        elif not callable(v):
+            out.append(prefix + a)
+    return out
+
+
+def test_every_simulation_setting_has_a_status():
+    import warnings
+    from exudyn_lie.bridge.settings import setting_status
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", DeprecationWarning)      # the deprecated aliases are fields too
+        fields = _settings_fields(exu.SimulationSettings())
+    assert len(fields) > 150
+    missing = [f for f in fields if setting_status(f) is None]
+    assert not missing, missing
+    assert setting_status("timeIntegration.newton.relativeTolerance")[0] == IGNORED
+    assert setting_status("solution.sensors.writePeriod")[0] == "live"
+
+
+def test_continue_from_restart_file_is_refused_with_mbs_unchanged():
+    mbs, out = torsional_offset()
+    mbs.Assemble()
+    ss = settings(0.01, 1e-3)
+    ss.solution.restart.continueIfAvailable = True
+    before = _state(mbs)
+    with pytest.raises(BridgeError, match="continueIfAvailable"):
+        exl.SolveDynamic(mbs, ss, showProgress=False)
+    assert _state(mbs) == before

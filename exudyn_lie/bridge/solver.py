@@ -39,6 +39,7 @@ from ..mbs.compiled import auto_groups
 from ..mbs.simulator import Simulator
 from .fast import CHUNK_ROWS, NodeTable, OutputChunks
 from .params import ParameterWatch
+from .settings import check_settings
 from .reader import BridgeError, ExudynScene, SceneFromExudyn
 
 GROUP_ALIASES = {"se3": "SE3", "so3xr3": "SO3xR3", "so3r3": "SO3xR3", "auto": "auto"}
@@ -393,13 +394,15 @@ class LieGroupSolver:
 
     def _plan(self, ss, nsteps, h, substeps):
         mbs = self.mbs
+        check_settings(ss)
+        # one Exudyn step per step: user step functions run, and Exudyn pauses, after every step
         userStep = bool(mbs.GetPreStepUserFunction()) or bool(mbs.GetPostStepUserFunction())
         if substeps is not None:
             k = int(substeps)
             if k < 1 or nsteps % k:
                 raise BridgeError(f"substeps={substeps} must be a positive divisor of numberOfSteps={nsteps}")
             return k, userStep
-        if userStep:
+        if userStep or ss.pauseAfterEachStep:
             return 1, userStep
         sol = ss.solution
         k = nsteps

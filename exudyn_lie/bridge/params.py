@@ -253,9 +253,12 @@ class ParameterWatch:
         def wrapped(mbs, *args, **kw):
             out = orig(mbs, *args, **kw)
             if mbs is target:
-                index = int(args[0]) if args else int(next(iter(kw.values())))
-                field = (args[1] if len(args) > 1 else kw.get("parameterName")) if named else None
-                (late if watch.busy else marks).append((kind, index, field))
+                if named and len(args) > 1:          # Set*Parameter(index, name, value): the common call
+                    mark = (kind, int(args[0]), args[1])
+                else:
+                    index = int(args[0]) if args else int(kw.get(kind + "Number", next(iter(kw.values()))))
+                    mark = (kind, index, kw.get("parameterName") if named else None)
+                (late if watch.busy else marks).append(mark)
             return out
         wrapped.__doc__ = orig.__doc__
         wrapped.__wrapped__ = orig
@@ -275,7 +278,7 @@ class ParameterWatch:
                 f"{self.what(kind, i)}: {field or 'its dictionary'} was changed by a user function while exudyn_lie "
                 f"integrated the step ending at t = {t:.6g} s (a force or load user function); exudyn_lie applies "
                 f"parameter changes between steps: change it in a pre-step user function (mbs.SetPreStepUserFunction)")
-        marks = list(dict.fromkeys(self.marks))
+        marks = self.marks[:]              # (a repeated mark re-reads the item again: cheaper than de-duplicating)
         del self.marks[:]
         rebuild = {}
         fast = self._fastLoad
@@ -384,15 +387,22 @@ class ParameterWatch:
         """Only ``loadVector`` of a compiled load changed: the new vector into its row (its
         marker frame and bodyFixed are as at the last full re-read, :meth:`_load`)."""
         target, Rm = row
-        v = np.asarray(self.mbs.GetLoadParameter(l, "loadVector"), float)
-        if not (v.shape == (3,) and np.isfinite(v).all()):
+        v = self.mbs.GetLoadParameter(l, "loadVector")
+        try:
+            x, y, z = v.tolist()
+            ok = math.isfinite(x) and math.isfinite(y) and math.isfinite(z)
+        except (AttributeError, TypeError, ValueError):
+            ok = False
+        if not ok:
             self._load(l, self.mbs.GetLoad(l), t)          # raises with the full message
             return
         if Rm is None:
-            target[:] = v
+            target[0] = x
+            target[1] = y
+            target[2] = z
         else:
             np.dot(Rm, v, out=target)
-        self.snap[("load", l)]["loadVector"] = v
+        # (the snapshot keeps the old vector: a later Modify* diff then re-reads the load, harmless)
         self.updates += 1
 
     def _connector(self, o, d, t):

@@ -578,3 +578,29 @@ def test_continue_from_restart_file_is_refused_with_mbs_unchanged():
     with pytest.raises(BridgeError, match="continueIfAvailable"):
         exl.SolveDynamic(mbs, ss, showProgress=False)
     assert _state(mbs) == before
+
+
+def reused_buffer():
+    """A controller that reuses one array for the vectors of three loads (it holds the last
+    one's vector when the step starts)."""
+    mbs = exu.SystemContainer().AddSystem()
+    g, b, j = pendulum(mbs)
+    mB = mbs.AddMarker(MarkerBodyRigid(bodyNumber=b, localPosition=[0.4, 0, 0]))
+    loads = [mbs.AddLoad(LoadForceVector(markerNumber=mB, loadVector=[0, 0, 0])) for _ in range(3)]
+    buf = np.zeros(3)
+
+    def pre_step(mbs, t):
+        for k, l in enumerate(loads):
+            buf[:] = [0, 20 * (k + 1) * np.cos(10 * sampled(t)), 0]
+            mbs.SetLoadParameter(l, "loadVector", buf)
+        return True
+
+    mbs.SetPreStepUserFunction(pre_step)
+    return mbs, {"pos": mbs.AddSensor(SensorBody(bodyNumber=b, storeInternal=True, outputVariableType=O.Position,
+                                                 localPosition=[0.4, 0, 0]))}
+
+
+def test_a_reused_load_vector_buffer_is_read_as_set():
+    """Every load gets the value it was set to (the bridge copies it at the call), as in Exudyn."""
+    mbs, ref, got = _compare(reused_buffer, 0.1, 1e-4, 1e-5, 1e-6)
+    assert np.max(np.abs(got["pos"][:, 2])) > 1e-2

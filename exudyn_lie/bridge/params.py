@@ -189,7 +189,7 @@ class ParameterWatch:
     to the compiled scene before the next step.
 
     ``marks`` (a list, empty when nothing changed: the per-step check is its truth value)
-    holds ``(kind, index, field or None)``; :meth:`apply` consumes it."""
+    holds ``(kind, index, field or None, value or None)``; :meth:`apply` consumes it."""
 
     def __init__(self, solver):
         self.solver = solver
@@ -253,11 +253,12 @@ class ParameterWatch:
         def wrapped(mbs, *args, **kw):
             out = orig(mbs, *args, **kw)
             if mbs is target:
-                if named and len(args) > 1:          # Set*Parameter(index, name, value): the common call
-                    mark = (kind, int(args[0]), args[1])
+                if named and len(args) > 2:          # Set*Parameter(index, name, value): the common call
+                    # a load vector's value, copied (a controller may reuse its buffer): the short path
+                    mark = (kind, int(args[0]), args[1], tuple(args[2]) if args[1] == "loadVector" else None)
                 else:
                     index = int(args[0]) if args else int(kw.get(kind + "Number", next(iter(kw.values()))))
-                    mark = (kind, index, kw.get("parameterName") if named else None)
+                    mark = (kind, index, kw.get("parameterName") if named else None, None)
                 (late if watch.busy else marks).append(mark)
             return out
         wrapped.__doc__ = orig.__doc__
@@ -272,7 +273,7 @@ class ParameterWatch:
     def apply(self, t):
         """Apply the recorded changes (made before the step that starts at ``t``)."""
         if self.late:
-            kind, i, field = self.late[0]
+            kind, i, field, _ = self.late[0]
             del self.late[:]
             raise BridgeError(
                 f"{self.what(kind, i)}: {field or 'its dictionary'} was changed by a user function while exudyn_lie "
@@ -282,9 +283,9 @@ class ParameterWatch:
         del self.marks[:]
         rebuild = {}
         fast = self._fastLoad
-        for kind, i, field in marks:
+        for kind, i, field, value in marks:
             if field == "loadVector" and kind == "load" and i in fast:
-                self._load_vector(i, fast[i], t)
+                self._load_vector(i, fast[i], value, t)
                 continue
             if i >= self.nItems[kind] or i < 0:
                 continue                 # Exudyn raised for this index; nothing was changed
@@ -383,16 +384,19 @@ class ParameterWatch:
         # from now on a new loadVector alone takes the short path (a controller's every step)
         self._fastLoad[l] = (sd.lvec[k, 0], mf.rotation() if bodyFixed else None)
 
-    def _load_vector(self, l, row, t):
-        """Only ``loadVector`` of a compiled load changed: the new vector into its row (its
-        marker frame and bodyFixed are as at the last full re-read, :meth:`_load`)."""
+    def _load_vector(self, l, row, value, t):
+        """Only ``loadVector`` of a compiled load changed: the new vector (the value Exudyn
+        accepted in ``SetLoadParameter``, read back if it is not a plain 3-vector) into its
+        row; the marker frame and bodyFixed are as at the last full re-read (:meth:`_load`)."""
         target, Rm = row
-        v = self.mbs.GetLoadParameter(l, "loadVector")
         try:
-            x, y, z = v.tolist()
+            x, y, z = value                      # None (not recorded) raises TypeError
+            x, y, z = float(x), float(y), float(z)
             ok = math.isfinite(x) and math.isfinite(y) and math.isfinite(z)
-        except (AttributeError, TypeError, ValueError):
-            ok = False
+        except (TypeError, ValueError):
+            v = self.mbs.GetLoadParameter(l, "loadVector")
+            x, y, z = (float(c) for c in v) if len(v) == 3 else (np.nan,) * 3
+            ok = math.isfinite(x) and math.isfinite(y) and math.isfinite(z)
         if not ok:
             self._load(l, self.mbs.GetLoad(l), t)          # raises with the full message
             return
@@ -401,7 +405,7 @@ class ParameterWatch:
             target[1] = y
             target[2] = z
         else:
-            np.dot(Rm, v, out=target)
+            np.dot(Rm, np.array((x, y, z)), out=target)
         # (the snapshot keeps the old vector: a later Modify* diff then re-reads the load, harmless)
         self.updates += 1
 

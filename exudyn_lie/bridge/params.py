@@ -38,7 +38,6 @@ import math
 
 import numpy as np
 
-from ..mbs.scene import GROUND
 from .reader import BridgeError, ExudynScene, _orthonormal, _userfunction
 
 LIVE, FIXED, REFUSED, INITIAL, IGNORED = "live", "fixed", "refused", "initial", "ignored"

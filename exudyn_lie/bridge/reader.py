@@ -3,7 +3,7 @@
 :func:`SceneFromExudyn` only *reads* ``mbs`` (items and the initial configuration); it
 never changes it.  Every item is either translated exactly (same equations as Exudyn,
 checked against Exudyn's own ``ComputeMassMatrix / ComputeODE2RHS / ComputeJacobianAE``
-in ``tests/test_bridge_oracle.py``), skipped for a stated reason (inactive connectors,
+in ``tests/test_bridge_oracle.py``), skipped for a stated reason (inactive joints,
 ground-to-ground items, sensors), or rejected with a :class:`BridgeError` naming the
 item type, its index and what is supported.
 
@@ -18,7 +18,8 @@ Mapping (Exudyn -> scene):
   joint frame ``marker localHT rotation @ rotationMarker`` (Exudyn's equations = the
   kernel's ``ObjectJointGeneric`` rows, row by row, see :func:`joint_ae_map`);
 * ``ObjectConnectorSpringDamper / CartesianSpringDamper / TorsionalSpringDamper`` ->
-  compiled springs (``velocityOffset`` folded into the constant force / torque); with a
+  compiled springs (``velocityOffset`` folded into the constant force / torque; an
+  inactive one with zero coefficients, so that a user function can switch it on); with a
   Python user function, a torsional spring without its NodeGenericData (Exudyn then uses
   the principal angle), and every ``ObjectConnectorRigidBodySpringDamper`` ->
   :mod:`.pyforces` (``Scene.AddPythonForce``, evaluated in Python at every stage);
@@ -32,6 +33,11 @@ A torsional spring's ``NodeGenericData`` holds Exudyn's continuous angle of the 
 (Exudyn takes the branch of the principal angle nearest to it); the reader starts from the
 stored value, so a spring that has already turned (e.g. a continued simulation) keeps its
 turn count (:class:`TorsionData`).
+
+``sc.itemRows`` maps each connector and load to its compiled row (or Python item), and
+``sc.reader`` keeps the marker frames: :mod:`.params` re-reads single items during a solve.
+:func:`check_system_level` refuses GeneralContact and the mbs-level user functions the
+bridge does not call.
 
 ``configuration='items'`` reads an mbs that is not assembled yet from its item
 dictionaries (the initial values ``mbs.Assemble()`` will set): ``SolveDynamic`` validates

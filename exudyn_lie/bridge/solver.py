@@ -25,6 +25,11 @@ costs about a microsecond instead of two compiled calls (~5 us of argument unbox
 With a pre- or post-step user function (which may change the state) a chunk is one
 output long; with forces evaluated in Python (user functions of connectors and loads)
 the hook advances the simulator one output at a time.
+
+Parameters changed by user functions during the run (:mod:`.params`): the changed items are
+re-read before the next step; outputs integrated ahead with the old values are dropped and
+the run continues from the state in mbs.  The same restart serves a user function that set
+the state, and Exudyn's discontinuous iteration calling the hook again for the same step.
 """
 from __future__ import annotations
 

@@ -367,7 +367,7 @@ def test_change_inside_a_force_user_function_is_refused():
         mbs.SetObjectParameter(tsd, "offset", t)
         return [0, 0, 0]
 
-    mbs.CreateForce(bodyNumber=b, loadVector=[0, 0, 0], loadVectorUserFunction=uf)
+    mbs.CreateForce(itemNumber=b, loadVector=[0, 0, 0], loadVectorUserFunction=uf)
     mbs.Assemble()
     with pytest.raises(BridgeError, match="pre-step user function"):
         exl.SolveDynamic(mbs, settings(0.01, 1e-3), showProgress=False)
@@ -454,7 +454,7 @@ def test_discontinuous_iteration_repeating_the_step_gives_the_same_result(model)
         if model == "preStep":
             mbs.SetPreStepUserFunction(lambda mbs, t: True)
         elif model == "python":
-            mbs.CreateForce(bodyNumber=b, loadVector=[0, 0, 0], loadVectorUserFunction=lambda mbs, t, v: [0, 0, t])
+            mbs.CreateForce(itemNumber=b, loadVector=[0, 0, 0], loadVectorUserFunction=lambda mbs, t, v: [0, 0, t])
         s = mbs.AddSensor(SensorBody(bodyNumber=b, storeInternal=True, outputVariableType=O.Position,
                                      localPosition=[0.2, 0, 0]))
         mbs.Assemble()
@@ -496,8 +496,8 @@ def _models_with_every_item():
                                     stiffness=1)
     mbs.CreateRigidBodySpringDamper(itemNumbers=[g, bodies[2]], localPosition0=[2, 0, 0],
                                     stiffness=np.eye(6), damping=np.zeros((6, 6)))
-    mbs.CreateForce(bodyNumber=bodies[0], loadVector=[1, 0, 0])
-    mbs.CreateTorque(bodyNumber=bodies[0], loadVector=[1, 0, 0])
+    mbs.CreateForce(itemNumber=bodies[0], loadVector=[1, 0, 0])
+    mbs.CreateTorque(itemNumber=bodies[0], loadVector=[1, 0, 0])
     n = mbs.AddNode(NodePointGround(referenceCoordinates=[0, 0, 0]))
     mbs.AddMarker(MarkerNodePosition(nodeNumber=n))
     mbs.AddMarker(exu.utilities.MarkerNodeRigid(nodeNumber=0))
@@ -604,3 +604,44 @@ def test_a_reused_load_vector_buffer_is_read_as_set():
     """Every load gets the value it was set to (the bridge copies it at the call), as in Exudyn."""
     mbs, ref, got = _compare(reused_buffer, 0.1, 1e-4, 1e-5, 1e-6)
     assert np.max(np.abs(got["pos"][:, 2])) > 1e-2
+
+
+def test_re_reading_unchanged_items_reproduces_the_compiled_rows():
+    """The rows the watch writes have compile_scene's layout: re-reading every load and
+    connector of a model with every compiled kind (body-fixed loads on rotated markers,
+    velocity offsets, turned torsional springs) changes no compiled number."""
+    from exudyn_lie.bridge.params import ParameterWatch
+    mbs = exu.SystemContainer().AddSystem()
+    g = mbs.CreateGround()
+    b = [mbs.CreateRigidBody(inertia=InertiaCuboid(1000, [0.4, 0.1, 0.1]), referencePosition=[i, 0.1 * i, 0],
+                             referenceRotationMatrix=exu.utilities.RotationMatrixZ(0.3 * i), gravity=[0, 0, -9.81])
+         for i in range(1, 3)]
+    mbs.CreateSpringDamper(itemNumbers=[g, b[0]], localPosition0=[1, 1, 0], localPosition1=[0.1, 0, 0],
+                           stiffness=10, damping=0.5, force=0.3, velocityOffset=0.2)
+    mbs.CreateCartesianSpringDamper(itemNumbers=[b[0], b[1]], localPosition0=[0.2, 0, 0], stiffness=[1, 2, 3],
+                                    damping=[0.1, 0.2, 0.3], offset=[0.1, 0, 0])
+    tsd = mbs.CreateTorsionalSpringDamper(itemNumbers=[b[0], b[1]], position=[1.5, 0, 0], axis=[0, 0, 1],
+                                          stiffness=5, damping=0.1, offset=0.4, torque=0.2, velocityOffset=1.0)
+    mbs.CreateForce(itemNumber=b[0], loadVector=[1, 2, 3], localPosition=[0.1, 0.2, 0], bodyFixed=True)
+    mbs.CreateTorque(itemNumber=b[1], loadVector=[0.1, 0.2, 0.3], bodyFixed=True)
+    mRot = mbs.AddMarker(MarkerBodyRigid(bodyNumber=b[1], localPosition=[0.1, 0, 0]))
+    mbs.SetMarkerParameter(mRot, "localHT", exu.rigidBodyUtilities.HomogeneousTransformation(
+        exu.utilities.RotationMatrixX(0.7), [0.1, 0, 0]))
+    mbs.AddLoad(LoadForceVector(markerNumber=mRot, loadVector=[0, 1, 0], bodyFixed=True))
+    mbs.Assemble()
+    n = mbs.GetObject(tsd)["nodeNumber"]
+    mbs.SetNodeParameter(n, "initialCoordinates", [0.4 + 4 * np.pi])          # turned twice
+    mbs.Assemble()
+    solver = exl.LieGroupSolver(mbs)
+    sd = solver.sim.sd
+    names = ("lint", "lvec", "sint", "spos", "spar", "cint", "cpos", "cpar", "tint", "trot", "tpar")
+    before = {k: getattr(sd, k).copy() for k in names}
+    assert solver.scene.torsionData[0].turns0 == 2
+    watch = ParameterWatch(solver)
+    items = [("load", l) for l in range(mbs.systemData.NumberOfLoads())
+             if mbs.GetLoad(l)["loadType"] != "MassProportional"] + \
+        [("object", o) for o in range(mbs.systemData.NumberOfObjects())]
+    watch._rebuild(items, 0.0)
+    for k in names:
+        np.testing.assert_array_equal(getattr(sd, k), before[k], err_msg=k)
+    assert all(len(before[k]) for k in ("lvec", "spar", "cpar", "tpar"))

@@ -342,6 +342,7 @@ def test_joint_switched_off_stops_the_solve_naming_item_and_field():
     assert t == pytest.approx(0.051)         # stopped in the step (0.05, 0.051] whose pre-step function changed it
 
 
+@pytest.mark.filterwarnings("ignore:ObjectRigidBody:DeprecationWarning")      # physicsMass: an alias of 'mass'
 @pytest.mark.parametrize("change, words", [
     (lambda mbs, it: mbs.SetObjectParameter(it["b"], "physicsMass", 2.0), ("ObjectRigidBody", "'mass'")),
     (lambda mbs, it: mbs.SetMarkerParameter(mbs.GetObject(it["j"])["markerNumbers"][0], "localPosition",

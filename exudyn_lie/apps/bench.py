@@ -20,6 +20,8 @@ Sections (``--sections``, default all):
 * ``mujoco``  MuJoCo (optional, ``pip install .[bench]``) as a peer on the heavy top and the
   double pendulum: agreement, cost per step, work-precision
   (:mod:`exudyn_lie.apps.bench_mujoco`; skipped with one line without MuJoCo).
+* ``params``  parameters changed during a solve: serialRobotTest's PD controller (12 load
+  vectors per step) against the same model without it (:mod:`.bench_params`).
 
 Every sweep runs through Exudyn's ``exudyn.processing.ParameterVariation`` with
 multiprocessing (:func:`exudyn_lie.apps.bench_runs.sweep`); every time is the
@@ -49,7 +51,7 @@ EXL_METHODS = ("RK4", "DOPRI5", "RK6")
 NATIVE_CONSTRAINED = ("GeneralizedAlpha", "GeneralizedAlpha-mN", "TrapezoidalIndex2")
 NATIVE_FREE = ("RK44", "RK67", "DOPRI5")
 EPS_LEVELS = (1e-4, 1e-5, 1e-6, 1e-7, 1e-8)
-SECTIONS = ("wp", "perstep", "scaling", "startup", "overhead", "groups", "mujoco")
+SECTIONS = ("wp", "perstep", "scaling", "startup", "overhead", "groups", "mujoco", "params")
 TARGET_RATIO = 10.0
 # absolute per-step targets (MK-RK4, SE3, median step, this 2-core machine)
 KERNEL_STEP_TARGETS_US = {"heavytop": 3.0, "doublependulum": 6.0}
@@ -913,6 +915,8 @@ def write_report(cfg, out, cmdline):
                       "closed-form exp, Taylor dexpinv" if float(a) < 2.59 else "closed forms of both")
             A(f"| {float(a):g} | {branch} | {us:.4f} |")
         A("")
+    from .bench_params import report_lines as _params_lines
+    L += _params_lines(out.get("params"))
     # ---- profile notes
     A("## 7. Profile and optimisation record")
     A("")
@@ -1026,6 +1030,10 @@ def main(argv=None):
     if "mujoco" in cfg.sections:
         from . import bench_mujoco
         out["mujoco"] = bench_mujoco.run_section(cfg, log)
+    if "params" in cfg.sections:
+        from .bench_params import parameter_updates
+        log("parameters changed during a solve (serialRobotTest PD controller)")
+        out["params"] = parameter_updates(T=0.1 if cfg.quick else 0.5, repeats=3 if cfg.quick else 7)
     out["env"]["loadEnd"] = loadavg()
     out["profileExtra"] = PROFILE_EXTRA
     os.makedirs(cfg.out, exist_ok=True)

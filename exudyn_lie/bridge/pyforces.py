@@ -62,8 +62,13 @@ def apply(mf, p, rb, f, tq, F, T):
 
 
 class PyItem:
-    """Base: an Exudyn item evaluated in Python."""
+    """Base: an Exudyn item evaluated in Python (``active`` False: an inactive connector,
+    no force; :meth:`idle` keeps its tracking going)."""
     label = ""
+    active = True
+
+    def idle(self, st):
+        pass
 
     def bodies(self):
         return []
@@ -145,6 +150,10 @@ class TorsionalSpringDamperUF(_Connector):
         self.uf = uf
         self.track = track
         self.prev = float(angle0) if track else None
+
+    def idle(self, st):
+        if self.track:          # Exudyn updates the data node's angle also while inactive
+            self.angle(st)
 
     def angle(self, st):
         """(phi tracked, phidot, world z axis of the A frame, (pA, rA), (pB, rB))."""
@@ -272,6 +281,9 @@ def combined(items, nb):
         F = np.zeros((nb, 3))
         T = np.zeros((nb, 3))
         for it in items:
-            it.add(t, st, F, T)
+            if it.active:
+                it.add(t, st, F, T)
+            else:
+                it.idle(st)
         return F, T
     return fn

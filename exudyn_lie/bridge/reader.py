@@ -3,7 +3,7 @@
 :func:`SceneFromExudyn` only *reads* ``mbs`` (items and the initial configuration); it
 never changes it.  Every item is either translated exactly (same equations as Exudyn,
 checked against Exudyn's own ``ComputeMassMatrix / ComputeODE2RHS / ComputeJacobianAE``
-in ``tests/test_bridge_oracle.py``), skipped for a stated reason (inactive connectors,
+in ``tests/test_bridge_oracle.py``), skipped for a stated reason (inactive joints,
 ground-to-ground items, sensors), or rejected with a :class:`BridgeError` naming the
 item type, its index and what is supported.
 
@@ -18,7 +18,8 @@ Mapping (Exudyn -> scene):
   joint frame ``marker localHT rotation @ rotationMarker`` (Exudyn's equations = the
   kernel's ``ObjectJointGeneric`` rows, row by row, see :func:`joint_ae_map`);
 * ``ObjectConnectorSpringDamper / CartesianSpringDamper / TorsionalSpringDamper`` ->
-  compiled springs (``velocityOffset`` folded into the constant force / torque); with a
+  compiled springs (``velocityOffset`` folded into the constant force / torque; an
+  inactive one with zero coefficients, so that a user function can switch it on); with a
   Python user function, a torsional spring without its NodeGenericData (Exudyn then uses
   the principal angle), and every ``ObjectConnectorRigidBodySpringDamper`` ->
   :mod:`.pyforces` (``Scene.AddPythonForce``, evaluated in Python at every stage);
@@ -32,6 +33,11 @@ A torsional spring's ``NodeGenericData`` holds Exudyn's continuous angle of the 
 (Exudyn takes the branch of the principal angle nearest to it); the reader starts from the
 stored value, so a spring that has already turned (e.g. a continued simulation) keeps its
 turn count (:class:`TorsionData`).
+
+``sc.itemRows`` maps each connector and load to its compiled row (or Python item), and
+``sc.reader`` keeps the marker frames: :mod:`.params` re-reads single items during a solve.
+:func:`check_system_level` refuses GeneralContact and the mbs-level user functions the
+bridge does not call.
 
 ``configuration='items'`` reads an mbs that is not assembled yet from its item
 dictionaries (the initial values ``mbs.Assemble()`` will set): ``SolveDynamic`` validates
@@ -128,6 +134,11 @@ class ExudynScene(Scene):
         self.nodeTypes = {}                   # node index -> Exudyn node type string
         self.torsionData: List[TorsionData] = []   # torsional springs with a data node (turns)
         self.configuration = "initial"        # what was read ('items': mbs not assembled yet)
+        # where each Exudyn item went: ("object", o) / ("load", l) -> (table, row), table one of
+        # "spring", "cartesian", "torsional" (compiled rows), "py" (index in pyItems), "load"
+        # (compiled load row), "massProportional", "ground" (no effect); joints: joints_info
+        self.itemRows = {}
+        self.reader = None                    # the _Reader (marker frames), for bridge.params
 
     def body_of_object(self, obj):
         try:
@@ -139,6 +150,37 @@ class ExudynScene(Scene):
         o, n = self.bodyObject[i], self.bodyNode[i]
         name = self.bodies[i].name
         return f"object {o} ('{name}', node {n} {self.nodeTypes[n]})"
+
+
+# mbs-level user functions of Exudyn 1.13.6 (MainSystem.Get*/Set*UserFunction): pre- and
+# post-step functions run as in a native solve (Exudyn's own time loop calls them); the
+# others act inside Exudyn's Newton / discontinuous iteration, which exudyn_lie replaces
+UNHONOURED_MBS_FUNCTIONS = {
+    "PostNewtonUserFunction": "it runs after each Newton solve of Exudyn's discontinuous iteration (contact, "
+                              "switching), which exudyn_lie's explicit step replaces",
+    "PreNewtonResidualUserFunction": "it runs before each Newton residual, which exudyn_lie's explicit step "
+                                     "does not compute",
+    "SystemJacobianUserFunction": "it modifies Exudyn's Newton Jacobian, which exudyn_lie's explicit step does "
+                                  "not use",
+}
+
+
+def check_system_level(mbs):
+    """Refuse what is not an item but changes the model: GeneralContact and mbs-level user
+    functions that exudyn_lie does not honour (reads only; raises BridgeError)."""
+    n = int(mbs.NumberOfGeneralContacts())
+    if n > 0:
+        raise BridgeError(f"mbs has {n} GeneralContact(s) (mbs.AddGeneralContact): exudyn_lie does not "
+                          f"integrate GeneralContact; solve this model with exudyn.SolveDynamic, or remove the "
+                          f"contact (mbs.DeleteGeneralContact)")
+    for name, why in UNHONOURED_MBS_FUNCTIONS.items():
+        fn = getattr(mbs, "Get" + name, None)
+        if fn is None:
+            continue
+        uf = fn()
+        if not (isinstance(uf, (int, float)) and uf == 0) and uf is not None:
+            raise BridgeError(f"mbs has a {name} (mbs.Set{name}): exudyn_lie does not call it ({why}); "
+                              f"solve with exudyn.SolveDynamic, or remove it with mbs.Set{name}(0)")
 
 
 def _userfunction(d, key, what):
@@ -259,6 +301,10 @@ class _Reader:
             t = d["nodeType"]
             sc.nodeTypes[n] = t
             if t in NODE_KINDS:
+                if t == "RigidBodyEP" and not d.get("addConstraintEquation", True):
+                    raise BridgeError(f"node {n} ('{d.get('name', '')}') NodeRigidBodyEP: addConstraintEquation=False "
+                                      f"is not supported by exudyn_lie (it keeps the Euler parameters on the unit "
+                                      f"sphere itself); use the default addConstraintEquation=True")
                 byKind.setdefault(t, []).append(n)
             elif t in ("PointGround", "GenericData"):
                 continue
@@ -470,9 +516,6 @@ class _Reader:
     def read_connector(self, sc, o, d):
         t = d["objectType"]
         what = self._what("object", o, d)
-        if not d.get("activeConnector", True):
-            sc.skipped.append((what, "inactive (activeConnector=False)"))
-            return
         m0, m1 = (int(m) for m in d["markerNumbers"])
         rigid = t in ("ConnectorRigidBodySpringDamper", "ConnectorTorsionalSpringDamper")
         A = self.marker(m0, what, need_rotation=rigid)
@@ -480,7 +523,14 @@ class _Reader:
         if A.body == GROUND and B.body == GROUND:
             sc.skipped.append((what, "connects ground to ground (no force on any body)"))
             return
+        active = bool(d.get("activeConnector", True))
+        if not active:
+            # compiled with zero coefficients (no force, as Exudyn's inactive connector), so
+            # that a user function can switch it on during the solve (bridge.params)
+            sc.skipped.append((what, "inactive (activeConnector=False): no force until it is switched on"))
         name = d.get("name", "") or f"object{o}"
+        nPy = len(sc.pyItems)
+        counts = (len(sc.springs), len(sc.cartesianSprings), len(sc.torsionalSprings))
         if t == "ConnectorSpringDamper":
             uf = _userfunction(d, "springForceUserFunction", what)
             if uf is None:
@@ -534,6 +584,9 @@ class _Reader:
             rotA = A.rot @ np.asarray(d.get("rotationMarker0", np.eye(3)), float)
             rotB = B.rot @ np.asarray(d.get("rotationMarker1", np.eye(3)), float)
             self._py(sc, pyforces.RigidBodySpringDamper(self.mbs, o, d, A, B, rotA, rotB, uf))
+        sc.itemRows[("object", o)] = _new_row(sc, nPy, counts)
+        if not active:
+            deactivate(sc, sc.itemRows[("object", o)])
 
     def _py(self, sc, item):
         sc.pyItems.append(item)
@@ -568,18 +621,23 @@ class _Reader:
                                   f"{mf.index} (Marker{mf.markerType}); Exudyn refuses this combination too")
             if mf.body == GROUND:
                 sc.skipped.append((what, "acts on ground"))
+                sc.itemRows[("load", l)] = ("ground", -1)
                 continue
             name = d.get("name", "") or f"load{l}"
             if uf is not None:
+                sc.itemRows[("load", l)] = ("py", len(sc.pyItems))
                 sc.pyItems.append(pyforces.LoadUF(self.mbs, l, t, lv, mf, bodyFixed, uf,
                                                   sc.bodies[mf.body].mass, sc.bodies[mf.body].com))
                 continue
             Rm = mf.rotation()
             if t == "ForceVector":
+                sc.itemRows[("load", l)] = ("load", len(sc.loads))
                 sc.AddForce(mf.body, Rm @ lv if bodyFixed else lv, position=mf.pos, bodyFixed=bodyFixed, name=name)
             elif t == "TorqueVector":
+                sc.itemRows[("load", l)] = ("load", len(sc.loads))
                 sc.AddTorque(mf.body, Rm @ lv if bodyFixed else lv, bodyFixed=bodyFixed, name=name)
             else:
+                sc.itemRows[("load", l)] = ("massProportional", -1)
                 mass_prop[mf.body] = mass_prop.get(mf.body, np.zeros(3)) + lv
                 mass_prop_loads.append(name)
         # a mass-proportional load equal on every body is gravity (energy diagnostics include it)
@@ -590,6 +648,33 @@ class _Reader:
             for b, v in mass_prop.items():
                 B = sc.bodies[b]
                 sc.AddForce(b, B.mass * v, position=B.com, name=f"massProportional{b}")
+
+
+def _new_row(sc, nPy, counts):
+    """(table, row) of the item a connector read just added to ``sc``."""
+    if len(sc.pyItems) > nPy:
+        return ("py", nPy)
+    for table, before, now in zip(("spring", "cartesian", "torsional"), counts,
+                                  (len(sc.springs), len(sc.cartesianSprings), len(sc.torsionalSprings))):
+        if now > before:
+            return (table, before)
+    raise AssertionError("connector read without a scene item")
+
+
+def deactivate(sc, row):
+    """An inactive connector: zero force (the scene item's coefficients, or the Python
+    item's ``active`` flag)."""
+    table, k = row
+    if table == "py":
+        sc.pyItems[k].active = False
+        return
+    item = {"spring": sc.springs, "cartesian": sc.cartesianSprings, "torsional": sc.torsionalSprings}[table][k]
+    item.stiffness = item.stiffness * 0.0
+    item.damping = item.damping * 0.0
+    if table == "spring":
+        item.force = 0.0
+    elif table == "torsional":
+        item.torque = 0.0
 
 
 def _principal_torsion_angle(sc, A, B, rotA, rotB):
@@ -618,8 +703,10 @@ def SceneFromExudyn(mbs, configuration="initial") -> ExudynScene:
     from the item dictionaries; the scene then has no Exudyn AE indices, it is for
     validation).  ``mbs`` is not modified.  Raises :class:`BridgeError` for unsupported
     items."""
+    check_system_level(mbs)
     rd = _Reader(mbs, configuration)
     sc = ExudynScene(mbs)
+    sc.reader = rd
     sc.configuration = configuration.lower()
     rd.read_nodes(sc)
     rd.read_bodies(sc)

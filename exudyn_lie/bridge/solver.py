@@ -25,6 +25,11 @@ costs about a microsecond instead of two compiled calls (~5 us of argument unbox
 With a pre- or post-step user function (which may change the state) a chunk is one
 output long; with forces evaluated in Python (user functions of connectors and loads)
 the hook advances the simulator one output at a time.
+
+Parameters changed by user functions during the run (:mod:`.params`): the changed items are
+re-read before the next step; outputs integrated ahead with the old values are dropped and
+the run continues from the state in mbs.  The same restart serves a user function that set
+the state, and Exudyn's discontinuous iteration calling the hook again for the same step.
 """
 from __future__ import annotations
 
@@ -41,6 +46,8 @@ from ..mbs.compiled import auto_groups
 from ..mbs.simulator import Simulator
 from ..userwarn import warn_user
 from .fast import CHUNK_ROWS, NodeTable, OutputChunks
+from .params import ParameterWatch
+from .settings import check_settings
 from .reader import BridgeError, ExudynScene, SceneFromExudyn
 
 GROUP_ALIASES = {"se3": "SE3", "so3xr3": "SO3xR3", "so3r3": "SO3xR3", "auto": "auto"}
@@ -351,9 +358,47 @@ class LieGroupSolver:
             if rows == 0:
                 self.sim.RaiseStatus(ch.failure, ch.h)
         if not ch.on_plan(t1):
-            raise BridgeError(f"internal: Exudyn's step ends at t = {t1!r}, the planned output at "
-                              f"t = {ch.time_of_next()!r}")
+            raise BridgeError(f"Exudyn's time loop asks for the step ending at t = {t1!r} s, exudyn_lie planned its "
+                              f"output at t = {ch.time_of_next()!r} s: Exudyn changed its step size (after a failed "
+                              f"discontinuous iteration or a step reduction), which exudyn_lie's fixed steps do not "
+                              f"follow; check timeIntegration.discontinuous and the step settings")
         ch.pop()
+
+    def _finalize(self, solver, ss2):
+        """Exudyn's FinalizeSolver.  A user function's ``mbs.Modify*`` marks mbs as not
+        assembled (``systemIsConsistent = False``) although it changed only live fields (the
+        parameter watch stops the run otherwise); Exudyn's own solve finalizes such a run in
+        C++ and leaves the flag False, but the Python FinalizeSolver refuses: it runs with
+        the flag set, which is then put back."""
+        mbs = self.mbs
+        consistent = mbs.systemIsConsistent
+        if not consistent:
+            mbs.systemIsConsistent = True
+        try:
+            solver.FinalizeSolver(mbs, ss2)
+        finally:
+            if not consistent:
+                mbs.systemIsConsistent = False
+
+    def _restart_from_mbs(self, t):
+        """Continue from the state in mbs at time ``t`` (Exudyn's start of the step): a user
+        function changed the coordinates, Exudyn's discontinuous iteration repeats the step
+        (it resets the ODE2 coordinates to the start of the step), or changed parameters
+        invalidate the outputs integrated ahead."""
+        self._reread_current(t)
+        ch = self._chunks
+        if ch is not None:
+            ch.rows = ch.next = 0
+            ch.failure = None
+
+    def _apply_parameters(self, t):
+        """Parameters changed by user functions since the last step: the simulator must not
+        be ahead of Exudyn (outputs integrated with the old values are dropped), then only
+        the changed items are re-read (:class:`~.params.ParameterWatch`)."""
+        ch = self._chunks
+        if ch is not None and ch.next < ch.rows:
+            self._restart_from_mbs(t)
+        self._params.apply(t)
 
     def _reread_current(self, t):
         """A pre-step user function changed the coordinates: continue from them."""
@@ -387,13 +432,15 @@ class LieGroupSolver:
 
     def _plan(self, ss, nsteps, h, substeps):
         mbs = self.mbs
+        check_settings(ss)
+        # one Exudyn step per step: user step functions run, and Exudyn pauses, after every step
         userStep = bool(mbs.GetPreStepUserFunction()) or bool(mbs.GetPostStepUserFunction())
         if substeps is not None:
             k = int(substeps)
             if k < 1 or nsteps % k:
                 raise BridgeError(f"substeps={substeps} must be a positive divisor of numberOfSteps={nsteps}")
             return k, userStep
-        if userStep:
+        if userStep or ss.pauseAfterEachStep:
             return 1, userStep
         sol = ss.solution
         k = nsteps
@@ -572,22 +619,41 @@ class LieGroupSolver:
             push = self._push
             nExudyn = nsteps // k
             count = [0]
+            params = self._params = ParameterWatch(self)
+            marks = params.marks                 # non-empty: a user function changed parameters
+            steps = [t0, t0]                     # start and end time of the current Exudyn step
 
             it = solver.it                       # Exudyn's iteration data (live), read once per step
 
             def hook(mainSolver, mbs, settings):
                 try:
                     t1 = it.currentTime
-                    if watch and self._written is not None and not (
-                            np.array_equal(sdat.GetODE2Coordinates(configuration=cur), self._written[0])
-                            and np.array_equal(sdat.GetODE2Coordinates_t(configuration=cur), self._written[1])):
-                        self._reread_current(sim.t)
-                    count[0] += 1
+                    repeat = t1 == steps[1]
+                    if repeat:
+                        # Exudyn's discontinuous iteration calls the hook again for the same step,
+                        # with the ODE2 coordinates reset to the start of the step
+                        self._restart_from_mbs(steps[0])
+                    else:
+                        steps[0] = steps[1]
+                        steps[1] = t1
+                        count[0] += 1
+                        if watch and self._written is not None and not (
+                                np.array_equal(sdat.GetODE2Coordinates(configuration=cur), self._written[0])
+                                and np.array_equal(sdat.GetODE2Coordinates_t(configuration=cur), self._written[1])):
+                            self._restart_from_mbs(steps[0])     # a user function changed the state
+                    if marks or params.late:
+                        self._apply_parameters(steps[0])
                     if nextOutput is not None:
                         nextOutput(t1, nExudyn - count[0] + 1)
                     else:
                         tic = perf()
-                        nflag = advance(int(round((t1 - sim.t) / h)), h, needAcc)
+                        params.busy = True
+                        try:
+                            nflag = advance(int(round((t1 - sim.t) / h)), h, needAcc)
+                        finally:
+                            params.busy = False
+                        if params.late:
+                            params.apply(t1)         # refused: changed inside the step
                         timing["integration"] += perf() - tic
                         sim.t = t1
                         if nflag:
@@ -619,7 +685,7 @@ class LieGroupSolver:
 
                 def fast_hook(mainSolver, mbs, settings):
                     o = ch.next
-                    if o >= ch.rows:
+                    if o >= ch.rows or marks:
                         return hook(mainSolver, mbs, settings)
                     t1 = it.currentTime
                     if abs(ch.tStart + (o + 1) * dtOut - t1) > tolOut + 1e-12 * abs(t1):
@@ -632,6 +698,8 @@ class LieGroupSolver:
                             ae[:] = AEr[o]
                     ch.next = o + 1
                     count[0] += 1
+                    steps[0] = steps[1]
+                    steps[1] = t1
                     if showProgress and perf() > state["nextProgress"]:
                         self._progress(state, t1)
                     return True
@@ -639,13 +707,14 @@ class LieGroupSolver:
                 solver.SetUserFunctionNewton(self.mbs, fast_hook)
             else:
                 solver.SetUserFunctionNewton(self.mbs, hook)
-            ok = solver.SolveSteps(self.mbs, ss2)
+            with params:                         # Set*Parameter / Modify* recorded during the loop
+                ok = solver.SolveSteps(self.mbs, ss2)
             if ok and not needAcc:
                 self._write(True)                # final accelerations, as a native solve leaves them
             if ok:
                 self._write_torsion_data()       # the exact turned angles (Exudyn tracks per output)
             finalized = True
-            solver.FinalizeSolver(self.mbs, ss2)
+            self._finalize(solver, ss2)
         except BaseException:
             if not finalized:
                 try:

@@ -1,0 +1,467 @@
+"""Parameters changed during a solve: honoured as in a native solve, or a clear stop.
+
+User functions change item parameters while Exudyn's time loop runs: a PD controller sets
+``loadVector`` every step, a switch sets ``activeConnector``, a moving reference frame sets
+a ground marker's ``localPosition`` or a ground's ``referencePosition``.  A native solve
+reads the new value at its next evaluation; a pre-step change therefore acts on the whole
+following step, a post-step change on the step after it (Exudyn's ``InitializeStep`` calls
+the pre-step function before the step's Newton iteration, ``FinishStep`` the post-step
+function after it; ``CSolverBase::SolveSteps``).
+
+How the bridge does the same (:class:`ParameterWatch`): while Exudyn's time loop runs, the
+``exudyn.MainSystem`` methods ``Set{Object,Node,Marker,Load}Parameter`` and
+``Modify{Object,Node,Marker,Load}`` are wrapped (class attributes, restored in a
+``finally``) so that each call on the solved ``mbs`` records the item.  Before the next
+integration step the bridge re-reads only the recorded items and writes the compiled rows
+they own (``SceneData.lvec / lint``, ``spos / spar``, ``cpos / cpar``, ``trot / tpar``),
+or refreshes their Python force items (:mod:`.pyforces`).  A controller setting 12 load
+vectors per step costs 12 dictionary reads and 12 row writes, not a new scene.
+
+Every field of every supported item has a status in :data:`FIELDS`:
+
+* ``live``: read at the start, and a change during the solve acts from the next step;
+* ``fixed``: read at the start; it shapes the compiled model (markers, nodes, joint axes,
+  masses), so a change during the solve stops it with a :class:`BridgeError` naming the
+  item and the field, at the step where it changed;
+* ``refused``: only Exudyn's default is supported (refused before ``mbs`` is touched);
+* ``initial``: an initial value, used by ``Assemble`` only (no effect during a solve, as
+  in Exudyn);
+* ``ignored``: no effect on the motion (names, visualization ``V...`` fields).
+
+A change made from inside a force user function while the bridge integrates a step
+(Exudyn would see it at its next Newton evaluation, within the step) stops the solve: the
+bridge applies changes between steps only.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .reader import BridgeError, ExudynScene, _orthonormal, _userfunction
+
+LIVE, FIXED, REFUSED, INITIAL, IGNORED = "live", "fixed", "refused", "initial", "ignored"
+
+_MARKER_MOVES = "moves the marker: connectors and loads follow it; a joint using the marker stops the solve"
+_RIGID_NODE = {
+    "referenceCoordinates": (FIXED, "the node's reference frame; change the state with "
+                                    "mbs.systemData.SetODE2Coordinates(..., configuration=Current) instead"),
+    "initialCoordinates": (INITIAL, "set by Assemble (the initial state)"),
+    "initialVelocities": (INITIAL, "set by Assemble (the initial state)"),
+}
+_JOINT = {
+    "markerNumbers": (FIXED, "the joint's bodies"),
+    "activeConnector": (FIXED, "the joint's constraint rows are compiled (an inactive joint has none)"),
+    "constrainedAxes": (FIXED, "the joint's constraint rows"),
+    "rotationMarker0": (FIXED, "the joint frame on marker 0 (a moving joint frame needs its velocity and "
+                               "acceleration in the index-1 formulation)"),
+    "rotationMarker1": (FIXED, "the joint frame on marker 1"),
+}
+_UF_LIVE = (LIVE, "another Python function: live; switching between no function and a function stops the solve "
+                  "(compiled item vs Python item)")
+
+#: status and reason of every field of every supported Exudyn item type, keyed by
+#: ``(kind, type)`` with the type as in the item dictionary (``GetObject(i)['objectType']``)
+FIELDS = {
+    ("node", "RigidBodyRotVecLG"): dict(_RIGID_NODE),
+    ("node", "RigidBodyEP"): dict(_RIGID_NODE, addConstraintEquation=(
+        REFUSED, "False is refused: exudyn_lie keeps the Euler parameters on the unit sphere, Exudyn would "
+                 "need a user constraint")),
+    ("node", "RigidBodyRxyz"): dict(_RIGID_NODE),
+    ("node", "PointGround"): {"referenceCoordinates": (LIVE, "moves the markers on the ground node")},
+    ("node", "GenericData"): {
+        "initialCoordinates": (INITIAL, "a torsional spring's continuous angle at the start"),
+        "numberOfDataCoordinates": (FIXED, "set by Assemble")},
+    ("object", "Ground"): {k: (LIVE, "moves the markers on the ground: " + _MARKER_MOVES)
+                           for k in ("referencePosition", "referenceRotation", "referenceHT")},
+    ("object", "RigidBody"): {
+        "mass": (FIXED, "compiled mass matrix"), "inertia": (FIXED, "compiled mass matrix"),
+        "centerOfMass": (FIXED, "compiled mass matrix"), "nodeNumber": (FIXED, "the body's node")},
+    ("object", "JointSpherical"): {k: v for k, v in _JOINT.items() if not k.startswith("rotationMarker")},
+    ("object", "JointRevoluteZ"): {k: v for k, v in _JOINT.items() if k != "constrainedAxes"},
+    ("object", "JointPrismaticX"): {k: v for k, v in _JOINT.items() if k != "constrainedAxes"},
+    ("object", "JointGeneric"): dict(_JOINT, **{
+        "alternativeConstraints": (REFUSED, "True is refused (default rotation constraints only)"),
+        "offsetUserFunction": (REFUSED, "a moving joint offset is refused"),
+        "offsetUserFunction_t": (REFUSED, "a moving joint offset is refused"),
+        "offsetUserFunctionParameters": (IGNORED, "read only by offsetUserFunction, which is refused")}),
+    ("object", "ConnectorSpringDamper"): {
+        **{k: (LIVE, "force law") for k in ("stiffness", "damping", "referenceLength", "force", "velocityOffset")},
+        "activeConnector": (LIVE, "switches the force off and on"),
+        "springForceUserFunction": _UF_LIVE, "markerNumbers": (FIXED, "the connected bodies")},
+    ("object", "ConnectorCartesianSpringDamper"): {
+        **{k: (LIVE, "force law") for k in ("stiffness", "damping", "offset")},
+        "activeConnector": (LIVE, "switches the force off and on"),
+        "springForceUserFunction": _UF_LIVE, "markerNumbers": (FIXED, "the connected bodies")},
+    ("object", "ConnectorTorsionalSpringDamper"): {
+        **{k: (LIVE, "torque law") for k in ("stiffness", "damping", "offset", "torque", "velocityOffset",
+                                              "rotationMarker0", "rotationMarker1")},
+        "activeConnector": (LIVE, "switches the torque off and on"),
+        "springTorqueUserFunction": _UF_LIVE, "markerNumbers": (FIXED, "the connected bodies"),
+        "nodeNumber": (FIXED, "the data node of the continuous angle")},
+    ("object", "ConnectorRigidBodySpringDamper"): {
+        **{k: (LIVE, "force law (a Python item)") for k in ("stiffness", "damping", "offset", "rotationMarker0",
+                                                            "rotationMarker1", "useIntrinsicFormulation",
+                                                            "springForceTorqueUserFunction")},
+        "activeConnector": (LIVE, "switches the force off and on"),
+        "markerNumbers": (FIXED, "the connected bodies"),
+        "postNewtonStepUserFunction": (REFUSED, "acts in Exudyn's discontinuous iteration, which exudyn_lie "
+                                                "replaces"),
+        "nodeNumber": (IGNORED, "data coordinates read only by postNewtonStepUserFunction, which is refused")},
+    ("marker", "BodyRigid"): {"localHT": (LIVE, _MARKER_MOVES), "localPosition": (LIVE, _MARKER_MOVES),
+                              "bodyNumber": (FIXED, "the marker's body")},
+    ("marker", "BodyPosition"): {"localPosition": (LIVE, _MARKER_MOVES), "bodyNumber": (FIXED, "the marker's body")},
+    ("marker", "NodeRigid"): {"localHT": (LIVE, _MARKER_MOVES), "nodeNumber": (FIXED, "the marker's node")},
+    ("marker", "NodePosition"): {"nodeNumber": (FIXED, "the marker's node")},
+    ("marker", "BodyMass"): {"bodyNumber": (FIXED, "the marker's body")},
+    ("load", "ForceVector"): {
+        "loadVector": (LIVE, "the force"), "bodyFixed": (LIVE, "the force's frame"),
+        "loadVectorUserFunction": _UF_LIVE, "markerNumber": (FIXED, "the loaded body")},
+    ("load", "TorqueVector"): {
+        "loadVector": (LIVE, "the torque"), "bodyFixed": (LIVE, "the torque's frame"),
+        "loadVectorUserFunction": _UF_LIVE, "markerNumber": (FIXED, "the loaded body")},
+    ("load", "MassProportional"): {
+        "loadVector": (LIVE, "with a loadVectorUserFunction (a Python item); a constant one is compiled as "
+                             "gravity, and a change stops the solve"),
+        "loadVectorUserFunction": _UF_LIVE, "markerNumber": (FIXED, "the loaded body")},
+}
+_COMMON = {"name": (IGNORED, "a label"), "objectType": (IGNORED, "the item type"),
+           "nodeType": (IGNORED, "the item type"), "markerType": (IGNORED, "the item type"),
+           "loadType": (IGNORED, "the item type")}
+
+_KINDS = {  # kind -> (getter, type key, label)
+    "object": ("GetObject", "objectType", "object"),
+    "node": ("GetNode", "nodeType", "node"),
+    "marker": ("GetMarker", "markerType", "marker"),
+    "load": ("GetLoad", "loadType", "load"),
+}
+_PREFIX = {"object": "Object", "node": "Node", "marker": "Marker", "load": "Load"}
+_WRAPPED = {  # MainSystem method -> kind (the item index is the first argument)
+    "SetObjectParameter": "object", "SetNodeParameter": "node", "SetMarkerParameter": "marker",
+    "SetLoadParameter": "load", "ModifyObject": "object", "ModifyNode": "node", "ModifyMarker": "marker",
+    "ModifyLoad": "load",
+}
+_UF_KEY = {"ConnectorSpringDamper": "springForceUserFunction",
+           "ConnectorCartesianSpringDamper": "springForceUserFunction",
+           "ConnectorTorsionalSpringDamper": "springTorqueUserFunction",
+           "ConnectorRigidBodySpringDamper": "springForceTorqueUserFunction"}
+
+
+def is_visualization(key):
+    """Exudyn's convention: visualization fields start with a capital ``V`` (``Vshow``,
+    ``VgraphicsData``); every other field starts with a lower-case letter."""
+    return key[:1] == "V"
+
+
+def field_status(kind, itemType, key):
+    """``(status, reason)`` of field ``key`` of an Exudyn item, or None if unknown."""
+    if is_visualization(key):
+        return (IGNORED, "visualization")
+    if key in _COMMON:
+        return _COMMON[key]
+    return FIELDS.get((kind, itemType), {}).get(key)
+
+
+def _same(a, b):
+    """Equal Exudyn field values (numbers, arrays, lists, user-function dictionaries)."""
+    if isinstance(a, dict) or isinstance(b, dict) or callable(a) or callable(b):
+        fa = a.get("function", a) if isinstance(a, dict) else a
+        fb = b.get("function", b) if isinstance(b, dict) else b
+        return fa is fb
+    if isinstance(a, str) or isinstance(b, str):
+        return a == b
+    try:
+        return bool(np.array_equal(np.asarray(a, float), np.asarray(b, float)))
+    except (TypeError, ValueError):
+        return a == b
+
+
+def _finite(x, what, key):
+    v = np.asarray(x, float)
+    if not np.all(np.isfinite(v)):
+        raise BridgeError(f"{what}: {key} set to a non-finite value {x!r} during the solve")
+    return v
+
+
+class ParameterWatch:
+    """Records the items a user function changes during ``Solve`` and applies the changes
+    to the compiled scene before the next step.
+
+    ``marks`` (a list, empty when nothing changed: the per-step check is its truth value)
+    holds ``(kind, index, field or None, value or None)``; :meth:`apply` consumes it."""
+
+    def __init__(self, solver):
+        self.solver = solver
+        self.mbs = solver.mbs
+        self.scene: ExudynScene = solver.scene
+        self.reader = self.scene.reader
+        self.marks = []
+        self.busy = False            # True while the bridge integrates (changes then are refused)
+        self.late = []               # changes recorded while busy
+        self._saved = {}
+        self.updates = 0             # items re-read (for the bench and tests)
+        self._fastLoad = {}          # compiled load -> (its lvec row view, marker rotation if bodyFixed)
+        self._build_maps()
+
+    # ------------------------------------------------------------------ set-up
+    def _build_maps(self):
+        mbs, sd = self.mbs, self.mbs.systemData
+        self.snap = {}
+        self.nItems = {"object": sd.NumberOfObjects(), "node": sd.NumberOfNodes(), "marker": sd.NumberOfMarkers(),
+                       "load": sd.NumberOfLoads()}
+        self.markerUsers = {}        # marker -> [("load", l) | ("object", o)]
+        self.markersOn = {}          # ("object", ground o) / ("node", ground node n) -> [markers]
+        for o in range(self.nItems["object"]):
+            d = self.snap[("object", o)] = mbs.GetObject(o)
+            for m in d.get("markerNumbers", []):
+                self.markerUsers.setdefault(int(m), []).append(("object", o))
+        for l in range(self.nItems["load"]):
+            d = self.snap[("load", l)] = mbs.GetLoad(l)
+            self.markerUsers.setdefault(int(d["markerNumber"]), []).append(("load", l))
+        for m in range(self.nItems["marker"]):
+            d = self.snap[("marker", m)] = mbs.GetMarker(m)
+            if "bodyNumber" in d:
+                self.markersOn.setdefault(("object", int(d["bodyNumber"])), []).append(m)
+            elif "nodeNumber" in d:
+                self.markersOn.setdefault(("node", int(d["nodeNumber"])), []).append(m)
+        for n in range(self.nItems["node"]):
+            self.snap[("node", n)] = mbs.GetNode(n)
+        self.torsionOfSpring = {td.spring: td for td in self.scene.torsionData if td.spring is not None}
+
+    def __enter__(self):
+        import exudyn as exu
+        cls = exu.MainSystem
+        target = self.mbs
+        for name, kind in _WRAPPED.items():
+            orig = getattr(cls, name)
+            self._saved[name] = orig
+            setattr(cls, name, self._wrapper(orig, kind, name.startswith("Set"), target))
+        return self
+
+    def __exit__(self, *exc):
+        import exudyn as exu
+        for name, orig in self._saved.items():
+            setattr(exu.MainSystem, name, orig)
+        self._saved = {}
+        return False
+
+    def _wrapper(self, orig, kind, named, target):
+        marks, late = self.marks, self.late
+        watch = self
+
+        def wrapped(mbs, *args, **kw):
+            out = orig(mbs, *args, **kw)
+            if mbs is target:
+                if named and len(args) > 2:          # Set*Parameter(index, name, value): the common call
+                    # a load vector's value, copied (a controller may reuse its buffer): the short path
+                    mark = (kind, int(args[0]), args[1], tuple(args[2]) if args[1] == "loadVector" else None)
+                else:
+                    index = int(args[0]) if args else int(kw.get(kind + "Number", next(iter(kw.values()))))
+                    mark = (kind, index, kw.get("parameterName") if named else None, None)
+                (late if watch.busy else marks).append(mark)
+            return out
+        wrapped.__doc__ = orig.__doc__
+        wrapped.__wrapped__ = orig
+        return wrapped
+
+    # ------------------------------------------------------------------ apply
+    def what(self, kind, i, d=None):
+        d = self.snap.get((kind, i), {}) if d is None else d
+        return f"{_KINDS[kind][2]} {i} ('{d.get('name', '')}') {_PREFIX[kind]}{d.get(_KINDS[kind][1], '?')}"
+
+    def apply(self, t):
+        """Apply the recorded changes (made before the step that starts at ``t``)."""
+        if self.late:
+            kind, i, field, _ = self.late[0]
+            del self.late[:]
+            raise BridgeError(
+                f"{self.what(kind, i)}: {field or 'its dictionary'} was changed by a user function while exudyn_lie "
+                f"integrated the step ending at t = {t:.6g} s (a force or load user function); exudyn_lie applies "
+                f"parameter changes between steps: change it in a pre-step user function (mbs.SetPreStepUserFunction)")
+        marks = self.marks[:]              # (a repeated mark re-reads the item again: cheaper than de-duplicating)
+        del self.marks[:]
+        rebuild = {}
+        fast = self._fastLoad
+        for kind, i, field, value in marks:
+            if field == "loadVector" and kind == "load" and i in fast:
+                self._load_vector(i, fast[i], value, t)
+                continue
+            if i >= self.nItems[kind] or i < 0:
+                continue                 # Exudyn raised for this index; nothing was changed
+            getter = getattr(self.mbs, _KINDS[kind][0])
+            new = getter(i)
+            old = self.snap[(kind, i)]
+            itemType = new[_KINDS[kind][1]]
+            # a named field is checked directly; Modify*, and names that are aliases of a
+            # dictionary key (SetObjectParameter(i, 'physicsMass', ...) sets 'mass'), by a diff
+            keys = [field] if field in new else [k for k in new if not is_visualization(k)
+                                                 and not _same(new[k], old.get(k))]
+            for key in keys:
+                st = field_status(kind, itemType, key)
+                if st is None:
+                    raise BridgeError(f"{self.what(kind, i, new)}: field '{key}' changed at t = {t:.6g} s is not "
+                                      f"known to exudyn_lie; solve with exudyn.SolveDynamic")
+                status, why = st
+                if status in (FIXED, REFUSED) and not _same(new.get(key), old.get(key)):
+                    raise BridgeError(
+                        f"{self.what(kind, i, new)}: parameter '{key}' changed during the solve at t = {t:.6g} s; "
+                        f"exudyn_lie cannot change it during a run ({why}); set it before the solve, or solve "
+                        f"with exudyn.SolveDynamic")
+                if status == LIVE:
+                    rebuild[(kind, i)] = True
+            self.snap[(kind, i)] = new
+        if rebuild:
+            self._rebuild(list(rebuild), t)
+
+    def _rebuild(self, items, t):
+        rd = self.reader
+        markers = []
+        targets = {}
+        for kind, i in items:
+            d = self.snap[(kind, i)]
+            if kind == "object" and d["objectType"] == "Ground":
+                H = np.asarray(d["referenceRotation"], float)
+                rd.ground[i] = (np.asarray(d["referencePosition"], float), H)
+                markers += self.markersOn.get(("object", i), [])
+            elif kind == "node":         # a ground node (rigid-node reference coordinates are fixed)
+                markers += self.markersOn.get(("node", i), [])
+            elif kind == "marker":
+                markers.append(i)
+            else:
+                targets[(kind, i)] = None
+        for m in dict.fromkeys(markers):
+            rd.markers.pop(m, None)
+            for user in self.markerUsers.get(m, []):
+                if user[0] == "object" and self.snap[user]["objectType"].startswith("Joint"):
+                    raise BridgeError(
+                        f"{self.what(*user)}: its marker {m} ({self.what('marker', m)}) moved during the solve at "
+                        f"t = {t:.6g} s; exudyn_lie cannot move a joint's marker during a run (a moving joint frame "
+                        f"needs its velocity and acceleration in the index-1 formulation); solve with "
+                        f"exudyn.SolveDynamic, or attach the joint to a body whose motion you prescribe")
+                targets[user] = None
+        for kind, i in targets:
+            d = self.snap[(kind, i)]
+            if kind == "load":
+                self._load(i, d, t)
+            elif d["objectType"] in _UF_KEY:
+                self._connector(i, d, t)
+            # other objects (ground, rigid bodies, joints) have no live field besides the above
+            self.updates += 1
+
+    def _load(self, l, d, t):
+        sc, rd = self.scene, self.reader
+        table, k = sc.itemRows[("load", l)]
+        lt = d["loadType"]
+        what = self.what("load", l, d)
+        lv = _finite(d["loadVector"], what, "loadVector")
+        uf = _userfunction(d, "loadVectorUserFunction", what)
+        if (uf is not None) != (table == "py") and table != "ground":
+            raise BridgeError(f"{what}: loadVectorUserFunction was {'set' if uf is not None else 'removed'} during "
+                              f"the solve at t = {t:.6g} s; exudyn_lie compiles constant loads and evaluates loads "
+                              f"with a user function in Python, and cannot switch during a run; set it before "
+                              f"the solve")
+        mf = rd.marker(d["markerNumber"], what, allow_mass=(lt == "MassProportional"))
+        if table == "ground":
+            return
+        if table == "massProportional":
+            raise BridgeError(f"{what}: parameter 'loadVector' changed during the solve at t = {t:.6g} s; a constant "
+                              f"mass-proportional load is compiled as gravity and cannot change during a run; give "
+                              f"it a loadVectorUserFunction to vary it")
+        bodyFixed = bool(d.get("bodyFixed", False))
+        if mf.rot is None and (lt == "TorqueVector" or bodyFixed):
+            raise BridgeError(f"{what}: bodyFixed=True needs a marker with an orientation at t = {t:.6g} s "
+                              f"(Exudyn refuses it too)")
+        if table == "py":
+            item = sc.pyItems[k]
+            item.lv, item.uf, item.mf, item.bodyFixed = lv, uf, mf, bodyFixed
+            return
+        sd = self.solver.sim.sd
+        # compile_scene's row: lvec[k] = [vector, point], lint[k] = [body, kind, bodyFixed]
+        sd.lvec[k, 0] = mf.rotation() @ lv if bodyFixed else lv
+        sd.lvec[k, 1] = mf.pos if lt == "ForceVector" else 0.0
+        sd.lint[k, 2] = int(bodyFixed)
+        # from now on a new loadVector alone takes the short path (a controller's every step)
+        self._fastLoad[l] = (sd.lvec[k, 0], mf.rotation() if bodyFixed else None)
+
+    def _load_vector(self, l, row, value, t):
+        """Only ``loadVector`` of a compiled load changed: the new vector (the value Exudyn
+        accepted in ``SetLoadParameter``, read back if it is not a plain 3-vector) into its
+        row; the marker frame and bodyFixed are as at the last full re-read (:meth:`_load`)."""
+        target, Rm = row
+        try:
+            x, y, z = value                      # None (not recorded) raises TypeError
+            x, y, z = float(x), float(y), float(z)
+            ok = math.isfinite(x) and math.isfinite(y) and math.isfinite(z)
+        except (TypeError, ValueError):
+            v = self.mbs.GetLoadParameter(l, "loadVector")
+            x, y, z = (float(c) for c in v) if len(v) == 3 else (np.nan,) * 3
+            ok = math.isfinite(x) and math.isfinite(y) and math.isfinite(z)
+        if not ok:
+            self._load(l, self.mbs.GetLoad(l), t)          # raises with the full message
+            return
+        if Rm is None:
+            target[0] = x
+            target[1] = y
+            target[2] = z
+        else:
+            np.dot(Rm, np.array((x, y, z)), out=target)
+        # (the snapshot keeps the old vector: a later Modify* diff then re-reads the load, harmless)
+        self.updates += 1
+
+    def _connector(self, o, d, t):
+        sc, rd = self.scene, self.reader
+        row = sc.itemRows.get(("object", o))
+        if row is None:
+            return                       # ground to ground: no force on any body
+        table, k = row
+        t_ = d["objectType"]
+        what = self.what("object", o, d)
+        uf = _userfunction(d, _UF_KEY[t_], what)
+        if uf is not None and table != "py":
+            raise BridgeError(f"{what}: {_UF_KEY[t_]} was set during the solve at t = {t:.6g} s; exudyn_lie compiled "
+                              f"the connector without it and cannot switch during a run; set it before the solve")
+        active = bool(d.get("activeConnector", True))
+        on = 1.0 if active else 0.0
+        if table == "py":
+            self._python_connector(o, d, k, active, t)
+            return
+        m0, m1 = (int(m) for m in d["markerNumbers"])
+        rigid = t_ == "ConnectorTorsionalSpringDamper"
+        A = rd.marker(m0, what, need_rotation=rigid)
+        B = rd.marker(m1, what, need_rotation=rigid)
+        sd = self.solver.sim.sd
+        f = {key: _finite(d[key], what, key) for key in FIELDS[("object", t_)]
+             if FIELDS[("object", t_)][key][0] == LIVE and key in d and not key.endswith("UserFunction")
+             and key != "activeConnector"}
+        if table == "spring":
+            # compile_scene: spar = [k, d, L0, f0] with Exudyn's velocityOffset folded into f0 (reader)
+            sd.spos[k, 0], sd.spos[k, 1] = A.pos, B.pos
+            sd.spar[k] = (on * f["stiffness"], on * f["damping"], f["referenceLength"],
+                          on * (f["force"] - f["damping"] * f.get("velocityOffset", 0.0)))
+        elif table == "cartesian":
+            sd.cpos[k, 0], sd.cpos[k, 1] = A.pos, B.pos
+            sd.cpar[k, 0], sd.cpar[k, 1], sd.cpar[k, 2] = on * f["stiffness"], on * f["damping"], f["offset"]
+        elif table == "torsional":
+            td = self.torsionOfSpring.get(k)
+            turns0 = td.turns0 if td is not None else 0
+            sd.trot[k, 0] = _orthonormal(A.rot @ np.asarray(d.get("rotationMarker0", np.eye(3)), float))
+            sd.trot[k, 1] = _orthonormal(B.rot @ np.asarray(d.get("rotationMarker1", np.eye(3)), float))
+            sd.tpar[k] = (on * f["stiffness"], on * f["damping"], f["offset"] - 2.0 * math.pi * turns0,
+                          on * (f["torque"] - f["damping"] * f.get("velocityOffset", 0.0)))
+
+    def _python_connector(self, o, d, k, active, t):
+        """A connector evaluated in Python: rebuilt by the reader from its new dictionary,
+        keeping its angle tracking."""
+        sc = self.scene
+        scratch = ExudynScene(self.mbs)
+        scratch.bodies = sc.bodies
+        scratch.nodeTypes = sc.nodeTypes
+        self.reader.read_connector(scratch, o, d)
+        if not scratch.pyItems:
+            raise BridgeError(f"{self.what('object', o, d)}: changed at t = {t:.6g} s so that it is no longer "
+                              f"evaluated in Python; set its parameters before the solve")
+        item = sc.pyItems[k]
+        keep = {key: getattr(item, key) for key in ("prev",) if hasattr(item, key)}
+        item.__dict__.update(scratch.pyItems[0].__dict__)
+        item.__dict__.update(keep)
+        item.active = active

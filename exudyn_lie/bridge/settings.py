@@ -1,0 +1,73 @@
+"""What ``exl.SolveDynamic`` does with each field of Exudyn's ``simulationSettings``.
+
+The bridge runs Exudyn's own time loop (``MainSolverImplicitSecondOrder``: InitializeSolver,
+SolveSteps, FinalizeSolver) on a copy of the settings whose Newton iteration is replaced by
+the Munthe-Kaas step.  So everything the loop does around a step works as natively (outputs,
+console, real time, pauses), and everything that tunes Exudyn's own step (Newton, the
+linear solver, generalized-alpha, step-size control) has no object.  :data:`SETTINGS` gives
+the status of every field by the longest matching prefix (a test walks every field of
+``exu.SimulationSettings()``); :func:`check_settings` refuses what would be ignored silently
+otherwise.
+"""
+from __future__ import annotations
+
+from .params import IGNORED, LIVE, REFUSED
+from .reader import BridgeError
+
+HONOURED = LIVE
+
+_STEP = "tunes Exudyn's own time step (Newton iteration, linear solver, step-size control), which exudyn_lie's " \
+        "explicit fixed step replaces"
+_LOOP = "done by Exudyn's own time loop, which the bridge runs"
+
+#: (field prefix, status, reason); the longest matching prefix applies
+SETTINGS = (
+    ("timeIntegration.startTime", HONOURED, "start of the fixed steps"),
+    ("timeIntegration.endTime", HONOURED, "end of the fixed steps"),
+    ("timeIntegration.numberOfSteps", HONOURED, "the fixed step h = (endTime - startTime) / numberOfSteps"),
+    ("timeIntegration.verboseMode", HONOURED, _LOOP + " (it counts output periods as steps)"),
+    ("timeIntegration.verboseModeFile", HONOURED, _LOOP),
+    ("timeIntegration.stepInformation", HONOURED, _LOOP),
+    ("timeIntegration.realtime", HONOURED, _LOOP),
+    ("timeIntegration.simulateInRealtime", HONOURED, _LOOP),
+    ("timeIntegration.realtimeFactor", HONOURED, _LOOP),
+    ("timeIntegration.realtimeWaitMicroseconds", HONOURED, _LOOP),
+    ("timeIntegration.solverType", IGNORED, "the integrator is chosen by SolveDynamic(method=...)"),
+    ("timeIntegration.discontinuous", IGNORED, "no supported item has a post-Newton error; a repeated step "
+                                               "(Exudyn's discontinuous iteration) gives the same result"),
+    ("timeIntegration", IGNORED, _STEP),       # newton, generalizedAlpha, explicit, adaptive steps, tolerances
+    ("solution.restart.continueIfAvailable", REFUSED, "True: exudyn_lie does not continue from a restart file"),
+    ("solution", HONOURED, _LOOP + ": solution and restart files, sensors, their periods, image recording"),
+    ("solutionSettings", HONOURED, _LOOP + " (deprecated names of solution.*)"),
+    ("pauseAfterEachStep", HONOURED, _LOOP + " (one Exudyn step per step then)"),
+    ("show", HONOURED, _LOOP + " (Exudyn's statistics of its loop)"),
+    ("displayComputationTime", HONOURED, _LOOP),
+    ("displayGlobalTimers", HONOURED, _LOOP),
+    ("displayStatistics", HONOURED, _LOOP),
+    ("consolePrecision", HONOURED, _LOOP),
+    ("outputPrecision", HONOURED, _LOOP),
+    ("cleanUpMemory", HONOURED, _LOOP),
+    ("linearSolver", IGNORED, _STEP),
+    ("linearSolverSettings", IGNORED, _STEP),
+    ("linearSolverType", IGNORED, _STEP),
+    ("parallel", IGNORED, "threads of Exudyn's own Newton iteration; exudyn_lie's kernel runs in one thread"),
+    ("staticSolver", IGNORED, "used by Exudyn's static solver only"),
+)
+
+
+def setting_status(path):
+    """``(status, reason)`` of a settings field (dotted path), or None if not covered."""
+    best = None
+    for prefix, status, why in SETTINGS:
+        if path == prefix or path.startswith(prefix + "."):
+            if best is None or len(prefix) > len(best[0]):
+                best = (prefix, status, why)
+    return None if best is None else best[1:]
+
+
+def check_settings(ss):
+    """Refuse settings that exudyn_lie would otherwise ignore silently (reads only)."""
+    if ss.solution.restart.continueIfAvailable:
+        raise BridgeError("simulationSettings.solution.restart.continueIfAvailable = True: exudyn_lie does not "
+                          "continue from a restart file (its state would be overwritten by the initial values); "
+                          "set it to False, or continue with exudyn.SolveDynamic")

@@ -58,17 +58,24 @@ def test_unknown_method_still_refused():
         exl.get_method("RK5")
 
 
-def test_solve_dynamic_accepts_lower_case_method_and_logs_it(tmp_path, capsys):
-    """Method names as users type them; the solution-file header and the log say what ran:
-    method, group, step and the number of steps (not Exudyn's output steps)."""
+def _heavy_top_settings(endTime, numberOfSteps, verboseMode=0):
+    """The paper's heavy top (assembled) and quiet settings."""
     import exudyn as exu
     from exudyn_lie.models import heavy_top
     mbs, info = heavy_top.build()
     mbs.Assemble()
     ss = exu.SimulationSettings()
-    ss.timeIntegration.endTime = 0.2
-    ss.timeIntegration.numberOfSteps = 200
-    ss.timeIntegration.verboseMode = 1
+    ss.timeIntegration.endTime = endTime
+    ss.timeIntegration.numberOfSteps = numberOfSteps
+    ss.timeIntegration.verboseMode = verboseMode
+    ss.solution.file.write = False
+    return mbs, ss
+
+
+def test_solve_dynamic_accepts_lower_case_method_and_logs_it(tmp_path, capsys):
+    """Method names as users type them; the solution-file header and the log say what ran:
+    method, group, step and the number of steps (not Exudyn's output steps)."""
+    mbs, ss = _heavy_top_settings(0.2, 200, verboseMode=1)
     ss.solution.file.write = True
     ss.solution.file.writePeriod = 0.01
     ss.solution.file.name = str(tmp_path / "solution.txt")
@@ -142,15 +149,7 @@ def test_kernel_warm_in_the_test_session():
 
 
 def test_no_warnings_from_a_plain_solve():
-    import exudyn as exu
-    from exudyn_lie.models import heavy_top
-    mbs, info = heavy_top.build()
-    mbs.Assemble()
-    ss = exu.SimulationSettings()
-    ss.timeIntegration.endTime = 0.1
-    ss.timeIntegration.numberOfSteps = 100
-    ss.timeIntegration.verboseMode = 0
-    ss.solution.file.write = False
+    mbs, ss = _heavy_top_settings(0.1, 100)
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         assert exl.SolveDynamic(mbs, ss, showProgress=False)

@@ -853,8 +853,9 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
     chosen by ``method``); ``showHints`` / ``showCausingItems`` are accepted for
     compatibility.  Keyword-only extras: ``method`` (:func:`exudyn_lie.method_names`),
     ``liegroup`` ('SE3', 'SO3xR3', 'auto' or {rigid-body object index: group}),
-    ``stabilization``, ``projectInitial``, ``verbose`` (print the group per body and the
-    plan), ``showProgress`` (a progress line every 2 s on runs longer than 2 s),
+    ``stabilization``, ``projectInitial`` (default True: an inconsistent initial state is
+    projected onto the constraints with a warning; False: ConstraintError), ``verbose``
+    (print the group per body, the plan and the time spent), ``showProgress`` (a progress line every 2 s on runs longer than 2 s),
     ``substeps`` (internal steps per Exudyn step; default: one Exudyn step per output
     period), ``accelerations`` (write q_tt / multipliers; default: when something reads
     them).
@@ -866,7 +867,8 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
     during the run (see :meth:`LieGroupSolver.Solve`).
 
     Bad input raises before ``mbs`` is touched: the arguments, the settings and the whole
-    model (items, initial state, initial constraint consistency) are checked first; with
+    model (items, initial state, and with ``projectInitial=False`` the initial constraint
+    consistency) are checked first; with
     ``autoAssemble`` and an mbs that is not assembled, the model is checked from its item
     dictionaries (what ``mbs.Assemble()`` will set) and only then assembled."""
     import exudyn as exu

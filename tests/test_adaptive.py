@@ -82,14 +82,23 @@ def test_dopri5_tolerance_proportionality():
     assert np.all((errs / TOLS >= 0.1) & (errs / TOLS <= 10.0)), errs / TOLS
 
 
-@pytest.mark.parametrize("method", [BS3, Vern6], ids=lambda m: m.name)
-def test_other_pairs_converge_with_tol(method):
-    """BS3 and Vern6: the achieved error falls with tol (slope within [0.8, 1.3]) and stays
-    within a factor 30 of it (measured: BS3 error/tol 6-11, Vern6 0.01-0.4)."""
-    errs = np.array([achieved_error(run(method, tol)) for tol in TOLS])
+def test_bs3_tolerance_proportionality():
+    """BS3 meets the same targets (measured: slope 0.99, error/tol 3.6-4.3)."""
+    errs = np.array([achieved_error(run(BS3, tol)) for tol in TOLS])
     slope = np.polyfit(np.log(TOLS), np.log(errs), 1)[0]
-    assert 0.8 <= slope <= 1.3, (slope, errs)
-    assert np.all((errs / TOLS > 1 / 30) | (TOLS < 1e-6)) and np.all(errs / TOLS < 30), errs / TOLS
+    assert abs(slope - 1.0) <= 0.15, (slope, errs)
+    assert np.all((errs / TOLS >= 0.1) & (errs / TOLS <= 10.0)), errs / TOLS
+
+
+def test_vern6_error_falls_with_tol_and_stays_below_it():
+    """Vern6 over-delivers at tight tolerances (measured: slope 1.16, error/tol falling from
+    0.21 at 1e-3 to 0.014 at 1e-10; not yet in its asymptotic range, where the global error of
+    the 6th-order solution under a 5th-order estimate is proportional to tol): asserted are
+    a slope within 1 +- 0.3 and error/tol in [0.005, 10]."""
+    errs = np.array([achieved_error(run(Vern6, tol)) for tol in TOLS])
+    slope = np.polyfit(np.log(TOLS), np.log(errs), 1)[0]
+    assert abs(slope - 1.0) <= 0.3, (slope, errs)
+    assert np.all((errs / TOLS >= 0.005) & (errs / TOLS <= 10.0)), errs / TOLS
 
 
 # ------------------------------------------------------------------ agreement with mk.py
@@ -215,46 +224,110 @@ def test_dense_output_on_the_group_converges_at_its_order(method):
         assert slope <= q + 1 + 0.5, (method.name, errs, slope)
 
 
-def test_se3_fixed_screw_motion_stays_exact_between_steps():
-    """A body pivoting about a fixed world axis (a revolute joint to the ground written as
-    the rhs of a physical pendulum about a body point p off the frame origin): on SE3 every
-    stage and every dense-output increment is a multiple of the same screw, so the pivot
-    point p stays fixed and the axis keeps its direction at every output time to round-off;
-    on SO3xR3 the pivot drifts at the level of the tolerance."""
-    p = np.array([0.3, -0.2, 0.1])                    # pivot in body coordinates
-    e3 = np.array([0.0, 0.0, 1.0])                    # axis (body = world at t = 0)
-    d = np.array([0.5, 0.2, 0.0])                     # COM, body coordinates
-    m_, I_p = 2.0, 0.7                                # mass, inertia about the pivot axis
-    screw = np.r_[e3, np.cross(p, e3)]                # body twist per unit angular rate
+def _pendulum(group, p, e3, d, m_, I_p):
+    """Right-hand side of a physical pendulum about the body axis e3 through the body point
+    p (a revolute joint to the ground written as an ODE): angular acceleration
+    wdot = e3 . ((d - p) x R^T m g) / I_p about the pivot.  SE3: Vdot = wdot (e3, p x e3)
+    (the body twist is a multiple of that fixed screw); SO3xR3: omegadot = wdot e3 and
+    rddot = -R (omegadot x p + omega x (omega x p)) (the pivot R p + r fixed)."""
+    screw = np.r_[e3, np.cross(p, e3)]
 
-    def pend_rhs(t, g, V):
-        out = np.empty((1, 6))
+    def f(t, g, V):
         R = g[0][0]
-        tau = np.cross(d - p, R.T @ (m_ * GRAV))[2] if True else 0.0
-        wdot = tau / I_p
-        if GR_[0] is se3:
-            out[0] = wdot * screw
-        else:                                         # mixed velocity: rdot = -R (w x p)
-            w = V[0, :3]
-            out[0, :3] = wdot * e3
-            out[0, 3:] = -R @ np.cross(wdot * e3, p) - R @ np.cross(w, np.cross(w, p))
+        wdot = np.cross(d - p, R.T @ (m_ * GRAV))[2] / I_p
+        if group is se3:
+            return (wdot * screw)[None]
+        w = V[0, :3]
+        out = np.empty((1, 6))
+        out[0, :3] = wdot * e3
+        out[0, 3:] = -R @ np.cross(wdot * e3, p) - R @ np.cross(w, np.cross(w, p))
         return out
 
-    R0 = np.array([[1.0, 0, 0], [0, 0, -1], [0, 1, 0]])   # axis e3 horizontal in world
-    g0 = [(R0, -R0 @ p)]                              # pivot at the world origin
-    results = {}
+    return f, screw
+
+
+def test_se3_fixed_screw_motion_stays_exact_between_steps():
+    """A pendulum on a fixed horizontal axis through a body point p off the frame origin:
+    on SE3 every stage and every dense-output increment is a multiple of the same screw,
+    so the pivot stays at the world origin and the axis keeps its direction at every output
+    time between the steps to round-off; on SO3xR3 the pivot drifts (at the tolerance)."""
+    p = np.array([0.3, -0.2, 0.1])
+    e3 = np.array([0.0, 0.0, 1.0])
+    d = np.array([0.5, 0.2, 0.0])
+    R0 = np.array([[1.0, 0, 0], [0, 0, -1], [0, 1, 0]])   # the axis e3 horizontal in world
+    g0 = [(R0, -R0 @ p)]                                    # pivot at the world origin
+    w0 = 2.0
+    out = {}
     for grp in (se3, so3xr3):
-        GR_ = [grp]
-        w0 = 2.0
+        f, screw = _pendulum(grp, p, e3, d, 2.0, 0.7)
         V0_ = w0 * screw if grp is se3 else np.r_[w0 * e3, -R0 @ np.cross(w0 * e3, p)]
-        tr = MA.integrate_adaptive(DOPRI5, [grp], g0, V0_[None], pend_rhs, (0.0, 3.0),
-                                   rtol=1e-6, atol=1e-6, t_eval=np.linspace(0, 3.0, 61))
-        piv = np.array([tr.R[k, 0] @ p + tr.r[k, 0] for k in range(len(tr.t))])
-        axis = np.array([tr.R[k, 0] @ e3 for k in range(len(tr.t))])
-        results[grp.__name__] = (np.abs(piv).max(), np.abs(axis - R0 @ e3).max(),
-                                 tr.stats.accepted)
-    pivot_se3, axis_se3, n_se3 = results[se3.__name__]
-    pivot_mixed, _, n_mixed = results[so3xr3.__name__]
-    assert n_se3 < 61                                 # outputs between the steps
-    assert pivot_se3 < 1e-14 and axis_se3 < 1e-14, results
-    assert pivot_mixed > 1e-9, results
+        tr = MA.integrate_adaptive(DOPRI5, [grp], g0, V0_[None], f, (0.0, 3.0), rtol=1e-6,
+                                   atol=1e-6, t_eval=np.linspace(0.0, 3.0, 61))
+        pivot = max(np.abs(tr.R[k, 0] @ p + tr.r[k, 0]).max() for k in range(len(tr.t)))
+        axis = max(np.abs(tr.R[k, 0] @ e3 - R0 @ e3).max() for k in range(len(tr.t)))
+        out[grp] = (pivot, axis, tr.stats.accepted)
+    pivot, axis, n_steps = out[se3]
+    assert n_steps < 61                                     # outputs between the steps
+    assert pivot < 1e-14 and axis < 1e-14, out
+    assert out[so3xr3][0] > 1e-9, out
+
+
+# ------------------------------------------------------------------ the norm and its seam
+def test_increment_difference_is_the_difference_of_the_two_mk_increments():
+    """dPhi = h sum (b - b_hat) K from the stage arrays equals Phi(b) - Phi(b_hat) of two
+    reference MK steps (mk.mk_increment with the tableau and with a copy whose weights are
+    b_hat): the two solutions share the base point, their difference needs no chart."""
+    from exudyn_lie.integrators.tableau import ButcherTableau
+    h = 0.2
+    tab_hat = ButcherTableau(name="DOPRI5_hat", A=DOPRI5._exact_coeffs[0],
+                             b=["5179/57600", 0, "7571/16695", "393/640", "-92097/339200",
+                                "187/2100", "1/40"], c=DOPRI5._exact_coeffs[2], order=4)
+    assert np.array_equal(tab_hat.b, DOPRI5.b_hat)
+    Phi, dV = mk.mk_increment(DOPRI5, GROUPS, G0, V0, 0.0, h, rhs)
+    Phi_h, dV_h = mk.mk_increment(tab_hat, GROUPS, G0, V0, 0.0, h, rhs)
+    st = MA._Step(DOPRI5, 2)
+    st.sweep(GROUPS, mk.as_poses(G0), V0, 0.0, h, rhs, 0, DOPRI5.stages)
+    dPhi, dVd = np.zeros((2, 6)), np.zeros((2, 6))
+    C.increment_difference(DOPRI5.b - DOPRI5.b_hat, h, st.K, st.Vd, dPhi, dVd)
+    np.testing.assert_allclose(dPhi, Phi - Phi_h, rtol=0, atol=1e-15)
+    np.testing.assert_allclose(dVd, dV - dV_h, rtol=0, atol=1e-15)
+    assert np.abs(dPhi).max() > 1e-6                      # a real estimate, not zero
+
+
+def test_weighted_rms_scaling_by_kind():
+    """One unit error per kind: sc = atol_kind + rtol size with atol_angle = atol,
+    atol_length = atol L, atol_omega = atol / T, atol_vel = atol L / T; 12 components."""
+    tol = C.tolerances(1e-3, 1e-2, length_scale=2.0, time_scale=0.5)
+    r = np.array([[3.0, 4.0, 0.0]])                      # |r| = 5
+    V = np.array([[0.0, 6.0, 8.0, 0.0, 0.0, 7.0]])       # |omega| = 10, |v| = 7
+    for k, sc in [(0, 1e-3 + 1e-2), (3, 2e-3 + 5e-2), (6, 2e-3 + 1e-1), (9, 4e-3 + 7e-2)]:
+        dPhi, dV = np.zeros((1, 6)), np.zeros((1, 6))
+        (dPhi if k < 6 else dV)[0, k % 6] = sc           # one component at its scale
+        assert C.weighted_rms(dPhi, dV, r, r, V, V, tol) == pytest.approx(np.sqrt(1 / 12))
+    with pytest.raises(ValueError):
+        C.tolerances(0.0, 1e-6)
+
+
+def test_control_functions_run_inside_compiled_code():
+    """The controller, the norm and HINIT are njit functions without allocation
+    (_nrt=False): a compiled caller uses them directly."""
+    from numba import njit
+
+    @njit(cache=False)
+    def loop(P, S, e, K, Vd, r, V, tol, dPhi, dV):
+        h = C.hinit_second(C.hinit_first(1.0, 2.0), 2.0, 3.0, 5.0, 1.0)
+        n_acc = 0
+        for _ in range(20):
+            err = C.embedded_error_norm(e, h, K, Vd, r, r, V, V, tol, dPhi, dV)
+            C.count_rhs(S, 6.0)
+            if C.control_step(P, S, h, err) == C.STATUS_ACCEPT:
+                n_acc += 1
+            h = S[C.S_H]
+        return n_acc, h
+
+    rng = np.random.default_rng(1)
+    K, Vd = rng.normal(size=(7, 2, 6)), rng.normal(size=(7, 2, 6))
+    n_acc, h = loop(C.controller_params(4), C.controller_state(), DOPRI5.b - DOPRI5.b_hat,
+                    K, Vd, rng.normal(size=(2, 3)), rng.normal(size=(2, 6)),
+                    C.tolerances(1e-6, 1e-6), np.zeros((2, 6)), np.zeros((2, 6)))
+    assert 0 < n_acc <= 20 and h > 0

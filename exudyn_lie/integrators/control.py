@@ -135,18 +135,18 @@ def tolerances(atol, rtol, length_scale=1.0, time_scale=1.0):
     return tol
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, inline="always", _nrt=False)
 def _norm3(x, o):
     return math.sqrt(x[o] * x[o] + x[o + 1] * x[o + 1] + x[o + 2] * x[o + 2])
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, inline="always", _nrt=False)
 def _sq3_over(x, o, sc):
     a, b, c = x[o] / sc, x[o + 1] / sc, x[o + 2] / sc
     return a * a + b * b + c * c
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def weighted_rms(dPhi, dV, r0, r1, V0, V1, tol):
     """Weighted RMS (module docstring) of configuration differences ``dPhi`` (n, 6) in the
     Lie algebra (rotation first) and velocity differences ``dV`` (n, 6); the relative
@@ -165,7 +165,7 @@ def weighted_rms(dPhi, dV, r0, r1, V0, V1, tol):
     return math.sqrt(acc / (12.0 * n)) if n > 0 else 0.0
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def increment_difference(e, h, K, Vd, dPhi, dV):
     """``dPhi = h sum_j e_j K[j]``, ``dV = h sum_j e_j Vd[j]`` for the stage arrays of the
     MK loop (K, Vd of shape (s, n, 6), as in ``mbs.kernel.finish``) and ``e = b - b_hat``:
@@ -183,7 +183,7 @@ def increment_difference(e, h, K, Vd, dPhi, dV):
             dV[i, k] = h * v
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def embedded_error_norm(e, h, K, Vd, r0, r1, V0, V1, tol, dPhi, dV):
     """:func:`increment_difference` into the work arrays ``dPhi``, ``dV``, then
     :func:`weighted_rms`: the scaled error of one MK step of an embedded pair."""
@@ -191,7 +191,7 @@ def embedded_error_norm(e, h, K, Vd, r0, r1, V0, V1, tol, dPhi, dV):
     return weighted_rms(dPhi, dV, r0, r1, V0, V1, tol)
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def control_step(P, S, h, err):
     """Decide on a step of size ``h`` with scaled error ``err`` (PI controller, module
     docstring).  Updates the state ``S`` (counters, PI memory, ``S[S_H]`` = the next step
@@ -231,13 +231,13 @@ def control_step(P, S, h, err):
     return STATUS_ACCEPT
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def count_rhs(S, n):
     """Add ``n`` right-hand-side evaluations to the counter."""
     S[S_N_RHS] += n
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def hinit_first(d0, d1):
     """HINIT, first guess: ``h0 = 0.01 d0 / d1`` (1e-6 if d0 or d1 < 1e-5)."""
     if d0 < 1e-5 or d1 < 1e-5:
@@ -245,7 +245,7 @@ def hinit_first(d0, d1):
     return 0.01 * d0 / d1
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def hinit_second(h0, d1, d2, q, h_max):
     """HINIT, final step from the Euler probe: ``min(100 h0, h1, h_max)`` with
     ``h1 = (0.01 / max(d1, d2))^(1/q)`` (``max(1e-6, 1e-3 h0)`` if max(d1, d2) <= 1e-15)."""

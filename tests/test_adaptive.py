@@ -331,3 +331,19 @@ def test_control_functions_run_inside_compiled_code():
                     K, Vd, rng.normal(size=(2, 3)), rng.normal(size=(2, 6)),
                     C.tolerances(1e-6, 1e-6), np.zeros((2, 6)), np.zeros((2, 6)))
     assert 0 < n_acc <= 20 and h > 0
+
+
+def test_stage_argument_beyond_2pi_is_a_rejection_not_an_error():
+    """A first step whose stage arguments reach |Psi| = c h |omega| >= 2 pi (dexp^-1
+    singular, eq. MK1 undefined) is rejected and retried with h / 5; the constant-twist
+    motion (a one-parameter subgroup) is then exact."""
+    V = np.array([[0.0, 0.0, 10.0, 0.0, 0.0, 0.0]])
+
+    def still(t, g, V_):
+        return np.zeros((1, 6))
+
+    tr = MA.integrate_adaptive(DOPRI5, [se3], [(np.eye(3), np.zeros(3))], V, still, (0.0, 2.0),
+                               rtol=1e-8, atol=1e-8, h0=1.0)
+    assert tr.stats.rejected >= 1 and tr.stats.steps[0][1] == pytest.approx(0.2)
+    c, s_ = np.cos(20.0), np.sin(20.0)
+    np.testing.assert_allclose(tr.R[-1, 0], [[c, -s_, 0], [s_, c, 0], [0, 0, 1]], atol=1e-13)

@@ -125,8 +125,8 @@ class _Step:
 
     def sweep(self, gms, g, V, t, h, rhs, j0, j1, Vd_first=None):
         """Stages j0 <= j < j1 (eq. MK1).  ``Vd_first``: the FSAL value of stage 1.
-        Returns the number of rhs evaluations, or -1 if a stage argument reaches
-        STAGE_ANGLE_MAX (dexp^-1 singular: the step must be reduced).  The last stage's
+        Returns ``(n, ok)``: the number of rhs evaluations made, and False if a stage
+        argument reached STAGE_ANGLE_MAX (dexp^-1 singular: the step must be reduced).  The last stage's
         pose and velocity are kept (``self.last``): for an FSAL pair they are the step's
         result, bit for bit (same sums as :meth:`increments` with b)."""
         A, c, K, Vd = self.A, self.c, self.K, self.Vd
@@ -140,7 +140,7 @@ class _Step:
             else:
                 Psi = h * psi
                 if not np.all(np.linalg.norm(Psi[:, :3], axis=1) < STAGE_ANGLE_MAX):
-                    return -1
+                    return nrhs, False
                 gj = _translate(gms, g, Psi)
             if j == 0 and Vd_first is not None:
                 Vd[0] = Vd_first
@@ -154,7 +154,7 @@ class _Step:
                     gm.dexpinv_apply_into(np.ascontiguousarray(-Psi[i]),
                                           np.ascontiguousarray(Vj[i]), K[j, i])
             self.last = (gj, Vj)
-        return nrhs
+        return nrhs, True
 
     def increments(self, h, w):
         """``(h sum_j w_j K_j, h sum_j w_j Vd_j)`` over the stages of ``w``."""
@@ -249,18 +249,18 @@ def integrate_adaptive(tableau, groups, g0, V0, rhs, t_span, rtol=1e-6, atol=1e-
     while t < t1:
         if stats.accepted + stats.rejected >= max_steps:
             raise RuntimeError(f"integrate_adaptive: more than {max_steps} steps")
-        last = t + h >= t1 * (1.0 - 4 * np.finfo(float).eps) or t + h >= t1
+        last = t + h >= t1 - 4.0 * np.finfo(float).eps * abs(t1)   # no sliver step at the end
         h_try = t1 - t if last else h
-        nr = st.sweep(gms, g, V, t, h_try, rhs, 0, s, Vd_first)
-        if nr < 0:                                       # stage argument beyond 2 pi
+        nr, ok = st.sweep(gms, g, V, t, h_try, rhs, 0, s, Vd_first)
+        stats.rhs_evaluations += nr
+        Vd_first = st.Vd[0].copy()                       # stage 1 is reusable on rejection
+        if not ok:                                       # stage argument beyond 2 pi
             err = np.inf
         else:
-            stats.rhs_evaluations += nr
-            Vd_first = st.Vd[0].copy()                   # stage 1 is reusable on rejection
-            Phi, dVb = st.increments(h_try, tab.b)
             if tab.fsal:                                 # the last stage is the result
                 g_new, V_new = st.last
             else:
+                Phi, dVb = st.increments(h_try, tab.b)
                 g_new, V_new = _translate(gms, g, Phi), V + dVb
             err = C.embedded_error_norm(e, h_try, st.K[:s], st.Vd[:s], _origins(g),
                                         _origins(g_new), V, V_new, tol, dPhi, dV)
@@ -282,7 +282,7 @@ def integrate_adaptive(tableau, groups, g0, V0, rhs, t_span, rtol=1e-6, atol=1e-
                 store(g_new, V_new)
             else:
                 if st.m and not extra_done:
-                    stats.rhs_evaluations += st.sweep(gms, g, V, t, h_try, rhs, s, s + st.m)
+                    stats.rhs_evaluations += st.sweep(gms, g, V, t, h_try, rhs, s, s + st.m)[0]
                     extra_done = True
                 w = tab.dense.weights((tk - t) / h_try)
                 sig, dv = st.increments(h_try, w)

@@ -185,9 +185,13 @@ def test_hinit_gives_a_sensible_first_step():
     assert hs[0] / hs[1] == pytest.approx(1e5 ** 0.2, rel=0.3)
 
 
-def test_methods_without_a_pair_are_refused():
+def test_methods_without_a_pair_are_refused_and_pairs_found_by_name():
     with pytest.raises(ValueError, match="no embedded weights"):
         run(RK4, 1e-6)
+    with pytest.raises(ValueError, match="no embedded weights"):
+        run("rk4", 1e-6)
+    assert MA.resolve_pair("ode23") is BS3 and MA.resolve_pair("Verner65") is Vern6
+    assert MA.resolve_pair("dopri5") is DOPRI5
 
 
 # ------------------------------------------------------------------ dense output on the group

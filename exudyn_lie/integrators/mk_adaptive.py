@@ -44,9 +44,10 @@ import numpy as np
 
 from . import control as C
 from .mk import STAGE_ANGLE_MAX, as_poses, resolve_groups
-from .tableau import get_method
+from .tableau import PAIRS, get_method
 
-__all__ = ["AdaptiveStats", "AdaptiveTrajectory", "integrate_adaptive", "initial_step"]
+__all__ = ["AdaptiveStats", "AdaptiveTrajectory", "integrate_adaptive", "initial_step",
+           "resolve_pair"]
 
 
 @dataclass
@@ -187,6 +188,16 @@ def initial_step(tab, gms, g, V, t, rhs, tol, h_max, Vd0=None):
 
 
 # ------------------------------------------------------------------------- the driver
+def resolve_pair(method):
+    """A tableau object, or the name / alias of an embedded pair (PAIRS, which holds pairs
+    not yet in METHODS), or any catalogue name (get_method)."""
+    if isinstance(method, str):
+        for m in PAIRS:
+            if m.matches(method):
+                return m
+    return get_method(method)
+
+
 def integrate_adaptive(tableau, groups, g0, V0, rhs, t_span, rtol=1e-6, atol=1e-6, *,
                        t_eval=None, h0=None, h_min=0.0, h_max=np.inf, length_scale=1.0,
                        time_scale=1.0, max_steps=1_000_000, **controller):
@@ -198,7 +209,7 @@ def integrate_adaptive(tableau, groups, g0, V0, rhs, t_span, rtol=1e-6, atol=1e-
     keywords of :func:`.control.controller_params` (safety, fac_min, fac_max, beta).
     Returns an :class:`AdaptiveTrajectory` whose ``stats`` count the steps and evaluations.
     """
-    tab = get_method(tableau)
+    tab = resolve_pair(tableau)
     if tab.b_hat is None:
         raise ValueError(f"method '{tab.name}' has no embedded weights (b_hat): adaptive "
                          f"steps need an embedded pair, e.g. DOPRI5, BS3 or Vern6")

@@ -205,7 +205,8 @@ def integrate_adaptive(tableau, groups, g0, V0, rhs, t_span, rtol=1e-6, atol=1e-
 
     ``t_eval``: output times in ``t_span`` (dense output on the group; default: the end
     time only).  ``h0``: first step (default: HINIT).  ``h_min``, ``h_max``: step bounds; a
-    step below ``h_min`` raises ``StepSizeError`` (``.time``, ``.step``).  ``controller``:
+    rejected step whose retry would fall below ``h_min`` raises ``StepSizeError`` (with
+    ``.time`` and ``.step``).  ``controller``:
     keywords of :func:`.control.controller_params` (safety, fac_min, fac_max, beta).
     Returns an :class:`AdaptiveTrajectory` whose ``stats`` count the steps and evaluations.
     """

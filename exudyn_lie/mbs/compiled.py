@@ -9,7 +9,7 @@ from collections import namedtuple
 
 import numpy as np
 
-from .kernel import GID_SE3, GID_SO3xR3, ROW_ROT, ROW_TRANS_LOCAL, ROW_TRANS_WORLD
+from .codes import GID_SE3, GID_SO3xR3, ROW_ROT, ROW_TRANS_LOCAL, ROW_TRANS_WORLD
 from .linalg import REL_PIVOT_TOL, rcm_order
 from .scene import GROUND, Scene, SceneError
 
@@ -36,6 +36,7 @@ Work = namedtuple("Work", [
     "Jr", "W", "eta", "h", "lam", "Sb", "Sd", "perm", "ytmp", "info",
     "tmp6", "tmp12", "v3", "m3", "ident", "zero3", "zero6",
     "tphi", "watchBody", "watchEntry", "watchMax",
+    "ext",                            # [token of the external rhs evaluator (mbs.external), 0: none]
 ])
 N_SCRATCH3 = 20
 
@@ -241,4 +242,5 @@ def make_work(sd, nstages):
         tmp6=np.zeros(6), tmp12=np.zeros(12), v3=np.zeros((N_SCRATCH3, 3)), m3=np.zeros((2, 3, 3)),
         ident=np.eye(3), zero3=np.zeros(3), zero6=np.zeros(6), tphi=np.zeros(sd.tint.shape[0]),
         watchBody=np.zeros(0, np.int64), watchEntry=np.zeros((0, 2), np.int64), watchMax=np.zeros(0),
+        ext=np.zeros(1, np.int64),
     )

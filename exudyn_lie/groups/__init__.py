@@ -43,6 +43,9 @@ which also checks that the _into variants do not allocate.
 """
 from . import so3, se3, so3xr3, quaternion, dualquat
 
+# The one registry of body configuration groups (name -> module).  Every entry implements
+# the interface of :mod:`.interface` with the same signatures; its position is the group
+# id the compiled kernel uses (exudyn_lie.mbs.codes).  A new group: its module, one line here.
 GROUPS = {'SE3': se3, 'SO3xR3': so3xr3}
 
 __all__ = ["so3", "se3", "so3xr3", "quaternion", "dualquat", "GROUPS", "switch_report"]

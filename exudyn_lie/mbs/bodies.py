@@ -172,3 +172,67 @@ def body_dexpinv_stage(gid, X, Y, out):
         so3.dexpinv_apply_into(X[0:3], Y[0:3], out[0:3])
         for k in range(3):
             out[3 + k] = Y[3 + k]
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def body_inertial_forces(gid, Mi, mass, com, R, Vi, Qi):
+    """Subtract the velocity-dependent (gyroscopic / centrifugal) terms of one body from
+    its generalised force ``Qi``, in the body's velocity coordinates.
+
+    SE3, eq. (NE1): ``M Vdot = W + ad_V^T (M V)``, ``ad_V^T (L, p) = (-(w x L) - v x p, -(w x p))``.
+    SO3xR3: ``M^m Vdot = W - (w x Theta_P w, m R (w x (w x c)))``."""
+    w0, w1, w2 = Vi[0], Vi[1], Vi[2]
+    if gid == GID_SE3:
+        Lx = Mi[0, 0] * w0 + Mi[0, 1] * w1 + Mi[0, 2] * w2 + Mi[0, 3] * Vi[3] + Mi[0, 4] * Vi[4] + Mi[0, 5] * Vi[5]
+        Ly = Mi[1, 0] * w0 + Mi[1, 1] * w1 + Mi[1, 2] * w2 + Mi[1, 3] * Vi[3] + Mi[1, 4] * Vi[4] + Mi[1, 5] * Vi[5]
+        Lz = Mi[2, 0] * w0 + Mi[2, 1] * w1 + Mi[2, 2] * w2 + Mi[2, 3] * Vi[3] + Mi[2, 4] * Vi[4] + Mi[2, 5] * Vi[5]
+        px = Mi[3, 0] * w0 + Mi[3, 1] * w1 + Mi[3, 2] * w2 + Mi[3, 3] * Vi[3] + Mi[3, 4] * Vi[4] + Mi[3, 5] * Vi[5]
+        py = Mi[4, 0] * w0 + Mi[4, 1] * w1 + Mi[4, 2] * w2 + Mi[4, 3] * Vi[3] + Mi[4, 4] * Vi[4] + Mi[4, 5] * Vi[5]
+        pz = Mi[5, 0] * w0 + Mi[5, 1] * w1 + Mi[5, 2] * w2 + Mi[5, 3] * Vi[3] + Mi[5, 4] * Vi[4] + Mi[5, 5] * Vi[5]
+        a0, a1, a2 = _cross(w0, w1, w2, Lx, Ly, Lz)
+        b0, b1, b2 = _cross(Vi[3], Vi[4], Vi[5], px, py, pz)
+        c0, c1, c2 = _cross(w0, w1, w2, px, py, pz)
+        Qi[0] -= a0 + b0
+        Qi[1] -= a1 + b1
+        Qi[2] -= a2 + b2
+        Qi[3] -= c0
+        Qi[4] -= c1
+        Qi[5] -= c2
+    else:
+        Lx = Mi[0, 0] * w0 + Mi[0, 1] * w1 + Mi[0, 2] * w2
+        Ly = Mi[1, 0] * w0 + Mi[1, 1] * w1 + Mi[1, 2] * w2
+        Lz = Mi[2, 0] * w0 + Mi[2, 1] * w1 + Mi[2, 2] * w2
+        a0, a1, a2 = _cross(w0, w1, w2, Lx, Ly, Lz)
+        Qi[0] -= a0
+        Qi[1] -= a1
+        Qi[2] -= a2
+        c = com
+        if mass * (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]) > 0.0:
+            wc0, wc1, wc2 = _cross(w0, w1, w2, c[0], c[1], c[2])
+            e0, e1, e2 = _cross(w0, w1, w2, wc0, wc1, wc2)
+            for k in range(3):
+                Qi[3 + k] -= mass * (R[k, 0] * e0 + R[k, 1] * e1 + R[k, 2] * e2)
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def body_twist(gid, R, V, Vb):
+    """The body-fixed twist ``Vb = (omega, R^T rdot)`` of the body's group velocity ``V``
+    (SE3: ``V`` itself; SO3xR3: ``v_b = R^T v``)."""
+    for k in range(3):
+        Vb[k] = V[k]
+    if gid == GID_SE3:
+        for k in range(3):
+            Vb[3 + k] = V[3 + k]
+    else:
+        for k in range(3):
+            Vb[3 + k] = R[0, k] * V[3] + R[1, k] * V[4] + R[2, k] * V[5]
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def translation_dual(gid, a, RTa):
+    """``T^T a`` for a world vector ``a``, given ``RTa = R^T a``: the translational
+    velocity coordinates' share of ``a . rdot`` (``rdot = T v``: ``T = R`` for SE3,
+    ``I`` for SO3xR3).  Returns one of the two arrays (no copy)."""
+    if gid == GID_SE3:
+        return RTa
+    return a

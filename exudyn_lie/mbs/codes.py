@@ -1,11 +1,12 @@
 """Constants shared by the compiled kernel modules: group ids, constraint-row kinds, the
 columns of the integer tables of ``SceneData``, status codes, the stage-argument bound and
 the stabilisation levels."""
-from ..groups import so3
+from ..groups import GROUPS, so3
 
-
-GID_SE3 = 0
-GID_SO3xR3 = 1
+# group id of a body = position of its group in the one registry, exudyn_lie.groups.GROUPS
+GROUP_NAMES = tuple(GROUPS)
+GID_SE3 = GROUP_NAMES.index("SE3")
+GID_SO3xR3 = GROUP_NAMES.index("SO3xR3")
 
 ROW_TRANS_LOCAL = 0   # a = (R_A rotA)[:, ax] ; h = a . (pB - pA)
 ROW_TRANS_WORLD = 1   # a = e_ax (world)       ; h = a . (pB - pA)

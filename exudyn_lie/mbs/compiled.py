@@ -9,11 +9,11 @@ from collections import namedtuple
 
 import numpy as np
 
-from .codes import GID_SE3, GID_SO3xR3, ROW_ROT, ROW_TRANS_LOCAL, ROW_TRANS_WORLD
+from .codes import GROUP_NAMES, ROW_ROT, ROW_TRANS_LOCAL, ROW_TRANS_WORLD
 from .linalg import REL_PIVOT_TOL, rcm_order
 from .scene import GROUND, Scene, SceneError
 
-GROUP_IDS = {"SE3": GID_SE3, "SO3xR3": GID_SO3xR3}
+GROUP_IDS = {name: gid for gid, name in enumerate(GROUP_NAMES)}
 GROUP_NAMES = {v: k for k, v in GROUP_IDS.items()}
 
 # Per feature: an integer table (body indices, flags) and float tables; zero rows when the

@@ -7,8 +7,8 @@ of ``hddot``: for ``h = a . d`` (a an axis, d a point difference)
 is quadratic in the velocities."""
 from numba import njit
 
-from .bodies import _cross, _matTvec, _side, body_axis, body_point
-from .codes import GID_SE3, J_BODY_A, J_BODY_B, J_NROW, J_ROW0, ROW_AX, ROW_BX, ROW_KIND, ROW_ROT, ROW_TRANS_LOCAL
+from .bodies import _cross, _matTvec, _side, body_axis, body_point, translation_dual
+from .codes import J_BODY_A, J_BODY_B, J_NROW, J_ROW0, ROW_AX, ROW_BX, ROW_KIND, ROW_ROT, ROW_TRANS_LOCAL
 
 
 # --------------------------------------------------------------------------- constraints
@@ -99,28 +99,20 @@ def joint_rows(j, gid, jint, jpos, jrot, rint, R, r, V, h, Jr, eta, v3, ident, z
                 Jr[q, 0] = c0
                 Jr[q, 1] = c1
                 Jr[q, 2] = c2
-                if gA == GID_SE3:              # v_A: -T_A^T a
-                    Jr[q, 3] = -RtA[0]
-                    Jr[q, 4] = -RtA[1]
-                    Jr[q, 5] = -RtA[2]
-                else:
-                    Jr[q, 3] = -ax[0]
-                    Jr[q, 4] = -ax[1]
-                    Jr[q, 5] = -ax[2]
+                Ta = translation_dual(gA, ax, RtA)     # v_A: -T_A^T a
+                Jr[q, 3] = -Ta[0]
+                Jr[q, 4] = -Ta[1]
+                Jr[q, 5] = -Ta[2]
             if b >= 0:
                 _matTvec(RB, ax, RtA)          # RB^T a
                 c0, c1, c2 = _cross(sB[0], sB[1], sB[2], RtA[0], RtA[1], RtA[2])
                 Jr[q, 6] = c0
                 Jr[q, 7] = c1
                 Jr[q, 8] = c2
-                if gB == GID_SE3:
-                    Jr[q, 9] = RtA[0]
-                    Jr[q, 10] = RtA[1]
-                    Jr[q, 11] = RtA[2]
-                else:
-                    Jr[q, 9] = ax[0]
-                    Jr[q, 10] = ax[1]
-                    Jr[q, 11] = ax[2]
+                Ta = translation_dual(gB, ax, RtA)     # v_B: T_B^T a
+                Jr[q, 9] = Ta[0]
+                Jr[q, 10] = Ta[1]
+                Jr[q, 11] = Ta[2]
 
 
 @njit(cache=True, inline="always", _nrt=False)

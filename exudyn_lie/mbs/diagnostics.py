@@ -2,8 +2,7 @@
 import numpy as np
 from numba import njit
 
-from .bodies import _side, body_point
-from .codes import GID_SE3
+from .bodies import _side, body_point, body_twist
 from .constraints import joints_rows
 from .forces import torsion_angle
 
@@ -15,15 +14,7 @@ def kinetic_and_gravity(gid, M, mass, com, gravity, R, r, V, Vb):
     ekin = 0.0
     egrav = 0.0
     for i in range(gid.shape[0]):
-        # body-fixed twist: v_b = R^T v for mixed bodies
-        for k in range(3):
-            Vb[k] = V[i, k]
-        if gid[i] == GID_SE3:
-            for k in range(3):
-                Vb[3 + k] = V[i, 3 + k]
-        else:
-            for k in range(3):
-                Vb[3 + k] = R[i, 0, k] * V[i, 3] + R[i, 1, k] * V[i, 4] + R[i, 2, k] * V[i, 5]
+        body_twist(gid[i], R[i], V[i], Vb)
         for a in range(6):
             for c in range(6):
                 ekin += 0.5 * Vb[a] * M[i, a, c] * Vb[c]

@@ -4,8 +4,8 @@ and ``compute_forces``, which adds those a scene has."""
 import numpy as np
 from numba import njit
 
-from .bodies import _cross, _matvec, _side, add_point_force, add_world_torque, body_point
-from .codes import GID_SE3, L_BODY, L_FIXED, L_KIND
+from .bodies import _matvec, _side, add_point_force, add_world_torque, body_inertial_forces, body_point
+from .codes import L_BODY, L_FIXED, L_KIND
 
 
 # --------------------------------------------------------------------------- forces
@@ -153,46 +153,10 @@ def torsion_angles(gid, tint, trot, tphi, R, r, V, m3, ident, zero3, zero6):
 
 @njit(cache=True, inline="always", _nrt=False)
 def inertial_forces(gid, M, mass, com, R, V, Q):
-    """Velocity-dependent (gyroscopic / centrifugal) terms of every body.
-
-    SE3, eq. (NE1): ``M Vdot = W + ad_V^T (M V)``, ``ad_V^T (L, p) = (-(w x L) - v x p, -(w x p))``.
-    SO3xR3: ``M^m Vdot = W - (w x Theta_P w, m R (w x (w x c)))``."""
+    """Velocity-dependent (gyroscopic / centrifugal) terms of every body, in its group
+    (:func:`~.bodies.body_inertial_forces`)."""
     for i in range(gid.shape[0]):
-        Mi = M[i]
-        Vi = V[i]
-        Qi = Q[i]
-        w0, w1, w2 = Vi[0], Vi[1], Vi[2]
-        if gid[i] == GID_SE3:
-            Lx = Mi[0, 0] * w0 + Mi[0, 1] * w1 + Mi[0, 2] * w2 + Mi[0, 3] * Vi[3] + Mi[0, 4] * Vi[4] + Mi[0, 5] * Vi[5]
-            Ly = Mi[1, 0] * w0 + Mi[1, 1] * w1 + Mi[1, 2] * w2 + Mi[1, 3] * Vi[3] + Mi[1, 4] * Vi[4] + Mi[1, 5] * Vi[5]
-            Lz = Mi[2, 0] * w0 + Mi[2, 1] * w1 + Mi[2, 2] * w2 + Mi[2, 3] * Vi[3] + Mi[2, 4] * Vi[4] + Mi[2, 5] * Vi[5]
-            px = Mi[3, 0] * w0 + Mi[3, 1] * w1 + Mi[3, 2] * w2 + Mi[3, 3] * Vi[3] + Mi[3, 4] * Vi[4] + Mi[3, 5] * Vi[5]
-            py = Mi[4, 0] * w0 + Mi[4, 1] * w1 + Mi[4, 2] * w2 + Mi[4, 3] * Vi[3] + Mi[4, 4] * Vi[4] + Mi[4, 5] * Vi[5]
-            pz = Mi[5, 0] * w0 + Mi[5, 1] * w1 + Mi[5, 2] * w2 + Mi[5, 3] * Vi[3] + Mi[5, 4] * Vi[4] + Mi[5, 5] * Vi[5]
-            a0, a1, a2 = _cross(w0, w1, w2, Lx, Ly, Lz)
-            b0, b1, b2 = _cross(Vi[3], Vi[4], Vi[5], px, py, pz)
-            c0, c1, c2 = _cross(w0, w1, w2, px, py, pz)
-            Qi[0] -= a0 + b0
-            Qi[1] -= a1 + b1
-            Qi[2] -= a2 + b2
-            Qi[3] -= c0
-            Qi[4] -= c1
-            Qi[5] -= c2
-        else:
-            Lx = Mi[0, 0] * w0 + Mi[0, 1] * w1 + Mi[0, 2] * w2
-            Ly = Mi[1, 0] * w0 + Mi[1, 1] * w1 + Mi[1, 2] * w2
-            Lz = Mi[2, 0] * w0 + Mi[2, 1] * w1 + Mi[2, 2] * w2
-            a0, a1, a2 = _cross(w0, w1, w2, Lx, Ly, Lz)
-            Qi[0] -= a0
-            Qi[1] -= a1
-            Qi[2] -= a2
-            c = com[i]
-            if mass[i] * (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]) > 0.0:
-                wc0, wc1, wc2 = _cross(w0, w1, w2, c[0], c[1], c[2])
-                e0, e1, e2 = _cross(w0, w1, w2, wc0, wc1, wc2)
-                Ri = R[i]
-                for k in range(3):
-                    Qi[3 + k] -= mass[i] * (Ri[k, 0] * e0 + Ri[k, 1] * e1 + Ri[k, 2] * e2)
+        body_inertial_forces(gid[i], M[i], mass[i], com[i], R[i], V[i], Q[i])
 
 
 @njit(cache=True, inline="always", _nrt=False)

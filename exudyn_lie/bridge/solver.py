@@ -129,7 +129,7 @@ class LieGroupSolver:
     def _groups(self, sc: ExudynScene):
         auto = auto_groups(sc)
         tied = set(sc.pyConnectedBodies)
-        for it in sc.joints + sc.springs + sc.cartesianSprings + sc.torsionalSprings + sc.rigidSprings:
+        for it in sc.joints + sc.connectors():
             tied.update([it.bodyA, it.bodyB])
         why = {}
         for b in range(sc.nBodies):

@@ -125,7 +125,7 @@ def auto_groups(scene: Scene):
     constrained = set()
     for j in scene.joints:
         constrained.update([j.bodyA, j.bodyB])
-    for s in scene.springs + scene.cartesianSprings + scene.torsionalSprings + scene.rigidSprings:
+    for s in scene.connectors():
         constrained.update([s.bodyA, s.bodyB])
     out = []
     for i, b in enumerate(scene.bodies):

@@ -1,4 +1,6 @@
 """Constraint stabilisation on the group: position (Gauss-Newton) and velocity projection."""
+from collections import namedtuple
+
 from numba import njit
 
 from .bodies import exp_compose
@@ -7,9 +9,16 @@ from .constraints import joints_rows
 from .index1 import schur_correct, schur_solve, subtract_rows_transposed
 
 
+# the arguments of project, by what they are (built by project_state from SceneData / Work)
+Joints = namedtuple("Joints", ["gid", "jint", "jpos", "jrot", "rint"])           # the joint tables
+Schur = namedtuple("Schur", ["Minv", "bw", "redundant", "pivotTol",              # J M^-1 J^T: data...
+                             "W", "lam", "Sb", "Sd", "perm", "ytmp", "info", "tmp12"])   # ... and work
+Rows = namedtuple("Rows", ["h", "Jr", "eta"])                                    # the rows at a state
+Scratch = namedtuple("Scratch", ["Psi", "v3", "m3", "ident", "zero3", "zero6"])
+
+
 @njit(cache=True, _nrt=False)
-def project(level, gid, Minv, jint, jpos, jrot, rint, bw, redundant, pivotTol, R, r, V, h, Jr, eta, W, lam, Sb,
-            Sd, perm, ytmp, info, tmp12, Psi, v3, m3, ident, zero3, zero6):
+def project(level, joints, schur, rows, scratch, R, r, V):
     """Constraint stabilisation (Simulator(stabilization=...)), both on the group:
 
     * positions (``level`` 2): Gauss-Newton ``g_i <- g_i exp(delta_i)``,
@@ -18,6 +27,10 @@ def project(level, gid, Minv, jint, jpos, jrot, rint, bw, redundant, pivotTol, R
     * velocities (``level`` >= 1): ``V <- V - M^-1 J^T (J M^-1 J^T)^-1 J V``.
 
     Returns a status code (STATUS_PROJECTION if max |h| stays above the tolerance)."""
+    gid, jint, jpos, jrot, rint = joints
+    Minv, bw, redundant, pivotTol, W, lam, Sb, Sd, perm, ytmp, info, tmp12 = schur
+    h, Jr, eta = rows
+    Psi, v3, m3, ident, zero3, zero6 = scratch
     nb = gid.shape[0]
     if level >= STAB_POSITION:
         scale = 1.0
@@ -63,6 +76,7 @@ def project(level, gid, Minv, jint, jpos, jrot, rint, bw, redundant, pivotTol, R
 def project_state(sd, wk, level, R, r, V):
     if sd.nrows == 0:
         return STATUS_OK
-    return project(level, sd.gid, sd.Minv, sd.jint, sd.jpos, sd.jrot, sd.rint, sd.bandwidth, sd.redundant,
-                   sd.pivotTol, R, r, V, wk.h, wk.Jr, wk.eta, wk.W, wk.lam, wk.Sb, wk.Sd, wk.perm, wk.ytmp, wk.info,
-                   wk.tmp12, wk.Psi, wk.v3, wk.m3, wk.ident, wk.zero3, wk.zero6)
+    return project(level, Joints(sd.gid, sd.jint, sd.jpos, sd.jrot, sd.rint),
+                   Schur(sd.Minv, sd.bandwidth, sd.redundant, sd.pivotTol, wk.W, wk.lam, wk.Sb, wk.Sd, wk.perm,
+                         wk.ytmp, wk.info, wk.tmp12),
+                   Rows(wk.h, wk.Jr, wk.eta), Scratch(wk.Psi, wk.v3, wk.m3, wk.ident, wk.zero3, wk.zero6), R, r, V)

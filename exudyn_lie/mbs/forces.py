@@ -151,10 +151,11 @@ def torsion_angles(gid, tint, trot, tphi, R, r, V, m3, ident, zero3, zero6):
         tphi[s] = phi
 
 
-@njit(cache=True, inline="always", _nrt=False)
+@njit(cache=True, _nrt=False)
 def inertial_forces(gid, M, mass, com, R, V, Q):
     """Velocity-dependent (gyroscopic / centrifugal) terms of every body, in its group
-    (:func:`~.bodies.body_inertial_forces`)."""
+    (:func:`~.bodies.body_inertial_forces`, inlined here; this loop is compiled on its own:
+    one call per stage, and mk_steps compiles faster than with a nested inline)."""
     for i in range(gid.shape[0]):
         body_inertial_forces(gid[i], M[i], mass[i], com[i], R[i], V[i], Q[i])
 

@@ -20,6 +20,8 @@ subclass), :class:`SimulationError` (a run failed) with :class:`ConstraintError`
 """
 __version__ = "0.1.0"
 
+from . import _numba_cache  # noqa: E402,F401  (first: the cache key of every compiled function)
+
 from .integrators.tableau import get_method, method_names  # noqa: E402
 from .mbs import (GROUND, ConstraintError, Scene, SceneError, SimulationError,  # noqa: E402
                   Simulator, StepSizeError)

@@ -169,7 +169,7 @@ def _run_exl(case):
     om, ve = twist_to_world_velocity(sim.gid, sim.R, sim.V)
     return dict(times=times, setup=setup, build=tBuild, steps=N, h=h,
                 R=sim.R.copy(), r=sim.r.copy(), omega=om, vel=ve, groups=list(sim.groups),
-                stages=int(len(sim.b)))
+                stages=int(len(sim.method.stages)))   # stages evaluated per step
 
 
 # --------------------------------------------------------------------------- native runs

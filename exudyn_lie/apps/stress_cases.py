@@ -219,13 +219,14 @@ SWITCH_EDGES = (0.0, so3.T_SWITCH_EXP, se3.T_SWITCH_DEXP, se3.T_SWITCH_DEXPINV, 
 
 def collect_stage_arguments(sim, h, nsteps):
     """Advance ``sim`` by ``nsteps`` MK steps stage by stage (the kernel's own compiled
-    pieces, in the order of ``kernel.mk_steps``) and return every group-map argument:
+    pieces, in the order of ``stepper.mk_steps``) and return every group-map argument:
     ``(gid, 'stage', Psi_j)`` (exp(Psi_j) and dexpinv_{-Psi_j}) and ``(gid, 'step', Phi)``."""
     sd, wk = sim.sd, sim.wk
-    A, b, c = sim.A, sim.b, sim.c
+    tab = sim.method
+    A, c = tab.A, tab.c
     out = []
     for n in range(nsteps):
-        for j in range(len(b)):
+        for j in tab.stages:
             if kernel.mk_stage_state(sd, wk, A, j, h, sim.R, sim.r, sim.V) != kernel.STATUS_OK:
                 raise RuntimeError(f"stage argument beyond the guard {kernel.STAGE_ARG_MAX:.4f}")
             if j > 0:
@@ -235,7 +236,7 @@ def collect_stage_arguments(sim, h, nsteps):
             if st != kernel.STATUS_OK:
                 raise RuntimeError(f"rhs status {st}")
             kernel.mk_stage_k(sd, wk, j)
-        kernel.mk_finish(sd, wk, b, h, sim.R, sim.r, sim.V)
+        kernel.mk_finish(sd, wk, tab, h, sim.R, sim.r, sim.V)
         for i in range(sd.nb):
             out.append((int(sd.gid[i]), "step", wk.Psi[i].copy()))
         sim.t += h
@@ -1074,7 +1075,7 @@ def fd_check(sim, eps=(1e-4, 5e-5)):
         for i in range(nb):
             Rn = np.zeros((3, 3))
             rn = np.zeros(3)
-            kernel._exp_compose(int(sd.gid[i]), R0[i], r0[i], np.ascontiguousarray(delta[i]), Rn, rn,
+            kernel.exp_compose(int(sd.gid[i]), R0[i], r0[i], np.ascontiguousarray(delta[i]), Rn, rn,
                                 np.zeros((3, 3)), np.zeros(3))
             R[i], r[i] = Rn, rn
         return sim.jacobian(R, r, V0)[0]

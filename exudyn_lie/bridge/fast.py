@@ -7,13 +7,13 @@ ten steps per output.  So :class:`OutputChunks` lets ``kernel.mk_steps`` integra
 of output steps in one call, recording the state (and accelerations / multipliers) at each
 output, converts the chunk to node coordinates in one call of
 :func:`~exudyn_lie.bridge.nodes.write_rows`, and per Exudyn step only copies one row into
-mbs.  Where a user function may change the state between outputs the chunk is one output
-long.  Both calls go through entry points resolved once (:func:`entry_point`).  Used when
-the simulator runs its pure compiled loop (no Python forces).
+mbs.  Where a user function may change the state between outputs, or Python forces run, the
+chunk is one output long.  Both calls go through entry points resolved once
+(:func:`entry_point`).  Every output path of the bridge goes through here.
 """
 import numpy as np
 
-from ..mbs import kernel
+from ..mbs import kernel, stepper
 from .nodes import NCOORD_MAX, write_rows
 
 CHUNK_SECONDS = 0.05        # aimed wall time of one chunk (progress, responsiveness)
@@ -102,9 +102,9 @@ class OutputChunks:
         n = max(1, min(int(nout), self.size))
         t0 = sim.t
         acc = n if self.doacc else 0
-        a1 = (sim.sd, sim.wk, sim.A, sim.b, sim.c, float(t0), h, n * nsub, sim.R, sim.r, sim.V, self.vmax, nsub,
+        a1 = (sim.sd, sim.wk, sim.method, sim.control, float(t0), h, n * nsub, sim.R, sim.r, sim.V, self.vmax, nsub,
               self.Ro[:n], self.ro[:n], self.Vo[:n], self.Vdo[:acc], self.lamo[:acc])
-        st, done = _call(self._ep, "mk", kernel.mk_steps, a1)
+        st, done = _call(self._ep, "mk", stepper.mk_steps, a1)
         rows = done // nsub
         if st != kernel.STATUS_OK and self.doacc and rows > 0 and np.isnan(self.Vdo[rows - 1, 0, 0]):
             rows -= 1                   # its accelerations failed: not an output

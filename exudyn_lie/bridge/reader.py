@@ -58,17 +58,21 @@ from .nodes import NODE_KINDS
 
 SUPPORTED_NODES = ("NodeRigidBodyRotVecLG", "NodeRigidBodyEP", "NodeRigidBodyRxyz", "NodePointGround",
                    "NodeGenericData (data only)")
-SUPPORTED_OBJECTS = ("ObjectGround", "ObjectRigidBody", "ObjectJointSpherical", "ObjectJointRevoluteZ",
-                     "ObjectJointPrismaticX", "ObjectJointGeneric", "ObjectConnectorSpringDamper",
-                     "ObjectConnectorCartesianSpringDamper", "ObjectConnectorRigidBodySpringDamper",
-                     "ObjectConnectorTorsionalSpringDamper")
 SUPPORTED_MARKERS = ("MarkerBodyRigid", "MarkerBodyPosition", "MarkerNodeRigid", "MarkerNodePosition",
                      "MarkerBodyMass")
 SUPPORTED_LOADS = ("LoadForceVector", "LoadTorqueVector", "LoadMassProportional")
 
 JOINT_TYPES = ("JointSpherical", "JointRevoluteZ", "JointPrismaticX", "JointGeneric")
-CONNECTOR_TYPES = ("ConnectorSpringDamper", "ConnectorCartesianSpringDamper",
-                   "ConnectorRigidBodySpringDamper", "ConnectorTorsionalSpringDamper")
+# connectors: Exudyn object type -> (reader method of _Reader, markers need an orientation);
+# the one list of the connectors the bridge reads
+CONNECTOR_READERS = {
+    "ConnectorSpringDamper": ("read_spring_damper", False),
+    "ConnectorCartesianSpringDamper": ("read_cartesian_spring_damper", False),
+    "ConnectorRigidBodySpringDamper": ("read_rigid_body_spring_damper", True),
+    "ConnectorTorsionalSpringDamper": ("read_torsional_spring_damper", True),
+}
+CONNECTOR_TYPES = tuple(CONNECTOR_READERS)
+SUPPORTED_OBJECTS = ("ObjectGround", "ObjectRigidBody") + tuple("Object" + t for t in JOINT_TYPES + CONNECTOR_TYPES)
 
 
 class BridgeError(SceneError):
@@ -517,7 +521,7 @@ class _Reader:
         t = d["objectType"]
         what = self._what("object", o, d)
         m0, m1 = (int(m) for m in d["markerNumbers"])
-        rigid = t in ("ConnectorRigidBodySpringDamper", "ConnectorTorsionalSpringDamper")
+        reader, rigid = CONNECTOR_READERS[t]
         A = self.marker(m0, what, need_rotation=rigid)
         B = self.marker(m1, what, need_rotation=rigid)
         if A.body == GROUND and B.body == GROUND:
@@ -531,62 +535,67 @@ class _Reader:
         name = d.get("name", "") or f"object{o}"
         nPy = len(sc.pyItems)
         counts = (len(sc.springs), len(sc.cartesianSprings), len(sc.torsionalSprings))
-        if t == "ConnectorSpringDamper":
-            uf = _userfunction(d, "springForceUserFunction", what)
-            if uf is None:
-                sc.AddSpringDamper(A.body, A.pos, B.body, B.pos, d["stiffness"], d["damping"],
-                                   d["referenceLength"], float(d["force"]) - float(d["damping"]) * float(
-                                       d.get("velocityOffset", 0.0)), name=name)
-            else:
-                self._py(sc, pyforces.SpringDamperUF(self.mbs, o, d, A, B, uf))
-        elif t == "ConnectorCartesianSpringDamper":
-            uf = _userfunction(d, "springForceUserFunction", what)
-            if uf is None:
-                sc.AddCartesianSpringDamper(A.body, A.pos, B.body, B.pos, d["stiffness"], d["damping"],
-                                            d["offset"], name=name)
-            else:
-                self._py(sc, pyforces.CartesianSpringDamperUF(self.mbs, o, d, A, B, uf))
-        elif t == "ConnectorTorsionalSpringDamper":
-            uf = _userfunction(d, "springTorqueUserFunction", what)
-            rotA = A.rot @ np.asarray(d.get("rotationMarker0", np.eye(3)), float)
-            rotB = B.rot @ np.asarray(d.get("rotationMarker1", np.eye(3)), float)
-            dataNode = int(d.get("nodeNumber", -1))
-            track = dataNode >= 0      # NodeGenericData: Exudyn's continuous angle of the last step
-            angle0 = self.data_coordinate(dataNode) if track else 0.0
-            if track and not np.isfinite(angle0):
-                raise BridgeError(f"{what}: the angle stored in its NodeGenericData {dataNode} is not finite: "
-                                  f"{angle0}")
-            if uf is None and track:
-                # Scene (= Exudyn's law): tau = k (phi - off) + d phidot + torque, -tau z_A on B;
-                # Exudyn's velocityOffset vo enters as d (phidot - vo): torque - d vo.  The kernel
-                # tracks phi from the principal angle; Exudyn's angle is the branch nearest to the
-                # stored one, turns0 turns away: folded into the offset
-                phi = _principal_torsion_angle(sc, A, B, rotA, rotB)
-                turns0 = int(np.round((angle0 - phi) / (2 * np.pi)))
-                s_ = sc.AddTorsionalSpringDamper(A.body, B.body, rotA=_orthonormal(rotA), rotB=_orthonormal(rotB),
-                                                 stiffness=d["stiffness"], damping=d["damping"],
-                                                 offset=float(d["offset"]) - 2 * np.pi * turns0,
-                                                 torque=float(d["torque"]) - float(d["damping"]) * float(
-                                                     d.get("velocityOffset", 0.0)), name=name)
-                sc.torsionData.append(TorsionData(o, dataNode, angle0, spring=s_, turns0=turns0))
-            else:
-                # a user function, or no data node: Exudyn then uses the principal angle in
-                # (-pi, pi] (the torque jumps at +-pi), which the compiled spring does not do
-                item = pyforces.TorsionalSpringDamperUF(self.mbs, o, d, A, B, rotA, rotB, uf, track, angle0)
-                self._py(sc, item)
-                if track:
-                    sc.torsionData.append(TorsionData(o, dataNode, angle0, item=item))
-        elif t == "ConnectorRigidBodySpringDamper":
-            uf = _userfunction(d, "springForceTorqueUserFunction", what)
-            if _userfunction(d, "postNewtonStepUserFunction", what) is not None:
-                raise BridgeError(f"{what}: postNewtonStepUserFunction (switching / data coordinates) is not "
-                                  f"supported by exudyn_lie")
-            rotA = A.rot @ np.asarray(d.get("rotationMarker0", np.eye(3)), float)
-            rotB = B.rot @ np.asarray(d.get("rotationMarker1", np.eye(3)), float)
-            self._py(sc, pyforces.RigidBodySpringDamper(self.mbs, o, d, A, B, rotA, rotB, uf))
+        getattr(self, reader)(sc, o, d, A, B, what, name)
         sc.itemRows[("object", o)] = _new_row(sc, nPy, counts)
         if not active:
             deactivate(sc, sc.itemRows[("object", o)])
+
+    def read_spring_damper(self, sc, o, d, A, B, what, name):
+        uf = _userfunction(d, "springForceUserFunction", what)
+        if uf is None:
+            sc.AddSpringDamper(A.body, A.pos, B.body, B.pos, d["stiffness"], d["damping"],
+                               d["referenceLength"], float(d["force"]) - float(d["damping"]) * float(
+                                   d.get("velocityOffset", 0.0)), name=name)
+        else:
+            self._py(sc, pyforces.SpringDamperUF(self.mbs, o, d, A, B, uf))
+
+    def read_cartesian_spring_damper(self, sc, o, d, A, B, what, name):
+        uf = _userfunction(d, "springForceUserFunction", what)
+        if uf is None:
+            sc.AddCartesianSpringDamper(A.body, A.pos, B.body, B.pos, d["stiffness"], d["damping"],
+                                        d["offset"], name=name)
+        else:
+            self._py(sc, pyforces.CartesianSpringDamperUF(self.mbs, o, d, A, B, uf))
+
+    def read_torsional_spring_damper(self, sc, o, d, A, B, what, name):
+        uf = _userfunction(d, "springTorqueUserFunction", what)
+        rotA = A.rot @ np.asarray(d.get("rotationMarker0", np.eye(3)), float)
+        rotB = B.rot @ np.asarray(d.get("rotationMarker1", np.eye(3)), float)
+        dataNode = int(d.get("nodeNumber", -1))
+        track = dataNode >= 0      # NodeGenericData: Exudyn's continuous angle of the last step
+        angle0 = self.data_coordinate(dataNode) if track else 0.0
+        if track and not np.isfinite(angle0):
+            raise BridgeError(f"{what}: the angle stored in its NodeGenericData {dataNode} is not finite: "
+                              f"{angle0}")
+        if uf is None and track:
+            # Scene (= Exudyn's law): tau = k (phi - off) + d phidot + torque, -tau z_A on B;
+            # Exudyn's velocityOffset vo enters as d (phidot - vo): torque - d vo.  The kernel
+            # tracks phi from the principal angle; Exudyn's angle is the branch nearest to the
+            # stored one, turns0 turns away: folded into the offset
+            phi = _principal_torsion_angle(sc, A, B, rotA, rotB)
+            turns0 = int(np.round((angle0 - phi) / (2 * np.pi)))
+            s_ = sc.AddTorsionalSpringDamper(A.body, B.body, rotA=_orthonormal(rotA), rotB=_orthonormal(rotB),
+                                             stiffness=d["stiffness"], damping=d["damping"],
+                                             offset=float(d["offset"]) - 2 * np.pi * turns0,
+                                             torque=float(d["torque"]) - float(d["damping"]) * float(
+                                                 d.get("velocityOffset", 0.0)), name=name)
+            sc.torsionData.append(TorsionData(o, dataNode, angle0, spring=s_, turns0=turns0))
+        else:
+            # a user function, or no data node: Exudyn then uses the principal angle in
+            # (-pi, pi] (the torque jumps at +-pi), which the compiled spring does not do
+            item = pyforces.TorsionalSpringDamperUF(self.mbs, o, d, A, B, rotA, rotB, uf, track, angle0)
+            self._py(sc, item)
+            if track:
+                sc.torsionData.append(TorsionData(o, dataNode, angle0, item=item))
+
+    def read_rigid_body_spring_damper(self, sc, o, d, A, B, what, name):
+        uf = _userfunction(d, "springForceTorqueUserFunction", what)
+        if _userfunction(d, "postNewtonStepUserFunction", what) is not None:
+            raise BridgeError(f"{what}: postNewtonStepUserFunction (switching / data coordinates) is not "
+                              f"supported by exudyn_lie")
+        rotA = A.rot @ np.asarray(d.get("rotationMarker0", np.eye(3)), float)
+        rotB = B.rot @ np.asarray(d.get("rotationMarker1", np.eye(3)), float)
+        self._py(sc, pyforces.RigidBodySpringDamper(self.mbs, o, d, A, B, rotA, rotB, uf))
 
     def _py(self, sc, item):
         sc.pyItems.append(item)

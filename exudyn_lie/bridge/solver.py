@@ -41,7 +41,7 @@ import numpy as np
 
 from .. import __version__
 from ..compiling import compile_timer
-from ..integrators.tableau import get_method, method_names
+from ..integrators.tableau import ButcherTableau, get_method, method_names
 from ..mbs.compiled import auto_groups
 from ..mbs.simulator import Simulator
 from ..userwarn import warn_user
@@ -66,13 +66,18 @@ def _group_name(g, what):
 
 
 def _check_method(method):
-    """The catalogue tableau of a method name (case-insensitive, aliases: ``get_method``)."""
+    """A catalogue method name (case-insensitive, aliases: ``get_method``) or a user's own
+    ButcherTableau."""
+    if isinstance(method, ButcherTableau):
+        return method
     if isinstance(method, str):
         try:
             return get_method(method)
         except ValueError as e:
-            raise BridgeError(f"unknown method {method!r}; available: {str(e).partition('available: ')[2]}") from None
-    raise BridgeError(f"unknown method {method!r}; available: {', '.join(method_names())}")
+            raise BridgeError(f"unknown method {method!r}; available: {str(e).partition('available: ')[2]} or an "
+                              f"exudyn_lie.integrators.ButcherTableau") from None
+    raise BridgeError(f"unknown method {method!r}; available: {', '.join(method_names())} or an "
+                      f"exudyn_lie.integrators.ButcherTableau")
 
 
 class LieGroupSolver:
@@ -81,7 +86,8 @@ class LieGroupSolver:
     Parameters
     ----------
     mbs : an assembled ``exudyn.MainSystem``
-    method : a method of :func:`exudyn_lie.integrators.method_names` (``'RK4'``, ...)
+    method : a method of :func:`exudyn_lie.integrators.method_names` (``'RK4'``, ...) or a
+        :class:`~exudyn_lie.integrators.ButcherTableau` of the user's own
     liegroup : ``'SE3'``, ``'SO3xR3'``, ``'auto'`` or a mapping ``{object index of an
         ObjectRigidBody: 'SE3' | 'SO3xR3'}`` (bodies not in the mapping use ``'auto'``).
         ``'auto'``: SO3xR3 for an unconstrained body whose frame is at its COM, SE3 for
@@ -143,7 +149,7 @@ class LieGroupSolver:
     def _groups(self, sc: ExudynScene):
         auto = auto_groups(sc)
         tied = set(sc.pyConnectedBodies)
-        for it in sc.joints + sc.springs + sc.cartesianSprings + sc.torsionalSprings + sc.rigidSprings:
+        for it in sc.joints + sc.connectors():
             tied.update([it.bodyA, it.bodyB])
         why = {}
         for b in range(sc.nBodies):
@@ -332,13 +338,6 @@ class LieGroupSolver:
     def _write(self, accelerations):
         self._fill(accelerations)
         self._push(accelerations)
-
-    def _advance(self, n, h, accelerations):
-        """n steps, then the buffers (the path with Python forces: one output at a time)."""
-        self.sim.Advance(n, h)
-        nflag = self._fill(accelerations)
-        self._warn_watched_nodes()
-        return nflag
 
     def _next_output(self, t1, outputsLeft):
         """The compiled path: the buffers at Exudyn's time ``t1`` from the next row of the
@@ -602,20 +601,19 @@ class LieGroupSolver:
             self._init_buffers_from_mbs()
             vmax = 1e6 * max(1.0, float(np.max(np.abs(sim.V))) if sim.V.size else 0.0)
             self._write(True)                    # initial state with accelerations / multipliers
-            # compiled path: chunks of outputs (one output per chunk if a user function may
-            # change the state in between); with Python forces: one output at a time
-            self._chunks = None if sim.sd.hasQext else OutputChunks(
+            # chunks of outputs from the one compiled stepper; one output per chunk if a user
+            # function may change the state in between or Python forces (Exudyn user
+            # functions) run, so that they are called in step with Exudyn's outputs
+            self._chunks = OutputChunks(
                 sim, self._nodes, vmax, (self._q, self._qt, self._qtt, self._ae), (self._jrow, self._jae),
-                k, h, needAcc, maxRows=1 if self._watch else CHUNK_ROWS)
+                k, h, needAcc, maxRows=1 if (self._watch or sim.sd.hasQext) else CHUNK_ROWS)
             # the hook, per Exudyn step (kept lean: it runs per output)
             sdat = self.mbs.systemData
             cur = exu.ConfigurationType.Current
             watch = self._watch
             live = self._live
-            timing = self.timing
             perf = time.perf_counter
-            nextOutput = self._next_output if self._chunks is not None else None
-            advance = self._advance
+            nextOutput = self._next_output
             push = self._push
             nExudyn = nsteps // k
             count = [0]
@@ -643,21 +641,13 @@ class LieGroupSolver:
                             self._restart_from_mbs(steps[0])     # a user function changed the state
                     if marks or params.late:
                         self._apply_parameters(steps[0])
-                    if nextOutput is not None:
+                    params.busy = True               # force user functions run inside: changes refused
+                    try:
                         nextOutput(t1, nExudyn - count[0] + 1)
-                    else:
-                        tic = perf()
-                        params.busy = True
-                        try:
-                            nflag = advance(int(round((t1 - sim.t) / h)), h, needAcc)
-                        finally:
-                            params.busy = False
-                        if params.late:
-                            params.apply(t1)         # refused: changed inside the step
-                        timing["integration"] += perf() - tic
-                        sim.t = t1
-                        if nflag:
-                            self._nodes.warn_flags()
+                    finally:
+                        params.busy = False
+                    if params.late:
+                        params.apply(t1)             # refused: changed inside the step
                     if not live:
                         push(needAcc)
                     if watch:
@@ -851,7 +841,8 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
 
     The positional arguments are Exudyn's.  ``solverType`` must be None (the integrator is
     chosen by ``method``); ``showHints`` / ``showCausingItems`` are accepted for
-    compatibility.  Keyword-only extras: ``method`` (:func:`exudyn_lie.method_names`),
+    compatibility.  Keyword-only extras: ``method`` (:func:`exudyn_lie.method_names` or a
+    :class:`~exudyn_lie.integrators.ButcherTableau` of the user's own),
     ``liegroup`` ('SE3', 'SO3xR3', 'auto' or {rigid-body object index: group}),
     ``stabilization``, ``projectInitial`` (default True: an inconsistent initial state is
     projected onto the constraints with a warning; False: ConstraintError), ``verbose``

@@ -5,8 +5,8 @@ Conventions (fixed for the whole package)
 * float64 numpy arrays; every public function is ``numba.njit(cache=True)`` and
   callable from Python and from other njit code (so3/se3 with fastmath={'contract'}:
   FMA fusion only).  No np.dot/@ inside njit code (numba needs scipy for it).
-  numba's cache does not track callees: after editing this package, delete the
-  __pycache__ of modules that call it (mbs, integrators) or they keep stale code.
+  numba's own cache key is the function's source file only; ``exudyn_lie._numba_cache``
+  adds a hash of every compiled module of the package, so edits here recompile callers.
 * Lie algebra vectors X = (xi, eta), ROTATION FIRST (X[0:3] rotation, X[3:6]
   translation); twists V = (omega, v).  SE3: body-fixed twist (omega, v = R^T rdot);
   SO3xR3: mixed velocity (omega body-fixed, rdot spatial).
@@ -43,6 +43,9 @@ which also checks that the _into variants do not allocate.
 """
 from . import so3, se3, so3xr3, quaternion, dualquat
 
+# The one registry of body configuration groups (name -> module).  Every entry implements
+# the interface of :mod:`.interface` with the same signatures; its position is the group
+# id the compiled kernel uses (exudyn_lie.mbs.codes).  A new group: its module, one line here.
 GROUPS = {'SE3': se3, 'SO3xR3': so3xr3}
 
 __all__ = ["so3", "se3", "so3xr3", "quaternion", "dualquat", "GROUPS", "switch_report"]

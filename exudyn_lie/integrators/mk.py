@@ -1,4 +1,7 @@
-"""Reference (Python-level) explicit Munthe-Kaas integrator on products of c-space groups.
+"""TEST ORACLE ONLY: the reference (Python-level) explicit Munthe-Kaas integrator on products
+of c-space groups.  No solver path runs it; every path (Simulator, SolveDynamic, Python
+forces) runs the one compiled stepper, :mod:`exudyn_lie.mbs.stepper`.  The tests compare
+that stepper and the vector-space formulations with this one.
 
 The state of an ``n``-body system is ``(g, V)``:
 

@@ -2,9 +2,15 @@
 
 * :mod:`.scene`     - bodies, joints, forces in plain Python (:class:`Scene`);
 * :mod:`.compiled`  - the scene flattened into arrays for numba;
-* :mod:`.kernel`    - compiled stage right-hand side and Munthe-Kaas time loop;
+* compiled, one job per module: :mod:`.codes`, :mod:`.bodies` (group dispatch),
+  :mod:`.forces`, :mod:`.constraints`, :mod:`.index1` (solve and stage rhs),
+  :mod:`.projection`, :mod:`.stepper` (the Munthe-Kaas stepper), :mod:`.diagnostics`;
+  :mod:`.kernel` re-exports their public names;
 * :mod:`.linalg`    - band / pivoted Cholesky for the index-1 solve;
+* :mod:`.external`  - right-hand sides evaluated in Python, called from the stepper;
 * :mod:`.simulator` - compile once, run many (:class:`Simulator`).
+
+See ``docs/ARCHITECTURE.md``.
 """
 from .scene import GROUND, JOINT_TYPES, Scene, SceneError, frame_with_axis
 from .simulator import (ConstraintError, Result, SimulationError, Simulator, StepSizeError)

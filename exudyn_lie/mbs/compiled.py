@@ -9,11 +9,11 @@ from collections import namedtuple
 
 import numpy as np
 
-from .kernel import GID_SE3, GID_SO3xR3, ROW_ROT, ROW_TRANS_LOCAL, ROW_TRANS_WORLD
+from .codes import GROUP_NAMES, ROW_ROT, ROW_TRANS_LOCAL, ROW_TRANS_WORLD
 from .linalg import REL_PIVOT_TOL, rcm_order
 from .scene import GROUND, Scene, SceneError
 
-GROUP_IDS = {"SE3": GID_SE3, "SO3xR3": GID_SO3xR3}
+GROUP_IDS = {name: gid for gid, name in enumerate(GROUP_NAMES)}
 GROUP_NAMES = {v: k for k, v in GROUP_IDS.items()}
 
 # Per feature: an integer table (body indices, flags) and float tables; zero rows when the
@@ -36,6 +36,7 @@ Work = namedtuple("Work", [
     "Jr", "W", "eta", "h", "lam", "Sb", "Sd", "perm", "ytmp", "info",
     "tmp6", "tmp12", "v3", "m3", "ident", "zero3", "zero6",
     "tphi", "watchBody", "watchEntry", "watchMax",
+    "ext",                            # [token of the external rhs evaluator (mbs.external), 0: none]
 ])
 N_SCRATCH3 = 20
 
@@ -124,7 +125,7 @@ def auto_groups(scene: Scene):
     constrained = set()
     for j in scene.joints:
         constrained.update([j.bodyA, j.bodyB])
-    for s in scene.springs + scene.cartesianSprings + scene.torsionalSprings + scene.rigidSprings:
+    for s in scene.connectors():
         constrained.update([s.bodyA, s.bodyB])
     out = []
     for i, b in enumerate(scene.bodies):
@@ -241,4 +242,5 @@ def make_work(sd, nstages):
         tmp6=np.zeros(6), tmp12=np.zeros(12), v3=np.zeros((N_SCRATCH3, 3)), m3=np.zeros((2, 3, 3)),
         ident=np.eye(3), zero3=np.zeros(3), zero6=np.zeros(6), tphi=np.zeros(sd.tint.shape[0]),
         watchBody=np.zeros(0, np.int64), watchEntry=np.zeros((0, 2), np.int64), watchMax=np.zeros(0),
+        ext=np.zeros(1, np.int64),
     )

@@ -392,12 +392,19 @@ class Scene:
     def nBodies(self):
         return len(self.bodies)
 
+    # the two-body force elements (connectors), each a list attribute: the one enumeration
+    CONNECTOR_LISTS = ("springs", "torsionalSprings", "cartesianSprings", "rigidSprings")
+
+    def connectors(self):
+        """Every connector (two-body force element) of the scene, list by list."""
+        return [c for name in self.CONNECTOR_LISTS for c in getattr(self, name)]
+
     def constraint_rows_per_joint(self):
         return [int(sum(j.constrainedAxes)) for j in self.joints]
 
     def __repr__(self):
         return (f"Scene({len(self.bodies)} bodies, {len(self.joints)} joints, "
-                f"{len(self.springs) + len(self.torsionalSprings) + len(self.cartesianSprings) + len(self.rigidSprings)} "
+                f"{len(self.connectors())} "
                 f"connectors, {len(self.loads)} loads, gravity={self.gravity.tolist()})")
 
 

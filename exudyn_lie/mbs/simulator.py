@@ -4,8 +4,8 @@
 >>> res = sim.Run(endTime=8.0, stepSize=1e-3, outputEvery=10)
 >>> res.jointViolation[:, 0]       # position violation of joint 0 over time
 
-The time loop runs inside numba (``kernel.mk_steps``) between output points; a scene
-with Python force callbacks runs a Python stage loop around the same compiled pieces.
+The time loop runs inside numba (``stepper.mk_steps``) between output points, also for a
+scene with Python force callbacks (called from the compiled stages, :mod:`.external`).
 """
 from __future__ import annotations
 
@@ -15,14 +15,17 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..compiling import announce_cold_compile
-from ..groups import se3, so3
+from ..groups import so3
+from ..integrators.stability import stability_radius
 from ..integrators.tableau import get_method
 from ..userwarn import warn_user
-from . import kernel
+from . import external, kernel
+from .bodies import body_dexpinv_stage, exp_compose
 from .compiled import compile_scene, make_work, resolve_groups, with_redundant
 from .linalg import REL_PIVOT_TOL, rows_in_null_space, schur_rank_and_null
 from .scene import Scene, SceneError
 from .state import BodyStates, twist_to_world_velocity, world_velocity_to_twist
+from .stepper import fixed_step_control, method_arrays
 
 
 class SimulationError(RuntimeError):
@@ -119,7 +122,8 @@ class Simulator:
     Parameters
     ----------
     scene : Scene
-    method : name of a Butcher tableau (``exudyn_lie.integrators.method_names()``)
+    method : name of a Butcher tableau (``exudyn_lie.integrators.method_names()``) or a
+        :class:`~exudyn_lie.integrators.ButcherTableau` of the user's own
     liegroup : ``'SE3'``, ``'SO3xR3'``, ``'auto'``, a per-body mapping or sequence
     stabilization : None (the paper's choice: no stabilisation), ``'velocity'``
         (project V onto ``J V = 0`` after every step) or ``'position'`` (additionally
@@ -144,10 +148,10 @@ class Simulator:
         self.sd, self.rowJoint = compile_scene(scene, self.groups)
         self.sd = self.sd._replace(stabilization={None: kernel.STAB_NONE, "velocity": kernel.STAB_VELOCITY,
                                                   "position": kernel.STAB_POSITION}[self.stabilization])
-        self.A = np.ascontiguousarray(self.tableau.A, dtype=float)
-        self.b = np.ascontiguousarray(self.tableau.b, dtype=float)
-        self.c = np.ascontiguousarray(self.tableau.c, dtype=float)
-        self.wk = make_work(self.sd, len(self.b))
+        self.method = method_arrays(self.tableau)
+        self.control = fixed_step_control()
+        self._extToken = external.register(self, "_external_forces") if self.sd.hasQext else 0
+        self.wk = self._make_work()
         self.gid = self.sd.gid
         self.projectInitial = projectInitial
         self.redundantJoints = []
@@ -157,6 +161,11 @@ class Simulator:
         if verbose:
             for i, b in enumerate(scene.bodies):
                 print(f"exudyn_lie: body {i} ({b.name}): {self.groups[i]}")
+
+    def _make_work(self):
+        wk = make_work(self.sd, len(self.method.b))
+        wk.ext[0] = self._extToken
+        return wk
 
     # ----------------------------------------------------------------- state
     def SetInitialState(self, R=None, r=None, omega=None, vel=None, t0=0.0):
@@ -263,7 +272,7 @@ class Simulator:
         rank, dep = self._dependent_rows(self.R, self.r, self.V, forced=True)
         self.redundantJoints = self._joints_of_rows(dep)
         self.sd = with_redundant(self.sd, True)
-        self.wk = make_work(self.sd, len(self.b))
+        self.wk = self._make_work()
         kernel.update_torsion_tracking(self.sd, self.wk, self.R, self.r, self.V)
         names = ", ".join(self.redundantJoints)
         rule = (f"Cholesky pivots of J M^-1 J^T at or below {REL_PIVOT_TOL:g} x its largest diagonal at the "
@@ -387,19 +396,13 @@ class Simulator:
         # the state this call starts from: restored on failure, and where a blow-up's
         # step suggestion linearises (the rejected state itself is far from the motion)
         self._segmentStart = (self.t, self.R.copy(), self.r.copy(), self.V.copy())
-        if self.sd.hasQext:
-            t0 = self.t
-            for n in range(int(nsteps)):
-                self._python_step(h)
-                self.t = t0 + (n + 1) * h    # exact, as the compiled loop's stage times
-            return
         st, done = self._mk_steps(int(nsteps), h)
         self.t += done * h               # on a failure: the last accepted step
         if st != kernel.STATUS_OK:
             self._raise_status(st, h)
 
     def NoOutputs(self):
-        """The output arguments of ``kernel.mk_steps`` for a call that records nothing:
+        """The output arguments of ``stepper.mk_steps`` for a call that records nothing:
         ``(0, Ro, ro, Vo, Vdo, lamo)`` with no rows (of the one compiled signature)."""
         out = getattr(self, "_noOutputs", None)
         if out is None:
@@ -409,11 +412,11 @@ class Simulator:
         return out
 
     def _mk_steps(self, n, h, t=None, R=None, r=None, V=None):
-        """``kernel.mk_steps`` through its resolved compiled entry point: a plain numba
+        """``stepper.mk_steps`` through its resolved compiled entry point: a plain numba
         call re-derives the types of the two namedtuples every time (~10 us)."""
         if not hasattr(self, "_vmaxValue"):
             self._vmaxValue = self._vmax()
-        args = (self.sd, self.wk, self.A, self.b, self.c, float(self.t if t is None else t), float(h), int(n),
+        args = (self.sd, self.wk, self.method, self.control, float(self.t if t is None else t), float(h), int(n),
                 self.R if R is None else R, self.r if r is None else r, self.V if V is None else V,
                 float(self._vmaxValue)) + self.NoOutputs()
         ep = getattr(self, "_mkEntry", None)
@@ -425,33 +428,10 @@ class Simulator:
             return out
         return ep(*args)
 
-    def _python_step(self, h):
-        """One step with Python force callbacks between the compiled stages."""
-        sd, wk = self.sd, self.wk
-        for j in range(len(self.b)):
-            st = kernel.mk_stage_state(sd, wk, self.A, j, h, self.R, self.r, self.V)
-            if st != kernel.STATUS_OK:
-                self._raise_status(st, h)
-            tj = self.t + self.c[j] * h
-            wk.Qext[:] = self._python_forces(tj, wk.Rs, wk.rs, wk.Vs)
-            st = kernel.rhs(sd, wk, tj, wk.Rs, wk.rs, wk.Vs, wk.Qext, wk.Vd[j])
-            if st != kernel.STATUS_OK:
-                self._raise_status(st, h)
-            kernel.mk_stage_k(sd, wk, j)
-        kernel.copy_state(self.R, self.r, self.V, wk.Rb, wk.rb, wk.Vb)
-        kernel.mk_finish(sd, wk, self.b, h, self.R, self.r, self.V)
-        st = kernel.state_is_finite(sd.gid, self.R, self.r, self.V, self._vmaxValue)
-        if st != kernel.STATUS_OK:
-            kernel.copy_state(wk.Rb, wk.rb, wk.Vb, self.R, self.r, self.V)
-            self._raise_status(st, h)
-        if sd.stabilization != kernel.STAB_NONE:
-            st = kernel.project_state(sd, wk, sd.stabilization, self.R, self.r, self.V)
-            if st != kernel.STATUS_OK:
-                kernel.copy_state(wk.Rb, wk.rb, wk.Vb, self.R, self.r, self.V)
-                self._raise_status(st, h)
-        kernel.update_torsion_tracking(sd, wk, self.R, self.r, self.V)
-        kernel.watch_rotation_entries(wk.watchBody, wk.watchEntry, wk.watchMax, self.R)
-        self.t += h
+    def _external_forces(self, t, R, r, V, Qext):
+        """The right-hand side seam (:mod:`.external`): called by the compiled stepper once
+        per stage with the stage state; fills ``Qext`` with the Python forces."""
+        Qext[:] = self._python_forces(t, R, r, V)
 
     def _python_forces(self, t, R, r, V):
         omega, vel = twist_to_world_velocity(self.gid, R, V)
@@ -471,6 +451,9 @@ class Simulator:
 
     def _raise_status(self, st, h):
         """Raise the error for a kernel status (public as :meth:`RaiseStatus`)."""
+        if st == kernel.STATUS_EXTERNAL:
+            external.reraise(self._extToken)
+            raise SimulationError(f"the Python forces failed at t = {self.t:.6g} s")
         if st == kernel.STATUS_SINGULAR:
             # the failing stage's state (same rule as the kernel: linalg module docstring)
             rank, dep = self._dependent_rows(self.wk.Rs, self.wk.rs, self.wk.Vs, forced=True)
@@ -515,7 +498,6 @@ class Simulator:
         :meth:`Advance` started from (:meth:`SpectralRadius`) and ``r`` the radius of the
         method's stability half-disk (:func:`~exudyn_lie.integrators.stability.stability_radius`).
         Never more than ``h / 2``; ``h / 10`` if the estimate is not available."""
-        from ..integrators.stability import stability_radius
         start = getattr(self, "_segmentStart", None)
         try:
             if start is None:
@@ -526,7 +508,7 @@ class Simulator:
             return h / 10.0
         if not np.isfinite(rho) or rho <= 0:
             return h / 10.0
-        return float(min(0.5 * h, 0.8 * stability_radius(self.tableau.name) / rho))
+        return float(min(0.5 * h, 0.8 * stability_radius(self.tableau) / rho))
 
     def SpectralRadius(self, R=None, r=None, V=None, t=None, iterations=40, seed=0):
         """Estimate of the spectral radius ``rho`` of the Jacobian of the first-order
@@ -571,13 +553,8 @@ class Simulator:
         ER, Er = np.empty((3, 3)), np.empty(3)
         for i in range(nb):
             X = np.ascontiguousarray(dx[0, i])
-            kernel._exp_compose(int(self.gid[i]), R[i], r[i], X, Rp[i], rp[i], ER, Er)
-            mX = -X
-            if self.gid[i] == kernel.GID_SE3:
-                se3.dexpinv_apply_into(mX, Vp[i], out[0, i])
-            else:
-                so3.dexpinv_apply_into(mX[:3], Vp[i, :3], out[0, i, :3])
-                out[0, i, 3:] = Vp[i, 3:]
+            exp_compose(int(self.gid[i]), R[i], r[i], X, Rp[i], rp[i], ER, Er)
+            body_dexpinv_stage(int(self.gid[i]), -X, Vp[i], out[0, i])
         if self._evaluate(t, Rp, rp, Vp) != kernel.STATUS_OK:
             raise SimulationError("right-hand side failed while estimating the spectral radius")
         out[1] = wk.Vd[0]
@@ -594,8 +571,6 @@ class Simulator:
     def _evaluate(self, t, R, r, V):
         """Equations of motion at one state (``mk_steps`` with no step): accelerations in
         ``wk.Vd[0]``, multipliers in ``wk.lam``; returns the kernel status."""
-        if self.sd.hasQext:
-            self.wk.Qext[:] = self._python_forces(t, R, r, V)
         st, _ = self._mk_steps(0, 0.0, t, R, r, V)
         return st
 

@@ -1,0 +1,114 @@
+"""numba's on-disk cache keyed on every compiled source of the package, not one file.
+
+numba validates a cached function by a stamp of *its own* source file only.  The
+kernel inlines and calls functions of other modules (the group maps into the stage
+loop, the joint rows into the right-hand side, ...), so editing a callee left the
+caller's cached machine code in place and it silently ran the old callee.
+
+This module registers two cache locators, in front of numba's own, for the functions
+defined in this package: they store where numba would (the ``__pycache__`` beside the
+module, or numba's user-wide cache directory when that is not writable) but add
+:func:`source_key` to the stamp - a hash of every module of the package that uses
+numba.  Editing any of them invalidates every cached function of the package (numba
+then recompiles on first use and overwrites the stale entries); other packages' numba
+functions are not affected.  Imported by ``exudyn_lie/__init__.py`` before any
+compiled function is defined.
+"""
+import hashlib
+import os
+import re
+
+from numba.core import caching
+
+PACKAGE_DIR = os.path.dirname(os.path.abspath(__file__))
+
+_KEY = None
+_APPLICATION_DIRS = ("apps", "models")
+_IMPORTS_NUMBA = re.compile(rb"^[ \t]*(?:from|import)[ \t]+numba\b", re.M)
+
+
+def compiled_sources(root=PACKAGE_DIR):
+    """The modules whose edit may change compiled code (sorted paths relative to ``root``):
+    every module of the solver library (compiled functions read module constants such as
+    ``mbs/codes.py`` at compile time, so modules without numba count too), and the
+    application modules that import numba.  The applications' other modules and the
+    models do not take part."""
+    out = []
+    for d, dirs, files in os.walk(root):
+        dirs[:] = sorted(x for x in dirs if x != "__pycache__")
+        for f in sorted(files):
+            if f.endswith(".py"):
+                p = os.path.join(d, f)
+                top = os.path.relpath(p, root).split(os.sep)[0]
+                if top not in _APPLICATION_DIRS:
+                    out.append(os.path.relpath(p, root))
+                    continue
+                with open(p, "rb") as fh:
+                    if _IMPORTS_NUMBA.search(fh.read()):
+                        out.append(os.path.relpath(p, root))
+    return out
+
+
+def source_key(root=PACKAGE_DIR):
+    """sha256 over the paths and contents of :func:`compiled_sources` (hex)."""
+    h = hashlib.sha256()
+    for rel in compiled_sources(root):
+        h.update(rel.replace(os.sep, "/").encode() + b"\0")
+        with open(os.path.join(root, rel), "rb") as fh:
+            h.update(fh.read())
+        h.update(b"\0")
+    return h.hexdigest()
+
+
+def package_key():
+    """:func:`source_key` of this installation, computed once per process."""
+    global _KEY
+    if _KEY is None:
+        _KEY = source_key()
+    return _KEY
+
+
+def _in_package(py_file):
+    try:
+        return os.path.commonpath([os.path.abspath(py_file), PACKAGE_DIR]) == PACKAGE_DIR
+    except ValueError:          # different drives
+        return False
+
+
+class _PackageKeyMixin:
+    def get_source_stamp(self):
+        return (super().get_source_stamp(), package_key())
+
+    @classmethod
+    def from_function(cls, py_func, py_file):
+        if not _in_package(py_file):
+            return None
+        return super().from_function(py_func, py_file)
+
+
+class PackageUserProvidedCacheLocator(_PackageKeyMixin, caching.UserProvidedCacheLocator):
+    """numba's locator for NUMBA_CACHE_DIR with the package source key in the stamp."""
+
+
+class PackageInTreeCacheLocator(_PackageKeyMixin, caching.InTreeCacheLocator):
+    """numba's in-tree locator with the package source key in the stamp."""
+
+
+class PackageUserWideCacheLocator(_PackageKeyMixin, caching.UserWideCacheLocator):
+    """numba's user-wide locator with the package source key in the stamp."""
+
+
+LOCATORS = (PackageUserProvidedCacheLocator, PackageInTreeCacheLocator, PackageUserWideCacheLocator)
+
+
+def install():
+    """Put the package's locators in front of numba's (idempotent), in numba's order of
+    preference: NUMBA_CACHE_DIR if set, else ``__pycache__``, else the user-wide cache."""
+    classes = caching.CacheImpl._locator_classes
+    for cls in LOCATORS:
+        if cls in classes:
+            classes.remove(cls)
+    classes[0:0] = list(LOCATORS)
+
+
+install()

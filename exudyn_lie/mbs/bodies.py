@@ -1,0 +1,238 @@
+"""Per-body kinematics in the body's configuration group: the one place where the kernel
+depends on the group of a body (``gid``, see :mod:`.codes` and :mod:`exudyn_lie.groups`).
+
+* ``SE3`` (0): twist ``V = (omega, v)`` with ``v`` body-fixed, ``rdot = R v``;
+* ``SO3xR3`` (1): mixed velocity, ``v = rdot`` spatial (eq. hybridvel).
+
+The translation map ``T`` (``rdot = T v``) is ``R`` for SE3 and ``I`` for SO3xR3; with it
+one formula serves both representations:  a body point ``s`` moves with
+``pdot = T v + R (omega x s)`` and ``pddot = T vdot - R s^ omegadot + beta`` where the
+velocity-product ("bias") term is ``beta = R (omega x (omega x s)) (+ R (omega x v) for SE3)``.
+
+Every group-dependent operation of the kernel is a function here with one dispatch on
+``gid``: the body point map, the generalised force of a point force, ``M^-1`` in the
+body's velocity coordinates, the configuration update ``g exp(X)`` and the MK stage map
+``dexp^-1``.
+"""
+from numba import njit
+
+from ..groups import se3, so3
+from .codes import GID_SE3
+
+
+# --------------------------------------------------------------------------- small vector helpers
+@njit(cache=True, inline="always", _nrt=False)
+def _cross(a0, a1, a2, b0, b1, b2):
+    return a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0
+
+
+@njit(cache=True, _nrt=False)
+def _matvec(M, x, out):
+    for i in range(3):
+        out[i] = M[i, 0] * x[0] + M[i, 1] * x[1] + M[i, 2] * x[2]
+
+
+@njit(cache=True, _nrt=False)
+def _matTvec(M, x, out):
+    for i in range(3):
+        out[i] = M[0, i] * x[0] + M[1, i] * x[1] + M[2, i] * x[2]
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def _side(gid, b, R, r, V, ident, zero3, zero6):
+    """(gid, R, r, V) of a joint/connector side; ground has identity, zero velocity."""
+    if b < 0:
+        return GID_SE3, ident, zero3, zero6
+    return gid[b], R[b], r[b], V[b]
+
+
+# --------------------------------------------------------------------------- body kinematics
+@njit(cache=True, _nrt=False)
+def body_point(gid, R, r, V, s, p, pd, beta):
+    """World position ``p``, velocity ``pd`` and velocity-product acceleration ``beta``
+    of the body point ``s`` (body coordinates)."""
+    w0, w1, w2 = V[0], V[1], V[2]
+    ws0, ws1, ws2 = _cross(w0, w1, w2, s[0], s[1], s[2])            # omega x s
+    wws0, wws1, wws2 = _cross(w0, w1, w2, ws0, ws1, ws2)            # omega x (omega x s)
+    if gid == GID_SE3:
+        # rdot = R v : pd = R (v + omega x s); beta = R (omega x (omega x s) + omega x v)
+        wv0, wv1, wv2 = _cross(w0, w1, w2, V[3], V[4], V[5])
+        l0 = V[3] + ws0
+        l1 = V[4] + ws1
+        l2 = V[5] + ws2
+        b0 = wws0 + wv0
+        b1 = wws1 + wv1
+        b2 = wws2 + wv2
+        for i in range(3):
+            p[i] = r[i] + R[i, 0] * s[0] + R[i, 1] * s[1] + R[i, 2] * s[2]
+            pd[i] = R[i, 0] * l0 + R[i, 1] * l1 + R[i, 2] * l2
+            beta[i] = R[i, 0] * b0 + R[i, 1] * b1 + R[i, 2] * b2
+    else:
+        for i in range(3):
+            p[i] = r[i] + R[i, 0] * s[0] + R[i, 1] * s[1] + R[i, 2] * s[2]
+            pd[i] = V[3 + i] + R[i, 0] * ws0 + R[i, 1] * ws1 + R[i, 2] * ws2
+            beta[i] = R[i, 0] * wws0 + R[i, 1] * wws1 + R[i, 2] * wws2
+
+
+@njit(cache=True, _nrt=False)
+def body_axis(R, V, u, a, ad, beta):
+    """World direction ``a = R u`` of the body-fixed unit vector ``u``, its rate
+    ``ad = R (omega x u)`` and bias acceleration ``beta = R (omega x (omega x u))``."""
+    wu0, wu1, wu2 = _cross(V[0], V[1], V[2], u[0], u[1], u[2])
+    wwu0, wwu1, wwu2 = _cross(V[0], V[1], V[2], wu0, wu1, wu2)
+    for i in range(3):
+        a[i] = R[i, 0] * u[0] + R[i, 1] * u[1] + R[i, 2] * u[2]
+        ad[i] = R[i, 0] * wu0 + R[i, 1] * wu1 + R[i, 2] * wu2
+        beta[i] = R[i, 0] * wwu0 + R[i, 1] * wwu1 + R[i, 2] * wwu2
+
+
+@njit(cache=True, _nrt=False)
+def add_point_force(gid, R, s, F, Q):
+    """Generalised force of a world force ``F`` at body point ``s``:
+    ``Q = (s x R^T F, T^T F)`` so that ``Q . V`` is the power."""
+    f0 = R[0, 0] * F[0] + R[1, 0] * F[1] + R[2, 0] * F[2]
+    f1 = R[0, 1] * F[0] + R[1, 1] * F[1] + R[2, 1] * F[2]
+    f2 = R[0, 2] * F[0] + R[1, 2] * F[1] + R[2, 2] * F[2]
+    m0, m1, m2 = _cross(s[0], s[1], s[2], f0, f1, f2)
+    Q[0] += m0
+    Q[1] += m1
+    Q[2] += m2
+    if gid == GID_SE3:
+        Q[3] += f0
+        Q[4] += f1
+        Q[5] += f2
+    else:
+        Q[3] += F[0]
+        Q[4] += F[1]
+        Q[5] += F[2]
+
+
+@njit(cache=True, _nrt=False)
+def add_world_torque(R, T, Q):
+    """Body-fixed generalised torque of a world torque ``T``."""
+    for i in range(3):
+        Q[i] += R[0, i] * T[0] + R[1, i] * T[1] + R[2, i] * T[2]
+
+
+@njit(cache=True, _nrt=False)
+def apply_minv(gid, Minv, R, x, out, tmp):
+    """``out = M_rep^-1 x`` for the body's velocity representation.
+
+    SE3: ``M`` is the constant J_P, ``Minv`` its inverse.  SO3xR3: ``V^m = D V`` with
+    ``D = diag(I, R)``, hence ``(M^m)^-1 = D M^-1 D^T``."""
+    if gid == GID_SE3:
+        for i in range(6):
+            s = 0.0
+            for k in range(6):
+                s += Minv[i, k] * x[k]
+            out[i] = s
+    else:
+        tmp[0] = x[0]
+        tmp[1] = x[1]
+        tmp[2] = x[2]
+        for i in range(3):
+            tmp[3 + i] = R[0, i] * x[3] + R[1, i] * x[4] + R[2, i] * x[5]
+        for i in range(6):
+            s = 0.0
+            for k in range(6):
+                s += Minv[i, k] * tmp[k]
+            tmp[6 + i] = s
+        out[0] = tmp[6]
+        out[1] = tmp[7]
+        out[2] = tmp[8]
+        for i in range(3):
+            out[3 + i] = R[i, 0] * tmp[9] + R[i, 1] * tmp[10] + R[i, 2] * tmp[11]
+
+
+
+@njit(cache=True, _nrt=False)
+def exp_compose(gid, R, r, X, Rout, rout, ER, Er):
+    """``(Rout, rout) = (R, r) exp(X)`` in the body's group (eqs. expX / expSO3xR3)."""
+    if gid == GID_SE3:
+        se3.exp_into(X, ER, Er)
+        for i in range(3):
+            rout[i] = r[i] + R[i, 0] * Er[0] + R[i, 1] * Er[1] + R[i, 2] * Er[2]
+    else:
+        so3.exp_into(X[0:3], ER)
+        for i in range(3):
+            rout[i] = r[i] + X[3 + i]
+    for i in range(3):
+        for j in range(3):
+            Rout[i, j] = R[i, 0] * ER[0, j] + R[i, 1] * ER[1, j] + R[i, 2] * ER[2, j]
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def body_dexpinv_stage(gid, X, Y, out):
+    """``out = dexp^-1_X Y`` in the body's group (the MK stage map, eq. MK1, with
+    ``X = -Psi_j``): SE3 the full 6x6 map; SO3xR3 SO3's on the rotation part, the
+    identity on the translation (the R3 factor is abelian)."""
+    if gid == GID_SE3:
+        se3.dexpinv_apply_into(X, Y, out)
+    else:
+        so3.dexpinv_apply_into(X[0:3], Y[0:3], out[0:3])
+        for k in range(3):
+            out[3 + k] = Y[3 + k]
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def body_inertial_forces(gid, Mi, mass, com, R, Vi, Qi):
+    """Subtract the velocity-dependent (gyroscopic / centrifugal) terms of one body from
+    its generalised force ``Qi``, in the body's velocity coordinates.
+
+    SE3, eq. (NE1): ``M Vdot = W + ad_V^T (M V)``, ``ad_V^T (L, p) = (-(w x L) - v x p, -(w x p))``.
+    SO3xR3: ``M^m Vdot = W - (w x Theta_P w, m R (w x (w x c)))``."""
+    w0, w1, w2 = Vi[0], Vi[1], Vi[2]
+    if gid == GID_SE3:
+        Lx = Mi[0, 0] * w0 + Mi[0, 1] * w1 + Mi[0, 2] * w2 + Mi[0, 3] * Vi[3] + Mi[0, 4] * Vi[4] + Mi[0, 5] * Vi[5]
+        Ly = Mi[1, 0] * w0 + Mi[1, 1] * w1 + Mi[1, 2] * w2 + Mi[1, 3] * Vi[3] + Mi[1, 4] * Vi[4] + Mi[1, 5] * Vi[5]
+        Lz = Mi[2, 0] * w0 + Mi[2, 1] * w1 + Mi[2, 2] * w2 + Mi[2, 3] * Vi[3] + Mi[2, 4] * Vi[4] + Mi[2, 5] * Vi[5]
+        px = Mi[3, 0] * w0 + Mi[3, 1] * w1 + Mi[3, 2] * w2 + Mi[3, 3] * Vi[3] + Mi[3, 4] * Vi[4] + Mi[3, 5] * Vi[5]
+        py = Mi[4, 0] * w0 + Mi[4, 1] * w1 + Mi[4, 2] * w2 + Mi[4, 3] * Vi[3] + Mi[4, 4] * Vi[4] + Mi[4, 5] * Vi[5]
+        pz = Mi[5, 0] * w0 + Mi[5, 1] * w1 + Mi[5, 2] * w2 + Mi[5, 3] * Vi[3] + Mi[5, 4] * Vi[4] + Mi[5, 5] * Vi[5]
+        a0, a1, a2 = _cross(w0, w1, w2, Lx, Ly, Lz)
+        b0, b1, b2 = _cross(Vi[3], Vi[4], Vi[5], px, py, pz)
+        c0, c1, c2 = _cross(w0, w1, w2, px, py, pz)
+        Qi[0] -= a0 + b0
+        Qi[1] -= a1 + b1
+        Qi[2] -= a2 + b2
+        Qi[3] -= c0
+        Qi[4] -= c1
+        Qi[5] -= c2
+    else:
+        Lx = Mi[0, 0] * w0 + Mi[0, 1] * w1 + Mi[0, 2] * w2
+        Ly = Mi[1, 0] * w0 + Mi[1, 1] * w1 + Mi[1, 2] * w2
+        Lz = Mi[2, 0] * w0 + Mi[2, 1] * w1 + Mi[2, 2] * w2
+        a0, a1, a2 = _cross(w0, w1, w2, Lx, Ly, Lz)
+        Qi[0] -= a0
+        Qi[1] -= a1
+        Qi[2] -= a2
+        c = com
+        if mass * (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]) > 0.0:
+            wc0, wc1, wc2 = _cross(w0, w1, w2, c[0], c[1], c[2])
+            e0, e1, e2 = _cross(w0, w1, w2, wc0, wc1, wc2)
+            for k in range(3):
+                Qi[3 + k] -= mass * (R[k, 0] * e0 + R[k, 1] * e1 + R[k, 2] * e2)
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def body_twist(gid, R, V, Vb):
+    """The body-fixed twist ``Vb = (omega, R^T rdot)`` of the body's group velocity ``V``
+    (SE3: ``V`` itself; SO3xR3: ``v_b = R^T v``)."""
+    for k in range(3):
+        Vb[k] = V[k]
+    if gid == GID_SE3:
+        for k in range(3):
+            Vb[3 + k] = V[3 + k]
+    else:
+        for k in range(3):
+            Vb[3 + k] = R[0, k] * V[3] + R[1, k] * V[4] + R[2, k] * V[5]
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def translation_dual(gid, a, RTa):
+    """``T^T a`` for a world vector ``a``, given ``RTa = R^T a``: the translational
+    velocity coordinates' share of ``a . rdot`` (``rdot = T v``: ``T = R`` for SE3,
+    ``I`` for SO3xR3).  Returns one of the two arrays (no copy)."""
+    if gid == GID_SE3:
+        return RTa
+    return a

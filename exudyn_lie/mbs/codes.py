@@ -1,0 +1,48 @@
+"""Constants shared by the compiled kernel modules: group ids, constraint-row kinds, the
+columns of the integer tables of ``SceneData``, status codes, the stage-argument bound and
+the stabilisation levels."""
+from ..groups import GROUPS, so3
+
+# group id of a body = position of its group in the one registry, exudyn_lie.groups.GROUPS
+GROUP_NAMES = tuple(GROUPS)
+GID_SE3 = GROUP_NAMES.index("SE3")
+GID_SO3xR3 = GROUP_NAMES.index("SO3xR3")
+
+ROW_TRANS_LOCAL = 0   # a = (R_A rotA)[:, ax] ; h = a . (pB - pA)
+ROW_TRANS_WORLD = 1   # a = e_ax (world)       ; h = a . (pB - pA)
+ROW_ROT = 2           # h = (R_A rotA)[:, ax] . (R_B rotB)[:, bx]
+
+# columns of the integer tables of SceneData
+ROW_KIND, ROW_AX, ROW_BX, ROW_BODY_A, ROW_BODY_B = 0, 1, 2, 3, 4      # rint (m, 5)
+J_BODY_A, J_BODY_B, J_ROW0, J_NROW = 0, 1, 2, 3                        # jint (nj, 4)
+L_BODY, L_KIND, L_FIXED = 0, 1, 2                                      # lint (nl, 3)
+
+STATUS_OK = 0
+STATUS_SINGULAR = 1
+STATUS_NONFINITE = 2
+STATUS_BLOWUP = 3
+STATUS_PROJECTION = 4      # the position projection did not converge
+STATUS_STAGE_ARG = 5       # a stage argument Psi_j left the domain of dexpinv (wk.info[2] = body)
+STATUS_EXTERNAL = 6        # the right-hand side evaluated in Python raised (mbs.external)
+
+# Domain of the MK stage equation k_j = dexpinv_{-Psi_j} V_j (eq. MK1): dexpinv of SO(3)
+# (and of SE(3), whose blocks share the coefficient) is singular at |rotation part| = 2 pi,
+# where D(t) = (1 - (t/2) cot(t/2)) / t^2 has a pole.  Near it, with t = 2 pi - delta, the
+# condition number of dexpinv (ratio of its singular values, 1 along the axis and
+# (t/2) / |sin(t/2)| across it) is about 2 pi / delta, and so is the relative condition
+# number of D(t) itself.  The time loop stops a step whose stage argument exceeds
+# STAGE_ARG_MAX = so3.DEXP_ANGLE_MAX = 2 pi (1 - sqrt(eps)) (condition number <= 1/sqrt(eps):
+# at most half the digits of the stage velocity lost), before evaluating that stage - the
+# same rule as the Python reference stepper (integrators/mk.py), so SE3's exactness for
+# motions in a subgroup holds on the same domain in both.  The test is one squared-norm
+# compare per body and stage.
+STAGE_ARG_MAX = so3.DEXP_ANGLE_MAX
+STAGE_ARG_MAX2 = STAGE_ARG_MAX * STAGE_ARG_MAX
+
+# stabilisation after each step (SceneData.stabilization)
+STAB_NONE = 0
+STAB_VELOCITY = 1          # V <- V - M^-1 J^T (J M^-1 J^T)^-1 J V
+STAB_POSITION = 2          # Gauss-Newton on the group for h(g) = 0, then the velocity projection
+PROJ_MAX_ITER = 20
+PROJ_TOL = 1e-13           # converged: max |h| <= PROJ_TOL max(1, max |r|)
+PROJ_FAIL = 1e3            # failure: max |h| > PROJ_FAIL * tolerance after PROJ_MAX_ITER iterations

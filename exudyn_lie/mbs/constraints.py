@@ -1,0 +1,122 @@
+"""Constraint rows of the joints: residual ``h``, Jacobian rows ``J`` and ``eta = -Jdot V``
+(eq. index1) for the row kinds of Exudyn's ObjectJointGeneric (:mod:`.codes` ROW_*).
+
+For a row ``h(g) = 0``, ``J V`` is its time derivative and ``eta`` is minus the bias part
+of ``hddot``: for ``h = a . d`` (a an axis, d a point difference)
+``hddot = addot . d + 2 adot . ddot + a . dddot`` and the bias collects every term that
+is quadratic in the velocities."""
+from numba import njit
+
+from .bodies import _cross, _matTvec, _side, body_axis, body_point, translation_dual
+from .codes import J_BODY_A, J_BODY_B, J_NROW, J_ROW0, ROW_AX, ROW_BX, ROW_KIND, ROW_ROT, ROW_TRANS_LOCAL
+
+
+# --------------------------------------------------------------------------- constraints
+@njit(cache=True, _nrt=False)
+def joint_rows(j, gid, jint, jpos, jrot, rint, R, r, V, h, Jr, eta, v3, ident, zero3, zero6):
+    """Residual ``h``, Jacobian rows ``Jr`` (row, 12: 6 for side A, 6 for side B) and
+    ``eta = -Jdot V`` of all rows of joint ``j``, written at the joint's row slots."""
+    a = jint[j, J_BODY_A]
+    b = jint[j, J_BODY_B]
+    gA, RA, rA, VA = _side(gid, a, R, r, V, ident, zero3, zero6)
+    gB, RB, rB, VB = _side(gid, b, R, r, V, ident, zero3, zero6)
+    sA = jpos[j, 0]
+    sB = jpos[j, 1]
+    rotA = jrot[j, 0]
+    rotB = jrot[j, 1]
+    pA, pB, vA, vB, bA, bB = v3[0], v3[1], v3[2], v3[3], v3[4], v3[5]
+    d, dd, bd, dAl, tmp = v3[6], v3[7], v3[8], v3[9], v3[10]
+    ax, axd, axb, bx, bxd, bxb = v3[11], v3[12], v3[13], v3[14], v3[15], v3[16]
+    u, w, RtA = v3[17], v3[18], v3[19]
+    body_point(gA, RA, rA, VA, sA, pA, vA, bA)
+    body_point(gB, RB, rB, VB, sB, pB, vB, bB)
+    for k in range(3):
+        d[k] = pB[k] - pA[k]
+        dd[k] = vB[k] - vA[k]
+        bd[k] = bB[k] - bA[k]
+    # RA^T (pB - rA): lever of the A-axis rotation, used by the local translation rows
+    for k in range(3):
+        tmp[k] = pB[k] - rA[k]
+    _matTvec(RA, tmp, dAl)
+    row0 = jint[j, J_ROW0]
+    for q in range(row0, row0 + jint[j, J_NROW]):
+        for k in range(12):
+            Jr[q, k] = 0.0
+        kind = rint[q, ROW_KIND]
+        rax = rint[q, ROW_AX]
+        if kind == ROW_ROT:
+            rbx = rint[q, ROW_BX]
+            for k in range(3):
+                u[k] = rotA[k, rax]
+                w[k] = rotB[k, rbx]
+            body_axis(RA, VA, u, ax, axd, axb)
+            body_axis(RB, VB, w, bx, bxd, bxb)
+            hv = 0.0
+            et = 0.0
+            for k in range(3):
+                hv += ax[k] * bx[k]
+                et += axb[k] * bx[k] + 2.0 * axd[k] * bxd[k] + ax[k] * bxb[k]
+            h[q] = hv
+            eta[q] = -et
+            if a >= 0:
+                _matTvec(RA, bx, RtA)          # u x (RA^T b)
+                c0, c1, c2 = _cross(u[0], u[1], u[2], RtA[0], RtA[1], RtA[2])
+                Jr[q, 0] = c0
+                Jr[q, 1] = c1
+                Jr[q, 2] = c2
+            if b >= 0:
+                _matTvec(RB, ax, RtA)          # w x (RB^T a)
+                c0, c1, c2 = _cross(w[0], w[1], w[2], RtA[0], RtA[1], RtA[2])
+                Jr[q, 6] = c0
+                Jr[q, 7] = c1
+                Jr[q, 8] = c2
+        else:
+            if kind == ROW_TRANS_LOCAL:
+                for k in range(3):
+                    u[k] = rotA[k, rax]
+                body_axis(RA, VA, u, ax, axd, axb)
+            else:
+                for k in range(3):
+                    ax[k] = 0.0
+                    axd[k] = 0.0
+                    axb[k] = 0.0
+                ax[rax] = 1.0
+            hv = 0.0
+            et = 0.0
+            for k in range(3):
+                hv += ax[k] * d[k]
+                et += axb[k] * d[k] + 2.0 * axd[k] * dd[k] + ax[k] * bd[k]
+            h[q] = hv
+            eta[q] = -et
+            if a >= 0:
+                _matTvec(RA, ax, RtA)          # RA^T a
+                if kind == ROW_TRANS_LOCAL:
+                    # -(a . pdot_A) + adot . d -> omega_A . (u x RA^T (pB - rA)) since RA^T a = u
+                    c0, c1, c2 = _cross(u[0], u[1], u[2], dAl[0], dAl[1], dAl[2])
+                else:
+                    # -(a . pdot_A) -> omega_A . (RA^T a x sA)
+                    c0, c1, c2 = _cross(RtA[0], RtA[1], RtA[2], sA[0], sA[1], sA[2])
+                Jr[q, 0] = c0
+                Jr[q, 1] = c1
+                Jr[q, 2] = c2
+                Ta = translation_dual(gA, ax, RtA)     # v_A: -T_A^T a
+                Jr[q, 3] = -Ta[0]
+                Jr[q, 4] = -Ta[1]
+                Jr[q, 5] = -Ta[2]
+            if b >= 0:
+                _matTvec(RB, ax, RtA)          # RB^T a
+                c0, c1, c2 = _cross(sB[0], sB[1], sB[2], RtA[0], RtA[1], RtA[2])
+                Jr[q, 6] = c0
+                Jr[q, 7] = c1
+                Jr[q, 8] = c2
+                Ta = translation_dual(gB, ax, RtA)     # v_B: T_B^T a
+                Jr[q, 9] = Ta[0]
+                Jr[q, 10] = Ta[1]
+                Jr[q, 11] = Ta[2]
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def joints_rows(gid, jint, jpos, jrot, rint, R, r, V, h, Jr, eta, v3, ident, zero3, zero6):
+    """:func:`joint_rows` of every joint."""
+    for j in range(jint.shape[0]):
+        joint_rows(j, gid, jint, jpos, jrot, rint, R, r, V, h, Jr, eta, v3, ident, zero3, zero6)

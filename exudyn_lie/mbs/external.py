@@ -1,0 +1,50 @@
+"""The right-hand side evaluated outside the compiled code: one seam of the stepper.
+
+The compiled stepper (:mod:`.stepper`) calls :func:`evaluate` once per evaluated stage
+when the scene has an external part (``SceneData.hasQext``), from a numba ``objmode``
+block: no Python stage loop, one Python call per stage.  Today the external part is
+the generalised forces of Python callbacks (``Scene.AddPythonForce``, the bridge's
+user functions), added to the compiled forces; a right-hand side that Exudyn evaluates
+(issue 17) plugs in here as another kind of evaluator.
+
+An evaluator is a Python callable ``f(t, Rs, rs, Vs, Qext)`` that fills ``Qext``
+(nb, 6) in the bodies' group velocity coordinates at the stage state.  It is
+registered under an integer token (kept in ``Work.ext[0]``, as numba cannot hold a
+Python object); an exception it raises is kept and the stepper returns
+``STATUS_EXTERNAL``, after which the caller re-raises it with :func:`reraise`.
+"""
+import itertools
+import weakref
+
+_EVALUATORS = {}
+_ERRORS = {}
+_TOKENS = itertools.count(1)
+
+
+def register(owner, method_name):
+    """Register ``getattr(owner, method_name)`` (held through a weak reference to
+    ``owner``, so the registry does not keep a simulator alive); returns the token."""
+    token = next(_TOKENS)
+    ref = weakref.ref(owner)
+    _EVALUATORS[token] = (ref, method_name)
+    weakref.finalize(owner, _EVALUATORS.pop, token, None)
+    return token
+
+
+def evaluate(token, t, Rs, rs, Vs, Qext):
+    """Called by the compiled stepper (objmode): 0 on success, 1 if the evaluator raised
+    (the exception is kept for :func:`reraise`)."""
+    try:
+        ref, name = _EVALUATORS[token]
+        getattr(ref(), name)(t, Rs, rs, Vs, Qext)
+        return 0
+    except BaseException as e:       # noqa: BLE001 - re-raised by the caller after the kernel returns
+        _ERRORS[token] = e
+        return 1
+
+
+def reraise(token):
+    """Raise the exception kept for ``token`` (if any)."""
+    e = _ERRORS.pop(token, None)
+    if e is not None:
+        raise e

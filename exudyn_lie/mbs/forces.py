@@ -1,0 +1,188 @@
+"""Applied and inertial generalised forces of the compiled kernel, one function per
+force element (gravity, loads, point-to-point, Cartesian and torsional spring-dampers)
+and ``compute_forces``, which adds those a scene has."""
+import numpy as np
+from numba import njit
+
+from .bodies import _matvec, _side, add_point_force, add_world_torque, body_inertial_forces, body_point
+from .codes import L_BODY, L_FIXED, L_KIND
+
+
+# --------------------------------------------------------------------------- forces
+@njit(cache=True, inline="always", _nrt=False)
+def gravity_forces(gid, mass, com, gravity, R, Q, F):
+    """Gravity acts at the centre of mass."""
+    for i in range(gid.shape[0]):
+        for k in range(3):
+            F[k] = mass[i] * gravity[k]
+        add_point_force(gid[i], R[i], com[i], F, Q[i])
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def load_forces(gid, lint, lvec, R, Q, F):
+    """Constant forces (at a body point) and torques, world or body-fixed."""
+    for l in range(lint.shape[0]):
+        i = lint[l, L_BODY]
+        if lint[l, L_KIND] == 0:
+            if lint[l, L_FIXED]:
+                _matvec(R[i], lvec[l, 0], F)
+            else:
+                for k in range(3):
+                    F[k] = lvec[l, 0, k]
+            add_point_force(gid[i], R[i], lvec[l, 1], F, Q[i])
+        else:
+            if lint[l, L_FIXED]:
+                for k in range(3):
+                    Q[i, k] += lvec[l, 0, k]
+            else:
+                add_world_torque(R[i], lvec[l, 0], Q[i])
+
+
+@njit(cache=True, _nrt=False)
+def spring_forces(gid, sint, spos, spar, R, r, V, Q, v3, ident, zero3, zero6):
+    """Point-to-point spring-dampers: tension ``f = k (L - L0) + d Ldot + f0``
+    (``spar`` = k, d, L0, f0)."""
+    pA, pB, vA, vB, bA, bB, F = v3[0], v3[1], v3[2], v3[3], v3[4], v3[5], v3[6]
+    for s in range(sint.shape[0]):
+        a = sint[s, 0]
+        b = sint[s, 1]
+        gA, RA, rA, VA = _side(gid, a, R, r, V, ident, zero3, zero6)
+        gB, RB, rB, VB = _side(gid, b, R, r, V, ident, zero3, zero6)
+        body_point(gA, RA, rA, VA, spos[s, 0], pA, vA, bA)
+        body_point(gB, RB, rB, VB, spos[s, 1], pB, vB, bB)
+        L = 0.0
+        for k in range(3):
+            L += (pB[k] - pA[k]) ** 2
+        L = np.sqrt(L)
+        if L < 1e-300:
+            continue  # direction undefined: zero-length spring exerts no force
+        Ld = 0.0
+        for k in range(3):
+            Ld += (pB[k] - pA[k]) * (vB[k] - vA[k])
+        Ld /= L
+        f = spar[s, 0] * (L - spar[s, 2]) + spar[s, 1] * Ld + spar[s, 3]
+        if a >= 0:
+            for k in range(3):
+                F[k] = f * (pB[k] - pA[k]) / L
+            add_point_force(gA, RA, spos[s, 0], F, Q[a])
+        if b >= 0:
+            for k in range(3):
+                F[k] = -f * (pB[k] - pA[k]) / L
+            add_point_force(gB, RB, spos[s, 1], F, Q[b])
+
+
+@njit(cache=True, _nrt=False)
+def cartesian_forces(gid, cint, cpos, cpar, R, r, V, Q, v3, ident, zero3, zero6):
+    """Cartesian spring-dampers, world components ``f_i = k_i (d_i - o_i) + c_i ddot_i``
+    (``cpar[s]`` = rows k, c, o)."""
+    pA, pB, vA, vB, bA, bB, F = v3[0], v3[1], v3[2], v3[3], v3[4], v3[5], v3[6]
+    for s in range(cint.shape[0]):
+        a = cint[s, 0]
+        b = cint[s, 1]
+        gA, RA, rA, VA = _side(gid, a, R, r, V, ident, zero3, zero6)
+        gB, RB, rB, VB = _side(gid, b, R, r, V, ident, zero3, zero6)
+        body_point(gA, RA, rA, VA, cpos[s, 0], pA, vA, bA)
+        body_point(gB, RB, rB, VB, cpos[s, 1], pB, vB, bB)
+        for k in range(3):
+            F[k] = cpar[s, 0, k] * (pB[k] - pA[k] - cpar[s, 2, k]) + cpar[s, 1, k] * (vB[k] - vA[k])
+        if a >= 0:
+            add_point_force(gA, RA, cpos[s, 0], F, Q[a])
+        if b >= 0:
+            for k in range(3):
+                F[k] = -F[k]
+            add_point_force(gB, RB, cpos[s, 1], F, Q[b])
+
+
+@njit(cache=True, _nrt=False)
+def torsion_angle(rotA, rotB, prev, RA, VA, RB, VB, FA, FB):
+    """Relative rotation angle about z of frame A (tracked continuously through turns
+    from the angle ``prev`` at the last accepted step) and its rate."""
+    # relative rotation Rrel = (RA rotA)^T (RB rotB); phi is its third Tait-Bryan (x-y-z)
+    # angle, atan2(-Rrel[0,1], Rrel[0,0]), as in Exudyn's TorsionalSpringDamper
+    for i in range(3):
+        for j in range(3):
+            FA[i, j] = RA[i, 0] * rotA[0, j] + RA[i, 1] * rotA[1, j] + RA[i, 2] * rotA[2, j]
+            FB[i, j] = RB[i, 0] * rotB[0, j] + RB[i, 1] * rotB[1, j] + RB[i, 2] * rotB[2, j]
+    r01 = FA[0, 0] * FB[0, 1] + FA[1, 0] * FB[1, 1] + FA[2, 0] * FB[2, 1]
+    r00 = FA[0, 0] * FB[0, 0] + FA[1, 0] * FB[1, 0] + FA[2, 0] * FB[2, 0]
+    phi0 = np.arctan2(-r01, r00)
+    turns = np.round((prev - phi0) / (2.0 * np.pi))
+    phi = phi0 + 2.0 * np.pi * turns
+    # phidot = z_A . (omega_B,world - omega_A,world)
+    wBw0 = RB[0, 0] * VB[0] + RB[0, 1] * VB[1] + RB[0, 2] * VB[2]
+    wBw1 = RB[1, 0] * VB[0] + RB[1, 1] * VB[1] + RB[1, 2] * VB[2]
+    wBw2 = RB[2, 0] * VB[0] + RB[2, 1] * VB[1] + RB[2, 2] * VB[2]
+    wAw0 = RA[0, 0] * VA[0] + RA[0, 1] * VA[1] + RA[0, 2] * VA[2]
+    wAw1 = RA[1, 0] * VA[0] + RA[1, 1] * VA[1] + RA[1, 2] * VA[2]
+    wAw2 = RA[2, 0] * VA[0] + RA[2, 1] * VA[1] + RA[2, 2] * VA[2]
+    phid = FA[0, 2] * (wBw0 - wAw0) + FA[1, 2] * (wBw1 - wAw1) + FA[2, 2] * (wBw2 - wAw2)
+    return phi, phid
+
+
+@njit(cache=True, _nrt=False)
+def torsional_forces(gid, tint, trot, tpar, tphi, R, r, V, Q, F, m3, ident, zero3, zero6):
+    """Torsional spring-dampers about the z axis of the frame on A (``tpar`` = k, d,
+    offset, torque).  Exudyn's law: ``tau = k (phi - phi0) + d phidot + torque``;
+    ``-tau z_A`` acts on B, ``+tau z_A`` on A."""
+    for s in range(tint.shape[0]):
+        a = tint[s, 0]
+        b = tint[s, 1]
+        gA, RA, rA, VA = _side(gid, a, R, r, V, ident, zero3, zero6)
+        gB, RB, rB, VB = _side(gid, b, R, r, V, ident, zero3, zero6)
+        phi, phid = torsion_angle(trot[s, 0], trot[s, 1], tphi[s], RA, VA, RB, VB, m3[0], m3[1])
+        tau = -(tpar[s, 0] * (phi - tpar[s, 2]) + tpar[s, 1] * phid + tpar[s, 3])
+        for k in range(3):
+            F[k] = tau * (RA[k, 0] * trot[s, 0, 0, 2] + RA[k, 1] * trot[s, 0, 1, 2] + RA[k, 2] * trot[s, 0, 2, 2])
+        if b >= 0:
+            add_world_torque(RB, F, Q[b])
+        if a >= 0:
+            for k in range(3):
+                F[k] = -F[k]
+            add_world_torque(RA, F, Q[a])
+
+
+@njit(cache=True, _nrt=False)
+def torsion_angles(gid, tint, trot, tphi, R, r, V, m3, ident, zero3, zero6):
+    """Store the current torsion angles as the branch reference for the next step."""
+    for s in range(tint.shape[0]):
+        gA, RA, rA, VA = _side(gid, tint[s, 0], R, r, V, ident, zero3, zero6)
+        gB, RB, rB, VB = _side(gid, tint[s, 1], R, r, V, ident, zero3, zero6)
+        phi, phid = torsion_angle(trot[s, 0], trot[s, 1], tphi[s], RA, VA, RB, VB, m3[0], m3[1])
+        tphi[s] = phi
+
+
+@njit(cache=True, _nrt=False)
+def inertial_forces(gid, M, mass, com, R, V, Q):
+    """Velocity-dependent (gyroscopic / centrifugal) terms of every body, in its group
+    (:func:`~.bodies.body_inertial_forces`, inlined here; this loop is compiled on its own:
+    one call per stage, and mk_steps compiles faster than with a nested inline)."""
+    for i in range(gid.shape[0]):
+        body_inertial_forces(gid[i], M[i], mass[i], com[i], R[i], V[i], Q[i])
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def compute_forces(sd, wk, t, R, r, V, Q):
+    """Applied and inertial generalised forces ``Q`` (nb, 6) at the state (R, r, V);
+    every force type a scene lacks is skipped."""
+    for i in range(sd.nb):
+        for k in range(6):
+            Q[i, k] = 0.0
+    F = wk.v3[6]
+    if sd.hasGravity:
+        gravity_forces(sd.gid, sd.mass, sd.com, sd.gravity, R, Q, F)
+    if sd.lint.shape[0] > 0:
+        load_forces(sd.gid, sd.lint, sd.lvec, R, Q, F)
+    if sd.sint.shape[0] > 0:
+        spring_forces(sd.gid, sd.sint, sd.spos, sd.spar, R, r, V, Q, wk.v3, wk.ident, wk.zero3, wk.zero6)
+    if sd.cint.shape[0] > 0:
+        cartesian_forces(sd.gid, sd.cint, sd.cpos, sd.cpar, R, r, V, Q, wk.v3, wk.ident, wk.zero3, wk.zero6)
+    if sd.tint.shape[0] > 0:
+        torsional_forces(sd.gid, sd.tint, sd.trot, sd.tpar, wk.tphi, R, r, V, Q, F, wk.m3, wk.ident, wk.zero3,
+                         wk.zero6)
+    inertial_forces(sd.gid, sd.M, sd.mass, sd.com, R, V, Q)
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def update_torsion_tracking(sd, wk, R, r, V):
+    if sd.tint.shape[0] > 0:
+        torsion_angles(sd.gid, sd.tint, sd.trot, wk.tphi, R, r, V, wk.m3, wk.ident, wk.zero3, wk.zero6)

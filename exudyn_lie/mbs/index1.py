@@ -1,0 +1,150 @@
+"""The index-1 solve (eq. index1): ``[M J^T; J 0][Vdot; lambda] = [Q; eta]`` by the Schur
+complement ``J M^-1 J^T`` (band Cholesky, or pivoted Cholesky for redundant rows), and
+the stage right-hand side ``rhs`` that assembles forces, rows and the solve."""
+from numba import njit
+
+from .bodies import apply_minv
+from .codes import ROW_BODY_A, ROW_BODY_B, STATUS_OK, STATUS_SINGULAR
+from .constraints import joints_rows
+from .forces import compute_forces
+from .linalg import band_cholesky_inplace, band_cholesky_solve_inplace, pivoted_cholesky_solve
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def _row_dot(rint, q, l, Jr, W):
+    """(J M^-1 J^T)[q, l] = sum over the bodies shared by rows q and l."""
+    s = 0.0
+    aq = rint[q, ROW_BODY_A]
+    bq = rint[q, ROW_BODY_B]
+    al = rint[l, ROW_BODY_A]
+    bl = rint[l, ROW_BODY_B]
+    if aq >= 0:
+        if aq == al:
+            for k in range(6):
+                s += Jr[q, k] * W[l, k]
+        if aq == bl:
+            for k in range(6):
+                s += Jr[q, k] * W[l, 6 + k]
+    if bq >= 0:
+        if bq == al:
+            for k in range(6):
+                s += Jr[q, 6 + k] * W[l, k]
+        if bq == bl:
+            for k in range(6):
+                s += Jr[q, 6 + k] * W[l, 6 + k]
+    return s
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def rows_times(rint, Jr, X, c, y, out):
+    """``out = c y + J X`` for a per-body array X (nb, 6), from the row blocks of J."""
+    for q in range(rint.shape[0]):
+        s = c * y[q]
+        a = rint[q, ROW_BODY_A]
+        b = rint[q, ROW_BODY_B]
+        if a >= 0:
+            for k in range(6):
+                s += Jr[q, k] * X[a, k]
+        if b >= 0:
+            for k in range(6):
+                s += Jr[q, 6 + k] * X[b, k]
+        out[q] = s
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def subtract_rows_transposed(rint, W, lam, X):
+    """``X -= W^T lam`` per body, W (m, 12) holding the two body blocks of each row."""
+    for q in range(rint.shape[0]):
+        lq = lam[q]
+        a = rint[q, ROW_BODY_A]
+        b = rint[q, ROW_BODY_B]
+        if a >= 0:
+            for k in range(6):
+                X[a, k] -= W[q, k] * lq
+        if b >= 0:
+            for k in range(6):
+                X[b, k] -= W[q, 6 + k] * lq
+
+
+@njit(cache=True, _nrt=False)
+def schur_solve(gid, Minv, rint, bw, redundant, pivotTol, R, Jr, W, lam, Sb, Sd, perm, ytmp, info, tmp12):
+    """``W = M^-1 J^T`` (row blocks) and ``lam <- (J M^-1 J^T)^-1 lam``: the Schur
+    complement shared by the index-1 solve and the projections.  ``S`` is banded (band
+    Cholesky); with redundant rows the pivoted Cholesky drops the dependent ones.
+    Returns a status code (info[0] = failing row, info[1] = rank if redundant)."""
+    m = rint.shape[0]
+    for q in range(m):
+        a = rint[q, ROW_BODY_A]
+        b = rint[q, ROW_BODY_B]
+        if a >= 0:
+            apply_minv(gid[a], Minv[a], R[a], Jr[q, 0:6], W[q, 0:6], tmp12)
+        else:
+            for k in range(6):
+                W[q, k] = 0.0
+        if b >= 0:
+            apply_minv(gid[b], Minv[b], R[b], Jr[q, 6:12], W[q, 6:12], tmp12)
+        else:
+            for k in range(6):
+                W[q, 6 + k] = 0.0
+    if redundant:
+        for q in range(m):
+            for l in range(q + 1):
+                v = _row_dot(rint, q, l, Jr, W)
+                Sd[q, l] = v
+                Sd[l, q] = v
+        info[1] = pivoted_cholesky_solve(Sd, m, lam, perm, ytmp, pivotTol)
+        return STATUS_OK
+    dmax = 0.0
+    for q in range(m):
+        l0 = q - bw
+        if l0 < 0:
+            l0 = 0
+        for l in range(l0, q + 1):
+            Sb[q, q - l] = _row_dot(rint, q, l, Jr, W)
+        if Sb[q, 0] > dmax:
+            dmax = Sb[q, 0]
+    fail = band_cholesky_inplace(Sb, m, bw, pivotTol * dmax)
+    if fail >= 0:
+        info[0] = fail
+        return STATUS_SINGULAR
+    band_cholesky_solve_inplace(Sb, m, bw, lam)
+    return STATUS_OK
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def schur_correct(gid, Minv, rint, bw, redundant, pivotTol, R, X, c, y, Jr, W, lam, Sb, Sd, perm, ytmp, info, tmp12):
+    """``X -= M^-1 J^T lambda`` with ``(J M^-1 J^T) lambda = c y + J X``: the correction that
+    makes ``J X = -c y``.  The index-1 solve (eq. index1) is ``X = Vdot = M^-1 Q``,
+    ``c y = -eta``; the velocity projection ``X = V``, ``c = 0``.  Returns a status code."""
+    rows_times(rint, Jr, X, c, y, lam)
+    st = schur_solve(gid, Minv, rint, bw, redundant, pivotTol, R, Jr, W, lam, Sb, Sd, perm, ytmp, info, tmp12)
+    if st != STATUS_OK:
+        return st
+    subtract_rows_transposed(rint, W, lam, X)
+    return STATUS_OK
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def free_accelerations(gid, Minv, R, Q, Vdot, tmp12):
+    """``Vdot = M^-1 Q`` body by body."""
+    for i in range(gid.shape[0]):
+        apply_minv(gid[i], Minv[i], R[i], Q[i], Vdot[i], tmp12)
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def rhs(sd, wk, t, R, r, V, Qext, Vdot):
+    """Stage right-hand side ``Vdot = F(g, V)`` (eq. ODE2a).  ``Qext`` holds extra
+    generalised forces (from Python callbacks), zeros otherwise."""
+    Q = wk.Q
+    compute_forces(sd, wk, t, R, r, V, Q)
+    if sd.hasQext:
+        for i in range(sd.nb):
+            for k in range(6):
+                Q[i, k] += Qext[i, k]
+    free_accelerations(sd.gid, sd.Minv, R, Q, Vdot, wk.tmp12)
+    if sd.nrows == 0:
+        return STATUS_OK
+    joints_rows(sd.gid, sd.jint, sd.jpos, sd.jrot, sd.rint, R, r, V, wk.h, wk.Jr, wk.eta, wk.v3, wk.ident,
+                wk.zero3, wk.zero6)
+    return schur_correct(sd.gid, sd.Minv, sd.rint, sd.bandwidth, sd.redundant, sd.pivotTol, R, Vdot, -1.0, wk.eta,
+                         wk.Jr, wk.W, wk.lam, wk.Sb, wk.Sd, wk.perm, wk.ytmp, wk.info, wk.tmp12)

@@ -1,0 +1,82 @@
+"""Constraint stabilisation on the group: position (Gauss-Newton) and velocity projection."""
+from collections import namedtuple
+
+from numba import njit
+
+from .bodies import exp_compose
+from .codes import PROJ_FAIL, PROJ_MAX_ITER, PROJ_TOL, STAB_POSITION, STATUS_OK, STATUS_PROJECTION
+from .constraints import joints_rows
+from .index1 import schur_correct, schur_solve, subtract_rows_transposed
+
+
+# the arguments of project, by what they are (built by project_state from SceneData / Work)
+Joints = namedtuple("Joints", ["gid", "jint", "jpos", "jrot", "rint"])           # the joint tables
+Schur = namedtuple("Schur", ["Minv", "bw", "redundant", "pivotTol",              # J M^-1 J^T: data...
+                             "W", "lam", "Sb", "Sd", "perm", "ytmp", "info", "tmp12"])   # ... and work
+Rows = namedtuple("Rows", ["h", "Jr", "eta"])                                    # the rows at a state
+Scratch = namedtuple("Scratch", ["Psi", "v3", "m3", "ident", "zero3", "zero6"])
+
+
+@njit(cache=True, _nrt=False)
+def project(level, joints, schur, rows, scratch, R, r, V):
+    """Constraint stabilisation (Simulator(stabilization=...)), both on the group:
+
+    * positions (``level`` 2): Gauss-Newton ``g_i <- g_i exp(delta_i)``,
+      ``delta = -M^-1 J^T (J M^-1 J^T)^-1 h(g)`` (the mass-weighted least-change
+      correction; J is the derivative of h along g exp(delta) in each body's group);
+    * velocities (``level`` >= 1): ``V <- V - M^-1 J^T (J M^-1 J^T)^-1 J V``.
+
+    Returns a status code (STATUS_PROJECTION if max |h| stays above the tolerance)."""
+    gid, jint, jpos, jrot, rint = joints
+    Minv, bw, redundant, pivotTol, W, lam, Sb, Sd, perm, ytmp, info, tmp12 = schur
+    h, Jr, eta = rows
+    Psi, v3, m3, ident, zero3, zero6 = scratch
+    nb = gid.shape[0]
+    if level >= STAB_POSITION:
+        scale = 1.0
+        for i in range(nb):
+            for k in range(3):
+                if abs(r[i, k]) > scale:
+                    scale = abs(r[i, k])
+        tol = PROJ_TOL * scale
+        hmax = 0.0
+        for it in range(PROJ_MAX_ITER + 1):
+            joints_rows(gid, jint, jpos, jrot, rint, R, r, V, h, Jr, eta, v3, ident, zero3, zero6)
+            hmax = 0.0
+            for q in range(rint.shape[0]):
+                if abs(h[q]) > hmax:
+                    hmax = abs(h[q])
+            if hmax <= tol or it == PROJ_MAX_ITER:
+                break
+            for q in range(rint.shape[0]):
+                lam[q] = h[q]
+            st = schur_solve(gid, Minv, rint, bw, redundant, pivotTol, R, Jr, W, lam, Sb, Sd, perm, ytmp, info,
+                             tmp12)
+            if st != STATUS_OK:
+                return st
+            for i in range(nb):
+                for k in range(6):
+                    Psi[i, k] = 0.0
+            subtract_rows_transposed(rint, W, lam, Psi)
+            for i in range(nb):
+                exp_compose(gid[i], R[i], r[i], Psi[i], m3[1], v3[1], m3[0], v3[0])
+                for a in range(3):
+                    r[i, a] = v3[1, a]
+                    for c in range(3):
+                        R[i, a, c] = m3[1, a, c]
+        if hmax > PROJ_FAIL * tol:
+            return STATUS_PROJECTION
+    else:
+        joints_rows(gid, jint, jpos, jrot, rint, R, r, V, h, Jr, eta, v3, ident, zero3, zero6)
+    return schur_correct(gid, Minv, rint, bw, redundant, pivotTol, R, V, 0.0, eta, Jr, W, lam, Sb, Sd, perm, ytmp,
+                         info, tmp12)
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def project_state(sd, wk, level, R, r, V):
+    if sd.nrows == 0:
+        return STATUS_OK
+    return project(level, Joints(sd.gid, sd.jint, sd.jpos, sd.jrot, sd.rint),
+                   Schur(sd.Minv, sd.bandwidth, sd.redundant, sd.pivotTol, wk.W, wk.lam, wk.Sb, wk.Sd, wk.perm,
+                         wk.ytmp, wk.info, wk.tmp12),
+                   Rows(wk.h, wk.Jr, wk.eta), Scratch(wk.Psi, wk.v3, wk.m3, wk.ident, wk.zero3, wk.zero6), R, r, V)

@@ -1,0 +1,334 @@
+"""The one Munthe-Kaas stepper (eq. MK1), compiled: every path of the package runs it.
+
+``mk_steps`` advances the state ``(R, r, V)`` of all bodies, each in its own group
+(:mod:`.bodies`), with the explicit tableau ``tab`` (:class:`Method`).  Its users: the
+fixed-step loop of :class:`~exudyn_lie.mbs.Simulator` (``Advance`` / ``Run``), the
+accelerations at a state (``nsteps = 0``), and the bridge's output chunks
+(:class:`~exudyn_lie.bridge.fast.OutputChunks`), with or without forces evaluated in
+Python.  (The Python reference stepper ``integrators/mk.py`` is kept as a test oracle.)
+
+One step, per body::
+
+    Psi_j = h sum_{l<j} a_jl k_l,   g_j = g exp(Psi_j),   V_j = V + h sum_{l<j} a_jl Vdot_l
+    Vdot_j = F(t + c_j h, g_j, V_j)                                    (index-1 rhs)
+    k_j = dexp^-1_{-Psi_j} V_j
+    g+ = g exp(h sum_j b_j k_j),   V+ = V + h sum_j b_j Vdot_j
+
+Only the stages in ``tab.stages`` are evaluated: a stage whose weight and all later
+coefficients are zero cannot change the step (e.g. DOPRI5's 7th, FSAL stage; its
+``k_j``, ``Vdot_j`` stay zero and the weighted sums are unchanged bit for bit).
+
+Two seams:
+
+* the **right-hand side outside the compiled code** (:mod:`.external`): when
+  ``sd.hasQext`` the stage calls the registered Python evaluator once (numba
+  ``objmode``), which fills the extra generalised forces ``wk.Qext`` at the stage state;
+  no Python stage loop.  An exception there ends the call with ``STATUS_EXTERNAL``.
+* the **step controller** (:class:`Control`): after each step ``control_step`` decides
+  to accept it and the next step size from an error estimate.  ``CONTROL_FIXED`` (the
+  only kind today) accepts every step with the same ``h`` and skips the estimate.  An
+  adaptive controller (issue 18) adds a kind: ``error_estimate`` from ``tab.bhat``
+  (the embedded increment ``h sum (b_j - bhat_j) k_j`` per body in the algebra, no
+  chart), its PI state in ``ctl.state``; a rejected step is undone from the backup
+  ``wk.Rb/rb/Vb`` that the loop keeps anyway, and FSAL / dense output use the stage
+  arrays ``wk.K``, ``wk.Vd``, which hold the accepted step's stages until the next
+  step starts (where ``record`` writes outputs).
+"""
+from collections import namedtuple
+
+import numpy as np
+from numba import njit, objmode
+
+from . import external
+from .bodies import body_dexpinv_stage, exp_compose
+from .codes import (STAB_NONE, STAGE_ARG_MAX2, STATUS_BLOWUP, STATUS_EXTERNAL, STATUS_NONFINITE, STATUS_OK,
+                    STATUS_STAGE_ARG)
+from .forces import update_torsion_tracking
+from .index1 import rhs
+from .projection import project_state
+
+# A tableau as the stepper uses it: A, b, c, the indices of the evaluated stages and the
+# embedded weights (no rows without a pair).
+Method = namedtuple("Method", ["A", "b", "c", "stages", "bhat"])
+
+# Step controller: kind, parameters, state (CONTROL_FIXED: none)
+Control = namedtuple("Control", ["kind", "par", "state"])
+CONTROL_FIXED = 0
+
+
+def needed_stages(A, b):
+    """Indices of the stages that can influence a step: ``b_j != 0`` or used by a needed
+    later stage (``a_lj != 0``).  Stage 0 is always evaluated (it is also the
+    accelerations at the step's initial state, recorded at outputs)."""
+    A = np.asarray(A, float)
+    b = np.asarray(b, float)
+    s = len(b)
+    need = [bool(b[j] != 0.0) for j in range(s)]
+    for j in range(s - 1, -1, -1):
+        if not need[j]:
+            need[j] = any(need[l] and A[l, j] != 0.0 for l in range(j + 1, s))
+    need[0] = True
+    return np.array([j for j in range(s) if need[j]], dtype=np.int64)
+
+
+def method_arrays(tableau):
+    """The :class:`Method` of a :class:`~exudyn_lie.integrators.tableau.ButcherTableau`."""
+    A, b, c = tableau.arrays()
+    bh = np.zeros(0) if tableau.b_hat is None else np.array(tableau.b_hat, dtype=np.float64)
+    return Method(A=A, b=b, c=c, stages=needed_stages(A, b), bhat=bh)
+
+
+def fixed_step_control():
+    """The controller of fixed steps."""
+    return Control(kind=CONTROL_FIXED, par=np.zeros(0), state=np.zeros(0))
+
+
+# --------------------------------------------------------------------------- the stages
+@njit(cache=True, inline="always", _nrt=False)
+def stage_state(gid, A, j, h, R, r, V, K, Vd, Psi, Rs, rs, Vs, ER, Er):
+    """Stage configuration ``g exp(Psi_j)`` and velocity ``V + h sum a_jl Vdot_l`` (eq. MK1).
+
+    Returns -1, or the first body whose stage argument has ``|rotation part of Psi_j|``
+    beyond STAGE_ARG_MAX (dexpinv_{-Psi_j} of the stage is singular at 2 pi); then the
+    stage is not evaluated."""
+    for i in range(gid.shape[0]):
+        Pi = Psi[i]
+        for k in range(6):
+            ps = 0.0
+            vs = V[i, k]
+            for l in range(j):
+                ps += A[j, l] * K[l, i, k]
+                vs += h * A[j, l] * Vd[l, i, k]
+            Pi[k] = h * ps
+            Vs[i, k] = vs
+        if j == 0:
+            for a in range(3):
+                rs[i, a] = r[i, a]
+                for b in range(3):
+                    Rs[i, a, b] = R[i, a, b]
+        else:
+            if Pi[0] * Pi[0] + Pi[1] * Pi[1] + Pi[2] * Pi[2] > STAGE_ARG_MAX2:   # (NaN: state_is_finite)
+                return i
+            exp_compose(gid[i], R[i], r[i], Pi, Rs[i], rs[i], ER, Er)
+    return -1
+
+
+@njit(cache=True, _nrt=False)
+def stage_k(gid, j, Psi, Vs, K, tmp6):
+    """``k_j = dexp^-1_{-Psi_j} V_j`` (eq. MK1), per body in its own group.  (Compiled on its
+    own, with the group dispatch inlined: one call per stage; inlining it into mk_steps
+    as well cost 2.5 s of mk_steps' compile time and no speed.)"""
+    for i in range(gid.shape[0]):
+        Kj = K[j, i]
+        if j == 0:
+            for k in range(6):
+                Kj[k] = Vs[i, k]
+        else:
+            for k in range(6):
+                tmp6[k] = -Psi[i, k]
+            body_dexpinv_stage(gid[i], tmp6, Vs[i], Kj)
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def finish(gid, stages, b, h, R, r, V, K, Vd, Psi, Rn, C, rn, Er):
+    """``g <- g exp(h sum b_j k_j)``, ``V <- V + h sum b_j Vdot_j`` over the evaluated
+    stages; re-orthonormalise R with one Newton step ``R <- R (3 I - R^T R) / 2``
+    (changes R by O(eps) only)."""
+    ns = stages.shape[0]
+    for i in range(gid.shape[0]):
+        Phi = Psi[i]
+        for k in range(6):
+            ph = 0.0
+            vv = 0.0
+            for jj in range(ns):
+                j = stages[jj]
+                ph += b[j] * K[j, i, k]
+                vv += b[j] * Vd[j, i, k]
+            Phi[k] = h * ph
+            V[i, k] += h * vv
+        exp_compose(gid[i], R[i], r[i], Phi, Rn, rn, C, Er)
+        # Newton orthonormalisation: C = (3 I - Rn^T Rn) / 2
+        for a in range(3):
+            for c in range(3):
+                g = 0.0
+                for k in range(3):
+                    g += Rn[k, a] * Rn[k, c]
+                C[a, c] = -0.5 * g
+            C[a, a] += 1.5
+        for a in range(3):
+            r[i, a] = rn[a]
+            for c in range(3):
+                R[i, a, c] = Rn[a, 0] * C[0, c] + Rn[a, 1] * C[1, c] + Rn[a, 2] * C[2, c]
+
+
+# the stages on the scene tuples (inlined into mk_steps; callable from Python, e.g. by the
+# stress suite's collection of group-map arguments)
+@njit(cache=True, inline="always", _nrt=False)
+def mk_stage_state(sd, wk, A, j, h, R, r, V):
+    """:func:`stage_state` on the scene tuples; a stage argument out of the domain of
+    dexpinv gives STATUS_STAGE_ARG with the body in ``wk.info[2]``."""
+    bad = stage_state(sd.gid, A, j, h, R, r, V, wk.K, wk.Vd, wk.Psi, wk.Rs, wk.rs, wk.Vs, wk.m3[0], wk.v3[0])
+    if bad >= 0:
+        wk.info[2] = bad
+        return STATUS_STAGE_ARG
+    return STATUS_OK
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def mk_stage_k(sd, wk, j):
+    stage_k(sd.gid, j, wk.Psi, wk.Vs, wk.K, wk.tmp6)
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def mk_finish(sd, wk, tab, h, R, r, V):
+    finish(sd.gid, tab.stages, tab.b, h, R, r, V, wk.K, wk.Vd, wk.Psi, wk.m3[1], wk.m3[0], wk.v3[1], wk.v3[0])
+
+
+@njit(cache=True, _nrt=False)
+def external_forces(token, t, Rs, rs, Vs, Qext):
+    """The right-hand side seam: the registered Python evaluator fills ``Qext`` at the
+    stage state (:mod:`.external`).  Returns a status code."""
+    with objmode(fail="int64"):
+        fail = external.evaluate(token, t, Rs, rs, Vs, Qext)
+    return STATUS_EXTERNAL if fail else STATUS_OK
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def stage_rhs(sd, wk, t, Vdot):
+    """``Vdot_j = F(t, g_j, V_j)`` at the stage state ``wk.Rs, wk.rs, wk.Vs``: the
+    external part first (if the scene has one), then the compiled index-1 rhs."""
+    if sd.hasQext:
+        st = external_forces(wk.ext[0], t, wk.Rs, wk.rs, wk.Vs, wk.Qext)
+        if st != STATUS_OK:
+            return st
+    return rhs(sd, wk, t, wk.Rs, wk.rs, wk.Vs, wk.Qext, Vdot)
+
+
+# --------------------------------------------------------------------------- the step controller
+@njit(cache=True, inline="always", _nrt=False)
+def error_estimate(ctl, tab, wk, h):
+    """Error of the accepted candidate for an adaptive controller (none for fixed steps)."""
+    return 0.0
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def control_step(ctl, err, h):
+    """``(accept, next h)`` after a step of size ``h`` with error estimate ``err``.
+    CONTROL_FIXED: every step accepted, the step size kept."""
+    return True, h
+
+
+# --------------------------------------------------------------------------- state helpers
+@njit(cache=True, inline="always", _nrt=False)
+def state_is_finite(gid, R, r, V, vmax):
+    """0 if finite and bounded, STATUS_NONFINITE / STATUS_BLOWUP otherwise."""
+    for i in range(gid.shape[0]):
+        for k in range(6):
+            x = V[i, k]
+            if not np.isfinite(x):
+                return STATUS_NONFINITE
+            if abs(x) > vmax:
+                return STATUS_BLOWUP
+        for k in range(3):
+            if not np.isfinite(r[i, k]):
+                return STATUS_NONFINITE
+    return STATUS_OK
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def copy_state(R, r, V, Rto, rto, Vto):
+    for i in range(R.shape[0]):
+        for a in range(3):
+            rto[i, a] = r[i, a]
+            for c in range(3):
+                Rto[i, a, c] = R[i, a, c]
+        for k in range(6):
+            Vto[i, k] = V[i, k]
+
+
+@njit(cache=True, _nrt=False)
+def watch_rotation_entries(watchBody, watchEntry, watchMax, R):
+    """Largest |R[body][i, j]| of the watched entries over the accepted steps (cheap
+    monitoring between outputs, e.g. of a coordinate singularity; none by default)."""
+    for w in range(watchBody.shape[0]):
+        a = abs(R[watchBody[w], watchEntry[w, 0], watchEntry[w, 1]])
+        if a > watchMax[w]:
+            watchMax[w] = a
+
+
+# --------------------------------------------------------------------------- the loop
+@njit(cache=True, _nrt=False)
+def mk_steps(sd, wk, tab, ctl, t0, h, nsteps, R, r, V, vmax, every, Ro, ro, Vo, Vdo, lamo):
+    """Advance ``nsteps`` MK steps in place.  Returns (status, steps done); on a failure
+    (R, r, V) hold the last accepted step (the rejected one is undone from wk.Rb...).
+
+    ``nsteps = 0`` evaluates the equations of motion once at the current state (the
+    first stage of a step): accelerations in ``wk.Vd[0]``, multipliers in ``wk.lam``.
+    (One call site of the inlined right-hand side serves both uses: a second one would
+    double the compile time.)
+
+    Outputs: with ``every > 0`` the state after every ``every``-th step goes to row
+    ``o = (n + 1) / every - 1`` of ``Ro, ro, Vo``; if ``Vdo`` has rows, the accelerations
+    and multipliers at that state go to ``Vdo[o], lamo[o]``.  They are the first stage of
+    the following step (explicit RK: stage 1 is evaluated at the step's initial state),
+    so recording them costs one extra evaluation per call, after the last step.  A failure
+    in that evaluation leaves ``Vdo[o, 0, 0]`` NaN.  (A caller that needs several outputs
+    then enters the compiled code once instead of once per output.)"""
+    A = tab.A
+    c = tab.c
+    stages = tab.stages
+    ns = stages.shape[0]
+    acc = Vdo.shape[0] > 0
+    pending = -1                         # output row whose accelerations are still due
+    n = 0
+    while True:
+        t = t0 + n * h
+        evalOnly = n >= nsteps
+        if evalOnly and nsteps > 0 and pending < 0:
+            return STATUS_OK, nsteps
+        for jj in range(ns):
+            j = stages[jj]
+            st = mk_stage_state(sd, wk, A, j, h, R, r, V)
+            if st != STATUS_OK:          # only for j >= 1: any pending output is written
+                return st, n
+            st = stage_rhs(sd, wk, t + c[j] * h, wk.Vd[j])
+            if st != STATUS_OK:
+                if pending >= 0:
+                    Vdo[pending, 0, 0] = np.nan
+                return st, n
+            if pending >= 0:
+                for i in range(Vdo.shape[1]):
+                    for k in range(6):
+                        Vdo[pending, i, k] = wk.Vd[0, i, k]
+                for k in range(lamo.shape[1]):
+                    lamo[pending, k] = wk.lam[k]
+                pending = -1
+            if evalOnly:
+                return STATUS_OK, nsteps
+            mk_stage_k(sd, wk, j)
+        copy_state(R, r, V, wk.Rb, wk.rb, wk.Vb)
+        mk_finish(sd, wk, tab, h, R, r, V)
+        st = state_is_finite(sd.gid, R, r, V, vmax)
+        if st != STATUS_OK:
+            copy_state(wk.Rb, wk.rb, wk.Vb, R, r, V)
+            return st, n
+        if ctl.kind != CONTROL_FIXED:
+            accept, hnext = control_step(ctl, error_estimate(ctl, tab, wk, h), h)
+            if not accept:
+                copy_state(wk.Rb, wk.rb, wk.Vb, R, r, V)
+                h = hnext
+                continue
+        if sd.stabilization != STAB_NONE:
+            st = project_state(sd, wk, sd.stabilization, R, r, V)
+            if st != STATUS_OK:
+                copy_state(wk.Rb, wk.rb, wk.Vb, R, r, V)
+                return st, n
+        update_torsion_tracking(sd, wk, R, r, V)
+        if wk.watchBody.shape[0] > 0:
+            watch_rotation_entries(wk.watchBody, wk.watchEntry, wk.watchMax, R)
+        n += 1
+        if every > 0 and n % every == 0:
+            o = n // every - 1
+            copy_state(R, r, V, Ro[o], ro[o], Vo[o])
+            if acc:
+                pending = o

@@ -1,0 +1,51 @@
+"""The numba cache of the package is keyed on all of its compiled sources.
+
+numba stamps a cached function with its own source file only; a caller that inlines a
+callee of another module would keep running the old callee after an edit.  The
+package's locators (``exudyn_lie._numba_cache``) add a hash of every module that uses
+numba to the stamp."""
+import os
+import shutil
+
+from exudyn_lie import _numba_cache as nc
+from exudyn_lie.groups import se3, so3
+from exudyn_lie.mbs import kernel
+
+
+def _locator(dispatcher):
+    return dispatcher._cache._impl.locator
+
+
+def test_package_functions_use_the_package_locators():
+    for f in (kernel.mk_steps, so3.exp_into, se3.dexpinv_apply_into):
+        loc = _locator(f)
+        assert isinstance(loc, nc.LOCATORS), type(loc)
+        stamp = loc.get_source_stamp()
+        assert stamp[1] == nc.package_key()
+
+
+def test_key_covers_callee_modules(tmp_path):
+    root = tmp_path / "exudyn_lie"
+    shutil.copytree(nc.PACKAGE_DIR, root, ignore=shutil.ignore_patterns("__pycache__"))
+    rels = nc.compiled_sources(str(root))
+    for rel in ("groups/so3.py", "groups/se3.py", "mbs/stepper.py", "mbs/codes.py", "mbs/linalg.py",
+                "bridge/nodes.py"):
+        assert rel.replace("/", os.sep) in rels
+    k0 = nc.source_key(str(root))
+    assert k0 == nc.source_key(nc.PACKAGE_DIR)
+    # an edit of a callee (the group maps) changes the key of every compiled function
+    p = root / "groups" / "so3.py"
+    p.write_text(p.read_text() + "\n# edited\n")
+    k1 = nc.source_key(str(root))
+    assert k1 != k0
+    # an application module without numba does not take part
+    p = root / "apps" / "report.py"
+    p.write_text(p.read_text() + "\n# edited\n")
+    assert nc.source_key(str(root)) == k1
+
+
+def test_other_packages_keep_numbas_locator(tmp_path):
+    src = tmp_path / "other_mod.py"
+    src.write_text("def f():\n    return 1\n")
+    assert nc.PackageInTreeCacheLocator.from_function(None, str(src)) is None
+    assert nc.PackageUserWideCacheLocator.from_function(None, str(src)) is None

@@ -149,15 +149,17 @@ def test_stability_radius_from_the_coefficients():
 
 
 def test_custom_tableau_in_simulator_with_step_size_error():
-    from exudyn_lie.analysis import stress_models as M
+    from exudyn_lie.apps import stress_models as M
     k = 1e6
     tab = _ralston3()
     hmax = 2.5 / math.sqrt(k)
     sim = Simulator(M.spring_mass(k), tab, "SE3")
+    h = 1.0 / 13          # endTime a multiple of the step (no last-step warning), far beyond hmax
+    assert h > 30 * hmax
     with pytest.raises(StepSizeError, match="method MyRalston3") as ei:
-        sim.Run(1.0, 30 * hmax)
+        sim.Run(1.0, h)
     sugg = float(re.search(r"try a step size of ([0-9.eE+-]+) s", str(ei.value)).group(1))
-    assert sugg < 30 * hmax
+    assert sugg < h
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         res = Simulator(M.spring_mass(k), tab, "SE3").Run(0.05, sugg, outputEvery=10_000)   # must not raise
@@ -177,7 +179,16 @@ def test_custom_tableau_equal_coefficients_bit_identical():
 def test_custom_tableau_in_solve_dynamic():
     exu = pytest.importorskip("exudyn")
     import exudyn_lie as exl
-    from exudyn_lie.bridge.example_heavytop import build
+    from exudyn.utilities import SensorBody
+    from exudyn_lie.models import heavy_top
+
+    def build():
+        mbs, info = heavy_top.build()
+        body = info.bodies[0].objectIndex
+        sensor = mbs.AddSensor(SensorBody(bodyNumber=body, storeInternal=True,
+                                          outputVariableType=exu.OutputVariableType.Position))
+        mbs.Assemble()
+        return info.SC, mbs, body, sensor
     rk4 = get_method("RK4")
     mine = ButcherTableau(name="MyRK4", order=4, A=rk4._exact_coeffs[0], b=rk4._exact_coeffs[1],
                           c=rk4._exact_coeffs[2])
@@ -187,7 +198,7 @@ def test_custom_tableau_in_solve_dynamic():
         ss = exu.SimulationSettings()
         ss.timeIntegration.endTime = 0.2
         ss.timeIntegration.numberOfSteps = 200
-        ss.solutionSettings.writeSolutionToFile = False
+        ss.solution.file.write = False
         assert exl.SolveDynamic(mbs, ss, method=method, liegroup="SE3", showProgress=False)
         out.append((np.array(mbs.systemData.GetODE2Coordinates()), mbs.GetSensorStoredData(sensor)))
     assert np.array_equal(out[0][0], out[1][0]) and np.array_equal(out[0][1], out[1][1])

@@ -67,6 +67,8 @@ import math
 import numpy as np
 from numba import njit
 
+from ..errors import StepSizeError
+
 __all__ = [
     "P_SAFETY", "P_FAC_MIN", "P_FAC_MAX", "P_BETA", "P_EXPO", "P_H_MIN", "P_H_MAX", "P_Q",
     "S_ERR_OLD", "S_REJECTED", "S_N_ACCEPT", "S_N_REJECT", "S_N_RHS", "S_H", "S_ERR",
@@ -258,9 +260,8 @@ def hinit_second(h0, d1, d2, q, h_max):
 
 
 def raise_step_size_error(t, h, h_min, err, method=""):
-    """Raise :class:`~exudyn_lie.mbs.simulator.StepSizeError` for a step below the minimum,
+    """Raise :class:`~exudyn_lie.errors.StepSizeError` for a step below the minimum,
     with ``.time`` and ``.step`` attributes (Python side of STATUS_H_MIN)."""
-    from ..mbs.simulator import StepSizeError  # lazily: mbs sits above integrators
     exc = StepSizeError(
         f"adaptive step{' (' + method + ')' if method else ''} at t = {t:.17g}: the error "
         f"control asks for h = {h:.6g} < minimum step {h_min:.6g} (scaled error {err:.3g} of "

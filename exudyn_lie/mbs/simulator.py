@@ -15,6 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..compiling import announce_cold_compile
+from ..errors import ConstraintError, SimulationError, StepSizeError  # noqa: F401 (re-exported)
 from ..groups import so3
 from ..integrators.stability import stability_radius
 from ..integrators.tableau import get_method
@@ -26,19 +27,6 @@ from .linalg import REL_PIVOT_TOL, rows_in_null_space, schur_rank_and_null
 from .scene import Scene, SceneError
 from .state import BodyStates, twist_to_world_velocity, world_velocity_to_twist
 from .stepper import fixed_step_control, method_arrays
-
-
-class SimulationError(RuntimeError):
-    """A run that cannot continue (singular constraints, blow-up, non-finite state)."""
-
-
-class ConstraintError(SimulationError):
-    """Singular or inconsistent constraints."""
-
-
-class StepSizeError(SimulationError):
-    """The step size is beyond the stability limit of the method, or a stage rotation
-    argument of the MK step left the domain of dexp^-1 (``kernel.STAGE_ARG_MAX``)."""
 
 
 # relative size of the constraint residual/velocity error accepted at the start

@@ -142,6 +142,24 @@ def test_supported_pendulum_agrees_with_native_to_the_native_step_error(corpus_r
     assert math.isfinite(e_native) and e_native > 0
 
 
+def test_fine_native_reference_has_k_times_the_steps(corpus_run):
+    """Where exl ran, the corpus also runs the script natively with numberOfSteps x 10: its
+    error (2nd order) is that of the script's step / 10^2, measured against the native value
+    extrapolated from h/2 and h/4; exl at the script's step is closer to it than native."""
+    records = corpus_run[0]
+    n = {k: records[f"pendulumRevolute{k}.py"]["testResult"][0] for k in STEPS}
+    h, h2, h4 = STEPS
+    n_extrapolated = n[h4] + (n[h4] - n[h2]) / 3
+    e_native = 4 / 3 * abs(n[h] - n[h2])
+    r = records[f"pendulumRevolute{h}.py"]
+    assert r["fineFactor"] == 10 and r["fine"]["status"] == "ok"
+    assert abs(r["testResultFine"] - n_extrapolated) <= 2 * e_native / 10**2
+    for k in STEPS:
+        r = records[f"pendulumRevolute{k}.py"]
+        assert r["relDiffFine"] < r["relDiffNativeFine"]
+    assert records["cableANCF.py"]["fine"] is None and records["brokenScript.py"]["fine"] is None
+
+
 def test_report_files(corpus_run):
     records, _, out = corpus_run
     data = json.loads((out / "corpus.json").read_text())       # written by main (one script)
@@ -151,6 +169,39 @@ def test_report_files(corpus_run):
     assert s["scripts"] == len(STEPS) + 2 and s["base"] == len(STEPS) + 1
     assert s["exl"]["ok"] == len(STEPS) and s["exl"]["refused"] == 1 and s["exl"]["crashed"] == 0
     assert s["firstRefusal"] == {"ObjectANCFCable2D": 1}
+    assert s["fineReferences"] == len(STEPS) and s["exlCloserToFine"] == len(STEPS)
     text = corpus.render(list(records.values()), s, "test", 0.0, 120)
     assert "| `ObjectANCFCable2D` | 1 |" in text
     assert "`brokenScript.py`" in (out / "corpus.md").read_text()
+
+
+def _run(status="ok", solves=(), error=None, in_solve=False):
+    return dict(status=status, solves=list(solves), error=error, inSolve=in_solve, testResult=None,
+                inventory=[], directSolvers=[], wall=0.0)
+
+
+def _err(cls, msg):
+    return dict(cls=cls, module="", msg=msg, where="s.py:3 f", whereExl="", tb="")
+
+
+@pytest.mark.parametrize("exl_run, expected", [
+    (_run(solves=[dict(n=1, status="ok")]), "ok"),
+    (_run("error", [dict(n=1, status="error", exl="refusal", error=_err("BridgeError", "object 0 of type X"))],
+          _err("BridgeError", "object 0 of type X")), "refused"),
+    (_run("error", [dict(n=1, status="error", exl="stop", error=_err("StepSizeError", "h too large"))],
+          _err("StepSizeError", "h too large")), "stopped"),
+    (_run("error", [dict(n=1, status="error", exl="internal", error=_err("BridgeError", "internal: x"))],
+          _err("BridgeError", "internal: x")), "crashed"),
+    (_run("error", [dict(n=1, status="error", exl=None, error=_err("KeyError", "3"))], _err("KeyError", "3")),
+     "crashed"),
+    (_run("error", [dict(n=1, status="ok")], _err("AttributeError", "no it")), "crashed"),     # after the solve
+    (_run("error", [dict(n=1, status="ok")], _err("NameError", "name 'VSum' is not defined")), "native error"),
+    (_run("error", [dict(n=1, status="error", exl=None, error=_err("ValueError", "user"))],
+          _err("ValueError", "user")), "native error"),          # the script's user function, as natively
+    (_run("timeout", [dict(n=1, status="running")], in_solve=True), "timeout"),
+    (_run("died", [dict(n=1, status="running")], _err("died", "exit code -11"), in_solve=True), "crashed"),
+])
+def test_classification_rules(exl_run, expected):
+    native = _run("error", [dict(n=1, status="error", error=_err("ValueError", "user"))],
+                  _err("NameError", "name 'VSum' is not defined"))
+    assert corpus.exl_outcome(native, exl_run)[0] == expected

@@ -3,15 +3,19 @@ through :func:`exudyn_lie.SolveDynamic`, unedited, and report what happens.
 
 Every script (a ``.py`` file, or every ``*.py`` in a folder, not recursive; ``--match GLOB``
 filters the file names) runs in a fresh interpreter (:mod:`.corpus_child`) with a time
-limit, at most twice:
+limit:
 
 1. **native**: as written, with graphics off (no window opens, nothing waits for a user);
 2. **exl**: the same, with every ``SolveDynamic`` the script calls (``mbs.SolveDynamic``,
    ``exu.SolveDynamic``, ``SolveDynamic`` from ``exudyn.solver``) passed with the same
    arguments to ``exudyn_lie.SolveDynamic``.  Only when the native run reached a dynamic
-   solve: otherwise the two runs would be the same.
+   solve: otherwise the two runs would be the same;
+3. **fine** (``--fine K``, default 10; 0: not): where exudyn_lie ran and both runs set
+   ``testResult``, natively with ``numberOfSteps`` times K in every ``SolveDynamic``: the
+   reference for both, since Exudyn's generalized-alpha at the script's step is only
+   second order.
 
-The working directory of both runs is a copy of the script's folder (under ``OUT/cwd``), so
+The working directory of the runs is a copy of the script's folder (under ``OUT/cwd``), so
 data files are found and files the script writes do not land in its source tree.
 
 Outcomes per script: native ``ok`` / ``error`` (class and first line) / ``timeout`` /
@@ -21,9 +25,10 @@ touched); ``stopped`` (a ``SimulationError`` during the run: ``StepSizeError``,
 ``ConstraintError``); ``crashed`` (any other exception out of ``exudyn_lie.SolveDynamic``,
 a ``BridgeError`` that says "internal", a process that died during the solve, or an error
 after ``exudyn_lie.SolveDynamic`` returned that the native run does not have: a bug or a
-drop-in gap of exudyn_lie); ``timeout``; ``native error`` (the exl run failed outside the
-solve exactly as the native run did).  ``exudynTestGlobals.testResult`` of both runs and
-their relative difference ``|exl - native| / max(|exl|, |native|)``.
+drop-in gap of exudyn_lie); ``timeout``; ``native error`` (the exl run failed with the
+same error, class and first line, as the native run, e.g. in the script's own user
+function).  ``exudynTestGlobals.testResult`` of the runs and the relative differences
+``|a - b| / max(|a|, |b|)`` of exl against native and against the fine native run.
 
 Writes ``corpus.md`` and ``corpus.json`` to ``--out`` (default ``./corpus_results``), the
 output of every run to ``OUT/logs``; one progress line per script.
@@ -137,8 +142,8 @@ def _log_tail(path, lines=3):
     return " | ".join(text[-lines:])[:300]
 
 
-def run_script(mode, script, cwd, timeout, logdir, stem):
-    """Run ``script`` once (mode 'native' or 'exl'); returns the run's record."""
+def run_script(mode, script, cwd, timeout, logdir, stem, factor=None):
+    """Run ``script`` once (mode 'native', 'exl' or 'fine' with ``factor``); returns the run's record."""
     log = os.path.join(logdir, f"{stem}.{mode}.log")
     events_path = os.path.join(logdir, f"{stem}.{mode}.events")
     if os.path.exists(events_path):
@@ -146,7 +151,8 @@ def run_script(mode, script, cwd, timeout, logdir, stem):
     tic = time.perf_counter()
     timed_out = False
     with open(log, "wb") as lf:
-        proc = subprocess.Popen([sys.executable, CHILD, mode, script, events_path], cwd=cwd, stdout=lf,
+        argv = [sys.executable, CHILD, mode, script, events_path] + ([str(factor)] if factor else [])
+        proc = subprocess.Popen(argv, cwd=cwd, stdout=lf,
                                 stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL, env=child_env(mode),
                                 start_new_session=True)
         try:
@@ -208,6 +214,18 @@ def error_line(err):
     return f"{err.get('cls')}: {err.get('msg')}" if err.get("msg") else str(err.get("cls"))
 
 
+def _key(err):
+    return (err.get("cls"), err.get("msg"))
+
+
+def native_errors(native):
+    """(class, first line) of the errors of the native run: in its solves and at its end."""
+    errs = {_key(s["error"]) for s in native["solves"] if s["status"] == "error"}
+    if native["status"] == "error" and native["error"]:
+        errs.add(_key(native["error"]))
+    return errs
+
+
 def exl_outcome(native, exl):
     """(status, reason) of the exl run; see the module doc for the statuses."""
     if exl is None:
@@ -220,6 +238,8 @@ def exl_outcome(native, exl):
             return "refused", error_line(err)
         if s.get("exl") == "stop":
             return "stopped", error_line(err)
+        if _key(err) in native_errors(native):      # e.g. the script's own user function failed
+            return "native error", error_line(err)
         where = err.get("whereExl") or err.get("where")
         return "crashed", f"{error_line(err)} (at {where})" if where else error_line(err)
     if exl["status"] == "timeout":
@@ -229,8 +249,8 @@ def exl_outcome(native, exl):
     if exl["status"] == "died":
         during = " during exudyn_lie.SolveDynamic" if exl["inSolve"] else ""
         return "crashed", f"process died{during}: {exl['error']['msg']}"
-    err, nerr = exl["error"] or {}, native["error"] or {}
-    if native["status"] == "error" and (err.get("cls"), err.get("msg")) == (nerr.get("cls"), nerr.get("msg")):
+    err = exl["error"] or {}
+    if _key(err) in native_errors(native):
         return "native error", error_line(err)
     where = err.get("where")
     return "crashed", f"after exudyn_lie.SolveDynamic returned: {error_line(err)}" + (f" (at {where})" if where else "")
@@ -272,7 +292,23 @@ def classify(name, script, native, exl):
                exlReason=reason, testResult=[tn, te], relDiff=relative_difference(tn, te),
                inventory=native["inventory"])
     rec["firstRefusal"] = refusal_key(reason) if status == "refused" else None
+    rec["fine"] = rec["fineFactor"] = rec["testResultFine"] = rec["relDiffFine"] = rec["relDiffNativeFine"] = None
     return rec
+
+
+def wants_fine_reference(rec):
+    """A native run at a finer step is worth it where exudyn_lie ran and both set a number."""
+    return rec["exlStatus"] == "ok" and rec["relDiff"] is not None
+
+
+def add_fine_reference(rec, fine, factor):
+    """The fine native run: its testResult and the relative differences of exl and of the
+    native run at the script's step against it."""
+    rec["fine"], rec["fineFactor"] = fine, factor
+    tf = fine["testResult"] if fine["status"] == "ok" else None
+    rec["testResultFine"] = tf
+    rec["relDiffFine"] = relative_difference(rec["testResult"][1], tf)
+    rec["relDiffNativeFine"] = relative_difference(rec["testResult"][0], tf)
 
 
 def unsupported_types(inventory):
@@ -299,16 +335,20 @@ def _count(values, keys=None):
     return dict(sorted(out.items(), key=lambda kv: (-kv[1], str(kv[0]))))
 
 
+def _buckets(values):
+    out, lo = {}, None
+    for hi in REL_BUCKETS:
+        out[f"<= {hi:g}" if lo is None else f"({lo:g}, {hi:g}]"] = sum(d <= hi and (lo is None or d > lo) for d in values)
+        lo = hi
+    out[f"> {lo:g}"] = sum(d > lo for d in values)
+    return out
+
+
 def summarize(records):
     base = [r for r in records if r["native"]["status"] == "ok" and r["dynamic"] == "yes"]
     rigid = [r for r in base if any(t in r["inventory"] for t in RIGID_BODY_TYPES)]
     pairs = [r["relDiff"] for r in base if r["exlStatus"] == "ok" and r["relDiff"] is not None]
-    buckets, lo = {}, None
-    for hi in REL_BUCKETS:
-        buckets[f"<= {hi:g}" if lo is None else f"({lo:g}, {hi:g}]"] = sum(
-            d <= hi and (lo is None or d > lo) for d in pairs)
-        lo = hi
-    buckets[f"> {lo:g}"] = sum(d > lo for d in pairs)
+    fine = [r for r in base if r.get("relDiffFine") is not None]
     items = {}
     lists_available = True
     for r in base:
@@ -316,8 +356,8 @@ def summarize(records):
         if unsup is None:
             lists_available = False
             break
-        # 'only': the one unsupported type besides node types (a node comes with its object)
-        others = [t for t in unsup if not t.startswith("Node")] or unsup
+        # 'only': the one unsupported object / load type (nodes and markers come with them)
+        others = [t for t in unsup if not t.startswith(("Node", "Marker"))] or unsup
         for t in unsup:
             contain, only = items.get(t, (0, 0))
             items[t] = (contain + 1, only + (others == [t]))
@@ -331,7 +371,10 @@ def summarize(records):
         rigid=len(rigid), rigidOk=sum(r["exlStatus"] == "ok" for r in rigid),
         exlOnNativeFailures=_count([r["exlStatus"] for r in records
                                     if r["native"]["status"] != "ok" and r["exlStatus"]]),
-        testResultPairs=len(pairs), relDiffBuckets=buckets,
+        testResultPairs=len(pairs), relDiffBuckets=_buckets(pairs),
+        fineReferences=len(fine), fineBuckets=_buckets([r["relDiffFine"] for r in fine]),
+        exlCloserToFine=sum(r["relDiffFine"] <= r["relDiffNativeFine"] for r in fine),
+        fineFailed=sum(1 for r in base if r.get("fine") and r["relDiffFine"] is None),
         firstRefusal=_count([r["firstRefusal"] for r in base if r["firstRefusal"]]),
         unsupportedItems=(dict(sorted(items.items(), key=lambda kv: (-kv[1][0], kv[0])))
                           if lists_available else None),
@@ -362,7 +405,7 @@ def _native_cell(r):
     return n["status"]
 
 
-def render(records, summary, command, wall, timeout):
+def render(records, summary, command, wall, timeout, fine=None):
     s = summary
     v = versions()
     L = [f"# Exudyn scripts through exudyn_lie.SolveDynamic", "",
@@ -384,6 +427,13 @@ def render(records, summary, command, wall, timeout):
          f"* testResult of both runs (exudyn_lie ok): {s['testResultPairs']} scripts; relative difference "
          + ", ".join(f"{k}: {n}" for k, n in s["relDiffBuckets"].items()),
          ]
+    if s["fineReferences"] or s["fineFailed"]:
+        L.append(f"* against a native run with {fine}x the steps (the script's step is no reference: "
+                 f"generalized-alpha is 2nd order): {s['fineReferences']} scripts"
+                 + (f" ({s['fineFailed']} more: the fine run failed or timed out)" if s["fineFailed"] else "")
+                 + "; exudyn_lie's relative difference " + ", ".join(f"{k}: {n}" for k, n in s["fineBuckets"].items())
+                 + f"; exudyn_lie at the script's step closer to it than native at the script's step: "
+                 f"{s['exlCloserToFine']}")
     if s["exlOnNativeFailures"]:
         L.append("* exudyn_lie on scripts whose native run failed after reaching `SolveDynamic` (not counted "
                  "above): " + ", ".join(f"{k} {n}" for k, n in s["exlOnNativeFailures"].items()))
@@ -394,8 +444,8 @@ def render(records, summary, command, wall, timeout):
         L += ["", "## Item types exudyn_lie does not read (native ok, `SolveDynamic` called)", "",
               "From the item types in `mbs` at the solve, against exudyn_lie's supported lists "
               "(`exudyn_lie.bridge.reader.SUPPORTED_*`; `GeneralContact` is not an item).", "",
-              "| item type | scripts that contain it | scripts where it is the only unsupported type (node types "
-              "not counted beside an object) |",
+              "| item type | scripts that contain it | scripts where it is the only unsupported object / load type "
+              "(node and marker types not counted beside one) |",
               "|---|---|---|"]
         L += [f"| `{k}` | {c} | {o} |" for k, (c, o) in s["unsupportedItems"].items()] or ["| (none) | 0 | 0 |"]
     crashed = [r for r in records if r["exlStatus"] == "crashed"]
@@ -418,15 +468,26 @@ def render(records, summary, command, wall, timeout):
         L += [f"| {_cell(k, 200)} | {n} |" for k, n in s["nativeErrors"].items()]
     L += ["", "## All scripts", "",
           "| script | native | s | SolveDynamic | exudyn_lie | s | testResult native | testResult exudyn_lie "
-          "| rel. diff | reason |", "|---|---|---|---|---|---|---|---|---|---|"]
+          "| rel. diff | testResult native, fine step | rel. diff exudyn_lie vs fine | reason |",
+          "|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in records:
         e = r["exl"]
         L.append("| " + " | ".join([
             f"`{r['name']}`", _cell(_native_cell(r), 80), f"{r['native']['wall']:.1f}", r["dynamic"],
             r["exlStatus"] or "", f"{e['wall']:.1f}" if e else "", _fmt_num(r["testResult"][0]),
             _fmt_num(r["testResult"][1]), f"{r['relDiff']:.2e}" if r["relDiff"] is not None else "",
+            _fine_cell(r), f"{r['relDiffFine']:.2e}" if r.get("relDiffFine") is not None else "",
             _cell(r["exlReason"], 120)]) + " |")
     return "\n".join(L) + "\n"
+
+
+def _fine_cell(r):
+    f = r.get("fine")
+    if not f:
+        return ""
+    if f["status"] != "ok":
+        return f"x{r['fineFactor']}: {f['status']}"
+    return f"x{r['fineFactor']}: {_fmt_num(r['testResultFine'])}"
 
 
 def progress_line(i, total, r):
@@ -434,6 +495,10 @@ def progress_line(i, total, r):
     tr = ""
     if r["relDiff"] is not None:
         tr = f" | testResult {_fmt_num(r['testResult'][0])} / {_fmt_num(r['testResult'][1])} (rel {r['relDiff']:.1e})"
+        if r.get("relDiffFine") is not None:
+            tr += f"; native x{r['fineFactor']} {_fmt_num(r['testResultFine'])}: exl rel {r['relDiffFine']:.1e}"
+        elif r.get("fine"):
+            tr += f"; native x{r['fineFactor']} {r['fine']['status']}"
     exl = ""
     if r["exl"] is not None:
         exl = f" | exl {r['exlStatus']} {r['exl']['wall']:.1f} s" + (f": {r['exlReason']}" if r["exlReason"] else "")
@@ -445,9 +510,10 @@ def progress_line(i, total, r):
 
 # ---------------------------------------------------------------------------------------------
 
-def run_corpus(scripts, outdir, timeout=120.0, jobs=1, log=print):
-    """Run every script natively and (when it reaches SolveDynamic) through exudyn_lie;
-    returns the records in the order of ``scripts``."""
+def run_corpus(scripts, outdir, timeout=120.0, jobs=1, log=print, fine=10):
+    """Run every script natively and (when it reaches SolveDynamic) through exudyn_lie, and
+    where exudyn_lie ran and both set testResult, natively with ``fine`` times the steps
+    (0: not); returns the records in the order of ``scripts``."""
     outdir = Path(outdir)
     logdir = outdir / "logs"
     logdir.mkdir(parents=True, exist_ok=True)
@@ -466,6 +532,8 @@ def run_corpus(scripts, outdir, timeout=120.0, jobs=1, log=print):
         native = run_script("native", script, cwd, timeout, str(logdir), stem)
         exl = run_script("exl", script, cwd, timeout, str(logdir), stem) if native["solves"] else None
         rec = classify(names[i], script, native, exl)
+        if fine and wants_fine_reference(rec):
+            add_fine_reference(rec, run_script("fine", script, cwd, timeout, str(logdir), stem, fine), fine)
         with lock:
             records[i] = rec
             done[0] += 1
@@ -488,6 +556,9 @@ def main(argv=None):
     ap.add_argument("--timeout", type=float, default=120.0, help="time limit per run in seconds (default 120)")
     ap.add_argument("--jobs", type=int, default=1, help="scripts run in parallel (default 1)")
     ap.add_argument("--match", default=None, metavar="GLOB", help="only file names matching GLOB, e.g. 'rigid*'")
+    ap.add_argument("--fine", type=int, default=10, metavar="K",
+                    help="where exudyn_lie ran and both runs set testResult, also run natively with K times "
+                         "numberOfSteps as the reference (default 10; 0: not)")
     args = ap.parse_args(argv)
     try:
         scripts = collect_scripts(args.paths, args.match)
@@ -500,12 +571,13 @@ def main(argv=None):
     command = "python -m exudyn_lie corpus " + " ".join(shlex.quote(a) for a in argv)
     print(f"exudyn_lie corpus: {len(scripts)} scripts, time limit {args.timeout:g} s, {args.jobs} job(s)")
     tic = time.perf_counter()
-    records = run_corpus(scripts, args.out, args.timeout, args.jobs)
+    records = run_corpus(scripts, args.out, args.timeout, args.jobs, fine=args.fine)
     wall = time.perf_counter() - tic
     summary = summarize(records)
     out = Path(args.out)
-    (out / "corpus.md").write_text(render(records, summary, command, wall, args.timeout))
+    (out / "corpus.md").write_text(render(records, summary, command, wall, args.timeout, args.fine))
     (out / "corpus.json").write_text(json.dumps(dict(command=command, versions=versions(), timeout=args.timeout,
+                                                     fine=args.fine,
                                                      wall=round(wall, 1), summary=summary, scripts=records),
                                                 indent=1, default=repr))
     print(f"exudyn_lie corpus: wrote {out / 'corpus.md'} and corpus.json ({wall:.0f} s): native ok "

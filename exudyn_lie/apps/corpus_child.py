@@ -1,6 +1,6 @@
 """The child process of ``python -m exudyn_lie corpus``: run ONE Exudyn script, unedited.
 
-    python corpus_child.py MODE SCRIPT EVENTS        (MODE: native | exl)
+    python corpus_child.py MODE SCRIPT EVENTS [FACTOR]    (MODE: native | exl | fine)
 
 Started by :mod:`exudyn_lie.apps.corpus` (by its file path, so that a native run imports
 nothing of exudyn_lie), in a fresh interpreter per run.  Before the script runs:
@@ -16,7 +16,9 @@ nothing of exudyn_lie), in a fresh interpreter per run.  Before the script runs:
   ``exudyn.solver.SolveDynamic`` (so also ``from exudyn.solver import *``) and the method
   ``exudyn.MainSystem.SolveDynamic`` - is replaced by a wrapper that logs the call and
   passes the same arguments to Exudyn's own function (native) or to
-  :func:`exudyn_lie.SolveDynamic` (exl).  Static and eigenvalue solves stay Exudyn's.
+  :func:`exudyn_lie.SolveDynamic` (exl); mode fine: Exudyn's own function with
+  ``timeIntegration.numberOfSteps`` multiplied by FACTOR during the call (a native
+  reference at a finer step).  Static and eigenvalue solves stay Exudyn's.
 
 The script runs with ``runpy.run_path(SCRIPT, run_name='__main__')``, ``sys.argv = [SCRIPT]``
 and its folder first on ``sys.path``, as ``python SCRIPT`` would.  Events go to EVENTS as
@@ -33,7 +35,8 @@ import traceback
 import types
 
 T0 = time.perf_counter()
-TB_LINES = 8            # traceback lines kept per error
+TB_FRAMES = 5           # innermost traceback frames kept per error
+TB_MESSAGE_LINES = 4    # and lines of its message
 
 
 def _open_events(path):
@@ -54,11 +57,13 @@ def describe(exc):
     frames = traceback.extract_tb(exc.__traceback__)
     where = f"{frames[-1].filename}:{frames[-1].lineno} {frames[-1].name}" if frames else ""
     ours = [f for f in frames if f"{os.sep}exudyn_lie{os.sep}" in f.filename]
-    tail = "".join(traceback.format_exception(type(exc), exc, exc.__traceback__)).rstrip().splitlines()
+    # the innermost frames, then the message (Exudyn's can span many lines: its first few)
+    tail = "".join(traceback.format_list(frames[-TB_FRAMES:])).rstrip().splitlines()
+    tail += f"{type(exc).__name__}: {msg}".splitlines()[:TB_MESSAGE_LINES]
     return dict(cls=type(exc).__name__, module=type(exc).__module__,
                 msg=msg.splitlines()[0] if msg else "", where=where,
                 whereExl=f"{ours[-1].filename}:{ours[-1].lineno} {ours[-1].name}" if ours else "",
-                tb="\n".join(tail[-TB_LINES:]))
+                tb="\n".join(tail))
 
 
 def exl_kind(exc):
@@ -213,13 +218,36 @@ def _solver_type(args, kwargs):
     return "settings: " + str(getattr(getattr(ss, "timeIntegration", None), "solverType", None))
 
 
-def install_solve_wrappers(exu, mode, emit):
+def _finer(original, factor):
+    """Exudyn's SolveDynamic with numberOfSteps * factor for the call (settings restored)."""
+    def solve(mbs, *args, **kwargs):
+        ss = kwargs.get("simulationSettings", args[0] if args else None)
+        if ss is None:
+            import exudyn
+            ss = exudyn.SimulationSettings()
+            if args:
+                args = (ss,) + args[1:]
+            else:
+                kwargs["simulationSettings"] = ss
+        ti = ss.timeIntegration
+        steps = ti.numberOfSteps
+        ti.numberOfSteps = steps * factor
+        try:
+            return original(mbs, *args, **kwargs)
+        finally:
+            ti.numberOfSteps = steps
+    return solve
+
+
+def install_solve_wrappers(exu, mode, emit, factor=1):
     """Replace every reachable SolveDynamic by a logging wrapper (see the module doc)."""
     import exudyn.solver
     original = exudyn.solver.SolveDynamic
     if mode == "exl":
         import exudyn_lie
         target = exudyn_lie.SolveDynamic
+    elif mode == "fine":
+        target = _finer(original, factor)
     else:
         target = original
     state = dict(depth=0, count=0)
@@ -275,7 +303,8 @@ def _log_direct_solvers(exu, state, emit):
 
 
 def main(argv):
-    mode, script, events = argv
+    mode, script, events = argv[:3]
+    factor = int(argv[3]) if len(argv) > 3 else 1
     script = os.path.abspath(script)
     f, emit = _open_events(events)
     script_dir = os.path.dirname(script)
@@ -287,8 +316,8 @@ def main(argv):
         import exudyn as exu
         install_graphics_stubs(exu)
         g, standin = test_globals(script_dir)
-        install_solve_wrappers(exu, mode, emit)
-        emit("start", mode=mode, exudyn=getattr(exu, "__version__", "?"), standinTestGlobals=standin)
+        install_solve_wrappers(exu, mode, emit, factor)
+        emit("start", mode=mode, factor=factor, exudyn=getattr(exu, "__version__", "?"), standinTestGlobals=standin)
     except BaseException as e:                   # noqa: BLE001 - the bootstrap itself failed
         emit("exit", status="bootstrap error", error=describe(e), testResult=None)
         f.close()

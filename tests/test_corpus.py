@@ -200,6 +200,7 @@ def _err(cls, msg):
           _err("ValueError", "user")), "native error"),          # the script's user function, as natively
     (_run("timeout", [dict(n=1, status="running")], in_solve=True), "timeout"),
     (_run("died", [dict(n=1, status="running")], _err("died", "exit code -11"), in_solve=True), "crashed"),
+    (_run("bootstrap error", [], _err("ImportError", "no exudyn_lie")), "crashed"),
 ])
 def test_classification_rules(exl_run, expected):
     native = _run("error", [dict(n=1, status="error", error=_err("ValueError", "user"))],

@@ -58,6 +58,9 @@ PACKAGE_PARENT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath
 EXL_STATUSES = ("ok", "refused", "stopped", "crashed", "timeout", "native error")
 RIGID_BODY_TYPES = ("ObjectRigidBody", "ObjectRigidBody2D")
 REL_BUCKETS = (1e-10, 1e-6, 1e-3, 1e-1)
+_LIVE = set()                  # the child processes running now (killed on an interrupt)
+_LIVE_LOCK = threading.Lock()
+_STOP = threading.Event()      # set on an interrupt: no new child starts
 
 
 # ---------------------------------------------------------------------------------------------
@@ -155,18 +158,34 @@ def run_script(mode, script, cwd, timeout, logdir, stem, factor=None):
         proc = subprocess.Popen(argv, cwd=cwd, stdout=lf,
                                 stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL, env=child_env(mode),
                                 start_new_session=True)
+        with _LIVE_LOCK:
+            _LIVE.add(proc)
         try:
-            rc = proc.wait(timeout=timeout)
+            proc.wait(timeout=timeout)
         except subprocess.TimeoutExpired:
             timed_out = True
-        # the child's session: the script's own subprocesses end with it
-        try:
-            os.killpg(proc.pid, signal.SIGKILL)
-        except (ProcessLookupError, PermissionError):
-            pass
+        finally:
+            _kill_session(proc)           # the script's own subprocesses end with it
+            with _LIVE_LOCK:
+                _LIVE.discard(proc)
         rc = proc.wait()
     wall = time.perf_counter() - tic
     return run_record(mode, read_events(events_path), timed_out, rc, wall, log)
+
+
+def _kill_session(proc):
+    try:
+        os.killpg(proc.pid, signal.SIGKILL)
+    except (ProcessLookupError, PermissionError):
+        pass
+
+
+def kill_running_children():
+    """End the sessions of the children still running (after an interrupt)."""
+    with _LIVE_LOCK:
+        procs = list(_LIVE)
+    for proc in procs:
+        _kill_session(proc)
 
 
 def run_record(mode, events, timed_out, rc, wall, log):
@@ -246,6 +265,8 @@ def exl_outcome(native, exl):
         return "timeout", ("in exudyn_lie.SolveDynamic" if exl["inSolve"] else "outside exudyn_lie.SolveDynamic")
     if exl["status"] == "ok":
         return "ok", ""
+    if exl["status"] == "bootstrap error":
+        return "crashed", f"the exl run could not start: {error_line(exl['error'])}"
     if exl["status"] == "died":
         during = " during exudyn_lie.SolveDynamic" if exl["inSolve"] else ""
         return "crashed", f"process died{during}: {exl['error']['msg']}"
@@ -529,20 +550,41 @@ def run_corpus(scripts, outdir, timeout=120.0, jobs=1, log=print, fine=10):
         script = scripts[i]
         stem = f"{i:04d}_{Path(script).stem}"
         cwd = cwds[os.path.dirname(script)]
-        native = run_script("native", script, cwd, timeout, str(logdir), stem)
-        exl = run_script("exl", script, cwd, timeout, str(logdir), stem) if native["solves"] else None
+
+        def run(mode, factor=None):
+            if _STOP.is_set():
+                raise KeyboardInterrupt
+            return run_script(mode, script, cwd, timeout, str(logdir), stem, factor)
+        native = run("native")
+        exl = run("exl") if native["solves"] else None
         rec = classify(names[i], script, native, exl)
         if fine and wants_fine_reference(rec):
-            add_fine_reference(rec, run_script("fine", script, cwd, timeout, str(logdir), stem, fine), fine)
+            add_fine_reference(rec, run("fine", fine), fine)
         with lock:
             records[i] = rec
             done[0] += 1
             log(progress_line(done[0], len(scripts), rec))
 
-    with ThreadPoolExecutor(max_workers=max(1, jobs)) as pool:
+    _STOP.clear()
+    pool = ThreadPoolExecutor(max_workers=max(1, jobs))
+    try:
         for f in [pool.submit(one, i) for i in range(len(scripts))]:
             f.result()
+    except BaseException:                  # Ctrl-C / SIGTERM: stop now, not at the next time limit
+        _STOP.set()
+        try:
+            signal.signal(signal.SIGINT, signal.SIG_IGN)     # a second Ctrl-C must not cut the clean-up
+        except ValueError:                                   # not the main thread
+            pass
+        pool.shutdown(wait=False, cancel_futures=True)
+        kill_running_children()
+        raise
+    pool.shutdown()
     return records
+
+
+def _terminate(signum, frame):
+    raise KeyboardInterrupt(f"signal {signum}")
 
 
 def main(argv=None):
@@ -571,7 +613,12 @@ def main(argv=None):
     command = "python -m exudyn_lie corpus " + " ".join(shlex.quote(a) for a in argv)
     print(f"exudyn_lie corpus: {len(scripts)} scripts, time limit {args.timeout:g} s, {args.jobs} job(s)")
     tic = time.perf_counter()
-    records = run_corpus(scripts, args.out, args.timeout, args.jobs, fine=args.fine)
+    signal.signal(signal.SIGTERM, _terminate)
+    try:
+        records = run_corpus(scripts, args.out, args.timeout, args.jobs, fine=args.fine)
+    except KeyboardInterrupt:
+        print("exudyn_lie corpus: interrupted; the running scripts were stopped, no report written", file=sys.stderr)
+        return 130
     wall = time.perf_counter() - tic
     summary = summarize(records)
     out = Path(args.out)

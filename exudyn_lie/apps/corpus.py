@@ -16,7 +16,8 @@ limit:
    second order.
 
 The working directory of the runs is a copy of the script's folder (under ``OUT/cwd``), so
-data files are found and files the script writes do not land in its source tree.
+data files are found and files the script writes to relative paths do not land in its
+source tree.
 
 Outcomes per script: native ``ok`` / ``error`` (class and first line) / ``timeout`` /
 ``died``; exudyn_lie ``ok``; ``refused`` (a ``SceneError`` / ``BridgeError``: input

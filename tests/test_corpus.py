@@ -1,0 +1,208 @@
+"""``python -m exudyn_lie corpus``: ordinary Exudyn scripts, unedited, run natively and through
+``exudyn_lie.SolveDynamic`` in child processes, and classified.
+
+Three small scripts in the style of Exudyn's TestModels (``exudynTestGlobals`` from
+``modelUnitTests``, ``useGraphics``, ``testResult``): a rigid pendulum on a revolute joint
+(supported; written at three step sizes), a free ANCF cable (an unsupported item) and a
+script with an error of its own (a name Exudyn 1.13.6 no longer exports)."""
+import json
+import math
+
+import pytest
+
+from exudyn_lie.apps import corpus
+
+HEADER = '''import exudyn as exu
+from exudyn.utilities import *
+import numpy as np
+
+useGraphics = True
+try:
+    from modelUnitTests import exudynTestGlobals
+    useGraphics = exudynTestGlobals.useGraphics
+except:
+    class ExudynTestGlobals:
+        pass
+    exudynTestGlobals = ExudynTestGlobals()
+
+SC = exu.SystemContainer()
+mbs = SC.AddSystem()
+'''
+
+# a 1 m bar (1000 kg/m^3, 0.1 x 0.1 m) on a revolute joint at its end, released horizontally;
+# testResult: x + y of the free end after 1 s
+PENDULUM = HEADER + '''
+L = 1
+oGround = mbs.CreateGround(referencePosition=[0, 0, 0])
+oBar = mbs.CreateRigidBody(inertia=InertiaCuboid(1000, [L, 0.1, 0.1]), referencePosition=[L/2, 0, 0],
+                           gravity=[0, -9.81, 0])
+mbs.CreateRevoluteJoint(itemNumbers=[oGround, oBar], position=[0, 0, 0], axis=[0, 0, 1])
+mbs.Assemble()
+
+simulationSettings = exu.SimulationSettings()
+simulationSettings.timeIntegration.endTime = 1
+simulationSettings.timeIntegration.numberOfSteps = {steps}
+simulationSettings.timeIntegration.verboseMode = 0
+if useGraphics:
+    SC.renderer.Start()
+    SC.renderer.DoIdleTasks()
+mbs.SolveDynamic(simulationSettings)
+if useGraphics:
+    SC.renderer.Stop()
+
+p = mbs.GetObjectOutputBody(oBar, exu.OutputVariableType.Position, localPosition=[L/2, 0, 0])
+exudynTestGlobals.testResult = p[0] + p[1]
+'''
+
+CABLE = HEADER + '''
+n0 = mbs.AddNode(NodePoint2DSlope1(referenceCoordinates=[0, 0, 1, 0]))
+n1 = mbs.AddNode(NodePoint2DSlope1(referenceCoordinates=[1, 0, 1, 0]))
+mbs.AddObject(ObjectANCFCable2D(nodeNumbers=[n0, n1], physicsLength=1, massPerLength=1,
+                                bendingStiffness=1, axialStiffness=100))
+mbs.Assemble()
+simulationSettings = exu.SimulationSettings()
+simulationSettings.timeIntegration.endTime = 0.1
+simulationSettings.timeIntegration.numberOfSteps = 10
+exu.SolveDynamic(mbs, simulationSettings)
+exudynTestGlobals.testResult = mbs.GetNodeOutput(n1, exu.OutputVariableType.Position)[1]
+'''
+
+BROKEN = HEADER + '''
+background = GraphicsDataRectangle(-1, -1, 1, 1, color4blue)   # dropped after Exudyn 1.11
+mbs.SolveDynamic(exu.SimulationSettings())
+'''
+
+STEPS = (100, 200, 400)          # h = 10, 5, 2.5 ms
+
+
+@pytest.fixture(scope="module")
+def corpus_run(tmp_path_factory):
+    src = tmp_path_factory.mktemp("scripts")
+    for n in STEPS:
+        (src / f"pendulumRevolute{n}.py").write_text(PENDULUM.format(steps=n))
+    (src / "cableANCF.py").write_text(CABLE)
+    (src / "brokenScript.py").write_text(BROKEN)
+    out = src / "results"
+    lines = []
+    records = corpus.run_corpus(corpus.collect_scripts([str(src)]), out, timeout=120, jobs=1, log=lines.append)
+    assert corpus.main([str(src), "--out", str(out), "--match", "brokenScript.py"]) == 0  # the command line
+    return {r["name"]: r for r in records}, lines, out
+
+
+def test_every_script_reports_one_progress_line(corpus_run):
+    records, lines, _ = corpus_run
+    assert len(lines) == len(records) == len(STEPS) + 2
+    assert all(any(name in line for line in lines) for name in records)
+
+
+def test_script_error_is_a_native_failure_and_no_exl_run(corpus_run):
+    r = corpus_run[0]["brokenScript.py"]
+    assert r["native"]["status"] == "error"
+    assert r["native"]["error"]["cls"] == "NameError"
+    assert "GraphicsDataRectangle" in r["native"]["error"]["msg"]
+    assert r["dynamic"] == "not reached"
+    assert r["exl"] is None and r["exlStatus"] is None
+
+
+def test_unsupported_item_is_refused_and_named(corpus_run):
+    r = corpus_run[0]["cableANCF.py"]
+    assert r["native"]["status"] == "ok" and r["dynamic"] == "yes"
+    assert isinstance(r["testResult"][0], float)            # the native run set it
+    assert r["exlStatus"] == "refused"
+    assert r["exl"]["solves"][0]["exl"] == "refusal"
+    assert r["exlReason"].startswith("BridgeError: ")
+    assert r["firstRefusal"] == "ObjectANCFCable2D"
+    assert r["testResult"][1] is None                        # the script stopped at the solve
+    assert "ObjectANCFCable2D" in r["inventory"] and "NodePoint2DSlope1" in r["inventory"]
+
+
+def test_supported_pendulum_agrees_with_native_to_the_native_step_error(corpus_run):
+    """exl (MK-RK4) and native (generalized-alpha, 2nd order) at the script's step h differ by
+    both global errors.  The native one is estimated by Richardson extrapolation from the
+    same script at h/2, h/4: e_n(h) = (4/3) |n(h) - n(h/2)|, valid when the observed ratio
+    |n(h) - n(h/2)| / |n(h/2) - n(h/4)| is near 2^2 (checked); exl's likewise with the
+    4th-order factor 16/15.  The factor 2 covers the O(h^3) remainder of the estimates."""
+    records = corpus_run[0]
+    n, x = {}, {}
+    for steps in STEPS:
+        r = records[f"pendulumRevolute{steps}.py"]
+        assert r["native"]["status"] == "ok" and r["exlStatus"] == "ok", r
+        n[steps], x[steps] = r["testResult"]
+        assert r["relDiff"] == pytest.approx(abs(x[steps] - n[steps]) / max(abs(x[steps]), abs(n[steps])), rel=1e-12)
+    h, h2, h4 = STEPS
+    ratio = abs(n[h] - n[h2]) / abs(n[h2] - n[h4])
+    assert 3.5 < ratio < 4.5, f"native not in its 2nd-order regime: ratio {ratio}"
+    e_native = 4 / 3 * abs(n[h] - n[h2])
+    e_exl = 16 / 15 * abs(x[h] - x[h2])
+    assert abs(x[h] - n[h]) <= 2 * (e_native + e_exl)
+    # and exl at the coarse step is the converged answer as far as native can tell: it matches
+    # the extrapolated native value far better than native's own error at that step
+    n_extrapolated = n[h4] + (n[h4] - n[h2]) / 3
+    assert abs(x[h] - n_extrapolated) <= 1e-2 * e_native
+    assert math.isfinite(e_native) and e_native > 0
+
+
+def test_fine_native_reference_has_k_times_the_steps(corpus_run):
+    """Where exl ran, the corpus also runs the script natively with numberOfSteps x 10: its
+    error (2nd order) is that of the script's step / 10^2, measured against the native value
+    extrapolated from h/2 and h/4; exl at the script's step is closer to it than native."""
+    records = corpus_run[0]
+    n = {k: records[f"pendulumRevolute{k}.py"]["testResult"][0] for k in STEPS}
+    h, h2, h4 = STEPS
+    n_extrapolated = n[h4] + (n[h4] - n[h2]) / 3
+    e_native = 4 / 3 * abs(n[h] - n[h2])
+    r = records[f"pendulumRevolute{h}.py"]
+    assert r["fineFactor"] == 10 and r["fine"]["status"] == "ok"
+    assert abs(r["testResultFine"] - n_extrapolated) <= 2 * e_native / 10**2
+    for k in STEPS:
+        r = records[f"pendulumRevolute{k}.py"]
+        assert r["relDiffFine"] < r["relDiffNativeFine"]
+    assert records["cableANCF.py"]["fine"] is None and records["brokenScript.py"]["fine"] is None
+
+
+def test_report_files(corpus_run):
+    records, _, out = corpus_run
+    data = json.loads((out / "corpus.json").read_text())       # written by main (one script)
+    assert [r["name"] for r in data["scripts"]] == ["brokenScript.py"]
+    assert data["summary"]["native"]["error"] == 1
+    s = corpus.summarize(list(records.values()))
+    assert s["scripts"] == len(STEPS) + 2 and s["base"] == len(STEPS) + 1
+    assert s["exl"]["ok"] == len(STEPS) and s["exl"]["refused"] == 1 and s["exl"]["crashed"] == 0
+    assert s["firstRefusal"] == {"ObjectANCFCable2D": 1}
+    assert s["fineReferences"] == len(STEPS) and s["exlCloserToFine"] == len(STEPS)
+    text = corpus.render(list(records.values()), s, "test", 0.0, 120)
+    assert "| `ObjectANCFCable2D` | 1 |" in text
+    assert "`brokenScript.py`" in (out / "corpus.md").read_text()
+
+
+def _run(status="ok", solves=(), error=None, in_solve=False):
+    return dict(status=status, solves=list(solves), error=error, inSolve=in_solve, testResult=None,
+                inventory=[], directSolvers=[], wall=0.0)
+
+
+def _err(cls, msg):
+    return dict(cls=cls, module="", msg=msg, where="s.py:3 f", whereExl="", tb="")
+
+
+@pytest.mark.parametrize("exl_run, expected", [
+    (_run(solves=[dict(n=1, status="ok")]), "ok"),
+    (_run("error", [dict(n=1, status="error", exl="refusal", error=_err("BridgeError", "object 0 of type X"))],
+          _err("BridgeError", "object 0 of type X")), "refused"),
+    (_run("error", [dict(n=1, status="error", exl="stop", error=_err("StepSizeError", "h too large"))],
+          _err("StepSizeError", "h too large")), "stopped"),
+    (_run("error", [dict(n=1, status="error", exl="internal", error=_err("BridgeError", "internal: x"))],
+          _err("BridgeError", "internal: x")), "crashed"),
+    (_run("error", [dict(n=1, status="error", exl=None, error=_err("KeyError", "3"))], _err("KeyError", "3")),
+     "crashed"),
+    (_run("error", [dict(n=1, status="ok")], _err("AttributeError", "no it")), "crashed"),     # after the solve
+    (_run("error", [dict(n=1, status="ok")], _err("NameError", "name 'VSum' is not defined")), "native error"),
+    (_run("error", [dict(n=1, status="error", exl=None, error=_err("ValueError", "user"))],
+          _err("ValueError", "user")), "native error"),          # the script's user function, as natively
+    (_run("timeout", [dict(n=1, status="running")], in_solve=True), "timeout"),
+    (_run("died", [dict(n=1, status="running")], _err("died", "exit code -11"), in_solve=True), "crashed"),
+    (_run("bootstrap error", [], _err("ImportError", "no exudyn_lie")), "crashed"),
+])
+def test_classification_rules(exl_run, expected):
+    native = _run("error", [dict(n=1, status="error", error=_err("ValueError", "user"))],
+                  _err("NameError", "name 'VSum' is not defined"))
+    assert corpus.exl_outcome(native, exl_run)[0] == expected

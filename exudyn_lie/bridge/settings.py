@@ -32,7 +32,9 @@ SETTINGS = (
     ("timeIntegration.simulateInRealtime", HONOURED, _LOOP),
     ("timeIntegration.realtimeFactor", HONOURED, _LOOP),
     ("timeIntegration.realtimeWaitMicroseconds", HONOURED, _LOOP),
-    ("timeIntegration.solverType", IGNORED, "the integrator is chosen by SolveDynamic(method=...)"),
+    ("timeIntegration.solverType", HONOURED, "read as Exudyn reads it (when SolveDynamic's solverType is None): "
+                                             "an explicit type selects its tableau, the implicit ones are replaced "
+                                             "by method=...; see bridge/solvertype.py"),
     ("timeIntegration.discontinuous", IGNORED, "no supported item has a post-Newton error; a repeated step "
                                                "(Exudyn's discontinuous iteration) gives the same result"),
     ("timeIntegration", IGNORED, _STEP),       # newton, generalizedAlpha, explicit, adaptive steps, tolerances

@@ -48,6 +48,7 @@ from ..userwarn import warn_user
 from .fast import CHUNK_ROWS, NodeTable, OutputChunks
 from .params import ParameterWatch
 from .settings import check_settings
+from .solvertype import resolve_solver_type
 from .reader import BridgeError, ExudynScene, SceneFromExudyn
 
 GROUP_ALIASES = {"se3": "SE3", "so3xr3": "SO3xR3", "so3r3": "SO3xR3", "auto": "auto"}
@@ -833,16 +834,21 @@ class LieGroupSolver:
 
 
 def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialValues=False, storeSolver=True,
-                 showHints=False, showCausingItems=True, autoAssemble=True, *, method="RK4", liegroup="auto",
+                 showHints=False, showCausingItems=True, autoAssemble=True, *, method=None, liegroup="auto",
                  stabilization=None, projectInitial=True, verbose=False, showProgress=True, substeps=None,
                  accelerations=None):
     """Drop-in for ``exudyn.SolveDynamic``: integrate ``mbs`` with an explicit Munthe-Kaas
     Lie group method inside Exudyn's time loop; returns True.
 
-    The positional arguments are Exudyn's.  ``solverType`` must be None (the integrator is
-    chosen by ``method``); ``showHints`` / ``showCausingItems`` are accepted for
-    compatibility.  Keyword-only extras: ``method`` (:func:`exudyn_lie.method_names` or a
-    :class:`~exudyn_lie.integrators.ButcherTableau` of the user's own),
+    The positional arguments are Exudyn's.  ``solverType`` (else
+    ``timeIntegration.solverType``, as Exudyn reads them): an explicit type selects its
+    tableau (RK44 -> RK4, ODE23 -> BS3, ...), GeneralizedAlpha is replaced by ``method``,
+    TrapezoidalIndex2 too but with a warning, VelocityVerlet and DVERK6 are refused
+    (:mod:`exudyn_lie.bridge.solvertype`); ``showHints`` / ``showCausingItems`` are accepted for
+    compatibility.  Keyword-only extras: ``method`` (default RK4 or the explicit solverType's
+    tableau; :func:`exudyn_lie.method_names` or a
+    :class:`~exudyn_lie.integrators.ButcherTableau` of the user's own; it must agree with an
+    explicit solverType),
     ``liegroup`` ('SE3', 'SO3xR3', 'auto' or {rigid-body object index: group}),
     ``stabilization``, ``projectInitial`` (default True: an inconsistent initial state is
     projected onto the constraints with a warning; False: ConstraintError), ``verbose``
@@ -863,14 +869,20 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
     ``autoAssemble`` and an mbs that is not assembled, the model is checked from its item
     dictionaries (what ``mbs.Assemble()`` will set) and only then assembled."""
     import exudyn as exu
-    if solverType is not None:
-        raise BridgeError(f"solverType={solverType} is Exudyn's choice of solver; exudyn_lie integrates with "
-                          f"explicit Munthe-Kaas methods: pass method=... (one of {', '.join(method_names())})")
+    settings = exu.SimulationSettings() if simulationSettings is None else simulationSettings
+    # solverType (argument, else the setting, as Exudyn reads them) -> the tableau (bridge/solvertype.py)
+    method, typeName, replaced = resolve_solver_type(solverType, settings.timeIntegration.solverType, method,
+                                                     _check_method)
     assemble = not mbs.systemIsConsistent and autoAssemble
     solver = LieGroupSolver(mbs, method=method, liegroup=liegroup, stabilization=stabilization,
                             projectInitial=projectInitial, verbose=verbose,
                             _configuration="items" if assemble else "initial")
-    solver._check_run(exu.SimulationSettings() if simulationSettings is None else simulationSettings, substeps)
+    if replaced:
+        groups = ", ".join(f"{g} ({solver.groups.count(g)})" for g in dict.fromkeys(solver.groups)) or "none"
+        warn_user(f"exudyn_lie.SolveDynamic: DynamicSolverType.{typeName} (Exudyn's implicit solver) is replaced, "
+                  f"like GeneralizedAlpha, by the explicit Munthe-Kaas method {solver.tableau.name} on the Lie "
+                  f"groups {groups} (bodies per group); pass an explicit solverType or method=... to choose it")
+    solver._check_run(settings, substeps)
     if assemble:
         warn_user("exudyn_lie.SolveDynamic: mbs is not assembled; calling mbs.Assemble()")
         mbs.Assemble()

@@ -877,12 +877,13 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
     solver = LieGroupSolver(mbs, method=method, liegroup=liegroup, stabilization=stabilization,
                             projectInitial=projectInitial, verbose=verbose,
                             _configuration="items" if assemble else "initial")
+    solver._check_run(settings, substeps)
     if replaced:
         groups = ", ".join(f"{g} ({solver.groups.count(g)})" for g in dict.fromkeys(solver.groups)) or "none"
         warn_user(f"exudyn_lie.SolveDynamic: DynamicSolverType.{typeName} (Exudyn's implicit solver) is replaced, "
                   f"like GeneralizedAlpha, by the explicit Munthe-Kaas method {solver.tableau.name} on the Lie "
-                  f"groups {groups} (bodies per group); pass an explicit solverType or method=... to choose it")
-    solver._check_run(settings, substeps)
+                  f"groups {groups} (bodies per group); method= or an explicit solverType chooses the method, "
+                  f"liegroup= the groups")
     if assemble:
         warn_user("exudyn_lie.SolveDynamic: mbs is not assembled; calling mbs.Assemble()")
         mbs.Assemble()

@@ -56,8 +56,11 @@ from ..mbs.scene import GROUND, Scene, SceneError
 from . import pyforces
 from .nodes import NODE_KINDS
 
-SUPPORTED_NODES = ("NodeRigidBodyRotVecLG", "NodeRigidBodyEP", "NodeRigidBodyRxyz", "NodePointGround",
-                   "NodeGenericData (data only)")
+SUPPORTED_NODES = ("NodeRigidBodyRotVecLG", "NodeRigidBodyEP", "NodeRigidBodyRxyz", "NodePoint", "NodePoint2D",
+                   "NodePointGround", "NodeGenericData (data only)")
+# objects that are bodies of the scene: Exudyn object type -> the node types it accepts
+RIGID_NODE_TYPES = ("RigidBodyRotVecLG", "RigidBodyEP", "RigidBodyRxyz")
+BODY_OBJECTS = {"RigidBody": RIGID_NODE_TYPES, "MassPoint": ("Point",), "MassPoint2D": ("Point2D",)}
 SUPPORTED_MARKERS = ("MarkerBodyRigid", "MarkerBodyPosition", "MarkerNodeRigid", "MarkerNodePosition",
                      "MarkerBodyMass")
 SUPPORTED_LOADS = ("LoadForceVector", "LoadTorqueVector", "LoadMassProportional")
@@ -72,7 +75,7 @@ CONNECTOR_READERS = {
     "ConnectorTorsionalSpringDamper": ("read_torsional_spring_damper", True),
 }
 CONNECTOR_TYPES = tuple(CONNECTOR_READERS)
-SUPPORTED_OBJECTS = ("ObjectGround", "ObjectRigidBody") + tuple("Object" + t for t in JOINT_TYPES + CONNECTOR_TYPES)
+SUPPORTED_OBJECTS = ("ObjectGround",) + tuple("Object" + t for t in BODY_OBJECTS) + tuple("Object" + t for t in JOINT_TYPES + CONNECTOR_TYPES)
 
 
 class BridgeError(SceneError):
@@ -331,16 +334,16 @@ class _Reader:
             if t == "Ground":
                 R = np.asarray(d.get("referenceRotation", np.eye(3)), float)
                 self.ground[o] = (np.asarray(d.get("referencePosition", [0, 0, 0]), float), R)
-            elif t == "RigidBody":
+            elif t in BODY_OBJECTS:
                 n = int(d["nodeNumber"])
                 nt = sc.nodeTypes.get(n)
-                if nt not in NODE_KINDS:
-                    raise BridgeError(f"object {o} ('{d.get('name', '')}') ObjectRigidBody uses node {n} of "
-                                      f"type Node{nt}; supported rigid-body nodes: "
-                                      f"{', '.join('Node' + k for k in NODE_KINDS)}")
+                if nt not in BODY_OBJECTS[t]:
+                    raise BridgeError(f"object {o} ('{d.get('name', '')}') Object{t} uses node {n} of "
+                                      f"type Node{nt}; supported nodes for it: "
+                                      f"{', '.join('Node' + k for k in BODY_OBJECTS[t])}")
                 if n in bodyOfNode:
-                    raise BridgeError(f"object {o} ('{d.get('name', '')}') ObjectRigidBody shares node {n} with "
-                                      f"object {bodyOfNode[n]}; one rigid body per node is supported")
+                    raise BridgeError(f"object {o} ('{d.get('name', '')}') Object{t} shares node {n} with "
+                                      f"object {bodyOfNode[n]}; one body per node is supported")
                 bodyOfNode[n] = o
             elif t not in JOINT_TYPES + CONNECTOR_TYPES:
                 raise BridgeError(f"object {o} ('{d.get('name', '')}') of type Object{t} is not supported by "
@@ -366,24 +369,28 @@ class _Reader:
             sc.nodeKinds.append(kind)
         # bodies in object order
         for o, d in enumerate(self.objects):
-            if d["objectType"] != "RigidBody":
+            if d["objectType"] not in BODY_OBJECTS:
                 continue
             n = int(d["nodeNumber"])
             R, r, om, vel = states[n]
             label = d.get("name", "") or f"object{o}"
             try:
-                b = sc.AddBody(mass=float(d["mass"]), inertia=_inertia_matrix(d["inertia"]),
-                               com=np.asarray(d.get("centerOfMass", [0, 0, 0]), float), R0=_orthonormal(R),
-                               r0=r, omega0=om, vel0=vel, name=label)
+                if d["objectType"] != "RigidBody":
+                    b = sc.AddPointMass(float(d.get("mass", d.get("physicsMass"))), r0=r, vel0=vel, name=label,
+                                        freeDirections=np.diag([1.0, 1.0, float(d["objectType"] == "MassPoint")]))
+                else:
+                        b = sc.AddBody(mass=float(d["mass"]), inertia=_inertia_matrix(d["inertia"]),
+                                   com=np.asarray(d.get("centerOfMass", [0, 0, 0]), float), R0=_orthonormal(R),
+                                   r0=r, omega0=om, vel0=vel, name=label)
             except SceneError as e:
-                raise BridgeError(f"object {o} ObjectRigidBody: {e}") from None
+                raise BridgeError(f"object {o} Object{d['objectType']}: {e}") from None
             sc.bodyObject.append(o)
             sc.bodyNode.append(n)
             self.rigidNodeBody[n] = b
         for kind in sc.nodeKinds:
             sc.kindBodies.append(np.array([self.rigidNodeBody[n] for n in kind.ids], dtype=np.int64))
         if sc.nBodies == 0:
-            raise BridgeError("the Exudyn model has no ObjectRigidBody; nothing to integrate")
+            raise BridgeError("the Exudyn model has no ObjectRigidBody or mass point; nothing to integrate")
         # EP normalisation rows stay 0
         for n, t in sc.nodeTypes.items():
             if t == "RigidBodyEP" and not self.items:
@@ -408,7 +415,7 @@ class _Reader:
                 if o in self.ground:
                     gp, gR = self.ground[o]
                     body, pos, Rm = GROUND, gp + gR @ pos, (None if Rm is None else gR @ Rm)
-                elif self.objects[o]["objectType"] == "RigidBody":
+                elif self.objects[o]["objectType"] in BODY_OBJECTS:
                     body = self._body_of_object(o)
                 else:
                     raise BridgeError(f"{what}: marker {m} (Marker{t}) is attached to object {o} of type "

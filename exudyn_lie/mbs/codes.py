@@ -7,6 +7,7 @@ from ..groups import GROUPS, so3
 GROUP_NAMES = tuple(GROUPS)
 GID_SE3 = GROUP_NAMES.index("SE3")
 GID_SO3xR3 = GROUP_NAMES.index("SO3xR3")
+GID_R3 = GROUP_NAMES.index("R3")         # point masses (groups/rn.py): R = I, omega = 0
 
 ROW_TRANS_LOCAL = 0   # a = (R_A rotA)[:, ax] ; h = a . (pB - pA)
 ROW_TRANS_WORLD = 1   # a = e_ax (world)       ; h = a . (pB - pA)

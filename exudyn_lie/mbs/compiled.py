@@ -54,6 +54,21 @@ def body_mass_matrix(mass, inertia, com):
     return M
 
 
+def point_mass_matrix(body):
+    """``M`` of a point mass (group R3): ``m P`` on the free directions ``P``, no rotation block."""
+    out = np.zeros((6, 6))
+    out[3:, 3:] = body.mass * body.freeDirections
+    return out
+
+
+def point_minv(body):
+    """``M^-1`` of a point mass (group R3): zero rotation block (omega stays 0), the
+    pseudo-inverse ``P / m`` of ``m P`` on the free directions ``P``."""
+    out = np.zeros((6, 6))
+    out[3:, 3:] = body.freeDirections / body.mass
+    return out
+
+
 def joint_row_descriptors(constrainedAxes, worldTranslation=False):
     """Rows of Exudyn's ObjectJointGeneric for the given locks, as (kind, ax, bx):
 
@@ -84,7 +99,12 @@ def joint_row_descriptors(constrainedAxes, worldTranslation=False):
 
 
 def resolve_groups(scene: Scene, liegroup):
-    """Per-body group names from ``'SE3'``, ``'SO3xR3'``, ``'auto'`` or a mapping/sequence."""
+    """Per-body group names from ``'SE3'``, ``'SO3xR3'``, ``'auto'`` or a mapping/sequence;
+    point masses are on ``R3`` whatever is asked (their only group)."""
+    return [("R3" if b.isPoint else g) for b, g in zip(scene.bodies, _rigid_groups(scene, liegroup))]
+
+
+def _rigid_groups(scene: Scene, liegroup):
     nb = scene.nBodies
     if isinstance(liegroup, str):
         key = _group_key(liegroup, "liegroup")
@@ -94,6 +114,9 @@ def resolve_groups(scene: Scene, liegroup):
     if isinstance(liegroup, dict):
         out = []
         for i in range(nb):
+            if i not in liegroup and scene.bodies[i].isPoint:
+                out.append("R3")
+                continue
             if i not in liegroup:
                 raise SceneError(f"liegroup mapping has no entry for body {i} ({scene.bodies[i].name}); "
                                  f"give one of 'SE3', 'SO3xR3' for every body")
@@ -143,8 +166,9 @@ def compile_scene(scene: Scene, groups):
     gid = np.array([GROUP_IDS[g] for g in groups], dtype=np.int64)
     mass = np.array([b.mass for b in scene.bodies], float)
     com = np.array([b.com for b in scene.bodies], float).reshape(nb, 3)
-    M = np.array([body_mass_matrix(b.mass, b.inertia, b.com) for b in scene.bodies])
-    Minv = np.array([np.linalg.inv(Mi) for Mi in M])
+    M = np.array([point_mass_matrix(b) if b.isPoint else body_mass_matrix(b.mass, b.inertia, b.com)
+                  for b in scene.bodies])
+    Minv = np.array([point_minv(b) if b.isPoint else np.linalg.inv(Mi) for b, Mi in zip(scene.bodies, M)])
 
     def arr(x, shape, dtype=float):
         a = np.array(x, dtype=dtype)

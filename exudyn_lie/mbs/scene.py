@@ -70,6 +70,13 @@ class Body:
     omega0: np.ndarray           # initial angular velocity, body-fixed
     vel0: np.ndarray             # initial velocity of the body frame origin, world frame
     name: str = ""
+    # a point mass (group R3, groups/rn.py): the projector (3x3, world) onto the directions it
+    # moves in (I for NodePoint, diag(1, 1, 0) for NodePoint2D, e e^T for Node1D); None: rigid
+    freeDirections: np.ndarray = None
+
+    @property
+    def isPoint(self):
+        return self.freeDirections is not None
 
 
 @dataclass
@@ -210,6 +217,21 @@ class Scene:
         self.bodies.append(Body(m, J, c, _rot(R0, f"{label}: R0"), _vec3(r0, f"{label}: r0"),
                                 _vec3(omega0, f"{label}: omega0"), _vec3(vel0, f"{label}: vel0"),
                                 label))
+        return idx
+
+    def AddPointMass(self, mass, r0=(0, 0, 0), vel0=(0, 0, 0), freeDirections=None, name: str = "") -> int:
+        """Add a point mass (no orientation, integrated on R^3); returns its body index.
+
+        ``freeDirections``: the 3x3 orthogonal projector onto the world directions the
+        point moves in (default: all three); forces along the others have no effect, as
+        for Exudyn's ``NodePoint2D`` (x, y) or a ``Node1D`` mass (one axis)."""
+        idx = len(self.bodies)
+        label = name or f"point{idx}"
+        m = _checked_point_mass(label, mass)
+        P = _projector(np.eye(3) if freeDirections is None else freeDirections, f"{label}: freeDirections")
+        v = _vec3(vel0, f"{label}: vel0")
+        self.bodies.append(Body(m, np.zeros((3, 3)), np.zeros(3), np.eye(3), _vec3(r0, f"{label}: r0"),
+                                np.zeros(3), P @ v, label, P))
         return idx
 
     def _check_body(self, b, what, allow_ground=True):
@@ -369,6 +391,10 @@ class Scene:
     def validate(self):
         """Re-check all data (the item records are mutable): raises SceneError."""
         for b in self.bodies:
+            if b.isPoint:
+                b.mass = _checked_point_mass(b.name, b.mass)
+                b.freeDirections = _projector(b.freeDirections, f"{b.name}: freeDirections")
+                continue
             b.mass, b.inertia, b.com = _checked_mass_properties(b.name, b.mass, b.inertia, b.com)
             b.R0 = _rot(b.R0, f"{b.name}: R0")
             for what in ("r0", "omega0", "vel0"):
@@ -432,6 +458,24 @@ def _checked_mass_properties(label, mass, inertia, com):
                          f"definite (eigenvalues {ev}); give the inertia about the body "
                          f"frame origin, consistent with mass and com")
     return m, J, c
+
+
+def _checked_point_mass(label, mass):
+    try:
+        m = float(mass)
+    except (TypeError, ValueError):
+        raise SceneError(f"{label}: mass must be a number, got {mass!r}") from None
+    if not np.isfinite(m) or m <= 0:
+        raise SceneError(f"{label}: mass must be positive and finite, got {mass}")
+    return m
+
+
+def _projector(P, what):
+    P = np.asarray(P, float)
+    if P.shape != (3, 3) or not np.all(np.isfinite(P)) or np.abs(P @ P - P).max() > 1e-12 \
+            or np.abs(P - P.T).max() > 1e-14 or np.trace(P) < 0.5:
+        raise SceneError(f"{what} must be a nonzero orthogonal projector (3x3, P = P^T = P P)")
+    return P.copy()
 
 
 def _finite(x, what):

@@ -62,10 +62,13 @@ SUPPORTED_NODES = ("NodeRigidBodyRotVecLG", "NodeRigidBodyEP", "NodeRigidBodyRxy
 RIGID_NODE_TYPES = ("RigidBodyRotVecLG", "RigidBodyEP", "RigidBodyRxyz")
 BODY_OBJECTS = {"RigidBody": RIGID_NODE_TYPES, "MassPoint": ("Point",), "MassPoint2D": ("Point2D",)}
 SUPPORTED_MARKERS = ("MarkerBodyRigid", "MarkerBodyPosition", "MarkerNodeRigid", "MarkerNodePosition",
-                     "MarkerBodyMass")
-SUPPORTED_LOADS = ("LoadForceVector", "LoadTorqueVector", "LoadMassProportional")
+                     "MarkerBodyMass", "MarkerNodeCoordinate")
+POSITION_MARKERS = SUPPORTED_MARKERS[:5]        # the markers with a position (and orientation)
+SUPPORTED_LOADS = ("LoadForceVector", "LoadTorqueVector", "LoadMassProportional", "LoadCoordinate")
 
-JOINT_TYPES = ("JointSpherical", "JointRevoluteZ", "JointPrismaticX", "JointGeneric")
+JOINT_TYPES = ("JointSpherical", "JointRevoluteZ", "JointPrismaticX", "JointGeneric", "ConnectorCoordinate")
+# joints with a reader of their own (the others: read_joint): Exudyn object type -> reader method
+JOINT_READERS = {"ConnectorCoordinate": "read_coordinate_constraint"}
 # connectors: Exudyn object type -> (reader method of _Reader, markers need an orientation);
 # the one list of the connectors the bridge reads
 CONNECTOR_READERS = {
@@ -73,9 +76,21 @@ CONNECTOR_READERS = {
     "ConnectorCartesianSpringDamper": ("read_cartesian_spring_damper", False),
     "ConnectorRigidBodySpringDamper": ("read_rigid_body_spring_damper", True),
     "ConnectorTorsionalSpringDamper": ("read_torsional_spring_damper", True),
+    "ConnectorCoordinateSpringDamper": ("read_coordinate_spring_damper", "coordinate"),
 }
 CONNECTOR_TYPES = tuple(CONNECTOR_READERS)
 SUPPORTED_OBJECTS = ("ObjectGround",) + tuple("Object" + t for t in BODY_OBJECTS) + tuple("Object" + t for t in JOINT_TYPES + CONNECTOR_TYPES)
+
+
+@dataclass
+class CoordinateMarker:
+    """A MarkerNodeCoordinate on a position coordinate: the value is ``p[axis] - ref`` of
+    the body frame origin (the node), 0 on ground."""
+    index: int
+    body: int
+    axis: int
+    ref: float
+    markerType: str = "NodeCoordinate"
 
 
 class BridgeError(SceneError):
@@ -437,8 +452,8 @@ class _Reader:
                     raise BridgeError(f"{what}: marker {m} (Marker{t}) is attached to node {n} of type Node{nt}, "
                                       f"which belongs to no ObjectRigidBody")
             else:
-                raise BridgeError(f"{what}: marker {m} of type Marker{t} is not supported by exudyn_lie; "
-                                  f"supported markers: {', '.join(SUPPORTED_MARKERS)}")
+                raise BridgeError(f"{what}: marker {m} of type Marker{t} is not supported for this item; it "
+                                  f"needs one of: {', '.join(POSITION_MARKERS)}")
             mf = MarkerFrame(m, t, body, np.asarray(pos, float), Rm)
             self.markers[m] = mf
         if mf.markerType == "BodyMass" and not allow_mass:
@@ -456,7 +471,9 @@ class _Reader:
     def read_items(self, sc: ExudynScene):
         for o, d in enumerate(self.objects):
             t = d["objectType"]
-            if t in JOINT_TYPES:
+            if t in JOINT_READERS:
+                getattr(self, JOINT_READERS[t])(sc, o, d)
+            elif t in JOINT_TYPES:
                 self.read_joint(sc, o, d)
             elif t in CONNECTOR_TYPES:
                 self.read_connector(sc, o, d)
@@ -524,13 +541,75 @@ class _Reader:
         # AE rows of unlocked axes (g = lambda) stay 0
         sc.aeZero.extend(sorted(set(aeAll.tolist()) - set(aeRows.tolist())))
 
+    def coordinate_marker(self, m, what):
+        """(body, position axis, reference value) of a MarkerNodeCoordinate: the marker value
+        is the node's current coordinate ``p[axis] - reference`` (0 on a ground node)."""
+        m = int(m)
+        if not 0 <= m < self.sd.NumberOfMarkers():
+            raise BridgeError(f"{what}: marker {m} does not exist")
+        d = self.mbs.GetMarker(m)
+        if d["markerType"] != "NodeCoordinate":
+            raise BridgeError(f"{what}: marker {m} is a Marker{d['markerType']}; this item needs "
+                              f"MarkerNodeCoordinate markers")
+        n, k = int(d["nodeNumber"]), int(d["coordinate"])
+        nt = self.mbs.GetNode(n)["nodeType"]
+        if nt == "PointGround":
+            return CoordinateMarker(m, GROUND, 0, 0.0)
+        if n not in self.rigidNodeBody:
+            raise BridgeError(f"{what}: marker {m} (MarkerNodeCoordinate) is on node {n} of type Node{nt}, which "
+                              f"belongs to no body exudyn_lie integrates")
+        npos = 2 if nt == "Point2D" else 3
+        if not 0 <= k < npos:
+            raise BridgeError(f"{what}: marker {m} (MarkerNodeCoordinate) is on coordinate {k} of node {n} "
+                              f"(Node{nt}), a rotation coordinate; exudyn_lie supports coordinate items on "
+                              f"position coordinates (0..{npos - 1}) only so far")
+        ref = float(np.asarray(self.mbs.GetNode(n)["referenceCoordinates"], float).reshape(-1)[k])
+        return CoordinateMarker(m, self.rigidNodeBody[n], k, ref)
+
+    def read_coordinate_constraint(self, sc, o, d):
+        """ObjectConnectorCoordinate: ``f q_B - q_A - offset = 0`` (CObjectConnectorCoordinate)."""
+        what = self._what("object", o, d)
+        try:
+            aeAll = np.zeros(0, np.int64) if self.items else np.array(self.sd.GetObjectLTGAE(o), dtype=np.int64)
+        except Exception:
+            aeAll = np.zeros(0, np.int64)
+        if not d.get("activeConnector", True):
+            sc.skipped.append((what, "inactive (activeConnector=False): Exudyn sets its multiplier to 0"))
+            sc.aeZero.extend(aeAll.tolist())
+            return
+        for key in ("offsetUserFunction", "offsetUserFunction_t"):
+            if _userfunction(d, key, what) is not None:
+                raise BridgeError(f"{what}: {key} is not supported by exudyn_lie yet; solve with "
+                                  f"exudyn.SolveDynamic")
+        if d.get("velocityLevel", False):
+            raise BridgeError(f"{what}: velocityLevel=True is not supported by exudyn_lie yet; solve with "
+                              f"exudyn.SolveDynamic")
+        m0, m1 = (int(m) for m in d["markerNumbers"])
+        cA = self.coordinate_marker(m0, what)
+        cB = self.coordinate_marker(m1, what)
+        A, ka, refA, B, kb, refB = cA.body, cA.axis, cA.ref, cB.body, cB.axis, cB.ref
+        f = float(d.get("factor1", d.get("factorValue1", 1.0)))      # factorValue1: before 1.12.258
+        if A == GROUND and (B == GROUND or f == 0.0):
+            sc.skipped.append((what, "constrains no body coordinate"))
+            sc.aeZero.extend(aeAll.tolist())
+            return
+        try:
+            j = sc.AddCoordinateConstraint(A, ka, B, kb, factor=f, name=d.get("name", "") or f"object{o}",
+                                           constant=float(d.get("offset", 0.0)) + f * refB - refA)
+        except SceneError as e:
+            raise BridgeError(f"{what}: {e}") from None
+        sc.joints_info.append(JointInfo(o, d["objectType"], j, aeAll[:1], aeAll))
+
     def read_connector(self, sc, o, d):
         t = d["objectType"]
         what = self._what("object", o, d)
         m0, m1 = (int(m) for m in d["markerNumbers"])
         reader, rigid = CONNECTOR_READERS[t]
-        A = self.marker(m0, what, need_rotation=rigid)
-        B = self.marker(m1, what, need_rotation=rigid)
+        if rigid == "coordinate":
+            A, B = self.coordinate_marker(m0, what), self.coordinate_marker(m1, what)
+        else:
+            A = self.marker(m0, what, need_rotation=rigid)
+            B = self.marker(m1, what, need_rotation=rigid)
         if A.body == GROUND and B.body == GROUND:
             sc.skipped.append((what, "connects ground to ground (no force on any body)"))
             return
@@ -541,7 +620,7 @@ class _Reader:
             sc.skipped.append((what, "inactive (activeConnector=False): no force until it is switched on"))
         name = d.get("name", "") or f"object{o}"
         nPy = len(sc.pyItems)
-        counts = (len(sc.springs), len(sc.cartesianSprings), len(sc.torsionalSprings))
+        counts = (len(sc.springs), len(sc.cartesianSprings), len(sc.torsionalSprings), len(sc.coordinateSprings))
         getattr(self, reader)(sc, o, d, A, B, what, name)
         sc.itemRows[("object", o)] = _new_row(sc, nPy, counts)
         if not active:
@@ -563,6 +642,15 @@ class _Reader:
                                         d["offset"], name=name)
         else:
             self._py(sc, pyforces.CartesianSpringDamperUF(self.mbs, o, d, A, B, uf))
+
+    def read_coordinate_spring_damper(self, sc, o, d, A, B, what, name):
+        """CObjectConnectorCoordinateSpringDamper: f = k (q_B - q_A - offset) + d (rates)."""
+        uf = _userfunction(d, "springForceUserFunction", what)
+        if uf is None:
+            sc.AddCoordinateSpringDamper(A.body, A.axis, B.body, B.axis, d["stiffness"], d["damping"],
+                                         float(d["offset"]) + B.ref - A.ref, name=name)
+        else:
+            self._py(sc, pyforces.CoordinateSpringDamperUF(self.mbs, o, d, A, B, uf))
 
     def read_torsional_spring_damper(self, sc, o, d, A, B, what, name):
         uf = _userfunction(d, "springTorqueUserFunction", what)
@@ -618,6 +706,9 @@ class _Reader:
             d = self.mbs.GetLoad(l)
             t = d["loadType"]
             what = f"load {l} ('{d.get('name', '')}') Load{t}"
+            if t == "Coordinate":
+                self.read_coordinate_load(sc, l, d, what)
+                continue
             if t not in ("ForceVector", "TorqueVector", "MassProportional"):
                 raise BridgeError(f"{what} is not supported by exudyn_lie; supported loads: "
                                   f"{', '.join(SUPPORTED_LOADS)}")
@@ -665,13 +756,33 @@ class _Reader:
                 B = sc.bodies[b]
                 sc.AddForce(b, B.mass * v, position=B.com, name=f"massProportional{b}")
 
+    def read_coordinate_load(self, sc, l, d, what):
+        """LoadCoordinate: a generalised force ``load`` on a node position coordinate, i.e. the
+        world force ``load e_axis`` at the node."""
+        load = float(d["load"])
+        if not np.isfinite(load):
+            raise BridgeError(f"{what}: load is not finite: {load}")
+        cm = self.coordinate_marker(d["markerNumber"], what)
+        if cm.body == GROUND:
+            sc.skipped.append((what, "acts on ground"))
+            sc.itemRows[("load", l)] = ("ground", -1)
+            return
+        uf = _userfunction(d, "loadUserFunction", what)
+        if uf is not None:
+            sc.itemRows[("load", l)] = ("py", len(sc.pyItems))
+            sc.pyItems.append(pyforces.CoordinateLoadUF(self.mbs, l, load, cm, uf))
+            return
+        sc.itemRows[("load", l)] = ("load", len(sc.loads))
+        sc.AddForce(cm.body, load * np.eye(3)[cm.axis], name=d.get("name", "") or f"load{l}")
+
 
 def _new_row(sc, nPy, counts):
     """(table, row) of the item a connector read just added to ``sc``."""
     if len(sc.pyItems) > nPy:
         return ("py", nPy)
-    for table, before, now in zip(("spring", "cartesian", "torsional"), counts,
-                                  (len(sc.springs), len(sc.cartesianSprings), len(sc.torsionalSprings))):
+    for table, before, now in zip(("spring", "cartesian", "torsional", "coordinate"), counts,
+                                  (len(sc.springs), len(sc.cartesianSprings), len(sc.torsionalSprings),
+                                   len(sc.coordinateSprings))):
         if now > before:
             return (table, before)
     raise AssertionError("connector read without a scene item")
@@ -684,7 +795,8 @@ def deactivate(sc, row):
     if table == "py":
         sc.pyItems[k].active = False
         return
-    item = {"spring": sc.springs, "cartesian": sc.cartesianSprings, "torsional": sc.torsionalSprings}[table][k]
+    item = {"spring": sc.springs, "cartesian": sc.cartesianSprings, "torsional": sc.torsionalSprings,
+            "coordinate": sc.coordinateSprings}[table][k]
     item.stiffness = item.stiffness * 0.0
     item.damping = item.damping * 0.0
     if table == "spring":

@@ -9,7 +9,7 @@ from collections import namedtuple
 
 import numpy as np
 
-from .codes import GROUP_NAMES, ROW_ROT, ROW_TRANS_LOCAL, ROW_TRANS_WORLD
+from .codes import GROUP_NAMES, ROW_COORD, ROW_ROT, ROW_TRANS_LOCAL, ROW_TRANS_WORLD
 from .linalg import REL_PIVOT_TOL, rcm_order
 from .scene import GROUND, Scene, SceneError
 
@@ -25,7 +25,8 @@ SceneData = namedtuple("SceneData", [
     "sint", "spos", "spar",           # springs: [A, B]; [posA, posB]; [k, d, L0, f0]
     "cint", "cpos", "cpar",           # Cartesian springs: [A, B]; [posA, posB]; [k(3), d(3), offset(3)]
     "tint", "trot", "tpar",           # torsional springs: [A, B]; [rotA, rotB]; [k, d, offset, torque]
-    "jint", "jpos", "jrot",           # joints: [A, B, first row, rows]; [posA, posB]; [rotA, rotB]
+    "kint", "kpar",                   # coordinate springs: [A, B, axis A, axis B]; [k, d, offset]
+    "jint", "jpos", "jrot", "jpar",   # joints: [A, B, first row, rows]; [posA, posB]; [rotA, rotB]; [row parameters]
     "rint",                           # constraint rows: [kind, axis of A, axis of B, body A, body B]
     "nrows", "bandwidth", "redundant", "pivotTol",
     "stabilization",                  # kernel.STAB_*: projection after every step
@@ -67,6 +68,23 @@ def point_minv(body):
     out = np.zeros((6, 6))
     out[3:, 3:] = body.freeDirections / body.mass
     return out
+
+
+N_JPAR = 2      # float parameters per joint (ROW_COORD: factor, constant)
+
+
+def joint_rows_of(joint):
+    """(kind, ax, bx) of the rows of a scene joint."""
+    if joint.coordinate is not None:
+        return [(ROW_COORD, joint.coordinate[0], joint.coordinate[1])]
+    return joint_row_descriptors(joint.constrainedAxes, joint.worldTranslation)
+
+
+def joint_parameters(joint):
+    """The float parameters of the joint's rows (``SceneData.jpar``)."""
+    if joint.coordinate is not None:
+        return [joint.coordinate[2], joint.coordinate[3]]
+    return [0.0] * N_JPAR
 
 
 def joint_row_descriptors(constrainedAxes, worldTranslation=False):
@@ -202,7 +220,7 @@ def compile_scene(scene: Scene, groups):
     rkind, rax, rbx, rA, rB, rjoint = [], [], [], [], [], []
     for k in order:
         jt = J[k]
-        rows = joint_row_descriptors(jt.constrainedAxes, jt.worldTranslation)
+        rows = joint_rows_of(jt)
         jrow0[k] = len(rkind)
         jnrow[k] = len(rows)
         for kind, a, b in rows:
@@ -240,9 +258,12 @@ def compile_scene(scene: Scene, groups):
         tint=arr([[s.bodyA, s.bodyB] for s in T], (-1, 2), np.int64),
         trot=arr([[s.rotA, s.rotB] for s in T], (-1, 2, 3, 3)),
         tpar=arr([[s.stiffness, s.damping, s.offset, s.torque] for s in T], (-1, 4)),
+        kint=arr([[s.bodyA, s.bodyB, s.axisA, s.axisB] for s in scene.coordinateSprings], (-1, 4), np.int64),
+        kpar=arr([[s.stiffness, s.damping, s.offset] for s in scene.coordinateSprings], (-1, 3)),
         jint=arr([[j.bodyA, j.bodyB, jrow0[k], jnrow[k]] for k, j in enumerate(J)], (-1, 4), np.int64),
         jpos=arr([[j.posA, j.posB] for j in J], (-1, 2, 3)),
         jrot=arr([[j.rotA, j.rotB] for j in J], (-1, 2, 3, 3)),
+        jpar=arr([joint_parameters(j) for j in J], (-1, N_JPAR)),
         rint=arr([list(x) for x in zip(rkind, rax, rbx, rA, rB)], (-1, 5), np.int64),
         nrows=m, bandwidth=bw, redundant=False, pivotTol=REL_PIVOT_TOL, stabilization=0,
     )

@@ -91,6 +91,9 @@ class Joint:
     kind: str = "generic"
     name: str = ""
     worldTranslation: bool = False   # translation rows along world axes (Exudyn's spherical joint)
+    # kind 'coordinate' (Exudyn's ObjectConnectorCoordinate on position coordinates):
+    # (axis of A, axis of B, factor f, constant c), h = f p_B[axis B] - p_A[axis A] - c
+    coordinate: tuple = None
 
 
 @dataclass
@@ -133,6 +136,21 @@ class CartesianSpringDamper:
     stiffness: np.ndarray
     damping: np.ndarray
     offset: np.ndarray
+    name: str = ""
+
+
+@dataclass
+class CoordinateSpringDamper:
+    """Exudyn's ``ObjectConnectorCoordinateSpringDamper`` on world position coordinates of the
+    body frame origins: ``f = k (p_B[axisB] - p_A[axisA] - offset) + d (rates)``, ``+f`` on A's
+    coordinate, ``-f`` on B's (mbs/coordinate_forces.py)."""
+    bodyA: int
+    axisA: int
+    bodyB: int
+    axisB: int
+    stiffness: float
+    damping: float
+    offset: float = 0.0
     name: str = ""
 
 
@@ -193,6 +211,7 @@ class Scene:
         self.torsionalSprings: List[TorsionalSpringDamper] = []
         self.cartesianSprings: List[CartesianSpringDamper] = []
         self.rigidSprings: List[RigidBodySpringDamper] = []
+        self.coordinateSprings: List[CoordinateSpringDamper] = []
         self.loads: List[Load] = []
         self.pythonForces: List[PythonForce] = []
 
@@ -268,6 +287,29 @@ class Scene:
         self.joints.append(Joint(int(bodyA), int(bodyB), _vec3(posA, f"{label}: posA"),
                                  _rot(rotA, f"{label}: rotA"), _vec3(posB, f"{label}: posB"),
                                  _rot(rotB, f"{label}: rotB"), ax, kind, label, bool(worldTranslation)))
+        return idx
+
+    def AddCoordinateConstraint(self, bodyA, axisA, bodyB, axisB, factor=1.0, constant=0.0, name="") -> int:
+        """One row ``h = factor * p_B[axisB] - p_A[axisA] - constant`` on the world position
+        coordinates of the body frame origins (0 for GROUND); Exudyn's
+        ``ObjectConnectorCoordinate`` on node position coordinates (the bridge folds the
+        node reference coordinates into ``constant``)."""
+        idx = len(self.joints)
+        label = name or f"joint{idx}(coordinate)"
+        self._check_body(bodyA, label)
+        self._check_body(bodyB, label)
+        if bodyA == GROUND and bodyB == GROUND:
+            raise SceneError(f"{label}: both sides are on the ground")
+        for ax in (axisA, axisB):
+            if ax not in (0, 1, 2):
+                raise SceneError(f"{label}: position coordinate index must be 0, 1 or 2, got {ax}")
+        f = _finite(factor, f"{label}: factor")
+        c = _finite(constant, f"{label}: constant")
+        if bodyB == GROUND or f == 0.0:
+            if bodyA == GROUND:
+                raise SceneError(f"{label}: the row acts on no body (factor 0 and side A on the ground)")
+        self.joints.append(Joint(int(bodyA), int(bodyB), np.zeros(3), np.eye(3), np.zeros(3), np.eye(3),
+                                 (1, 0, 0, 0, 0, 0), "coordinate", label, False, (int(axisA), int(axisB), f, c)))
         return idx
 
     def _joint_at(self, kind, bodyA, bodyB, position, rotation, name):
@@ -366,6 +408,22 @@ class Scene:
             _rot(rotB, label), K.copy(), D.copy(), o.copy(), label))
         return len(self.rigidSprings) - 1
 
+    def AddCoordinateSpringDamper(self, bodyA, axisA, bodyB, axisB, stiffness, damping=0.0, offset=0.0,
+                                  name="") -> int:
+        """Spring-damper between two world position coordinates of body frame origins
+        (GROUND: 0): ``f = k (p_B[axisB] - p_A[axisA] - offset) + d (pdot_B[axisB] - pdot_A[axisA])``,
+        ``+f`` along ``e_axisA`` on A, ``-f`` along ``e_axisB`` on B."""
+        label = name or f"coordinateSpring{len(self.coordinateSprings)}"
+        self._check_body(bodyA, label)
+        self._check_body(bodyB, label)
+        for ax in (axisA, axisB):
+            if ax not in (0, 1, 2):
+                raise SceneError(f"{label}: position coordinate index must be 0, 1 or 2, got {ax}")
+        self.coordinateSprings.append(CoordinateSpringDamper(
+            int(bodyA), int(axisA), int(bodyB), int(axisB), _finite(stiffness, f"{label}: stiffness"),
+            _finite(damping, f"{label}: damping"), _finite(offset, f"{label}: offset"), label))
+        return len(self.coordinateSprings) - 1
+
     def AddForce(self, body, force, position=(0, 0, 0), bodyFixed=False, name="") -> int:
         """Constant force at body point ``position`` (body coordinates); world frame unless
         ``bodyFixed``."""
@@ -408,6 +466,9 @@ class Scene:
         for s in self.cartesianSprings:
             for what in ("stiffness", "damping", "offset"):
                 _vec3(getattr(s, what), f"{s.name}: {what}")
+        for s in self.coordinateSprings:
+            for what in ("stiffness", "damping", "offset"):
+                _finite(getattr(s, what), f"{s.name}: {what}")
         for l in self.loads:
             _vec3(l.vector, f"{l.name}: vector")
         if not np.all(np.isfinite(self.gravity)):
@@ -419,7 +480,7 @@ class Scene:
         return len(self.bodies)
 
     # the two-body force elements (connectors), each a list attribute: the one enumeration
-    CONNECTOR_LISTS = ("springs", "torsionalSprings", "cartesianSprings", "rigidSprings")
+    CONNECTOR_LISTS = ("springs", "torsionalSprings", "cartesianSprings", "rigidSprings", "coordinateSprings")
 
     def connectors(self):
         """Every connector (two-body force element) of the scene, list by list."""

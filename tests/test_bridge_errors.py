@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import exudyn as exu
-from exudyn.utilities import (Node1D, ObjectMass1D, LoadCoordinate, LoadForceVector, LoadTorqueVector, MarkerBodyPosition,
+from exudyn.utilities import (ObjectConnectorGravity, Node1D, ObjectMass1D, LoadCoordinate, LoadForceVector, LoadTorqueVector, MarkerBodyPosition,
                               MarkerNodeCoordinate, MarkerNodePosition, ObjectJointSpherical, RotationMatrixX,
                               SensorBody)
 
@@ -67,8 +67,10 @@ def expect_error(mbs, exc, match, **kw):
 @pytest.mark.parametrize("extra,match", [
     (lambda mbs, g, b: mbs.AddObject(ObjectMass1D(nodeNumber=mbs.AddNode(Node1D(referenceCoordinates=[0])), mass=1)),
      r"object 3 .*ObjectMass1D is not supported.*supported objects: ObjectGround, ObjectRigidBody"),
-    (lambda mbs, g, b: mbs.CreateDistanceConstraint(itemNumbers=[g, b], localPosition0=[0, 1, 0]),
-     r"object 3 .*ObjectConnectorDistance is not supported"),
+    (lambda mbs, g, b: mbs.AddObject(ObjectConnectorGravity(markerNumbers=[
+        mbs.AddMarker(MarkerBodyPosition(bodyNumber=g)), mbs.AddMarker(MarkerBodyPosition(bodyNumber=b))],
+        mass0=1, mass1=1)),
+     r"object 3 .*ObjectConnectorGravity is not supported"),
     (lambda mbs, g, b: mbs.AddLoad(LoadCoordinate(markerNumber=mbs.AddMarker(
         MarkerNodeCoordinate(nodeNumber=0, coordinate=4)), load=1)),
      r"load 1 .*LoadCoordinate.*coordinate 4 of node 0 .*a rotation coordinate"),

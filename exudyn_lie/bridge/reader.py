@@ -66,9 +66,10 @@ SUPPORTED_MARKERS = ("MarkerBodyRigid", "MarkerBodyPosition", "MarkerNodeRigid",
 POSITION_MARKERS = SUPPORTED_MARKERS[:5]        # the markers with a position (and orientation)
 SUPPORTED_LOADS = ("LoadForceVector", "LoadTorqueVector", "LoadMassProportional", "LoadCoordinate")
 
-JOINT_TYPES = ("JointSpherical", "JointRevoluteZ", "JointPrismaticX", "JointGeneric", "ConnectorCoordinate")
+JOINT_TYPES = ("JointSpherical", "JointRevoluteZ", "JointPrismaticX", "JointGeneric", "ConnectorCoordinate",
+               "ConnectorDistance")
 # joints with a reader of their own (the others: read_joint): Exudyn object type -> reader method
-JOINT_READERS = {"ConnectorCoordinate": "read_coordinate_constraint"}
+JOINT_READERS = {"ConnectorCoordinate": "read_coordinate_constraint", "ConnectorDistance": "read_distance_constraint"}
 # connectors: Exudyn object type -> (reader method of _Reader, markers need an orientation);
 # the one list of the connectors the bridge reads
 CONNECTOR_READERS = {
@@ -77,6 +78,7 @@ CONNECTOR_READERS = {
     "ConnectorRigidBodySpringDamper": ("read_rigid_body_spring_damper", True),
     "ConnectorTorsionalSpringDamper": ("read_torsional_spring_damper", True),
     "ConnectorCoordinateSpringDamper": ("read_coordinate_spring_damper", "coordinate"),
+    "ConnectorLinearSpringDamper": ("read_linear_spring_damper", True),
 }
 CONNECTOR_TYPES = tuple(CONNECTOR_READERS)
 SUPPORTED_OBJECTS = ("ObjectGround",) + tuple("Object" + t for t in BODY_OBJECTS) + tuple("Object" + t for t in JOINT_TYPES + CONNECTOR_TYPES)
@@ -541,6 +543,38 @@ class _Reader:
         # AE rows of unlocked axes (g = lambda) stay 0
         sc.aeZero.extend(sorted(set(aeAll.tolist()) - set(aeRows.tolist())))
 
+    def _constraint_ae(self, o, d, what, sc):
+        """The AE indices of a one-row constraint object; None (skipped) if it is inactive."""
+        try:
+            aeAll = np.zeros(0, np.int64) if self.items else np.array(self.sd.GetObjectLTGAE(o), dtype=np.int64)
+        except Exception:
+            aeAll = np.zeros(0, np.int64)
+        if not d.get("activeConnector", True):
+            sc.skipped.append((what, "inactive (activeConnector=False): Exudyn sets its multiplier to 0"))
+            sc.aeZero.extend(aeAll.tolist())
+            return None
+        return aeAll
+
+    def read_distance_constraint(self, sc, o, d):
+        """ObjectConnectorDistance: ``|p_1 - p_0| - distance = 0`` (CObjectConnectorDistance)."""
+        what = self._what("object", o, d)
+        aeAll = self._constraint_ae(o, d, what, sc)
+        if aeAll is None:
+            return
+        m0, m1 = (int(m) for m in d["markerNumbers"])
+        A = self.marker(m0, what)
+        B = self.marker(m1, what)
+        if A.body == GROUND and B.body == GROUND:
+            sc.skipped.append((what, "connects ground to ground"))
+            sc.aeZero.extend(aeAll.tolist())
+            return
+        try:
+            j = sc.AddDistanceConstraint(A.body, A.pos, B.body, B.pos, float(d["distance"]),
+                                         name=d.get("name", "") or f"object{o}")
+        except SceneError as e:
+            raise BridgeError(f"{what}: {e}") from None
+        sc.joints_info.append(JointInfo(o, d["objectType"], j, aeAll[:1], aeAll))
+
     def coordinate_marker(self, m, what):
         """(body, position axis, reference value) of a MarkerNodeCoordinate: the marker value
         is the node's current coordinate ``p[axis] - reference`` (0 on a ground node)."""
@@ -620,7 +654,8 @@ class _Reader:
             sc.skipped.append((what, "inactive (activeConnector=False): no force until it is switched on"))
         name = d.get("name", "") or f"object{o}"
         nPy = len(sc.pyItems)
-        counts = (len(sc.springs), len(sc.cartesianSprings), len(sc.torsionalSprings), len(sc.coordinateSprings))
+        counts = (len(sc.springs), len(sc.cartesianSprings), len(sc.torsionalSprings), len(sc.coordinateSprings),
+                  len(sc.linearSprings))
         getattr(self, reader)(sc, o, d, A, B, what, name)
         sc.itemRows[("object", o)] = _new_row(sc, nPy, counts)
         if not active:
@@ -651,6 +686,16 @@ class _Reader:
                                          float(d["offset"]) + B.ref - A.ref, name=name)
         else:
             self._py(sc, pyforces.CoordinateSpringDamperUF(self.mbs, o, d, A, B, uf))
+
+    def read_linear_spring_damper(self, sc, o, d, A, B, what, name):
+        """CObjectConnectorLinearSpringDamper: along ``A_0 axisMarker0`` (marker 0's orientation)."""
+        if _userfunction(d, "springForceUserFunction", what) is not None:
+            raise BridgeError(f"{what}: springForceUserFunction is not supported by exudyn_lie yet; solve with "
+                              f"exudyn.SolveDynamic")
+        sc.AddLinearSpringDamper(A.body, A.pos, A.rot @ np.asarray(d["axisMarker0"], float), B.body, B.pos,
+                                 d["stiffness"], d["damping"], d["offset"],
+                                 float(d["force"]) - float(d["damping"]) * float(d.get("velocityOffset", 0.0)),
+                                 name=name)
 
     def read_torsional_spring_damper(self, sc, o, d, A, B, what, name):
         uf = _userfunction(d, "springTorqueUserFunction", what)
@@ -780,9 +825,9 @@ def _new_row(sc, nPy, counts):
     """(table, row) of the item a connector read just added to ``sc``."""
     if len(sc.pyItems) > nPy:
         return ("py", nPy)
-    for table, before, now in zip(("spring", "cartesian", "torsional", "coordinate"), counts,
+    for table, before, now in zip(("spring", "cartesian", "torsional", "coordinate", "linear"), counts,
                                   (len(sc.springs), len(sc.cartesianSprings), len(sc.torsionalSprings),
-                                   len(sc.coordinateSprings))):
+                                   len(sc.coordinateSprings), len(sc.linearSprings))):
         if now > before:
             return (table, before)
     raise AssertionError("connector read without a scene item")
@@ -796,10 +841,10 @@ def deactivate(sc, row):
         sc.pyItems[k].active = False
         return
     item = {"spring": sc.springs, "cartesian": sc.cartesianSprings, "torsional": sc.torsionalSprings,
-            "coordinate": sc.coordinateSprings}[table][k]
+            "coordinate": sc.coordinateSprings, "linear": sc.linearSprings}[table][k]
     item.stiffness = item.stiffness * 0.0
     item.damping = item.damping * 0.0
-    if table == "spring":
+    if table in ("spring", "linear"):
         item.force = 0.0
     elif table == "torsional":
         item.torque = 0.0

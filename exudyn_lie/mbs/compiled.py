@@ -9,7 +9,7 @@ from collections import namedtuple
 
 import numpy as np
 
-from .codes import GROUP_NAMES, ROW_COORD, ROW_ROT, ROW_TRANS_LOCAL, ROW_TRANS_WORLD
+from .codes import GROUP_NAMES, ROW_COORD, ROW_DIST, ROW_ROT, ROW_TRANS_LOCAL, ROW_TRANS_WORLD
 from .linalg import REL_PIVOT_TOL, rcm_order
 from .scene import GROUND, Scene, SceneError
 
@@ -26,6 +26,7 @@ SceneData = namedtuple("SceneData", [
     "cint", "cpos", "cpar",           # Cartesian springs: [A, B]; [posA, posB]; [k(3), d(3), offset(3)]
     "tint", "trot", "tpar",           # torsional springs: [A, B]; [rotA, rotB]; [k, d, offset, torque]
     "kint", "kpar",                   # coordinate springs: [A, B, axis A, axis B]; [k, d, offset]
+    "xint", "xpos", "xaxis", "xpar",  # linear springs: [A, B]; [posA, posB]; axis on A; [k, d, offset, force]
     "jint", "jpos", "jrot", "jpar",   # joints: [A, B, first row, rows]; [posA, posB]; [rotA, rotB]; [row parameters]
     "rint",                           # constraint rows: [kind, axis of A, axis of B, body A, body B]
     "nrows", "bandwidth", "redundant", "pivotTol",
@@ -70,13 +71,15 @@ def point_minv(body):
     return out
 
 
-N_JPAR = 2      # float parameters per joint (ROW_COORD: factor, constant)
+N_JPAR = 2      # float parameters per joint (ROW_COORD: factor, constant; ROW_DIST: distance)
 
 
 def joint_rows_of(joint):
     """(kind, ax, bx) of the rows of a scene joint."""
     if joint.coordinate is not None:
         return [(ROW_COORD, joint.coordinate[0], joint.coordinate[1])]
+    if joint.distance is not None:
+        return [(ROW_DIST, 0, 0)]
     return joint_row_descriptors(joint.constrainedAxes, joint.worldTranslation)
 
 
@@ -84,6 +87,8 @@ def joint_parameters(joint):
     """The float parameters of the joint's rows (``SceneData.jpar``)."""
     if joint.coordinate is not None:
         return [joint.coordinate[2], joint.coordinate[3]]
+    if joint.distance is not None:
+        return [joint.distance, 0.0]
     return [0.0] * N_JPAR
 
 
@@ -260,6 +265,10 @@ def compile_scene(scene: Scene, groups):
         tpar=arr([[s.stiffness, s.damping, s.offset, s.torque] for s in T], (-1, 4)),
         kint=arr([[s.bodyA, s.bodyB, s.axisA, s.axisB] for s in scene.coordinateSprings], (-1, 4), np.int64),
         kpar=arr([[s.stiffness, s.damping, s.offset] for s in scene.coordinateSprings], (-1, 3)),
+        xint=arr([[s.bodyA, s.bodyB] for s in scene.linearSprings], (-1, 2), np.int64),
+        xpos=arr([[s.posA, s.posB] for s in scene.linearSprings], (-1, 2, 3)),
+        xaxis=arr([s.axisA for s in scene.linearSprings], (-1, 3)),
+        xpar=arr([[s.stiffness, s.damping, s.offset, s.force] for s in scene.linearSprings], (-1, 4)),
         jint=arr([[j.bodyA, j.bodyB, jrow0[k], jnrow[k]] for k, j in enumerate(J)], (-1, 4), np.int64),
         jpos=arr([[j.posA, j.posB] for j in J], (-1, 2, 3)),
         jrot=arr([[j.rotA, j.rotB] for j in J], (-1, 2, 3, 3)),

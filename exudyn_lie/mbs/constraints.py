@@ -8,8 +8,9 @@ is quadratic in the velocities."""
 from numba import njit
 
 from .bodies import _cross, _matTvec, _side, body_axis, body_point, translation_dual
-from .codes import J_BODY_A, J_BODY_B, J_NROW, J_ROW0, ROW_AX, ROW_BX, ROW_COORD, ROW_KIND, ROW_ROT, ROW_TRANS_LOCAL
+from .codes import J_BODY_A, J_BODY_B, J_NROW, J_ROW0, ROW_AX, ROW_BX, ROW_COORD, ROW_DIST, ROW_KIND, ROW_ROT, ROW_TRANS_LOCAL
 from .coordinate_rows import coordinate_row
+from .distance_rows import distance_row
 
 
 # --------------------------------------------------------------------------- constraints
@@ -78,19 +79,22 @@ def joint_rows(j, gid, jint, jpos, jrot, jpar, rint, R, r, V, h, Jr, eta, v3, id
                 for k in range(3):
                     u[k] = rotA[k, rax]
                 body_axis(RA, VA, u, ax, axd, axb)
+            elif kind == ROW_DIST:
+                distance_row(q, jpar[j, 0], d, dd, bd, ax, h, eta)    # ax <- e, the row's world direction
             else:
                 for k in range(3):
                     ax[k] = 0.0
                     axd[k] = 0.0
                     axb[k] = 0.0
                 ax[rax] = 1.0
-            hv = 0.0
-            et = 0.0
-            for k in range(3):
-                hv += ax[k] * d[k]
-                et += axb[k] * d[k] + 2.0 * axd[k] * dd[k] + ax[k] * bd[k]
-            h[q] = hv
-            eta[q] = -et
+            if kind != ROW_DIST:
+                hv = 0.0
+                et = 0.0
+                for k in range(3):
+                    hv += ax[k] * d[k]
+                    et += axb[k] * d[k] + 2.0 * axd[k] * dd[k] + ax[k] * bd[k]
+                h[q] = hv
+                eta[q] = -et
             if a >= 0:
                 _matTvec(RA, ax, RtA)          # RA^T a
                 if kind == ROW_TRANS_LOCAL:

@@ -94,6 +94,7 @@ class Joint:
     # kind 'coordinate' (Exudyn's ObjectConnectorCoordinate on position coordinates):
     # (axis of A, axis of B, factor f, constant c), h = f p_B[axis B] - p_A[axis A] - c
     coordinate: tuple = None
+    distance: float = None           # kind 'distance' (ObjectConnectorDistance): h = |p_B - p_A| - distance
 
 
 @dataclass
@@ -155,6 +156,23 @@ class CoordinateSpringDamper:
 
 
 @dataclass
+class LinearSpringDamper:
+    """Exudyn's ``ObjectConnectorLinearSpringDamper``: along the world axis ``a = R_A axisA``,
+    ``f = k (a . (p_B - p_A) - offset) + d a . (pdot_B - pdot_A) + force``; ``+f a`` at the
+    point on A, ``-f a`` at the point on B (mbs/linear_spring_forces.py)."""
+    bodyA: int
+    posA: np.ndarray
+    axisA: np.ndarray            # unit axis in A's body frame (world if A is GROUND)
+    bodyB: int
+    posB: np.ndarray
+    stiffness: float
+    damping: float
+    offset: float = 0.0
+    force: float = 0.0
+    name: str = ""
+
+
+@dataclass
 class RigidBodySpringDamper:
     """6-dof spring between two frames, Exudyn's ``ObjectConnectorRigidBodySpringDamper``
     law: in the frame on A, displacement ``u = Aw^T (pB - pA)`` and the rotation
@@ -212,6 +230,7 @@ class Scene:
         self.cartesianSprings: List[CartesianSpringDamper] = []
         self.rigidSprings: List[RigidBodySpringDamper] = []
         self.coordinateSprings: List[CoordinateSpringDamper] = []
+        self.linearSprings: List[LinearSpringDamper] = []
         self.loads: List[Load] = []
         self.pythonForces: List[PythonForce] = []
 
@@ -310,6 +329,23 @@ class Scene:
                 raise SceneError(f"{label}: the row acts on no body (factor 0 and side A on the ground)")
         self.joints.append(Joint(int(bodyA), int(bodyB), np.zeros(3), np.eye(3), np.zeros(3), np.eye(3),
                                  (1, 0, 0, 0, 0, 0), "coordinate", label, False, (int(axisA), int(axisB), f, c)))
+        return idx
+
+    def AddDistanceConstraint(self, bodyA, posA, bodyB, posB, distance, name="") -> int:
+        """One row ``h = |p_B - p_A| - distance`` between body points (world points on
+        GROUND); Exudyn's ``ObjectConnectorDistance``."""
+        idx = len(self.joints)
+        label = name or f"joint{idx}(distance)"
+        self._check_body(bodyA, label)
+        self._check_body(bodyB, label)
+        if bodyA == bodyB:
+            raise SceneError(f"{label}: both sides are on the same {'ground' if bodyA == GROUND else 'body'}")
+        L0 = _finite(distance, f"{label}: distance")
+        if L0 <= 0.0:
+            raise SceneError(f"{label}: distance must be positive (the direction is undefined at 0), got {L0}")
+        self.joints.append(Joint(int(bodyA), int(bodyB), _vec3(posA, f"{label}: posA"), np.eye(3),
+                                 _vec3(posB, f"{label}: posB"), np.eye(3), (1, 0, 0, 0, 0, 0), "distance", label,
+                                 False, None, L0))
         return idx
 
     def _joint_at(self, kind, bodyA, bodyB, position, rotation, name):
@@ -424,6 +460,20 @@ class Scene:
             _finite(damping, f"{label}: damping"), _finite(offset, f"{label}: offset"), label))
         return len(self.coordinateSprings) - 1
 
+    def AddLinearSpringDamper(self, bodyA, posA, axisA, bodyB, posB, stiffness, damping=0.0, offset=0.0, force=0.0,
+                              name="") -> int:
+        """Spring-damper along the axis ``axisA`` fixed in body A (Exudyn's
+        ObjectConnectorLinearSpringDamper)."""
+        label = name or f"linearSpring{len(self.linearSprings)}"
+        self._check_body(bodyA, label)
+        self._check_body(bodyB, label)
+        ax = _vec3(axisA, f"{label}: axisA")
+        self.linearSprings.append(LinearSpringDamper(
+            int(bodyA), _vec3(posA, f"{label}: posA"), ax, int(bodyB), _vec3(posB, f"{label}: posB"),
+            _finite(stiffness, f"{label}: stiffness"), _finite(damping, f"{label}: damping"),
+            _finite(offset, f"{label}: offset"), _finite(force, f"{label}: force"), label))
+        return len(self.linearSprings) - 1
+
     def AddForce(self, body, force, position=(0, 0, 0), bodyFixed=False, name="") -> int:
         """Constant force at body point ``position`` (body coordinates); world frame unless
         ``bodyFixed``."""
@@ -480,7 +530,8 @@ class Scene:
         return len(self.bodies)
 
     # the two-body force elements (connectors), each a list attribute: the one enumeration
-    CONNECTOR_LISTS = ("springs", "torsionalSprings", "cartesianSprings", "rigidSprings", "coordinateSprings")
+    CONNECTOR_LISTS = ("springs", "torsionalSprings", "cartesianSprings", "rigidSprings", "coordinateSprings",
+                       "linearSprings")
 
     def connectors(self):
         """Every connector (two-body force element) of the scene, list by list."""

@@ -316,6 +316,9 @@ class NodeKind:
     # ((i, j), limit): the coordinates are singular where |R[i, j]| reaches 1; the bridge
     # watches the entry at every internal step and warns above ``limit`` (None: regular)
     singularity = None
+    # number of leading coordinates that are the node position's world components (the
+    # coordinates that coordinate items may use, bridge.reader.coordinate_marker); None: none
+    positionCoordinates = None
 
     def __init__(self, ids, idx, qref):
         self.ids = np.asarray(ids, dtype=np.int64)
@@ -422,6 +425,7 @@ class RotVecLGNode(NodeKind):
     typeName = "RigidBodyRotVecLG"
     code = CODE_ROTVEC
     nrot = 3
+    positionCoordinates = 3
 
     def check_params(self, p, quiet=False):
         big = np.linalg.norm(p, axis=1) > rot.TWO_PI
@@ -450,6 +454,7 @@ class EPNode(NodeKind):
     typeName = "RigidBodyEP"
     code = CODE_EP
     nrot = 4
+    positionCoordinates = 3
     TOL = 1e-6
 
     def check_params(self, p, quiet=False):
@@ -487,6 +492,7 @@ class RxyzNode(NodeKind):
     typeName = "RigidBodyRxyz"
     code = CODE_RXYZ
     nrot = 3
+    positionCoordinates = 3
     singularity = ((0, 2), math.sqrt(1.0 - RXYZ_WARN_COS ** 2))     # R[0, 2] = sin(beta)
 
     def singular_warning(self, i):
@@ -519,6 +525,7 @@ class PointNode(NodeKind):
     code = CODE_POINT
     nrot = 0
     npos = 3
+    positionCoordinates = 3
 
     def __init__(self, ids, idx, qref):
         self.ids = np.asarray(ids, dtype=np.int64)
@@ -563,6 +570,7 @@ class Point2DNode(PointNode):
     typeName = "Point2D"
     code = CODE_POINT2D
     npos = 2
+    positionCoordinates = 2
 
 
 #: the registry: Exudyn ``nodeType`` string -> class

@@ -592,11 +592,12 @@ class _Reader:
         if n not in self.rigidNodeBody:
             raise BridgeError(f"{what}: marker {m} (MarkerNodeCoordinate) is on node {n} of type Node{nt}, which "
                               f"belongs to no body exudyn_lie integrates")
-        npos = 2 if nt == "Point2D" else 3
+        npos = getattr(NODE_KINDS.get(nt), "positionCoordinates", None) or 0
         if not 0 <= k < npos:
             raise BridgeError(f"{what}: marker {m} (MarkerNodeCoordinate) is on coordinate {k} of node {n} "
-                              f"(Node{nt}), a rotation coordinate; exudyn_lie supports coordinate items on "
-                              f"position coordinates (0..{npos - 1}) only so far")
+                              f"(Node{nt}), not a position coordinate (a rotation coordinate); exudyn_lie supports "
+                              f"coordinate items on node position coordinates only so far"
+                              + (f" (0..{npos - 1} of this node)" if npos else ""))
         ref = float(np.asarray(self.mbs.GetNode(n)["referenceCoordinates"], float).reshape(-1)[k])
         return CoordinateMarker(m, self.rigidNodeBody[n], k, ref)
 

@@ -192,3 +192,16 @@ def test_heavy_top_reference_agrees_with_exudyn(quick_run):
     rn = data["models"]["heavytop"]["refNative"]
     assert rn["converges"], rn
     assert rn["order"] > 1.5 and rn["err"] < 1e-4, rn
+
+
+def test_items_section(tmp_path):
+    """The point-mass-against-rigid-body section runs and reports (no timing asserted)."""
+    readme = tmp_path / "README.md"
+    readme.write_text("intro\n")
+    argv = ["--quick", "--sections", "items", "--out", str(tmp_path), "--no-progress", "--readme", str(readme)]
+    assert bench.main(argv) == 0
+    data = json.loads((tmp_path / "bench_results.json").read_text())
+    ps = data["items"]["perstep"]
+    assert set(ps) == {f"{k}/{v}" for k in ("point", "SE3", "SO3xR3") for v in ("springs", "distance")}
+    assert all(np.isfinite(x) for x in ps.values())
+    assert "## 9. Point masses against rigid bodies" in (tmp_path / "BENCHMARKS.md").read_text()

@@ -189,6 +189,10 @@ def package(mbs, groups, q, qt, t=0.0):
         for b in range(nb):
             kernel.add_point_force(int(sim.gid[b]), sim.R[b], np.zeros(3), np.asarray(F[b], float), Q[b])
             kernel.add_world_torque(sim.R[b], np.asarray(T[b], float), Q[b])
+    for b in range(nb):
+        if sc.bodies[b].isPoint:        # a point mass: only its free translations are coordinates
+            Q[b, :3] = 0.0
+            Q[b, 3:] = sc.bodies[b].freeDirections @ Q[b, 3:]
     h, J, eta = sim.jacobian()
     return dict(M=M, Q=Q.reshape(-1), h=h, J=J, P=P, PdV=PdV, sim=sim, scene=sc)
 

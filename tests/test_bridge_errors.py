@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import exudyn as exu
-from exudyn.utilities import (LoadCoordinate, LoadForceVector, LoadTorqueVector, MarkerBodyPosition,
+from exudyn.utilities import (ObjectConnectorGravity, Node1D, ObjectMass1D, LoadCoordinate, LoadForceVector, LoadTorqueVector, MarkerBodyPosition,
                               MarkerNodeCoordinate, MarkerNodePosition, ObjectJointSpherical, RotationMatrixX,
                               SensorBody)
 
@@ -65,13 +65,15 @@ def expect_error(mbs, exc, match, **kw):
 
 
 @pytest.mark.parametrize("extra,match", [
-    (lambda mbs, g, b: mbs.CreateMassPoint(referencePosition=[2, 0, 0], mass=1),
-     r"object 3 .*ObjectMassPoint is not supported.*supported objects: ObjectGround, ObjectRigidBody"),
-    (lambda mbs, g, b: mbs.CreateDistanceConstraint(itemNumbers=[g, b], localPosition0=[0, 1, 0]),
-     r"object 3 .*ObjectConnectorDistance is not supported"),
+    (lambda mbs, g, b: mbs.AddObject(ObjectMass1D(nodeNumber=mbs.AddNode(Node1D(referenceCoordinates=[0])), mass=1)),
+     r"object 3 .*ObjectMass1D is not supported.*supported objects: ObjectGround, ObjectRigidBody"),
+    (lambda mbs, g, b: mbs.AddObject(ObjectConnectorGravity(markerNumbers=[
+        mbs.AddMarker(MarkerBodyPosition(bodyNumber=g)), mbs.AddMarker(MarkerBodyPosition(bodyNumber=b))],
+        mass0=1, mass1=1)),
+     r"object 3 .*ObjectConnectorGravity is not supported"),
     (lambda mbs, g, b: mbs.AddLoad(LoadCoordinate(markerNumber=mbs.AddMarker(
-        MarkerNodeCoordinate(nodeNumber=0, coordinate=0)), load=1)),
-     r"load 1 .*LoadCoordinate is not supported.*LoadForceVector"),
+        MarkerNodeCoordinate(nodeNumber=0, coordinate=4)), load=1)),
+     r"load 1 .*LoadCoordinate.*coordinate 4 of node 0 .*a rotation coordinate"),
     (lambda mbs, g, b: mbs.CreateGenericJoint(itemNumbers=[g, b], position=[1, 0, 0],
                                               constrainedAxes=[1, 1, 1, 0, 0, 0]) and
      mbs.SetObjectParameter(3, "offsetUserFunction", lambda mbs, t, i, p: [0, 0, 0, 0, 0, 0]),
@@ -274,8 +276,8 @@ def test_autoassemble_validates_before_assembling(case):
     kw, ss = {}, quiet_settings(0.01, 10)
     extra, omega = None, (1.0, 2.0, 0.5)
     if case == "unsupported item":
-        extra, err, match = (lambda mbs, g, b: mbs.CreateMassPoint(referencePosition=[2, 0, 0], mass=1)), \
-            BridgeError, r"ObjectMassPoint is not supported"
+        extra, err, match = (lambda mbs, g, b: mbs.AddObject(ObjectMass1D(nodeNumber=mbs.AddNode(
+            Node1D(referenceCoordinates=[0])), mass=1))), BridgeError, r"ObjectMass1D is not supported"
     elif case == "joint violated":
         extra, err, match = (lambda mbs, g, b: mbs.AddObject(ObjectJointSpherical(markerNumbers=[
             mbs.AddMarker(MarkerBodyPosition(bodyNumber=g, localPosition=[1.5, 0, 0])),

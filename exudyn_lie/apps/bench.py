@@ -22,6 +22,7 @@ Sections (``--sections``, default all):
   (:mod:`exudyn_lie.apps.bench_mujoco`; skipped with one line without MuJoCo).
 * ``params``  parameters changed during a solve: serialRobotTest's PD controller (12 load
   vectors per step) against the same model without it (:mod:`.bench_params`).
+* ``items``   a point mass against a rigid body per step (:mod:`.bench_items`).
 
 Every sweep runs through Exudyn's ``exudyn.processing.ParameterVariation`` with
 multiprocessing (:func:`exudyn_lie.apps.bench_runs.sweep`); every time is the
@@ -51,7 +52,7 @@ EXL_METHODS = ("RK4", "DOPRI5", "RK6")
 NATIVE_CONSTRAINED = ("GeneralizedAlpha", "GeneralizedAlpha-mN", "TrapezoidalIndex2")
 NATIVE_FREE = ("RK44", "RK67", "DOPRI5")
 EPS_LEVELS = (1e-4, 1e-5, 1e-6, 1e-7, 1e-8)
-SECTIONS = ("wp", "perstep", "scaling", "startup", "overhead", "groups", "mujoco", "params")
+SECTIONS = ("wp", "perstep", "scaling", "startup", "overhead", "groups", "mujoco", "params", "items")
 TARGET_RATIO = 10.0
 # absolute per-step targets (MK-RK4, SE3, median step, this 2-core machine)
 KERNEL_STEP_TARGETS_US = {"heavytop": 3.0, "doublependulum": 6.0}
@@ -917,6 +918,8 @@ def write_report(cfg, out, cmdline):
         A("")
     from .bench_params import report_lines as _params_lines
     L += _params_lines(out.get("params"))
+    from .bench_items import report_lines as _items_lines
+    L += _items_lines(out.get("items"))
     # ---- profile notes
     A("## 7. Profile and optimisation record")
     A("")
@@ -1034,6 +1037,10 @@ def main(argv=None):
         from .bench_params import parameter_updates
         log("parameters changed during a solve (serialRobotTest PD controller)")
         out["params"] = parameter_updates(T=0.1 if cfg.quick else 0.5, repeats=3 if cfg.quick else 7)
+    if "items" in cfg.sections:
+        from .bench_items import per_step as items_per_step
+        log("point masses against rigid bodies")
+        out["items"] = items_per_step(m=100 if cfg.quick else 200, repeats=3 if cfg.quick else 7)
     out["env"]["loadEnd"] = loadavg()
     out["profileExtra"] = PROFILE_EXTRA
     os.makedirs(cfg.out, exist_ok=True)

@@ -32,6 +32,8 @@ from . import rotations as rot
 CODE_ROTVEC = 0
 CODE_EP = 1
 CODE_RXYZ = 2
+CODE_POINT = 3          # NodePoint: 3 position coordinates, no rotation
+CODE_POINT2D = 4        # NodePoint2D: x, y
 NCOORD_MAX = 7          # position (3) + at most 4 rotation parameters
 TWO_PI = 2.0 * math.pi
 ROTVEC_LIMIT = 1.5 * math.pi
@@ -202,6 +204,8 @@ def rxyz_row(R, omega, omegad, prev, first, p, p_t, p_tt):
 
 @njit(cache=True)
 def write_row(code, R, omega, omegad, prev, first, p, p_t, p_tt):
+    if code == CODE_POINT or code == CODE_POINT2D:
+        return 0                         # no rotation parameters
     if code == CODE_ROTVEC:
         return rotvec_row(R, omega, omegad, prev, first, p, p_t, p_tt)
     elif code == CODE_EP:
@@ -253,13 +257,14 @@ def write_nodes(gid, R, r, V, Vdot, doacc, code, body, idx, nq, qref, prev, firs
         if f:
             flags[i] = 1                 # kept until the warning is given (warn_flags)
             nflag += 1
-        for k in range(3):
+        npos = 2 if code[i] == CODE_POINT2D else 3
+        for k in range(npos):
             q[idx[i, k]] = r[b, k] - qref[i, k]
             qt[idx[i, k]] = vel[k]
             if doacc:
                 qtt[idx[i, k]] = acc[k]
-        for k in range(nq[i] - 3):
-            j = idx[i, 3 + k]
+        for k in range(nq[i] - npos):
+            j = idx[i, npos + k]
             q[j] = p[k] - qref[i, 3 + k]
             qt[j] = pt[k]
             if doacc:
@@ -311,6 +316,9 @@ class NodeKind:
     # ((i, j), limit): the coordinates are singular where |R[i, j]| reaches 1; the bridge
     # watches the entry at every internal step and warns above ``limit`` (None: regular)
     singularity = None
+    # number of leading coordinates that are the node position's world components (the
+    # coordinates that coordinate items may use, bridge.reader.coordinate_marker); None: none
+    positionCoordinates = None
 
     def __init__(self, ids, idx, qref):
         self.ids = np.asarray(ids, dtype=np.int64)
@@ -417,6 +425,7 @@ class RotVecLGNode(NodeKind):
     typeName = "RigidBodyRotVecLG"
     code = CODE_ROTVEC
     nrot = 3
+    positionCoordinates = 3
 
     def check_params(self, p, quiet=False):
         big = np.linalg.norm(p, axis=1) > rot.TWO_PI
@@ -445,6 +454,7 @@ class EPNode(NodeKind):
     typeName = "RigidBodyEP"
     code = CODE_EP
     nrot = 4
+    positionCoordinates = 3
     TOL = 1e-6
 
     def check_params(self, p, quiet=False):
@@ -482,6 +492,7 @@ class RxyzNode(NodeKind):
     typeName = "RigidBodyRxyz"
     code = CODE_RXYZ
     nrot = 3
+    positionCoordinates = 3
     singularity = ((0, 2), math.sqrt(1.0 - RXYZ_WARN_COS ** 2))     # R[0, 2] = sin(beta)
 
     def singular_warning(self, i):
@@ -507,5 +518,60 @@ class RxyzNode(NodeKind):
         return np.linalg.solve(rot.rxyz_glocal(p), rhs[..., None])[..., 0]
 
 
+class PointNode(NodeKind):
+    """``NodePoint``: position coordinates only (a point mass on R^3, group ``R3``); the
+    state is ``(I, r, 0, rdot)``."""
+    typeName = "Point"
+    code = CODE_POINT
+    nrot = 0
+    npos = 3
+    positionCoordinates = 3
+
+    def __init__(self, ids, idx, qref):
+        self.ids = np.asarray(ids, dtype=np.int64)
+        n = len(self.ids)
+        self.idx = np.asarray(idx, dtype=np.int64).reshape(n, self.npos)
+        self.qref = np.asarray(qref, float).reshape(n, self.npos)
+        self.prev = np.zeros((n, 4))
+        self.first = True
+        self.warned = np.zeros(n, bool)
+
+    def _pad(self, x):
+        out = np.zeros((len(self), 3))
+        out[:, :self.npos] = x
+        return out
+
+    def read(self, q, q_t):
+        n = len(self)
+        self.first = False
+        return (np.repeat(np.eye(3)[None], n, axis=0), self._pad(self.qref + q[self.idx]), np.zeros((n, 3)),
+                self._pad(q_t[self.idx]))
+
+    def write(self, R, r, omega, vel, omegad=None, acc=None, q=None, q_t=None, q_tt=None):
+        k = self.npos
+        q[self.idx] = np.asarray(r)[:, :k] - self.qref
+        q_t[self.idx] = np.asarray(vel)[:, :k]
+        if q_tt is not None and acc is not None:
+            q_tt[self.idx] = np.asarray(acc)[:, :k]
+        self.first = False
+        return np.zeros((len(self), 0))
+
+    def velocity_map(self, q):
+        T = np.zeros((len(self), self.npos, 6))
+        T[:, :, 3:3 + self.npos] = np.eye(self.npos)
+        return T
+
+    def velocity_map_dot(self, q, q_t):
+        return np.zeros((len(self), self.npos))
+
+
+class Point2DNode(PointNode):
+    """``NodePoint2D``: coordinates x, y (z = 0, Exudyn's CNodePoint2D)."""
+    typeName = "Point2D"
+    code = CODE_POINT2D
+    npos = 2
+    positionCoordinates = 2
+
+
 #: the registry: Exudyn ``nodeType`` string -> class
-NODE_KINDS = {cls.typeName: cls for cls in (RotVecLGNode, EPNode, RxyzNode)}
+NODE_KINDS = {cls.typeName: cls for cls in (RotVecLGNode, EPNode, RxyzNode, PointNode, Point2DNode)}

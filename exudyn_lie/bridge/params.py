@@ -57,6 +57,8 @@ _JOINT = {
                                "acceleration in the index-1 formulation)"),
     "rotationMarker1": (FIXED, "the joint frame on marker 1"),
 }
+_COMPILED_ROW = (FIXED, "compiled into a constraint row or force element of issue 16's items; a change during "
+                        "a run is not re-read yet")
 _UF_LIVE = (LIVE, "another Python function: live; switching between no function and a function stops the solve "
                   "(compiled item vs Python item)")
 
@@ -69,6 +71,33 @@ FIELDS = {
                  "need a user constraint")),
     ("node", "RigidBodyRxyz"): dict(_RIGID_NODE),
     ("node", "PointGround"): {"referenceCoordinates": (LIVE, "moves the markers on the ground node")},
+    ("node", "Point"): dict(_RIGID_NODE),
+    ("node", "Point2D"): dict(_RIGID_NODE),
+    ("object", "MassPoint"): {"mass": (FIXED, "compiled mass matrix"), "nodeNumber": (FIXED, "the body's node")},
+    ("object", "MassPoint2D"): {"mass": (FIXED, "compiled mass matrix"), "nodeNumber": (FIXED, "the body's node")},
+    ("object", "ConnectorCoordinate"): {
+        "markerNumbers": (FIXED, "the constrained coordinates"), "offset": _COMPILED_ROW, "factor1": _COMPILED_ROW,
+        "activeConnector": (FIXED, "the constraint row is compiled (an inactive one has none)"),
+        "velocityLevel": (REFUSED, "True is refused"),
+        "offsetUserFunction": (REFUSED, "a moving offset is refused"),
+        "offsetUserFunction_t": (REFUSED, "a moving offset is refused")},
+    ("object", "ConnectorDistance"): {
+        "markerNumbers": (FIXED, "the constrained points"), "distance": _COMPILED_ROW,
+        "activeConnector": (FIXED, "the constraint row is compiled (an inactive one has none)")},
+    ("object", "ConnectorCoordinateSpringDamper"): {
+        **{k: _COMPILED_ROW for k in ("stiffness", "damping", "offset", "activeConnector")},
+        "springForceUserFunction": (FIXED, "compiled item or Python item, chosen at the start"),
+        "markerNumbers": (FIXED, "the connected coordinates")},
+    ("object", "ConnectorLinearSpringDamper"): {
+        **{k: _COMPILED_ROW for k in ("stiffness", "damping", "axisMarker0", "offset", "velocityOffset", "force",
+                                      "activeConnector")},
+        "springForceUserFunction": (REFUSED, "a user function is refused"),
+        "markerNumbers": (FIXED, "the connected bodies")},
+    ("marker", "NodeCoordinate"): {"nodeNumber": (FIXED, "the marker's node"),
+                                   "coordinate": (FIXED, "the marker's coordinate")},
+    ("load", "Coordinate"): {
+        "load": (LIVE, "the generalised force on the coordinate"), "loadUserFunction": _UF_LIVE,
+        "markerNumber": (FIXED, "the loaded coordinate")},
     ("node", "GenericData"): {
         "initialCoordinates": (INITIAL, "a torsional spring's continuous angle at the start"),
         "numberOfDataCoordinates": (FIXED, "set by Assemble")},
@@ -341,7 +370,9 @@ class ParameterWatch:
                 targets[user] = None
         for kind, i in targets:
             d = self.snap[(kind, i)]
-            if kind == "load":
+            if kind == "load" and d["loadType"] == "Coordinate":
+                self._coordinate_load(i, d, t)
+            elif kind == "load":
                 self._load(i, d, t)
             elif d["objectType"] in _UF_KEY:
                 self._connector(i, d, t)
@@ -382,6 +413,27 @@ class ParameterWatch:
         sd.lint[k, 2] = int(bodyFixed)
         # from now on a new loadVector alone takes the short path (a controller's every step)
         self._fastLoad[l] = (sd.lvec[k, 0], mf.rotation() if bodyFixed else None)
+
+    def _coordinate_load(self, l, d, t):
+        """LoadCoordinate: the new ``load`` (or user function) into its compiled load row, a
+        world force ``load e_axis`` at the node (reader.read_coordinate_load), or its Python item."""
+        table, k = self.scene.itemRows[("load", l)]
+        what = self.what("load", l, d)
+        load = float(_finite(d["load"], what, "load"))
+        uf = _userfunction(d, "loadUserFunction", what)
+        if table == "ground":
+            return
+        if (uf is not None) != (table == "py"):
+            raise BridgeError(f"{what}: loadUserFunction was {'set' if uf is not None else 'removed'} during the "
+                              f"solve at t = {t:.6g} s; exudyn_lie compiles constant loads and evaluates loads with a "
+                              f"user function in Python, and cannot switch during a run; set it before the solve")
+        if table == "py":
+            item = self.scene.pyItems[k]
+            item.load, item.uf = load, uf
+            return
+        cm = self.reader.coordinate_marker(d["markerNumber"], what)
+        sd = self.solver.sim.sd
+        sd.lvec[k, 0] = load * np.eye(3)[cm.axis]
 
     def _load_vector(self, l, row, value, t):
         """Only ``loadVector`` of a compiled load changed: the new vector (the value Exudyn

@@ -287,3 +287,55 @@ def combined(items, nb):
                 it.idle(st)
         return F, T
     return fn
+
+
+def coordinate_state(cm, st):
+    """(current coordinate, its rate) of a node position coordinate (reader.CoordinateMarker):
+    ``p[axis] - ref`` of the body frame origin, 0 on the ground."""
+    if cm.body == GROUND:
+        return 0.0, 0.0
+    return st.r[cm.body][cm.axis] - cm.ref, st.vel[cm.body][cm.axis]
+
+
+def apply_coordinate(cm, f, F):
+    """A generalised force ``f`` on a node position coordinate: world force ``f e_axis`` at
+    the node (the body frame origin)."""
+    if cm.body != GROUND:
+        F[cm.body][cm.axis] += f
+
+
+class CoordinateSpringDamperUF(_Connector):
+    """ObjectConnectorCoordinateSpringDamper with ``springForceUserFunction(mbs, t, i,
+    q_B - q_A, qdot_B - qdot_A, k, d, offset)``: ``-f`` on q_B, ``+f`` on q_A."""
+
+    def __init__(self, mbs, o, d, A, B, uf):
+        super().__init__(mbs, o, d, A, B)
+        self.uf = uf
+
+    def add(self, t, st, F, T):
+        d = self.d
+        qA, vA = coordinate_state(self.A, st)
+        qB, vB = coordinate_state(self.B, st)
+        f = float(_call(self.label, self.uf, self.mbs, t, self.o, qB - qA, vB - vA, d["stiffness"], d["damping"],
+                        d["offset"]))
+        apply_coordinate(self.A, f, F)
+        apply_coordinate(self.B, -f, F)
+
+
+class CoordinateLoadUF(PyItem):
+    """LoadCoordinate with ``loadUserFunction(mbs, t, load)``: a generalised force on the
+    node coordinate."""
+
+    def __init__(self, mbs, l, load, cm, uf):
+        self.mbs = mbs
+        self.l = int(l)
+        self.load = load
+        self.cm = cm
+        self.uf = uf
+        self.label = f"load {l} LoadCoordinate"
+
+    def bodies(self):
+        return [self.cm.body]
+
+    def add(self, t, st, F, T):
+        apply_coordinate(self.cm, float(_call(self.label, self.uf, self.mbs, t, self.load)), F)

@@ -56,13 +56,20 @@ from ..mbs.scene import GROUND, Scene, SceneError
 from . import pyforces
 from .nodes import NODE_KINDS
 
-SUPPORTED_NODES = ("NodeRigidBodyRotVecLG", "NodeRigidBodyEP", "NodeRigidBodyRxyz", "NodePointGround",
-                   "NodeGenericData (data only)")
+SUPPORTED_NODES = ("NodeRigidBodyRotVecLG", "NodeRigidBodyEP", "NodeRigidBodyRxyz", "NodePoint", "NodePoint2D",
+                   "NodePointGround", "NodeGenericData (data only)")
+# objects that are bodies of the scene: Exudyn object type -> the node types it accepts
+RIGID_NODE_TYPES = ("RigidBodyRotVecLG", "RigidBodyEP", "RigidBodyRxyz")
+BODY_OBJECTS = {"RigidBody": RIGID_NODE_TYPES, "MassPoint": ("Point",), "MassPoint2D": ("Point2D",)}
 SUPPORTED_MARKERS = ("MarkerBodyRigid", "MarkerBodyPosition", "MarkerNodeRigid", "MarkerNodePosition",
-                     "MarkerBodyMass")
-SUPPORTED_LOADS = ("LoadForceVector", "LoadTorqueVector", "LoadMassProportional")
+                     "MarkerBodyMass", "MarkerNodeCoordinate")
+POSITION_MARKERS = SUPPORTED_MARKERS[:5]        # the markers with a position (and orientation)
+SUPPORTED_LOADS = ("LoadForceVector", "LoadTorqueVector", "LoadMassProportional", "LoadCoordinate")
 
-JOINT_TYPES = ("JointSpherical", "JointRevoluteZ", "JointPrismaticX", "JointGeneric")
+JOINT_TYPES = ("JointSpherical", "JointRevoluteZ", "JointPrismaticX", "JointGeneric", "ConnectorCoordinate",
+               "ConnectorDistance")
+# joints with a reader of their own (the others: read_joint): Exudyn object type -> reader method
+JOINT_READERS = {"ConnectorCoordinate": "read_coordinate_constraint", "ConnectorDistance": "read_distance_constraint"}
 # connectors: Exudyn object type -> (reader method of _Reader, markers need an orientation);
 # the one list of the connectors the bridge reads
 CONNECTOR_READERS = {
@@ -70,9 +77,22 @@ CONNECTOR_READERS = {
     "ConnectorCartesianSpringDamper": ("read_cartesian_spring_damper", False),
     "ConnectorRigidBodySpringDamper": ("read_rigid_body_spring_damper", True),
     "ConnectorTorsionalSpringDamper": ("read_torsional_spring_damper", True),
+    "ConnectorCoordinateSpringDamper": ("read_coordinate_spring_damper", "coordinate"),
+    "ConnectorLinearSpringDamper": ("read_linear_spring_damper", True),
 }
 CONNECTOR_TYPES = tuple(CONNECTOR_READERS)
-SUPPORTED_OBJECTS = ("ObjectGround", "ObjectRigidBody") + tuple("Object" + t for t in JOINT_TYPES + CONNECTOR_TYPES)
+SUPPORTED_OBJECTS = ("ObjectGround",) + tuple("Object" + t for t in BODY_OBJECTS) + tuple("Object" + t for t in JOINT_TYPES + CONNECTOR_TYPES)
+
+
+@dataclass
+class CoordinateMarker:
+    """A MarkerNodeCoordinate on a position coordinate: the value is ``p[axis] - ref`` of
+    the body frame origin (the node), 0 on ground."""
+    index: int
+    body: int
+    axis: int
+    ref: float
+    markerType: str = "NodeCoordinate"
 
 
 class BridgeError(SceneError):
@@ -331,16 +351,16 @@ class _Reader:
             if t == "Ground":
                 R = np.asarray(d.get("referenceRotation", np.eye(3)), float)
                 self.ground[o] = (np.asarray(d.get("referencePosition", [0, 0, 0]), float), R)
-            elif t == "RigidBody":
+            elif t in BODY_OBJECTS:
                 n = int(d["nodeNumber"])
                 nt = sc.nodeTypes.get(n)
-                if nt not in NODE_KINDS:
-                    raise BridgeError(f"object {o} ('{d.get('name', '')}') ObjectRigidBody uses node {n} of "
-                                      f"type Node{nt}; supported rigid-body nodes: "
-                                      f"{', '.join('Node' + k for k in NODE_KINDS)}")
+                if nt not in BODY_OBJECTS[t]:
+                    raise BridgeError(f"object {o} ('{d.get('name', '')}') Object{t} uses node {n} of "
+                                      f"type Node{nt}; supported nodes for it: "
+                                      f"{', '.join('Node' + k for k in BODY_OBJECTS[t])}")
                 if n in bodyOfNode:
-                    raise BridgeError(f"object {o} ('{d.get('name', '')}') ObjectRigidBody shares node {n} with "
-                                      f"object {bodyOfNode[n]}; one rigid body per node is supported")
+                    raise BridgeError(f"object {o} ('{d.get('name', '')}') Object{t} shares node {n} with "
+                                      f"object {bodyOfNode[n]}; one body per node is supported")
                 bodyOfNode[n] = o
             elif t not in JOINT_TYPES + CONNECTOR_TYPES:
                 raise BridgeError(f"object {o} ('{d.get('name', '')}') of type Object{t} is not supported by "
@@ -366,24 +386,28 @@ class _Reader:
             sc.nodeKinds.append(kind)
         # bodies in object order
         for o, d in enumerate(self.objects):
-            if d["objectType"] != "RigidBody":
+            if d["objectType"] not in BODY_OBJECTS:
                 continue
             n = int(d["nodeNumber"])
             R, r, om, vel = states[n]
             label = d.get("name", "") or f"object{o}"
             try:
-                b = sc.AddBody(mass=float(d["mass"]), inertia=_inertia_matrix(d["inertia"]),
-                               com=np.asarray(d.get("centerOfMass", [0, 0, 0]), float), R0=_orthonormal(R),
-                               r0=r, omega0=om, vel0=vel, name=label)
+                if d["objectType"] != "RigidBody":
+                    b = sc.AddPointMass(float(d.get("mass", d.get("physicsMass"))), r0=r, vel0=vel, name=label,
+                                        freeDirections=np.diag([1.0, 1.0, float(d["objectType"] == "MassPoint")]))
+                else:
+                        b = sc.AddBody(mass=float(d["mass"]), inertia=_inertia_matrix(d["inertia"]),
+                                   com=np.asarray(d.get("centerOfMass", [0, 0, 0]), float), R0=_orthonormal(R),
+                                   r0=r, omega0=om, vel0=vel, name=label)
             except SceneError as e:
-                raise BridgeError(f"object {o} ObjectRigidBody: {e}") from None
+                raise BridgeError(f"object {o} Object{d['objectType']}: {e}") from None
             sc.bodyObject.append(o)
             sc.bodyNode.append(n)
             self.rigidNodeBody[n] = b
         for kind in sc.nodeKinds:
             sc.kindBodies.append(np.array([self.rigidNodeBody[n] for n in kind.ids], dtype=np.int64))
         if sc.nBodies == 0:
-            raise BridgeError("the Exudyn model has no ObjectRigidBody; nothing to integrate")
+            raise BridgeError("the Exudyn model has no ObjectRigidBody or mass point; nothing to integrate")
         # EP normalisation rows stay 0
         for n, t in sc.nodeTypes.items():
             if t == "RigidBodyEP" and not self.items:
@@ -408,7 +432,7 @@ class _Reader:
                 if o in self.ground:
                     gp, gR = self.ground[o]
                     body, pos, Rm = GROUND, gp + gR @ pos, (None if Rm is None else gR @ Rm)
-                elif self.objects[o]["objectType"] == "RigidBody":
+                elif self.objects[o]["objectType"] in BODY_OBJECTS:
                     body = self._body_of_object(o)
                 else:
                     raise BridgeError(f"{what}: marker {m} (Marker{t}) is attached to object {o} of type "
@@ -430,8 +454,8 @@ class _Reader:
                     raise BridgeError(f"{what}: marker {m} (Marker{t}) is attached to node {n} of type Node{nt}, "
                                       f"which belongs to no ObjectRigidBody")
             else:
-                raise BridgeError(f"{what}: marker {m} of type Marker{t} is not supported by exudyn_lie; "
-                                  f"supported markers: {', '.join(SUPPORTED_MARKERS)}")
+                raise BridgeError(f"{what}: marker {m} of type Marker{t} is not supported for this item; it "
+                                  f"needs one of: {', '.join(POSITION_MARKERS)}")
             mf = MarkerFrame(m, t, body, np.asarray(pos, float), Rm)
             self.markers[m] = mf
         if mf.markerType == "BodyMass" and not allow_mass:
@@ -449,7 +473,9 @@ class _Reader:
     def read_items(self, sc: ExudynScene):
         for o, d in enumerate(self.objects):
             t = d["objectType"]
-            if t in JOINT_TYPES:
+            if t in JOINT_READERS:
+                getattr(self, JOINT_READERS[t])(sc, o, d)
+            elif t in JOINT_TYPES:
                 self.read_joint(sc, o, d)
             elif t in CONNECTOR_TYPES:
                 self.read_connector(sc, o, d)
@@ -517,13 +543,108 @@ class _Reader:
         # AE rows of unlocked axes (g = lambda) stay 0
         sc.aeZero.extend(sorted(set(aeAll.tolist()) - set(aeRows.tolist())))
 
+    def _constraint_ae(self, o, d, what, sc):
+        """The AE indices of a one-row constraint object; None (skipped) if it is inactive."""
+        try:
+            aeAll = np.zeros(0, np.int64) if self.items else np.array(self.sd.GetObjectLTGAE(o), dtype=np.int64)
+        except Exception:
+            aeAll = np.zeros(0, np.int64)
+        if not d.get("activeConnector", True):
+            sc.skipped.append((what, "inactive (activeConnector=False): Exudyn sets its multiplier to 0"))
+            sc.aeZero.extend(aeAll.tolist())
+            return None
+        return aeAll
+
+    def read_distance_constraint(self, sc, o, d):
+        """ObjectConnectorDistance: ``|p_1 - p_0| - distance = 0`` (CObjectConnectorDistance)."""
+        what = self._what("object", o, d)
+        aeAll = self._constraint_ae(o, d, what, sc)
+        if aeAll is None:
+            return
+        m0, m1 = (int(m) for m in d["markerNumbers"])
+        A = self.marker(m0, what)
+        B = self.marker(m1, what)
+        if A.body == GROUND and B.body == GROUND:
+            sc.skipped.append((what, "connects ground to ground"))
+            sc.aeZero.extend(aeAll.tolist())
+            return
+        try:
+            j = sc.AddDistanceConstraint(A.body, A.pos, B.body, B.pos, float(d["distance"]),
+                                         name=d.get("name", "") or f"object{o}")
+        except SceneError as e:
+            raise BridgeError(f"{what}: {e}") from None
+        sc.joints_info.append(JointInfo(o, d["objectType"], j, aeAll[:1], aeAll))
+
+    def coordinate_marker(self, m, what):
+        """(body, position axis, reference value) of a MarkerNodeCoordinate: the marker value
+        is the node's current coordinate ``p[axis] - reference`` (0 on a ground node)."""
+        m = int(m)
+        if not 0 <= m < self.sd.NumberOfMarkers():
+            raise BridgeError(f"{what}: marker {m} does not exist")
+        d = self.mbs.GetMarker(m)
+        if d["markerType"] != "NodeCoordinate":
+            raise BridgeError(f"{what}: marker {m} is a Marker{d['markerType']}; this item needs "
+                              f"MarkerNodeCoordinate markers")
+        n, k = int(d["nodeNumber"]), int(d["coordinate"])
+        nt = self.mbs.GetNode(n)["nodeType"]
+        if nt == "PointGround":
+            return CoordinateMarker(m, GROUND, 0, 0.0)
+        if n not in self.rigidNodeBody:
+            raise BridgeError(f"{what}: marker {m} (MarkerNodeCoordinate) is on node {n} of type Node{nt}, which "
+                              f"belongs to no body exudyn_lie integrates")
+        npos = getattr(NODE_KINDS.get(nt), "positionCoordinates", None) or 0
+        if not 0 <= k < npos:
+            raise BridgeError(f"{what}: marker {m} (MarkerNodeCoordinate) is on coordinate {k} of node {n} "
+                              f"(Node{nt}), not a position coordinate (a rotation coordinate); exudyn_lie supports "
+                              f"coordinate items on node position coordinates only so far"
+                              + (f" (0..{npos - 1} of this node)" if npos else ""))
+        ref = float(np.asarray(self.mbs.GetNode(n)["referenceCoordinates"], float).reshape(-1)[k])
+        return CoordinateMarker(m, self.rigidNodeBody[n], k, ref)
+
+    def read_coordinate_constraint(self, sc, o, d):
+        """ObjectConnectorCoordinate: ``f q_B - q_A - offset = 0`` (CObjectConnectorCoordinate)."""
+        what = self._what("object", o, d)
+        try:
+            aeAll = np.zeros(0, np.int64) if self.items else np.array(self.sd.GetObjectLTGAE(o), dtype=np.int64)
+        except Exception:
+            aeAll = np.zeros(0, np.int64)
+        if not d.get("activeConnector", True):
+            sc.skipped.append((what, "inactive (activeConnector=False): Exudyn sets its multiplier to 0"))
+            sc.aeZero.extend(aeAll.tolist())
+            return
+        for key in ("offsetUserFunction", "offsetUserFunction_t"):
+            if _userfunction(d, key, what) is not None:
+                raise BridgeError(f"{what}: {key} is not supported by exudyn_lie yet; solve with "
+                                  f"exudyn.SolveDynamic")
+        if d.get("velocityLevel", False):
+            raise BridgeError(f"{what}: velocityLevel=True is not supported by exudyn_lie yet; solve with "
+                              f"exudyn.SolveDynamic")
+        m0, m1 = (int(m) for m in d["markerNumbers"])
+        cA = self.coordinate_marker(m0, what)
+        cB = self.coordinate_marker(m1, what)
+        A, ka, refA, B, kb, refB = cA.body, cA.axis, cA.ref, cB.body, cB.axis, cB.ref
+        f = float(d.get("factor1", d.get("factorValue1", 1.0)))      # factorValue1: before 1.12.258
+        if A == GROUND and (B == GROUND or f == 0.0):
+            sc.skipped.append((what, "constrains no body coordinate"))
+            sc.aeZero.extend(aeAll.tolist())
+            return
+        try:
+            j = sc.AddCoordinateConstraint(A, ka, B, kb, factor=f, name=d.get("name", "") or f"object{o}",
+                                           constant=float(d.get("offset", 0.0)) + f * refB - refA)
+        except SceneError as e:
+            raise BridgeError(f"{what}: {e}") from None
+        sc.joints_info.append(JointInfo(o, d["objectType"], j, aeAll[:1], aeAll))
+
     def read_connector(self, sc, o, d):
         t = d["objectType"]
         what = self._what("object", o, d)
         m0, m1 = (int(m) for m in d["markerNumbers"])
         reader, rigid = CONNECTOR_READERS[t]
-        A = self.marker(m0, what, need_rotation=rigid)
-        B = self.marker(m1, what, need_rotation=rigid)
+        if rigid == "coordinate":
+            A, B = self.coordinate_marker(m0, what), self.coordinate_marker(m1, what)
+        else:
+            A = self.marker(m0, what, need_rotation=rigid)
+            B = self.marker(m1, what, need_rotation=rigid)
         if A.body == GROUND and B.body == GROUND:
             sc.skipped.append((what, "connects ground to ground (no force on any body)"))
             return
@@ -534,7 +655,8 @@ class _Reader:
             sc.skipped.append((what, "inactive (activeConnector=False): no force until it is switched on"))
         name = d.get("name", "") or f"object{o}"
         nPy = len(sc.pyItems)
-        counts = (len(sc.springs), len(sc.cartesianSprings), len(sc.torsionalSprings))
+        counts = (len(sc.springs), len(sc.cartesianSprings), len(sc.torsionalSprings), len(sc.coordinateSprings),
+                  len(sc.linearSprings))
         getattr(self, reader)(sc, o, d, A, B, what, name)
         sc.itemRows[("object", o)] = _new_row(sc, nPy, counts)
         if not active:
@@ -556,6 +678,25 @@ class _Reader:
                                         d["offset"], name=name)
         else:
             self._py(sc, pyforces.CartesianSpringDamperUF(self.mbs, o, d, A, B, uf))
+
+    def read_coordinate_spring_damper(self, sc, o, d, A, B, what, name):
+        """CObjectConnectorCoordinateSpringDamper: f = k (q_B - q_A - offset) + d (rates)."""
+        uf = _userfunction(d, "springForceUserFunction", what)
+        if uf is None:
+            sc.AddCoordinateSpringDamper(A.body, A.axis, B.body, B.axis, d["stiffness"], d["damping"],
+                                         float(d["offset"]) + B.ref - A.ref, name=name)
+        else:
+            self._py(sc, pyforces.CoordinateSpringDamperUF(self.mbs, o, d, A, B, uf))
+
+    def read_linear_spring_damper(self, sc, o, d, A, B, what, name):
+        """CObjectConnectorLinearSpringDamper: along ``A_0 axisMarker0`` (marker 0's orientation)."""
+        if _userfunction(d, "springForceUserFunction", what) is not None:
+            raise BridgeError(f"{what}: springForceUserFunction is not supported by exudyn_lie yet; solve with "
+                              f"exudyn.SolveDynamic")
+        sc.AddLinearSpringDamper(A.body, A.pos, A.rot @ np.asarray(d["axisMarker0"], float), B.body, B.pos,
+                                 d["stiffness"], d["damping"], d["offset"],
+                                 float(d["force"]) - float(d["damping"]) * float(d.get("velocityOffset", 0.0)),
+                                 name=name)
 
     def read_torsional_spring_damper(self, sc, o, d, A, B, what, name):
         uf = _userfunction(d, "springTorqueUserFunction", what)
@@ -611,6 +752,9 @@ class _Reader:
             d = self.mbs.GetLoad(l)
             t = d["loadType"]
             what = f"load {l} ('{d.get('name', '')}') Load{t}"
+            if t == "Coordinate":
+                self.read_coordinate_load(sc, l, d, what)
+                continue
             if t not in ("ForceVector", "TorqueVector", "MassProportional"):
                 raise BridgeError(f"{what} is not supported by exudyn_lie; supported loads: "
                                   f"{', '.join(SUPPORTED_LOADS)}")
@@ -658,13 +802,33 @@ class _Reader:
                 B = sc.bodies[b]
                 sc.AddForce(b, B.mass * v, position=B.com, name=f"massProportional{b}")
 
+    def read_coordinate_load(self, sc, l, d, what):
+        """LoadCoordinate: a generalised force ``load`` on a node position coordinate, i.e. the
+        world force ``load e_axis`` at the node."""
+        load = float(d["load"])
+        if not np.isfinite(load):
+            raise BridgeError(f"{what}: load is not finite: {load}")
+        cm = self.coordinate_marker(d["markerNumber"], what)
+        if cm.body == GROUND:
+            sc.skipped.append((what, "acts on ground"))
+            sc.itemRows[("load", l)] = ("ground", -1)
+            return
+        uf = _userfunction(d, "loadUserFunction", what)
+        if uf is not None:
+            sc.itemRows[("load", l)] = ("py", len(sc.pyItems))
+            sc.pyItems.append(pyforces.CoordinateLoadUF(self.mbs, l, load, cm, uf))
+            return
+        sc.itemRows[("load", l)] = ("load", len(sc.loads))
+        sc.AddForce(cm.body, load * np.eye(3)[cm.axis], name=d.get("name", "") or f"load{l}")
+
 
 def _new_row(sc, nPy, counts):
     """(table, row) of the item a connector read just added to ``sc``."""
     if len(sc.pyItems) > nPy:
         return ("py", nPy)
-    for table, before, now in zip(("spring", "cartesian", "torsional"), counts,
-                                  (len(sc.springs), len(sc.cartesianSprings), len(sc.torsionalSprings))):
+    for table, before, now in zip(("spring", "cartesian", "torsional", "coordinate", "linear"), counts,
+                                  (len(sc.springs), len(sc.cartesianSprings), len(sc.torsionalSprings),
+                                   len(sc.coordinateSprings), len(sc.linearSprings))):
         if now > before:
             return (table, before)
     raise AssertionError("connector read without a scene item")
@@ -677,10 +841,11 @@ def deactivate(sc, row):
     if table == "py":
         sc.pyItems[k].active = False
         return
-    item = {"spring": sc.springs, "cartesian": sc.cartesianSprings, "torsional": sc.torsionalSprings}[table][k]
+    item = {"spring": sc.springs, "cartesian": sc.cartesianSprings, "torsional": sc.torsionalSprings,
+            "coordinate": sc.coordinateSprings, "linear": sc.linearSprings}[table][k]
     item.stiffness = item.stiffness * 0.0
     item.damping = item.damping * 0.0
-    if table == "spring":
+    if table in ("spring", "linear"):
         item.force = 0.0
     elif table == "torsional":
         item.torque = 0.0

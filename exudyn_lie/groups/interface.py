@@ -8,6 +8,10 @@ tangent vector is a 6-vector ``X = (rotation, translation)``.  ``dexp`` is right
 trivialised (see the package docstring).  The ``_into`` variants write into arrays the
 caller provides and do not allocate (the compiled kernel uses them).
 
+A group whose algebra is a subspace of the 6-vectors (R^3 of the point masses) says which
+components are its coordinates with a module attribute ``ALGEBRA_MASK`` (6 floats, 1 = a
+coordinate); the others are ignored by ``exp`` and 0 in ``log``.  Without it, all six are.
+
 ``so3`` is the rotation factor shared by both groups, not a body group: its elements are
 ``R`` alone and its algebra 3-vectors, so its signatures lack the translation arguments.
 

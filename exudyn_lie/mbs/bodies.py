@@ -3,6 +3,10 @@ depends on the group of a body (``gid``, see :mod:`.codes` and :mod:`exudyn_lie.
 
 * ``SE3`` (0): twist ``V = (omega, v)`` with ``v`` body-fixed, ``rdot = R v``;
 * ``SO3xR3`` (1): mixed velocity, ``v = rdot`` spatial (eq. hybridvel).
+* ``R3`` (2): point masses (``groups/rn.py``): ``R = I`` and ``omega = 0`` for all time,
+  ``v = rdot``; the rotation block of ``Minv`` is 0 and the translation block the (pseudo-)
+  inverse of the mass on the free directions.  Every map that does not branch on ``R3``
+  treats it as SO3xR3 with ``omega = 0``, which is exact.
 
 The translation map ``T`` (``rdot = T v``) is ``R`` for SE3 and ``I`` for SO3xR3; with it
 one formula serves both representations:  a body point ``s`` moves with
@@ -17,7 +21,7 @@ body's velocity coordinates, the configuration update ``g exp(X)`` and the MK st
 from numba import njit
 
 from ..groups import se3, so3
-from .codes import GID_SE3
+from .codes import GID_R3, GID_SE3, GID_SO3xR3
 
 
 # --------------------------------------------------------------------------- small vector helpers
@@ -89,7 +93,12 @@ def body_axis(R, V, u, a, ad, beta):
 @njit(cache=True, _nrt=False)
 def add_point_force(gid, R, s, F, Q):
     """Generalised force of a world force ``F`` at body point ``s``:
-    ``Q = (s x R^T F, T^T F)`` so that ``Q . V`` is the power."""
+    ``Q = (s x R^T F, T^T F)`` so that ``Q . V`` is the power (R3: ``(0, F)``, omega = 0)."""
+    if gid == GID_R3:
+        Q[3] += F[0]
+        Q[4] += F[1]
+        Q[5] += F[2]
+        return
     f0 = R[0, 0] * F[0] + R[1, 0] * F[1] + R[2, 0] * F[2]
     f1 = R[0, 1] * F[0] + R[1, 1] * F[1] + R[2, 1] * F[2]
     f2 = R[0, 2] * F[0] + R[1, 2] * F[1] + R[2, 2] * F[2]
@@ -119,8 +128,9 @@ def apply_minv(gid, Minv, R, x, out, tmp):
     """``out = M_rep^-1 x`` for the body's velocity representation.
 
     SE3: ``M`` is the constant J_P, ``Minv`` its inverse.  SO3xR3: ``V^m = D V`` with
-    ``D = diag(I, R)``, hence ``(M^m)^-1 = D M^-1 D^T``."""
-    if gid == GID_SE3:
+    ``D = diag(I, R)``, hence ``(M^m)^-1 = D M^-1 D^T``.  R3: the constant ``Minv`` (its
+    velocity is spatial and ``R = I``)."""
+    if gid != GID_SO3xR3:
         for i in range(6):
             s = 0.0
             for k in range(6):
@@ -148,6 +158,13 @@ def apply_minv(gid, Minv, R, x, out, tmp):
 @njit(cache=True, _nrt=False)
 def exp_compose(gid, R, r, X, Rout, rout, ER, Er):
     """``(Rout, rout) = (R, r) exp(X)`` in the body's group (eqs. expX / expSO3xR3)."""
+    if gid == GID_R3:
+        # the abelian R^3 (groups/rn.py): r + X_trans; R = I is kept
+        for i in range(3):
+            rout[i] = r[i] + X[3 + i]
+            for j in range(3):
+                Rout[i, j] = R[i, j]
+        return
     if gid == GID_SE3:
         se3.exp_into(X, ER, Er)
         for i in range(3):
@@ -168,6 +185,9 @@ def body_dexpinv_stage(gid, X, Y, out):
     identity on the translation (the R3 factor is abelian)."""
     if gid == GID_SE3:
         se3.dexpinv_apply_into(X, Y, out)
+    elif gid == GID_R3:
+        for k in range(6):          # abelian: dexpinv = identity
+            out[k] = Y[k]
     else:
         so3.dexpinv_apply_into(X[0:3], Y[0:3], out[0:3])
         for k in range(3):
@@ -198,7 +218,7 @@ def body_inertial_forces(gid, Mi, mass, com, R, Vi, Qi):
         Qi[3] -= c0
         Qi[4] -= c1
         Qi[5] -= c2
-    else:
+    elif gid == GID_SO3xR3:         # R3 (a point mass) has no velocity-dependent terms
         Lx = Mi[0, 0] * w0 + Mi[0, 1] * w1 + Mi[0, 2] * w2
         Ly = Mi[1, 0] * w0 + Mi[1, 1] * w1 + Mi[1, 2] * w2
         Lz = Mi[2, 0] * w0 + Mi[2, 1] * w1 + Mi[2, 2] * w2

@@ -7,10 +7,13 @@ from ..groups import GROUPS, so3
 GROUP_NAMES = tuple(GROUPS)
 GID_SE3 = GROUP_NAMES.index("SE3")
 GID_SO3xR3 = GROUP_NAMES.index("SO3xR3")
+GID_R3 = GROUP_NAMES.index("R3")         # point masses (groups/rn.py): R = I, omega = 0
 
 ROW_TRANS_LOCAL = 0   # a = (R_A rotA)[:, ax] ; h = a . (pB - pA)
 ROW_TRANS_WORLD = 1   # a = e_ax (world)       ; h = a . (pB - pA)
 ROW_ROT = 2           # h = (R_A rotA)[:, ax] . (R_B rotB)[:, bx]
+ROW_DIST = 4          # h = |p_B - p_A| - L0 (Exudyn's ObjectConnectorDistance, mbs/distance_rows.py)
+ROW_COORD = 3         # h = f p_B[bx] - p_A[ax] - c (Exudyn's ObjectConnectorCoordinate, mbs/coordinate_rows.py)
 
 # columns of the integer tables of SceneData
 ROW_KIND, ROW_AX, ROW_BX, ROW_BODY_A, ROW_BODY_B = 0, 1, 2, 3, 4      # rint (m, 5)

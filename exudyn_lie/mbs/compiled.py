@@ -9,7 +9,7 @@ from collections import namedtuple
 
 import numpy as np
 
-from .codes import GROUP_NAMES, ROW_ROT, ROW_TRANS_LOCAL, ROW_TRANS_WORLD
+from .codes import GROUP_NAMES, ROW_COORD, ROW_DIST, ROW_ROT, ROW_TRANS_LOCAL, ROW_TRANS_WORLD
 from .linalg import REL_PIVOT_TOL, rcm_order
 from .scene import GROUND, Scene, SceneError
 
@@ -25,7 +25,9 @@ SceneData = namedtuple("SceneData", [
     "sint", "spos", "spar",           # springs: [A, B]; [posA, posB]; [k, d, L0, f0]
     "cint", "cpos", "cpar",           # Cartesian springs: [A, B]; [posA, posB]; [k(3), d(3), offset(3)]
     "tint", "trot", "tpar",           # torsional springs: [A, B]; [rotA, rotB]; [k, d, offset, torque]
-    "jint", "jpos", "jrot",           # joints: [A, B, first row, rows]; [posA, posB]; [rotA, rotB]
+    "kint", "kpar",                   # coordinate springs: [A, B, axis A, axis B]; [k, d, offset]
+    "xint", "xpos", "xaxis", "xpar",  # linear springs: [A, B]; [posA, posB]; axis on A; [k, d, offset, force]
+    "jint", "jpos", "jrot", "jpar",   # joints: [A, B, first row, rows]; [posA, posB]; [rotA, rotB]; [row parameters]
     "rint",                           # constraint rows: [kind, axis of A, axis of B, body A, body B]
     "nrows", "bandwidth", "redundant", "pivotTol",
     "stabilization",                  # kernel.STAB_*: projection after every step
@@ -52,6 +54,42 @@ def body_mass_matrix(mass, inertia, com):
     M[3:, :3] = -mass * ch
     M[3:, 3:] = mass * np.eye(3)
     return M
+
+
+def point_mass_matrix(body):
+    """``M`` of a point mass (group R3): ``m P`` on the free directions ``P``, no rotation block."""
+    out = np.zeros((6, 6))
+    out[3:, 3:] = body.mass * body.freeDirections
+    return out
+
+
+def point_minv(body):
+    """``M^-1`` of a point mass (group R3): zero rotation block (omega stays 0), the
+    pseudo-inverse ``P / m`` of ``m P`` on the free directions ``P``."""
+    out = np.zeros((6, 6))
+    out[3:, 3:] = body.freeDirections / body.mass
+    return out
+
+
+N_JPAR = 2      # float parameters per joint (ROW_COORD: factor, constant; ROW_DIST: distance)
+
+
+def joint_rows_of(joint):
+    """(kind, ax, bx) of the rows of a scene joint."""
+    if joint.coordinate is not None:
+        return [(ROW_COORD, joint.coordinate[0], joint.coordinate[1])]
+    if joint.distance is not None:
+        return [(ROW_DIST, 0, 0)]
+    return joint_row_descriptors(joint.constrainedAxes, joint.worldTranslation)
+
+
+def joint_parameters(joint):
+    """The float parameters of the joint's rows (``SceneData.jpar``)."""
+    if joint.coordinate is not None:
+        return [joint.coordinate[2], joint.coordinate[3]]
+    if joint.distance is not None:
+        return [joint.distance, 0.0]
+    return [0.0] * N_JPAR
 
 
 def joint_row_descriptors(constrainedAxes, worldTranslation=False):
@@ -84,7 +122,12 @@ def joint_row_descriptors(constrainedAxes, worldTranslation=False):
 
 
 def resolve_groups(scene: Scene, liegroup):
-    """Per-body group names from ``'SE3'``, ``'SO3xR3'``, ``'auto'`` or a mapping/sequence."""
+    """Per-body group names from ``'SE3'``, ``'SO3xR3'``, ``'auto'`` or a mapping/sequence;
+    point masses are on ``R3`` whatever is asked (their only group)."""
+    return [("R3" if b.isPoint else g) for b, g in zip(scene.bodies, _rigid_groups(scene, liegroup))]
+
+
+def _rigid_groups(scene: Scene, liegroup):
     nb = scene.nBodies
     if isinstance(liegroup, str):
         key = _group_key(liegroup, "liegroup")
@@ -94,6 +137,9 @@ def resolve_groups(scene: Scene, liegroup):
     if isinstance(liegroup, dict):
         out = []
         for i in range(nb):
+            if i not in liegroup and scene.bodies[i].isPoint:
+                out.append("R3")
+                continue
             if i not in liegroup:
                 raise SceneError(f"liegroup mapping has no entry for body {i} ({scene.bodies[i].name}); "
                                  f"give one of 'SE3', 'SO3xR3' for every body")
@@ -143,8 +189,9 @@ def compile_scene(scene: Scene, groups):
     gid = np.array([GROUP_IDS[g] for g in groups], dtype=np.int64)
     mass = np.array([b.mass for b in scene.bodies], float)
     com = np.array([b.com for b in scene.bodies], float).reshape(nb, 3)
-    M = np.array([body_mass_matrix(b.mass, b.inertia, b.com) for b in scene.bodies])
-    Minv = np.array([np.linalg.inv(Mi) for Mi in M])
+    M = np.array([point_mass_matrix(b) if b.isPoint else body_mass_matrix(b.mass, b.inertia, b.com)
+                  for b in scene.bodies])
+    Minv = np.array([point_minv(b) if b.isPoint else np.linalg.inv(Mi) for b, Mi in zip(scene.bodies, M)])
 
     def arr(x, shape, dtype=float):
         a = np.array(x, dtype=dtype)
@@ -178,7 +225,7 @@ def compile_scene(scene: Scene, groups):
     rkind, rax, rbx, rA, rB, rjoint = [], [], [], [], [], []
     for k in order:
         jt = J[k]
-        rows = joint_row_descriptors(jt.constrainedAxes, jt.worldTranslation)
+        rows = joint_rows_of(jt)
         jrow0[k] = len(rkind)
         jnrow[k] = len(rows)
         for kind, a, b in rows:
@@ -216,9 +263,16 @@ def compile_scene(scene: Scene, groups):
         tint=arr([[s.bodyA, s.bodyB] for s in T], (-1, 2), np.int64),
         trot=arr([[s.rotA, s.rotB] for s in T], (-1, 2, 3, 3)),
         tpar=arr([[s.stiffness, s.damping, s.offset, s.torque] for s in T], (-1, 4)),
+        kint=arr([[s.bodyA, s.bodyB, s.axisA, s.axisB] for s in scene.coordinateSprings], (-1, 4), np.int64),
+        kpar=arr([[s.stiffness, s.damping, s.offset] for s in scene.coordinateSprings], (-1, 3)),
+        xint=arr([[s.bodyA, s.bodyB] for s in scene.linearSprings], (-1, 2), np.int64),
+        xpos=arr([[s.posA, s.posB] for s in scene.linearSprings], (-1, 2, 3)),
+        xaxis=arr([s.axisA for s in scene.linearSprings], (-1, 3)),
+        xpar=arr([[s.stiffness, s.damping, s.offset, s.force] for s in scene.linearSprings], (-1, 4)),
         jint=arr([[j.bodyA, j.bodyB, jrow0[k], jnrow[k]] for k, j in enumerate(J)], (-1, 4), np.int64),
         jpos=arr([[j.posA, j.posB] for j in J], (-1, 2, 3)),
         jrot=arr([[j.rotA, j.rotB] for j in J], (-1, 2, 3, 3)),
+        jpar=arr([joint_parameters(j) for j in J], (-1, N_JPAR)),
         rint=arr([list(x) for x in zip(rkind, rax, rbx, rA, rB)], (-1, 5), np.int64),
         nrows=m, bandwidth=bw, redundant=False, pivotTol=REL_PIVOT_TOL, stabilization=0,
     )

@@ -8,12 +8,14 @@ is quadratic in the velocities."""
 from numba import njit
 
 from .bodies import _cross, _matTvec, _side, body_axis, body_point, translation_dual
-from .codes import J_BODY_A, J_BODY_B, J_NROW, J_ROW0, ROW_AX, ROW_BX, ROW_KIND, ROW_ROT, ROW_TRANS_LOCAL
+from .codes import J_BODY_A, J_BODY_B, J_NROW, J_ROW0, ROW_AX, ROW_BX, ROW_COORD, ROW_DIST, ROW_KIND, ROW_ROT, ROW_TRANS_LOCAL
+from .coordinate_rows import coordinate_row
+from .distance_rows import distance_row
 
 
 # --------------------------------------------------------------------------- constraints
 @njit(cache=True, _nrt=False)
-def joint_rows(j, gid, jint, jpos, jrot, rint, R, r, V, h, Jr, eta, v3, ident, zero3, zero6):
+def joint_rows(j, gid, jint, jpos, jrot, jpar, rint, R, r, V, h, Jr, eta, v3, ident, zero3, zero6):
     """Residual ``h``, Jacobian rows ``Jr`` (row, 12: 6 for side A, 6 for side B) and
     ``eta = -Jdot V`` of all rows of joint ``j``, written at the joint's row slots."""
     a = jint[j, J_BODY_A]
@@ -44,7 +46,9 @@ def joint_rows(j, gid, jint, jpos, jrot, rint, R, r, V, h, Jr, eta, v3, ident, z
             Jr[q, k] = 0.0
         kind = rint[q, ROW_KIND]
         rax = rint[q, ROW_AX]
-        if kind == ROW_ROT:
+        if kind == ROW_COORD:
+            coordinate_row(q, a, b, gA, gB, RA, RB, rax, rint[q, ROW_BX], jpar[j], pA, pB, bA, bB, u, RtA, h, Jr, eta)
+        elif kind == ROW_ROT:
             rbx = rint[q, ROW_BX]
             for k in range(3):
                 u[k] = rotA[k, rax]
@@ -75,19 +79,22 @@ def joint_rows(j, gid, jint, jpos, jrot, rint, R, r, V, h, Jr, eta, v3, ident, z
                 for k in range(3):
                     u[k] = rotA[k, rax]
                 body_axis(RA, VA, u, ax, axd, axb)
+            elif kind == ROW_DIST:
+                distance_row(q, jpar[j, 0], d, dd, bd, ax, h, eta)    # ax <- e, the row's world direction
             else:
                 for k in range(3):
                     ax[k] = 0.0
                     axd[k] = 0.0
                     axb[k] = 0.0
                 ax[rax] = 1.0
-            hv = 0.0
-            et = 0.0
-            for k in range(3):
-                hv += ax[k] * d[k]
-                et += axb[k] * d[k] + 2.0 * axd[k] * dd[k] + ax[k] * bd[k]
-            h[q] = hv
-            eta[q] = -et
+            if kind != ROW_DIST:
+                hv = 0.0
+                et = 0.0
+                for k in range(3):
+                    hv += ax[k] * d[k]
+                    et += axb[k] * d[k] + 2.0 * axd[k] * dd[k] + ax[k] * bd[k]
+                h[q] = hv
+                eta[q] = -et
             if a >= 0:
                 _matTvec(RA, ax, RtA)          # RA^T a
                 if kind == ROW_TRANS_LOCAL:
@@ -116,7 +123,7 @@ def joint_rows(j, gid, jint, jpos, jrot, rint, R, r, V, h, Jr, eta, v3, ident, z
 
 
 @njit(cache=True, inline="always", _nrt=False)
-def joints_rows(gid, jint, jpos, jrot, rint, R, r, V, h, Jr, eta, v3, ident, zero3, zero6):
+def joints_rows(gid, jint, jpos, jrot, jpar, rint, R, r, V, h, Jr, eta, v3, ident, zero3, zero6):
     """:func:`joint_rows` of every joint."""
     for j in range(jint.shape[0]):
-        joint_rows(j, gid, jint, jpos, jrot, rint, R, r, V, h, Jr, eta, v3, ident, zero3, zero6)
+        joint_rows(j, gid, jint, jpos, jrot, jpar, rint, R, r, V, h, Jr, eta, v3, ident, zero3, zero6)

@@ -6,6 +6,8 @@ from numba import njit
 
 from .bodies import _matvec, _side, add_point_force, add_world_torque, body_inertial_forces, body_point
 from .codes import L_BODY, L_FIXED, L_KIND
+from .coordinate_forces import coordinate_spring_forces
+from .linear_spring_forces import linear_spring_forces
 
 
 # --------------------------------------------------------------------------- forces
@@ -179,6 +181,11 @@ def compute_forces(sd, wk, t, R, r, V, Q):
     if sd.tint.shape[0] > 0:
         torsional_forces(sd.gid, sd.tint, sd.trot, sd.tpar, wk.tphi, R, r, V, Q, F, wk.m3, wk.ident, wk.zero3,
                          wk.zero6)
+    if sd.kint.shape[0] > 0:
+        coordinate_spring_forces(sd.gid, sd.kint, sd.kpar, R, r, V, Q, wk.v3, wk.ident, wk.zero3, wk.zero6)
+    if sd.xint.shape[0] > 0:
+        linear_spring_forces(sd.gid, sd.xint, sd.xpos, sd.xaxis, sd.xpar, R, r, V, Q, wk.v3, wk.ident, wk.zero3,
+                             wk.zero6)
     inertial_forces(sd.gid, sd.M, sd.mass, sd.com, R, V, Q)
 
 

@@ -10,7 +10,7 @@ from .index1 import schur_correct, schur_solve, subtract_rows_transposed
 
 
 # the arguments of project, by what they are (built by project_state from SceneData / Work)
-Joints = namedtuple("Joints", ["gid", "jint", "jpos", "jrot", "rint"])           # the joint tables
+Joints = namedtuple("Joints", ["gid", "jint", "jpos", "jrot", "jpar", "rint"])           # the joint tables
 Schur = namedtuple("Schur", ["Minv", "bw", "redundant", "pivotTol",              # J M^-1 J^T: data...
                              "W", "lam", "Sb", "Sd", "perm", "ytmp", "info", "tmp12"])   # ... and work
 Rows = namedtuple("Rows", ["h", "Jr", "eta"])                                    # the rows at a state
@@ -27,7 +27,7 @@ def project(level, joints, schur, rows, scratch, R, r, V):
     * velocities (``level`` >= 1): ``V <- V - M^-1 J^T (J M^-1 J^T)^-1 J V``.
 
     Returns a status code (STATUS_PROJECTION if max |h| stays above the tolerance)."""
-    gid, jint, jpos, jrot, rint = joints
+    gid, jint, jpos, jrot, jpar, rint = joints
     Minv, bw, redundant, pivotTol, W, lam, Sb, Sd, perm, ytmp, info, tmp12 = schur
     h, Jr, eta = rows
     Psi, v3, m3, ident, zero3, zero6 = scratch
@@ -41,7 +41,7 @@ def project(level, joints, schur, rows, scratch, R, r, V):
         tol = PROJ_TOL * scale
         hmax = 0.0
         for it in range(PROJ_MAX_ITER + 1):
-            joints_rows(gid, jint, jpos, jrot, rint, R, r, V, h, Jr, eta, v3, ident, zero3, zero6)
+            joints_rows(gid, jint, jpos, jrot, jpar, rint, R, r, V, h, Jr, eta, v3, ident, zero3, zero6)
             hmax = 0.0
             for q in range(rint.shape[0]):
                 if abs(h[q]) > hmax:
@@ -67,7 +67,7 @@ def project(level, joints, schur, rows, scratch, R, r, V):
         if hmax > PROJ_FAIL * tol:
             return STATUS_PROJECTION
     else:
-        joints_rows(gid, jint, jpos, jrot, rint, R, r, V, h, Jr, eta, v3, ident, zero3, zero6)
+        joints_rows(gid, jint, jpos, jrot, jpar, rint, R, r, V, h, Jr, eta, v3, ident, zero3, zero6)
     return schur_correct(gid, Minv, rint, bw, redundant, pivotTol, R, V, 0.0, eta, Jr, W, lam, Sb, Sd, perm, ytmp,
                          info, tmp12)
 
@@ -76,7 +76,7 @@ def project(level, joints, schur, rows, scratch, R, r, V):
 def project_state(sd, wk, level, R, r, V):
     if sd.nrows == 0:
         return STATUS_OK
-    return project(level, Joints(sd.gid, sd.jint, sd.jpos, sd.jrot, sd.rint),
+    return project(level, Joints(sd.gid, sd.jint, sd.jpos, sd.jrot, sd.jpar, sd.rint),
                    Schur(sd.Minv, sd.bandwidth, sd.redundant, sd.pivotTol, wk.W, wk.lam, wk.Sb, wk.Sd, wk.perm,
                          wk.ytmp, wk.info, wk.tmp12),
                    Rows(wk.h, wk.Jr, wk.eta), Scratch(wk.Psi, wk.v3, wk.m3, wk.ident, wk.zero3, wk.zero6), R, r, V)

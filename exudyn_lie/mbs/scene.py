@@ -70,6 +70,13 @@ class Body:
     omega0: np.ndarray           # initial angular velocity, body-fixed
     vel0: np.ndarray             # initial velocity of the body frame origin, world frame
     name: str = ""
+    # a point mass (group R3, groups/rn.py): the projector (3x3, world) onto the directions it
+    # moves in (I for NodePoint, diag(1, 1, 0) for NodePoint2D, e e^T for Node1D); None: rigid
+    freeDirections: np.ndarray = None
+
+    @property
+    def isPoint(self):
+        return self.freeDirections is not None
 
 
 @dataclass
@@ -84,6 +91,10 @@ class Joint:
     kind: str = "generic"
     name: str = ""
     worldTranslation: bool = False   # translation rows along world axes (Exudyn's spherical joint)
+    # kind 'coordinate' (Exudyn's ObjectConnectorCoordinate on position coordinates):
+    # (axis of A, axis of B, factor f, constant c), h = f p_B[axis B] - p_A[axis A] - c
+    coordinate: tuple = None
+    distance: float = None           # kind 'distance' (ObjectConnectorDistance): h = |p_B - p_A| - distance
 
 
 @dataclass
@@ -126,6 +137,38 @@ class CartesianSpringDamper:
     stiffness: np.ndarray
     damping: np.ndarray
     offset: np.ndarray
+    name: str = ""
+
+
+@dataclass
+class CoordinateSpringDamper:
+    """Exudyn's ``ObjectConnectorCoordinateSpringDamper`` on world position coordinates of the
+    body frame origins: ``f = k (p_B[axisB] - p_A[axisA] - offset) + d (rates)``, ``+f`` on A's
+    coordinate, ``-f`` on B's (mbs/coordinate_forces.py)."""
+    bodyA: int
+    axisA: int
+    bodyB: int
+    axisB: int
+    stiffness: float
+    damping: float
+    offset: float = 0.0
+    name: str = ""
+
+
+@dataclass
+class LinearSpringDamper:
+    """Exudyn's ``ObjectConnectorLinearSpringDamper``: along the world axis ``a = R_A axisA``,
+    ``f = k (a . (p_B - p_A) - offset) + d a . (pdot_B - pdot_A) + force``; ``+f a`` at the
+    point on A, ``-f a`` at the point on B (mbs/linear_spring_forces.py)."""
+    bodyA: int
+    posA: np.ndarray
+    axisA: np.ndarray            # unit axis in A's body frame (world if A is GROUND)
+    bodyB: int
+    posB: np.ndarray
+    stiffness: float
+    damping: float
+    offset: float = 0.0
+    force: float = 0.0
     name: str = ""
 
 
@@ -186,6 +229,8 @@ class Scene:
         self.torsionalSprings: List[TorsionalSpringDamper] = []
         self.cartesianSprings: List[CartesianSpringDamper] = []
         self.rigidSprings: List[RigidBodySpringDamper] = []
+        self.coordinateSprings: List[CoordinateSpringDamper] = []
+        self.linearSprings: List[LinearSpringDamper] = []
         self.loads: List[Load] = []
         self.pythonForces: List[PythonForce] = []
 
@@ -210,6 +255,21 @@ class Scene:
         self.bodies.append(Body(m, J, c, _rot(R0, f"{label}: R0"), _vec3(r0, f"{label}: r0"),
                                 _vec3(omega0, f"{label}: omega0"), _vec3(vel0, f"{label}: vel0"),
                                 label))
+        return idx
+
+    def AddPointMass(self, mass, r0=(0, 0, 0), vel0=(0, 0, 0), freeDirections=None, name: str = "") -> int:
+        """Add a point mass (no orientation, integrated on R^3); returns its body index.
+
+        ``freeDirections``: the 3x3 orthogonal projector onto the world directions the
+        point moves in (default: all three); forces along the others have no effect, as
+        for Exudyn's ``NodePoint2D`` (x, y) or a ``Node1D`` mass (one axis)."""
+        idx = len(self.bodies)
+        label = name or f"point{idx}"
+        m = _checked_point_mass(label, mass)
+        P = _projector(np.eye(3) if freeDirections is None else freeDirections, f"{label}: freeDirections")
+        v = _vec3(vel0, f"{label}: vel0")
+        self.bodies.append(Body(m, np.zeros((3, 3)), np.zeros(3), np.eye(3), _vec3(r0, f"{label}: r0"),
+                                np.zeros(3), P @ v, label, P))
         return idx
 
     def _check_body(self, b, what, allow_ground=True):
@@ -246,6 +306,46 @@ class Scene:
         self.joints.append(Joint(int(bodyA), int(bodyB), _vec3(posA, f"{label}: posA"),
                                  _rot(rotA, f"{label}: rotA"), _vec3(posB, f"{label}: posB"),
                                  _rot(rotB, f"{label}: rotB"), ax, kind, label, bool(worldTranslation)))
+        return idx
+
+    def AddCoordinateConstraint(self, bodyA, axisA, bodyB, axisB, factor=1.0, constant=0.0, name="") -> int:
+        """One row ``h = factor * p_B[axisB] - p_A[axisA] - constant`` on the world position
+        coordinates of the body frame origins (0 for GROUND); Exudyn's
+        ``ObjectConnectorCoordinate`` on node position coordinates (the bridge folds the
+        node reference coordinates into ``constant``)."""
+        idx = len(self.joints)
+        label = name or f"joint{idx}(coordinate)"
+        self._check_body(bodyA, label)
+        self._check_body(bodyB, label)
+        if bodyA == GROUND and bodyB == GROUND:
+            raise SceneError(f"{label}: both sides are on the ground")
+        for ax in (axisA, axisB):
+            if ax not in (0, 1, 2):
+                raise SceneError(f"{label}: position coordinate index must be 0, 1 or 2, got {ax}")
+        f = _finite(factor, f"{label}: factor")
+        c = _finite(constant, f"{label}: constant")
+        if bodyB == GROUND or f == 0.0:
+            if bodyA == GROUND:
+                raise SceneError(f"{label}: the row acts on no body (factor 0 and side A on the ground)")
+        self.joints.append(Joint(int(bodyA), int(bodyB), np.zeros(3), np.eye(3), np.zeros(3), np.eye(3),
+                                 (1, 0, 0, 0, 0, 0), "coordinate", label, False, (int(axisA), int(axisB), f, c)))
+        return idx
+
+    def AddDistanceConstraint(self, bodyA, posA, bodyB, posB, distance, name="") -> int:
+        """One row ``h = |p_B - p_A| - distance`` between body points (world points on
+        GROUND); Exudyn's ``ObjectConnectorDistance``."""
+        idx = len(self.joints)
+        label = name or f"joint{idx}(distance)"
+        self._check_body(bodyA, label)
+        self._check_body(bodyB, label)
+        if bodyA == bodyB:
+            raise SceneError(f"{label}: both sides are on the same {'ground' if bodyA == GROUND else 'body'}")
+        L0 = _finite(distance, f"{label}: distance")
+        if L0 <= 0.0:
+            raise SceneError(f"{label}: distance must be positive (the direction is undefined at 0), got {L0}")
+        self.joints.append(Joint(int(bodyA), int(bodyB), _vec3(posA, f"{label}: posA"), np.eye(3),
+                                 _vec3(posB, f"{label}: posB"), np.eye(3), (1, 0, 0, 0, 0, 0), "distance", label,
+                                 False, None, L0))
         return idx
 
     def _joint_at(self, kind, bodyA, bodyB, position, rotation, name):
@@ -344,6 +444,36 @@ class Scene:
             _rot(rotB, label), K.copy(), D.copy(), o.copy(), label))
         return len(self.rigidSprings) - 1
 
+    def AddCoordinateSpringDamper(self, bodyA, axisA, bodyB, axisB, stiffness, damping=0.0, offset=0.0,
+                                  name="") -> int:
+        """Spring-damper between two world position coordinates of body frame origins
+        (GROUND: 0): ``f = k (p_B[axisB] - p_A[axisA] - offset) + d (pdot_B[axisB] - pdot_A[axisA])``,
+        ``+f`` along ``e_axisA`` on A, ``-f`` along ``e_axisB`` on B."""
+        label = name or f"coordinateSpring{len(self.coordinateSprings)}"
+        self._check_body(bodyA, label)
+        self._check_body(bodyB, label)
+        for ax in (axisA, axisB):
+            if ax not in (0, 1, 2):
+                raise SceneError(f"{label}: position coordinate index must be 0, 1 or 2, got {ax}")
+        self.coordinateSprings.append(CoordinateSpringDamper(
+            int(bodyA), int(axisA), int(bodyB), int(axisB), _finite(stiffness, f"{label}: stiffness"),
+            _finite(damping, f"{label}: damping"), _finite(offset, f"{label}: offset"), label))
+        return len(self.coordinateSprings) - 1
+
+    def AddLinearSpringDamper(self, bodyA, posA, axisA, bodyB, posB, stiffness, damping=0.0, offset=0.0, force=0.0,
+                              name="") -> int:
+        """Spring-damper along the axis ``axisA`` fixed in body A (Exudyn's
+        ObjectConnectorLinearSpringDamper)."""
+        label = name or f"linearSpring{len(self.linearSprings)}"
+        self._check_body(bodyA, label)
+        self._check_body(bodyB, label)
+        ax = _vec3(axisA, f"{label}: axisA")
+        self.linearSprings.append(LinearSpringDamper(
+            int(bodyA), _vec3(posA, f"{label}: posA"), ax, int(bodyB), _vec3(posB, f"{label}: posB"),
+            _finite(stiffness, f"{label}: stiffness"), _finite(damping, f"{label}: damping"),
+            _finite(offset, f"{label}: offset"), _finite(force, f"{label}: force"), label))
+        return len(self.linearSprings) - 1
+
     def AddForce(self, body, force, position=(0, 0, 0), bodyFixed=False, name="") -> int:
         """Constant force at body point ``position`` (body coordinates); world frame unless
         ``bodyFixed``."""
@@ -369,6 +499,10 @@ class Scene:
     def validate(self):
         """Re-check all data (the item records are mutable): raises SceneError."""
         for b in self.bodies:
+            if b.isPoint:
+                b.mass = _checked_point_mass(b.name, b.mass)
+                b.freeDirections = _projector(b.freeDirections, f"{b.name}: freeDirections")
+                continue
             b.mass, b.inertia, b.com = _checked_mass_properties(b.name, b.mass, b.inertia, b.com)
             b.R0 = _rot(b.R0, f"{b.name}: R0")
             for what in ("r0", "omega0", "vel0"):
@@ -382,6 +516,9 @@ class Scene:
         for s in self.cartesianSprings:
             for what in ("stiffness", "damping", "offset"):
                 _vec3(getattr(s, what), f"{s.name}: {what}")
+        for s in self.coordinateSprings:
+            for what in ("stiffness", "damping", "offset"):
+                _finite(getattr(s, what), f"{s.name}: {what}")
         for l in self.loads:
             _vec3(l.vector, f"{l.name}: vector")
         if not np.all(np.isfinite(self.gravity)):
@@ -393,7 +530,8 @@ class Scene:
         return len(self.bodies)
 
     # the two-body force elements (connectors), each a list attribute: the one enumeration
-    CONNECTOR_LISTS = ("springs", "torsionalSprings", "cartesianSprings", "rigidSprings")
+    CONNECTOR_LISTS = ("springs", "torsionalSprings", "cartesianSprings", "rigidSprings", "coordinateSprings",
+                       "linearSprings")
 
     def connectors(self):
         """Every connector (two-body force element) of the scene, list by list."""
@@ -432,6 +570,24 @@ def _checked_mass_properties(label, mass, inertia, com):
                          f"definite (eigenvalues {ev}); give the inertia about the body "
                          f"frame origin, consistent with mass and com")
     return m, J, c
+
+
+def _checked_point_mass(label, mass):
+    try:
+        m = float(mass)
+    except (TypeError, ValueError):
+        raise SceneError(f"{label}: mass must be a number, got {mass!r}") from None
+    if not np.isfinite(m) or m <= 0:
+        raise SceneError(f"{label}: mass must be positive and finite, got {mass}")
+    return m
+
+
+def _projector(P, what):
+    P = np.asarray(P, float)
+    if P.shape != (3, 3) or not np.all(np.isfinite(P)) or np.abs(P @ P - P).max() > 1e-12 \
+            or np.abs(P - P.T).max() > 1e-14 or np.trace(P) < 0.5:
+        raise SceneError(f"{what} must be a nonzero orthogonal projector (3x3, P = P^T = P P)")
+    return P.copy()
 
 
 def _finite(x, what):

@@ -1,0 +1,44 @@
+"""The linear spring-damper along an axis of the marker-0 frame: Exudyn's
+``ObjectConnectorLinearSpringDamper`` (CObjectConnectorLinearSpringDamper):
+
+    a = A_0 axisMarker0 (world),  u = a . (p_1 - p_0),  v = a . (pdot_1 - pdot_0),
+    f = k (u - offset) + d (v - velocityOffset) + force,
+
+the force ``f a`` enters Exudyn's LHS through the *position* Jacobians of the two markers
+(``+`` on marker 1, ``-`` on marker 0): the applied forces are ``-f a`` at point 1 and
+``+f a`` at point 0, and the rotation of the axis ``a`` itself contributes no generalised
+force (as in Exudyn).  ``SceneData``: ``xint`` = [A, B], ``xpos`` = [posA, posB], ``xaxis`` =
+the axis in A's body frame (world if A is ground), ``xpar`` = [k, d, offset, force - d
+velocityOffset].
+"""
+from numba import njit
+
+from .bodies import _side, add_point_force, body_point
+
+
+@njit(cache=True, _nrt=False)
+def linear_spring_forces(gid, xint, xpos, xaxis, xpar, R, r, V, Q, v3, ident, zero3, zero6):
+    pA, pB, vA, vB, bA, bB, F, a = v3[0], v3[1], v3[2], v3[3], v3[4], v3[5], v3[6], v3[7]
+    for s in range(xint.shape[0]):
+        ia = xint[s, 0]
+        ib = xint[s, 1]
+        gA, RA, rA, VA = _side(gid, ia, R, r, V, ident, zero3, zero6)
+        gB, RB, rB, VB = _side(gid, ib, R, r, V, ident, zero3, zero6)
+        body_point(gA, RA, rA, VA, xpos[s, 0], pA, vA, bA)
+        body_point(gB, RB, rB, VB, xpos[s, 1], pB, vB, bB)
+        u = 0.0
+        v = 0.0
+        for k in range(3):
+            a[k] = RA[k, 0] * xaxis[s, 0] + RA[k, 1] * xaxis[s, 1] + RA[k, 2] * xaxis[s, 2]
+        for k in range(3):
+            u += a[k] * (pB[k] - pA[k])
+            v += a[k] * (vB[k] - vA[k])
+        f = xpar[s, 0] * (u - xpar[s, 2]) + xpar[s, 1] * v + xpar[s, 3]
+        if ia >= 0:
+            for k in range(3):
+                F[k] = f * a[k]
+            add_point_force(gA, RA, xpos[s, 0], F, Q[ia])
+        if ib >= 0:
+            for k in range(3):
+                F[k] = -f * a[k]
+            add_point_force(gB, RB, xpos[s, 1], F, Q[ib])

@@ -22,6 +22,8 @@ Sections (``--sections``, default all):
   (:mod:`exudyn_lie.apps.bench_mujoco`; skipped with one line without MuJoCo).
 * ``params``  parameters changed during a solve: serialRobotTest's PD controller (12 load
   vectors per step) against the same model without it (:mod:`.bench_params`).
+* ``userfunctions``  Python user functions: the heavy top with a zero user load and with a PD
+  torque, overhead per call against the compiled step (:mod:`.bench_userfunctions`).
 
 Every sweep runs through Exudyn's ``exudyn.processing.ParameterVariation`` with
 multiprocessing (:func:`exudyn_lie.apps.bench_runs.sweep`); every time is the
@@ -51,7 +53,7 @@ EXL_METHODS = ("RK4", "DOPRI5", "RK6")
 NATIVE_CONSTRAINED = ("GeneralizedAlpha", "GeneralizedAlpha-mN", "TrapezoidalIndex2")
 NATIVE_FREE = ("RK44", "RK67", "DOPRI5")
 EPS_LEVELS = (1e-4, 1e-5, 1e-6, 1e-7, 1e-8)
-SECTIONS = ("wp", "perstep", "scaling", "startup", "overhead", "groups", "mujoco", "params")
+SECTIONS = ("wp", "perstep", "scaling", "startup", "overhead", "groups", "mujoco", "params", "userfunctions")
 TARGET_RATIO = 10.0
 # absolute per-step targets (MK-RK4, SE3, median step, this 2-core machine)
 KERNEL_STEP_TARGETS_US = {"heavytop": 3.0, "doublependulum": 6.0}
@@ -641,6 +643,8 @@ def targets_lines(cfg, out):
           + ", ".join(f"{us:.3g} us at \\|xi\\| = {float(a):g}" for a, us in gm.items()) + " | - |")
     from .bench_mujoco import target_lines as mujoco_target_lines
     L += mujoco_target_lines(out.get("mujoco"))
+    from .bench_userfunctions import target_lines as uf_target_lines
+    L += uf_target_lines(out.get("userfunctions"))
     A(f"| parallel sweeps through exudyn.processing.ParameterVariation | "
       f"`exudyn_lie.apps.bench_runs.sweep`, {cfg.jobs} processes | yes |")
     return L
@@ -922,6 +926,9 @@ def write_report(cfg, out, cmdline):
     A("")
     A(PROFILE_NOTES.format(extra=out.get("profileExtra", "")))
     A("")
+    if out.get("userfunctions"):
+        from .bench_userfunctions import report_lines as uf_report_lines
+        L += uf_report_lines(out["userfunctions"])
     if out.get("mujoco"):
         from .bench_mujoco import report_lines as mujoco_report_lines
         L += mujoco_report_lines(out["mujoco"], out["mujoco"].get("figure"))
@@ -1034,6 +1041,9 @@ def main(argv=None):
         from .bench_params import parameter_updates
         log("parameters changed during a solve (serialRobotTest PD controller)")
         out["params"] = parameter_updates(T=0.1 if cfg.quick else 0.5, repeats=3 if cfg.quick else 7)
+    if "userfunctions" in cfg.sections:
+        from . import bench_userfunctions
+        out["userfunctions"] = bench_userfunctions.run_section(cfg, log)
     out["env"]["loadEnd"] = loadavg()
     out["profileExtra"] = PROFILE_EXTRA
     os.makedirs(cfg.out, exist_ok=True)

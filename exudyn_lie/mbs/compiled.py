@@ -36,7 +36,9 @@ Work = namedtuple("Work", [
     "Jr", "W", "eta", "h", "lam", "Sb", "Sd", "perm", "ytmp", "info",
     "tmp6", "tmp12", "v3", "m3", "ident", "zero3", "zero6",
     "tphi", "watchBody", "watchEntry", "watchMax",
-    "ext",                            # [token of the external rhs evaluator (mbs.external), 0: none]
+    "ext",                            # [token of the external rhs evaluator (mbs.external), 0: none;
+                                      #  1 if the forces it returned were not finite]
+    "Vw",                             # (nb, 6) (omega body, world rdot) at the stage, for Python forces
 ])
 N_SCRATCH3 = 20
 
@@ -242,5 +244,5 @@ def make_work(sd, nstages):
         tmp6=np.zeros(6), tmp12=np.zeros(12), v3=np.zeros((N_SCRATCH3, 3)), m3=np.zeros((2, 3, 3)),
         ident=np.eye(3), zero3=np.zeros(3), zero6=np.zeros(6), tphi=np.zeros(sd.tint.shape[0]),
         watchBody=np.zeros(0, np.int64), watchEntry=np.zeros((0, 2), np.int64), watchMax=np.zeros(0),
-        ext=np.zeros(1, np.int64),
+        ext=np.zeros(2, np.int64), Vw=np.zeros((nb, 6) if sd.hasQext else (0, 6)),
     )

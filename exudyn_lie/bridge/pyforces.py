@@ -1,6 +1,7 @@
 """Exudyn items evaluated in Python (``Scene.AddPythonForce``): connectors with Python
-user functions, the RigidBodySpringDamper (not compiled by the kernel yet) and loads
-with a ``loadVectorUserFunction``.
+user functions (the RigidBodySpringDamper with a ``springForceTorqueUserFunction``; without
+one it is compiled, ``mbs/forces.rigid_spring_forces``) and loads with a
+``loadVectorUserFunction``.
 
 Every item implements ``add(t, st, F, T)``: it adds world forces ``F[b]`` (acting at the
 frame origin of body ``b``) and world torques ``T[b]`` for the body states ``st``

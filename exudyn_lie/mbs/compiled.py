@@ -25,6 +25,8 @@ SceneData = namedtuple("SceneData", [
     "sint", "spos", "spar",           # springs: [A, B]; [posA, posB]; [k, d, L0, f0]
     "cint", "cpos", "cpar",           # Cartesian springs: [A, B]; [posA, posB]; [k(3), d(3), offset(3)]
     "tint", "trot", "tpar",           # torsional springs: [A, B]; [rotA, rotB]; [k, d, offset, torque]
+    "bint", "bpos", "brot", "bpar",   # rigid-body springs: [A, B, intrinsic]; [posA, posB]; [rotA, rotB];
+                                      #   rows K (6), D (6), offset
     "jint", "jpos", "jrot",           # joints: [A, B, first row, rows]; [posA, posB]; [rotA, rotB]
     "rint",                           # constraint rows: [kind, axis of A, axis of B, body A, body B]
     "nrows", "bandwidth", "redundant", "pivotTol",
@@ -156,9 +158,7 @@ def compile_scene(scene: Scene, groups):
     S = scene.springs
     C = scene.cartesianSprings
     T = scene.torsionalSprings
-    if scene.rigidSprings:
-        raise SceneError("RigidBodySpringDamper is not supported by the compiled kernel yet "
-                         f"({scene.rigidSprings[0].name}); use a PythonForce")
+    B = scene.rigidSprings
 
     # joints: order by reverse Cuthill-McKee on the joint graph (joints sharing a body are
     # adjacent) so that S = J M^-1 J^T is banded with a small bandwidth
@@ -218,6 +218,10 @@ def compile_scene(scene: Scene, groups):
         tint=arr([[s.bodyA, s.bodyB] for s in T], (-1, 2), np.int64),
         trot=arr([[s.rotA, s.rotB] for s in T], (-1, 2, 3, 3)),
         tpar=arr([[s.stiffness, s.damping, s.offset, s.torque] for s in T], (-1, 4)),
+        bint=arr([[s.bodyA, s.bodyB, int(s.intrinsic)] for s in B], (-1, 3), np.int64),
+        bpos=arr([[s.posA, s.posB] for s in B], (-1, 2, 3)),
+        brot=arr([[s.rotA, s.rotB] for s in B], (-1, 2, 3, 3)),
+        bpar=arr([np.vstack([s.stiffness, s.damping, s.offset[None]]) for s in B], (-1, 13, 6)),
         jint=arr([[j.bodyA, j.bodyB, jrow0[k], jnrow[k]] for k, j in enumerate(J)], (-1, 4), np.int64),
         jpos=arr([[j.posA, j.posB] for j in J], (-1, 2, 3)),
         jrot=arr([[j.rotA, j.rotB] for j in J], (-1, 2, 3, 3)),
@@ -241,7 +245,7 @@ def make_work(sd, nstages):
         Jr=np.zeros((m, 12)), W=np.zeros((m, 12)), eta=np.zeros(m), h=np.zeros(m), lam=np.zeros(m),
         Sb=np.zeros((m, sd.bandwidth + 1)), Sd=np.zeros((m, m)) if sd.redundant else np.zeros((0, 0)),
         perm=np.zeros(m, np.int64), ytmp=np.zeros(m), info=np.zeros(4, np.int64),
-        tmp6=np.zeros(6), tmp12=np.zeros(12), v3=np.zeros((N_SCRATCH3, 3)), m3=np.zeros((2, 3, 3)),
+        tmp6=np.zeros(6), tmp12=np.zeros(12), v3=np.zeros((N_SCRATCH3, 3)), m3=np.zeros((4, 3, 3)),
         ident=np.eye(3), zero3=np.zeros(3), zero6=np.zeros(6), tphi=np.zeros(sd.tint.shape[0]),
         watchBody=np.zeros(0, np.int64), watchEntry=np.zeros((0, 2), np.int64), watchMax=np.zeros(0),
         ext=np.zeros(2, np.int64), Vw=np.zeros((nb, 6) if sd.hasQext else (0, 6)),

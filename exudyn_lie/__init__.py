@@ -20,25 +20,27 @@ subclass), :class:`SimulationError` (a run failed) with :class:`ConstraintError`
 """
 __version__ = "0.1.0"
 
-from . import _numba_cache  # noqa: E402,F401  (first: the cache key of every compiled function)
+# Nothing is imported here: ``import exudyn_lie`` costs no numpy, numba or Exudyn (issue 19,
+# start-up).  The names below load their module on first use; every subpackage with
+# compiled code imports ``_numba_cache`` first (the cache key of every compiled function).
+_LAZY = {
+    "get_method": "integrators.tableau", "method_names": "integrators.tableau",
+    **{n: "mbs" for n in ("GROUND", "ConstraintError", "Scene", "SceneError", "SimulationError", "Simulator",
+                          "StepSizeError")},
+    **{n: "bridge" for n in ("SolveDynamic", "LieGroupSolver", "SceneFromExudyn", "ExudynScene", "BridgeError")},
+}
 
-from .integrators.tableau import get_method, method_names  # noqa: E402
-from .mbs import (GROUND, ConstraintError, Scene, SceneError, SimulationError,  # noqa: E402
-                  Simulator, StepSizeError)
-
-
-# the Exudyn bridge imports exudyn; it is loaded on first use of one of these names
-_BRIDGE_NAMES = ("SolveDynamic", "LieGroupSolver", "SceneFromExudyn", "ExudynScene", "BridgeError")
-
-__all__ = ["__version__", "get_method", "method_names", "GROUND", "Scene", "Simulator", "SceneError",
-           "SimulationError", "ConstraintError", "StepSizeError", *_BRIDGE_NAMES]
+__all__ = ["__version__", *_LAZY]
 
 
 def __getattr__(name):
-    if name in _BRIDGE_NAMES:
-        from . import bridge
-        return getattr(bridge, name)
-    raise AttributeError(f"module 'exudyn_lie' has no attribute {name!r}")
+    mod = _LAZY.get(name)
+    if mod is None:
+        raise AttributeError(f"module 'exudyn_lie' has no attribute {name!r}")
+    from importlib import import_module
+    value = getattr(import_module(f"{__name__}.{mod}"), name)
+    globals()[name] = value
+    return value
 
 
 def __dir__():

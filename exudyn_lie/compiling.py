@@ -5,15 +5,53 @@ only the first run on a machine (or after the sources changed) compiles.  A cold
 recognised by numba's own cache index of the kernel's time loop: missing or stale (numba
 compares the source file's time stamp and size) and not compiled in this process yet.
 """
+import atexit
 import contextlib
+import os
 import sys
 
-#: Seconds a cold start compiles: 17 s (paper, kernel path) to 36 s (SolveDynamic on a busy machine) on a
-#: 2-core Intel Xeon, measured with
-#: an empty cache (README, set-up).
+#: Seconds a cold start compiles when this machine has not compiled the solver before: 17 s
+#: (paper, kernel path) to 36 s (SolveDynamic on a busy machine) on a 2-core Intel Xeon,
+#: measured with an empty cache (README, set-up).  After one cold start the notice gives
+#: the compile time measured then on this machine (:data:`MEASURED_FILE`).
 COLD_COMPILE_SECONDS = 30
+#: numba's compile seconds of the last cold start on this machine (beside numba's cache)
+MEASURED_FILE = os.path.join(os.path.dirname(os.path.abspath(__file__)), "__pycache__", "cold_compile_seconds.txt")
 
 _announced = False
+
+
+def estimated_seconds():
+    """The compile time the notice announces: the last cold start's, measured on this
+    machine, else :data:`COLD_COMPILE_SECONDS`."""
+    try:
+        with open(MEASURED_FILE) as f:
+            v = float(f.read().split()[0])
+        if 0.0 < v < 3600.0:
+            return int(round(v))
+    except (OSError, ValueError, IndexError):
+        pass
+    return COLD_COMPILE_SECONDS
+
+
+def _measure_this_cold_start():
+    """Sum numba's compile time for the rest of the process and store it at exit (the
+    next cold start on this machine, e.g. after an update, announces it)."""
+    from numba.core import event
+    tl = event.TimingListener()
+    event.register("numba:compile", tl)
+
+    def save():
+        if not tl.done or tl.duration < 1.0:
+            return
+        try:
+            os.makedirs(os.path.dirname(MEASURED_FILE), exist_ok=True)
+            with open(MEASURED_FILE, "w") as f:
+                f.write(f"{tl.duration:.1f}\n")
+        except OSError:
+            pass
+    atexit.register(save)
+    return tl
 
 
 def cache_is_cold(disp):
@@ -34,8 +72,9 @@ def announce_cold_compile(disp, stream=None):
     if _announced or not cache_is_cold(disp):
         return False
     _announced = True
-    print(f"exudyn_lie: compiling the solver for this machine, first run only, about {COLD_COMPILE_SECONDS} s",
+    print(f"exudyn_lie: compiling the solver for this machine, first run only, about {estimated_seconds()} s",
           file=sys.stderr if stream is None else stream, flush=True)
+    _measure_this_cold_start()
     return True
 
 

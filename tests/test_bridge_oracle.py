@@ -437,3 +437,20 @@ def test_partial_spherical_between_bodies_is_world_axis_rows(axes, group, rng):
         np.testing.assert_allclose(ge[ae[locked]], h, rtol=0, atol=1e-13)
         np.testing.assert_allclose(Ce[ae[locked]] @ pk["P"], J, rtol=0, atol=1e-12 * scale)
         assert np.all(Ce[ae[free]] == 0)                  # the free axes' rows only hold lambda_i = 0
+
+
+@pytest.mark.parametrize("item", ["rbsd_intrinsic", "rbsd_taitbryan", "rbsd_ground_intrinsic",
+                                  "rbsd_userfunction_intrinsic"])
+def test_rigid_body_spring_damper_compiled_unless_user_function(item, rng):
+    """Without a user function the RigidBodySpringDamper is a compiled scene item (no Python
+    force; the oracle comparisons above then check the compiled law), with one a Python item;
+    both agree with Exudyn at random states, also with the tilted joint frame about y."""
+    from exudyn_lie.bridge import SceneFromExudyn
+    mbs, g, b0, b1 = two_bodies(("RotVecLG", "RotVecLG"))
+    ITEMS[item](mbs, g, b0, b1)
+    mbs.Assemble()
+    sc = SceneFromExudyn(mbs)
+    uf = "userfunction" in item
+    assert len(sc.rigidSprings) == (0 if uf else 1)
+    assert bool(sc.pythonForces) == uf
+    _check(mbs, rng, "SE3", ntrials=4)

@@ -169,6 +169,28 @@ def switched_spring():
     return mbs, out
 
 
+def switched_rigid_spring():
+    """A RigidBodySpringDamper (compiled) whose stiffness and offset a post-step function
+    changes, and which it switches off and on."""
+    mbs = exu.SystemContainer().AddSystem()
+    g, b, j = pendulum(mbs, exu.NodeType.RotationEulerParameters)
+    rs = mbs.CreateRigidBodySpringDamper(itemNumbers=[g, b], localPosition0=[0.3, 0.2, 0], localPosition1=[0.2, 0, 0],
+                                         stiffness=np.diag([3000, 3000, 3000, 20, 20, 20.0]),
+                                         damping=np.diag([5, 5, 5, 0.1, 0.1, 0.1]), useIntrinsicFormulation=True)
+
+    def post_step(mbs, t):
+        ms = int(round(sampled_after(t) / TS))
+        mbs.SetObjectParameter(rs, "activeConnector", not (30 <= ms < 70))
+        mbs.SetObjectParameter(rs, "stiffness", np.diag([3000 + 2000 * (ms >= 50), 3000, 3000, 20, 20, 20.0]))
+        mbs.SetObjectParameter(rs, "offset", [0, 0.05 * (ms >= 100), 0, 0, 0, 0.1 * (ms >= 120)])
+        return True
+
+    mbs.SetPostStepUserFunction(post_step)
+    out = {"pos": mbs.AddSensor(SensorBody(bodyNumber=b, storeInternal=True, outputVariableType=O.Position,
+                                           localPosition=[0.2, 0, 0]))}
+    return mbs, out
+
+
 def moving_ground():
     """movingGroundRobotTest: ground markers that move (a MarkerBodyRigid's localPosition on
     an ObjectGround, a ground node's referenceCoordinates and an ObjectGround's
@@ -291,6 +313,11 @@ def test_torsional_spring_offset_moved_every_step_matches_native():
 
 def test_spring_switched_off_and_on_matches_native():
     mbs, ref, got = _compare(switched_spring, 0.2, 1e-4, 1e-5, 1e-6)
+
+
+def test_compiled_rigid_body_spring_changed_and_switched_matches_native():
+    mbs, ref, got = _compare(switched_rigid_spring, 0.2, 1e-4, 1e-5, 1e-6)
+    assert mbs.sys["lieGroupSolver"]._params.updates > 0
 
 
 def test_moving_ground_markers_match_native():
@@ -690,13 +717,20 @@ def test_re_reading_unchanged_items_reproduces_the_compiled_rows():
     mbs.SetMarkerParameter(mRot, "localHT", exu.rigidBodyUtilities.HomogeneousTransformation(
         exu.utilities.RotationMatrixX(0.7), [0.1, 0, 0]))
     mbs.AddLoad(LoadForceVector(markerNumber=mRot, loadVector=[0, 1, 0], bodyFixed=True))
+    for intrinsic in (False, True):
+        mbs.CreateRigidBodySpringDamper(itemNumbers=[b[0], b[1]], localPosition0=[0.3, 0, 0.1],
+                                        localPosition1=[-0.2, 0.1, 0], stiffness=np.diag([1, 2, 3, 4, 5, 6.0]),
+                                        damping=0.1 * np.ones((6, 6)), offset=[0.1, 0, 0, 0, 0.2, 0],
+                                        rotationMatrixJoint=exu.utilities.RotationMatrixY(0.4),
+                                        useIntrinsicFormulation=intrinsic)
     mbs.Assemble()
     n = mbs.GetObject(tsd)["nodeNumber"]
     mbs.SetNodeParameter(n, "initialCoordinates", [0.4 + 4 * np.pi])          # turned twice
     mbs.Assemble()
     solver = exl.LieGroupSolver(mbs)
     sd = solver.sim.sd
-    names = ("lint", "lvec", "sint", "spos", "spar", "cint", "cpos", "cpar", "tint", "trot", "tpar")
+    names = ("lint", "lvec", "sint", "spos", "spar", "cint", "cpos", "cpar", "tint", "trot", "tpar", "bint", "bpos",
+             "brot", "bpar")
     before = {k: getattr(sd, k).copy() for k in names}
     assert solver.scene.torsionData[0].turns0 == 2
     watch = ParameterWatch(solver)
@@ -706,4 +740,4 @@ def test_re_reading_unchanged_items_reproduces_the_compiled_rows():
     watch._rebuild(items, 0.0)
     for k in names:
         np.testing.assert_array_equal(getattr(sd, k), before[k], err_msg=k)
-    assert all(len(before[k]) for k in ("lvec", "spar", "cpar", "tpar"))
+    assert all(len(before[k]) for k in ("lvec", "spar", "cpar", "tpar", "bpar"))

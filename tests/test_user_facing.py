@@ -124,7 +124,7 @@ def test_cold_compile_is_announced_once_and_timed(tmp_path, monkeypatch):
     buf = io.StringIO()
     assert compiling.announce_cold_compile(f, stream=buf)
     assert buf.getvalue() == (f"exudyn_lie: compiling the solver for this machine, first run only, about "
-                              f"{compiling.COLD_COMPILE_SECONDS} s\n")
+                              f"{compiling.estimated_seconds()} s\n")
     assert not compiling.announce_cold_compile(f, stream=buf)          # once per process
     with compiling.compile_timer() as ct:
         assert f(2.0) == 4.0
@@ -135,6 +135,18 @@ def test_cold_compile_is_announced_once_and_timed(tmp_path, monkeypatch):
     with compiling.compile_timer() as ct:
         g(1.0)
     assert ct.seconds == 0.0                                           # loaded from the cache
+
+
+def test_cold_compile_estimate_is_the_last_measured_one(tmp_path, monkeypatch):
+    """The notice's "about N s": the default before any cold start on the machine, then the
+    compile seconds measured at the last one."""
+    from exudyn_lie import compiling
+    monkeypatch.setattr(compiling, "MEASURED_FILE", str(tmp_path / "cold_compile_seconds.txt"))
+    assert compiling.estimated_seconds() == compiling.COLD_COMPILE_SECONDS
+    (tmp_path / "cold_compile_seconds.txt").write_text("41.6\n")
+    assert compiling.estimated_seconds() == 42
+    (tmp_path / "cold_compile_seconds.txt").write_text("garbage\n")
+    assert compiling.estimated_seconds() == compiling.COLD_COMPILE_SECONDS
 
 
 def test_kernel_warm_in_the_test_session():

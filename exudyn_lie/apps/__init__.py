@@ -13,6 +13,7 @@ matplotlib.  Layers (each imports only the ones above it): the library
 * :mod:`.stress` - the stress suite: :mod:`.stress_cases`, :mod:`.stress_models`, :mod:`.stress_theory`;
 * :mod:`.generated` - the README's generated blocks; :func:`versions` the versions they name.
 """
+from .. import _numba_cache  # noqa: F401  (first: the cache key of every compiled function)
 
 
 def versions():

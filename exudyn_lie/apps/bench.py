@@ -23,6 +23,10 @@ Sections (``--sections``, default all):
 * ``params``  parameters changed during a solve: serialRobotTest's PD controller (12 load
   vectors per step) against the same model without it (:mod:`.bench_params`).
 * ``items``   a point mass against a rigid body per step (:mod:`.bench_items`).
+* ``userfunctions``  Python user functions: the heavy top with a zero user load and with a PD
+  torque, overhead per call against the compiled step (:mod:`.bench_userfunctions`).
+* ``topology``  chain, star, binary tree and ladder of N bodies: cost per step against N,
+  fitted exponents (:mod:`.bench_topology`).
 
 Every sweep runs through Exudyn's ``exudyn.processing.ParameterVariation`` with
 multiprocessing (:func:`exudyn_lie.apps.bench_runs.sweep`); every time is the
@@ -52,7 +56,8 @@ EXL_METHODS = ("RK4", "DOPRI5", "RK6")
 NATIVE_CONSTRAINED = ("GeneralizedAlpha", "GeneralizedAlpha-mN", "TrapezoidalIndex2")
 NATIVE_FREE = ("RK44", "RK67", "DOPRI5")
 EPS_LEVELS = (1e-4, 1e-5, 1e-6, 1e-7, 1e-8)
-SECTIONS = ("wp", "perstep", "scaling", "startup", "overhead", "groups", "mujoco", "params", "items")
+SECTIONS = ("wp", "perstep", "scaling", "startup", "overhead", "groups", "mujoco", "params", "items",
+            "userfunctions", "topology")
 TARGET_RATIO = 10.0
 # absolute per-step targets (MK-RK4, SE3, median step, this 2-core machine)
 KERNEL_STEP_TARGETS_US = {"heavytop": 3.0, "doublependulum": 6.0}
@@ -642,6 +647,10 @@ def targets_lines(cfg, out):
           + ", ".join(f"{us:.3g} us at \\|xi\\| = {float(a):g}" for a, us in gm.items()) + " | - |")
     from .bench_mujoco import target_lines as mujoco_target_lines
     L += mujoco_target_lines(out.get("mujoco"))
+    from .bench_userfunctions import target_lines as uf_target_lines
+    L += uf_target_lines(out.get("userfunctions"))
+    from .bench_topology import target_lines as topo_target_lines
+    L += topo_target_lines(out.get("topology"))
     A(f"| parallel sweeps through exudyn.processing.ParameterVariation | "
       f"`exudyn_lie.apps.bench_runs.sweep`, {cfg.jobs} processes | yes |")
     return L
@@ -925,6 +934,12 @@ def write_report(cfg, out, cmdline):
     A("")
     A(PROFILE_NOTES.format(extra=out.get("profileExtra", "")))
     A("")
+    if out.get("userfunctions"):
+        from .bench_userfunctions import report_lines as uf_report_lines
+        L += uf_report_lines(out["userfunctions"])
+    if out.get("topology"):
+        from .bench_topology import report_lines as topo_report_lines
+        L += topo_report_lines(out["topology"])
     if out.get("mujoco"):
         from .bench_mujoco import report_lines as mujoco_report_lines
         L += mujoco_report_lines(out["mujoco"], out["mujoco"].get("figure"))
@@ -1041,6 +1056,12 @@ def main(argv=None):
         from .bench_items import per_step as items_per_step
         log("point masses against rigid bodies")
         out["items"] = items_per_step(m=100 if cfg.quick else 200, repeats=3 if cfg.quick else 7)
+    if "userfunctions" in cfg.sections:
+        from . import bench_userfunctions
+        out["userfunctions"] = bench_userfunctions.run_section(cfg, log)
+    if "topology" in cfg.sections:
+        from . import bench_topology
+        out["topology"] = bench_topology.run_section(cfg, log)
     out["env"]["loadEnd"] = loadavg()
     out["profileExtra"] = PROFILE_EXTRA
     os.makedirs(cfg.out, exist_ok=True)

@@ -11,6 +11,7 @@ True
 * :func:`SceneFromExudyn` - the model as an exudyn_lie :class:`~exudyn_lie.mbs.Scene`;
 * :data:`NODE_KINDS` - the node registry (RotVecLG, EP, Rxyz).
 """
+from .. import _numba_cache  # noqa: F401  (first: the cache key of every compiled function)
 from .nodes import NODE_KINDS, EPNode, NodeKind, RotVecLGNode, RxyzNode
 from .reader import BridgeError, ExudynScene, SceneFromExudyn
 from .solver import LieGroupSolver, SolveDynamic

@@ -129,7 +129,7 @@ FIELDS = {
         "springTorqueUserFunction": _UF_LIVE, "markerNumbers": (FIXED, "the connected bodies"),
         "nodeNumber": (FIXED, "the data node of the continuous angle")},
     ("object", "ConnectorRigidBodySpringDamper"): {
-        **{k: (LIVE, "force law (a Python item)") for k in ("stiffness", "damping", "offset", "rotationMarker0",
+        **{k: (LIVE, "force law") for k in ("stiffness", "damping", "offset", "rotationMarker0",
                                                             "rotationMarker1", "useIntrinsicFormulation",
                                                             "springForceTorqueUserFunction")},
         "activeConnector": (LIVE, "switches the force off and on"),
@@ -478,7 +478,7 @@ class ParameterWatch:
             self._python_connector(o, d, k, active, t)
             return
         m0, m1 = (int(m) for m in d["markerNumbers"])
-        rigid = t_ == "ConnectorTorsionalSpringDamper"
+        rigid = t_ in ("ConnectorTorsionalSpringDamper", "ConnectorRigidBodySpringDamper")
         A = rd.marker(m0, what, need_rotation=rigid)
         B = rd.marker(m1, what, need_rotation=rigid)
         sd = self.solver.sim.sd
@@ -500,6 +500,15 @@ class ParameterWatch:
             sd.trot[k, 1] = _orthonormal(B.rot @ np.asarray(d.get("rotationMarker1", np.eye(3)), float))
             sd.tpar[k] = (on * f["stiffness"], on * f["damping"], f["offset"] - 2.0 * math.pi * turns0,
                           on * (f["torque"] - f["damping"] * f.get("velocityOffset", 0.0)))
+        elif table == "rigid":
+            # compile_scene: bint [A, B, intrinsic]; bpar rows K (6), D (6), offset
+            sd.bpos[k, 0], sd.bpos[k, 1] = A.pos, B.pos
+            sd.brot[k, 0] = _orthonormal(A.rot @ np.asarray(d.get("rotationMarker0", np.eye(3)), float))
+            sd.brot[k, 1] = _orthonormal(B.rot @ np.asarray(d.get("rotationMarker1", np.eye(3)), float))
+            sd.bint[k, 2] = int(bool(d.get("useIntrinsicFormulation", False)))
+            sd.bpar[k, :6] = on * np.asarray(f["stiffness"], float).reshape(6, 6)
+            sd.bpar[k, 6:12] = on * np.asarray(f["damping"], float).reshape(6, 6)
+            sd.bpar[k, 12] = np.asarray(f["offset"], float).reshape(6)
 
     def _python_connector(self, o, d, k, active, t):
         """A connector evaluated in Python: rebuilt by the reader from its new dictionary,

@@ -1,6 +1,7 @@
 """Exudyn items evaluated in Python (``Scene.AddPythonForce``): connectors with Python
-user functions, the RigidBodySpringDamper (not compiled by the kernel yet) and loads
-with a ``loadVectorUserFunction``.
+user functions (the RigidBodySpringDamper with a ``springForceTorqueUserFunction``; without
+one it is compiled, ``mbs/forces.rigid_spring_forces``) and loads with a
+``loadVectorUserFunction``.
 
 Every item implements ``add(t, st, F, T)``: it adds world forces ``F[b]`` (acting at the
 frame origin of body ``b``) and world torques ``T[b]`` for the body states ``st``
@@ -258,35 +259,80 @@ class LoadUF(PyItem):
         self.label = f"load {l} Load{loadType}"
 
     def add(self, t, st, F, T):
-        v = np.asarray(_call(self.label, self.uf, self.mbs, t, self.lv), float).reshape(3)
+        # scalar arithmetic: this runs once per stage, numpy's per-call cost on 3-vectors
+        # would be most of it
+        try:
+            v = self.uf(self.mbs, t, self.lv)
+        except Exception as e:
+            raise type(e)(f"{self.label}: user function raised: {e}") from e
+        try:
+            v0, v1, v2 = float(v[0]), float(v[1]), float(v[2])
+            if len(v) != 3:
+                raise ValueError
+        except (TypeError, ValueError, IndexError):
+            v0, v1, v2 = np.asarray(v, float).reshape(3)
         b = self.mf.body
-        R = st.R[b]
         if self.loadType == "MassProportional":
-            f = self.mass * v
-            F[b] += f
-            T[b] += _cross(R @ self.com, f)
+            m = self.mass
+            f0, f1, f2 = m * v0, m * v1, m * v2
+            _add_force(st.R[b], self.com, b, f0, f1, f2, F, T)
             return
         if self.bodyFixed:
-            v = R @ (self.mf.rotation() @ v)
+            v0, v1, v2 = self.mf.rotation() @ np.array((v0, v1, v2))     # R (A v), Exudyn's order
+            R = st.R[b]
+            v0, v1, v2 = (R[0, 0] * v0 + R[0, 1] * v1 + R[0, 2] * v2, R[1, 0] * v0 + R[1, 1] * v1 + R[1, 2] * v2,
+                          R[2, 0] * v0 + R[2, 1] * v1 + R[2, 2] * v2)
         if self.loadType == "ForceVector":
-            F[b] += v
-            T[b] += _cross(R @ self.mf.pos, v)
+            _add_force(st.R[b], self.mf.pos, b, v0, v1, v2, F, T)
         else:
-            T[b] += v
+            T[b, 0] += v0
+            T[b, 1] += v1
+            T[b, 2] += v2
 
 
-def combined(items, nb):
-    """One ``Scene.AddPythonForce`` callback evaluating all items."""
-    def fn(t, st):
-        F = np.zeros((nb, 3))
-        T = np.zeros((nb, 3))
-        for it in items:
+def _add_force(R, s, b, f0, f1, f2, F, T):
+    """Add the world force f at the body point s (body coordinates) of body b: ``F[b] += f``,
+    ``T[b] += (R s) x f`` (scalar arithmetic)."""
+    F[b, 0] += f0
+    F[b, 1] += f1
+    F[b, 2] += f2
+    s0, s1, s2 = float(s[0]), float(s[1]), float(s[2])
+    if s0 == 0.0 and s1 == 0.0 and s2 == 0.0:
+        return
+    a0 = R[0, 0] * s0 + R[0, 1] * s1 + R[0, 2] * s2
+    a1 = R[1, 0] * s0 + R[1, 1] * s1 + R[1, 2] * s2
+    a2 = R[2, 0] * s0 + R[2, 1] * s1 + R[2, 2] * s2
+    T[b, 0] += a1 * f2 - a2 * f1
+    T[b, 1] += a2 * f0 - a0 * f2
+    T[b, 2] += a0 * f1 - a1 * f0
+
+
+class Combined:
+    """One ``Scene.AddPythonForce`` callback evaluating all items: ``fn(t, st) -> (F, T)``,
+    and ``add_into(t, st, F, T)``, which the simulator's Python-force seam calls to add
+    into its own arrays (no allocation per stage)."""
+
+    def __init__(self, items, nb):
+        self.items = items
+        self.nb = nb
+
+    def add_into(self, t, st, F, T):
+        for it in self.items:
             if it.active:
                 it.add(t, st, F, T)
             else:
                 it.idle(st)
+
+    def __call__(self, t, st):
+        F = np.zeros((self.nb, 3))
+        T = np.zeros((self.nb, 3))
+        self.add_into(t, st, F, T)
         return F, T
-    return fn
+
+
+def combined(items, nb):
+    """One ``Scene.AddPythonForce`` callback evaluating all items."""
+    return Combined(items, nb)
 
 
 def coordinate_state(cm, st):

@@ -17,12 +17,12 @@ Mapping (Exudyn -> scene):
 * ``ObjectJointSpherical / RevoluteZ / PrismaticX / Generic`` -> ``Scene.AddJoint`` with the
   joint frame ``marker localHT rotation @ rotationMarker`` (Exudyn's equations = the
   kernel's ``ObjectJointGeneric`` rows, row by row, see :func:`joint_ae_map`);
-* ``ObjectConnectorSpringDamper / CartesianSpringDamper / TorsionalSpringDamper`` ->
-  compiled springs (``velocityOffset`` folded into the constant force / torque; an
-  inactive one with zero coefficients, so that a user function can switch it on); with a
-  Python user function, a torsional spring without its NodeGenericData (Exudyn then uses
-  the principal angle), and every ``ObjectConnectorRigidBodySpringDamper`` ->
-  :mod:`.pyforces` (``Scene.AddPythonForce``, evaluated in Python at every stage);
+* ``ObjectConnectorSpringDamper / CartesianSpringDamper / TorsionalSpringDamper /
+  RigidBodySpringDamper`` -> compiled springs (``velocityOffset`` folded into the constant
+  force / torque; an inactive one with zero coefficients, so that a user function can
+  switch it on); with a Python user function, and a torsional spring without its
+  NodeGenericData (Exudyn then uses the principal angle) -> :mod:`.pyforces`
+  (``Scene.AddPythonForce``, evaluated in Python at every stage);
 * ``LoadForceVector / LoadTorqueVector / LoadMassProportional`` -> constant loads (a
   uniform mass-proportional load on every body becomes the scene's gravity), with a
   ``loadVectorUserFunction`` -> :mod:`.pyforces`.  As in Exudyn (which refuses them at
@@ -656,7 +656,7 @@ class _Reader:
         name = d.get("name", "") or f"object{o}"
         nPy = len(sc.pyItems)
         counts = (len(sc.springs), len(sc.cartesianSprings), len(sc.torsionalSprings), len(sc.coordinateSprings),
-                  len(sc.linearSprings))
+                  len(sc.linearSprings), len(sc.rigidSprings))
         getattr(self, reader)(sc, o, d, A, B, what, name)
         sc.itemRows[("object", o)] = _new_row(sc, nPy, counts)
         if not active:
@@ -736,6 +736,13 @@ class _Reader:
                               f"supported by exudyn_lie")
         rotA = A.rot @ np.asarray(d.get("rotationMarker0", np.eye(3)), float)
         rotB = B.rot @ np.asarray(d.get("rotationMarker1", np.eye(3)), float)
+        if uf is None:             # compiled (mbs/forces.rigid_spring_forces: the same law)
+            sc.AddRigidBodySpringDamper(A.body, B.body, posA=A.pos, rotA=_orthonormal(rotA), posB=B.pos,
+                                        rotB=_orthonormal(rotB), stiffness=np.asarray(d["stiffness"], float),
+                                        damping=np.asarray(d["damping"], float),
+                                        offset=np.asarray(d["offset"], float), name=name,
+                                        intrinsic=bool(d.get("useIntrinsicFormulation", False)))
+            return
         self._py(sc, pyforces.RigidBodySpringDamper(self.mbs, o, d, A, B, rotA, rotB, uf))
 
     def _py(self, sc, item):
@@ -826,9 +833,9 @@ def _new_row(sc, nPy, counts):
     """(table, row) of the item a connector read just added to ``sc``."""
     if len(sc.pyItems) > nPy:
         return ("py", nPy)
-    for table, before, now in zip(("spring", "cartesian", "torsional", "coordinate", "linear"), counts,
+    for table, before, now in zip(("spring", "cartesian", "torsional", "coordinate", "linear", "rigid"), counts,
                                   (len(sc.springs), len(sc.cartesianSprings), len(sc.torsionalSprings),
-                                   len(sc.coordinateSprings), len(sc.linearSprings))):
+                                   len(sc.coordinateSprings), len(sc.linearSprings), len(sc.rigidSprings))):
         if now > before:
             return (table, before)
     raise AssertionError("connector read without a scene item")
@@ -842,7 +849,7 @@ def deactivate(sc, row):
         sc.pyItems[k].active = False
         return
     item = {"spring": sc.springs, "cartesian": sc.cartesianSprings, "torsional": sc.torsionalSprings,
-            "coordinate": sc.coordinateSprings, "linear": sc.linearSprings}[table][k]
+            "coordinate": sc.coordinateSprings, "linear": sc.linearSprings, "rigid": sc.rigidSprings}[table][k]
     item.stiffness = item.stiffness * 0.0
     item.damping = item.damping * 0.0
     if table in ("spring", "linear"):

@@ -41,6 +41,7 @@ constants (T_SWITCH_*).  Every public function of so3, se3, so3xr3, quaternion
 and dualquat is called from inside an njit function in tests/test_groups_njit.py,
 which also checks that the _into variants do not allocate.
 """
+from .. import _numba_cache  # noqa: F401  (first: the cache key of every compiled function)
 from . import so3, se3, so3xr3, quaternion, dualquat, rn
 
 # The one registry of body configuration groups (name -> module).  Every entry implements

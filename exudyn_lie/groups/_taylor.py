@@ -38,6 +38,8 @@ from math import factorial
 import numpy as np
 from numba import njit
 
+from .._memo import DiskMemo, arg_key
+
 EPS = float(np.finfo(np.float64).eps)   # 2.220446049250313e-16
 
 # numba fast-math flags of the hot-path code: FMA contraction only (no
@@ -139,8 +141,16 @@ def series(name, n):
     return list(_series(name, n))
 
 
+_MEMO = DiskMemo("taylor", __file__)
+
+
 @lru_cache(maxsize=None)
 def _series(name, n):
+    """:func:`_series_exact`, kept on disk between processes (:mod:`exudyn_lie._memo`)."""
+    return _MEMO.get(arg_key(name, n), lambda: _series_exact(name, n))
+
+
+def _series_exact(name, n):
     m = n + 4   # working length (enough for the shifts below)
     if name == "A":       # sin t / t                                  (exp SO3)
         return s_sin_t(n)

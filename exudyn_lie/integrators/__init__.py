@@ -7,6 +7,7 @@
   solver path runs) and the vector-space formulations.
 * :mod:`.vector_space` -- the vector-space formulations (ODEvec1, ODEvec2) for comparison.
 """
+from .. import _numba_cache  # noqa: F401  (first: the cache key of every compiled function)
 from .tableau import (METHODS, ButcherTableau, achieved_order, get_method, method_names,
                       order_condition_residuals, quadrature_order, rooted_trees)
 

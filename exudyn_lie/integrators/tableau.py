@@ -31,6 +31,8 @@ from typing import Optional, Tuple
 
 import numpy as np
 
+from .._memo import DiskMemo, arg_key
+
 __all__ = [
     "ButcherTableau",
     "METHODS",
@@ -315,6 +317,15 @@ def continuous_order_residuals(A_ext, P, max_order):
     return out
 
 
+_MEMO = DiskMemo("tableau", __file__)
+
+
+def _checked(args, check):
+    """Run ``check()`` (raises on a violated condition) unless the same check of the same
+    exact coefficients passed before (kept on disk, :mod:`exudyn_lie._memo`)."""
+    _MEMO.get(arg_key(*args), lambda: check() or True)
+
+
 def _check_continuous_extension(dense, A_raw, b_raw, exact, scale, fail):
     """Validate ``dense`` against the method; returns the float arrays to store."""
     if not isinstance(dense, ContinuousExtension):
@@ -447,7 +458,8 @@ class ButcherTableau:
         if not _residual_ok(sb - 1, exact, scale):
             fail(f"consistency condition sum(b) = 1 violated: sum(b) = {float(sb)!r}")
         # order conditions (rooted trees) up to the claimed order
-        self._check_order_conditions(A_raw, b_raw, int(self.order), exact, scale, "b", fail)
+        _checked(("b", A_raw, b_raw, int(self.order), exact, scale),
+                 lambda: self._check_order_conditions(A_raw, b_raw, int(self.order), exact, scale, "b", fail))
 
         b_hat_arr = None
         if self.b_hat is not None:
@@ -457,8 +469,9 @@ class ButcherTableau:
             if self.order_hat is None:
                 fail("b_hat given without order_hat")
             ex_h = exact and _is_exact(bh_raw)
-            self._check_order_conditions(A_raw, bh_raw, int(self.order_hat), ex_h, scale,
-                                         "b_hat", fail)
+            _checked(("b_hat", A_raw, bh_raw, int(self.order_hat), ex_h, scale),
+                     lambda: self._check_order_conditions(A_raw, bh_raw, int(self.order_hat), ex_h, scale,
+                                                          "b_hat", fail))
             b_hat_arr = _readonly([float(x) for x in bh_raw])
         elif self.order_hat is not None:
             fail("order_hat given without b_hat")
@@ -474,8 +487,10 @@ class ButcherTableau:
         set_(self, "_exact_coeffs", (A_raw, b_raw, c_raw) if exact else None)
         # --- dense output (issue 18): checked against A and b, stored as float arrays
         if self.dense is not None:
-            set_(self, "dense", _check_continuous_extension(self.dense, A_raw, b_raw, exact,
-                                                            scale, fail))
+            dense = self.dense
+            set_(self, "dense", _MEMO.get(arg_key("dense", dense, A_raw, b_raw, exact, scale),
+                                          lambda: _check_continuous_extension(dense, A_raw, b_raw, exact, scale,
+                                                                              fail)))
 
     @staticmethod
     def _check_order_conditions(A_raw, b_raw, order, exact, scale, wname, fail):

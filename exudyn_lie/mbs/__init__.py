@@ -12,6 +12,7 @@
 
 See ``docs/ARCHITECTURE.md``.
 """
+from .. import _numba_cache  # noqa: F401  (first: the cache key of every compiled function)
 from .scene import GROUND, JOINT_TYPES, Scene, SceneError, frame_with_axis
 from .simulator import (ConstraintError, Result, SimulationError, Simulator, StepSizeError)
 

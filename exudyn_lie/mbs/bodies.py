@@ -123,6 +123,25 @@ def add_world_torque(R, T, Q):
         Q[i] += R[0, i] * T[0] + R[1, i] * T[1] + R[2, i] * T[2]
 
 
+@njit(cache=True, inline="always", _nrt=False)
+def add_point_force_origin(gid, R, FT, Q):
+    """:func:`add_point_force` of the world force ``FT[0:3]`` at the frame origin
+    (``s = 0``): ``Q += (0, T^T F)``."""
+    if gid == GID_SE3:
+        for k in range(3):
+            Q[3 + k] += R[0, k] * FT[0] + R[1, k] * FT[1] + R[2, k] * FT[2]
+    else:
+        for k in range(3):
+            Q[3 + k] += FT[k]
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def add_world_torque_row(R, FT, Q):
+    """:func:`add_world_torque` of the world torque ``FT[3:6]``: ``Q[0:3] += R^T T``."""
+    for i in range(3):
+        Q[i] += R[0, i] * FT[3] + R[1, i] * FT[4] + R[2, i] * FT[5]
+
+
 @njit(cache=True, _nrt=False)
 def apply_minv(gid, Minv, R, x, out, tmp):
     """``out = M_rep^-1 x`` for the body's velocity representation.
@@ -246,6 +265,21 @@ def body_twist(gid, R, V, Vb):
     else:
         for k in range(3):
             Vb[3 + k] = R[0, k] * V[3] + R[1, k] * V[4] + R[2, k] * V[5]
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def body_world_velocity(gid, R, V, out):
+    """``out = (omega, rdot)``: the body-fixed angular velocity and the world velocity of the
+    frame origin, from the body's group velocity ``V`` (SE3: ``rdot = R v``; SO3xR3:
+    ``rdot = v``).  What :class:`~exudyn_lie.mbs.state.BodyStates` hands to Python forces."""
+    for k in range(3):
+        out[k] = V[k]
+    if gid == GID_SE3:
+        for k in range(3):
+            out[3 + k] = R[k, 0] * V[3] + R[k, 1] * V[4] + R[k, 2] * V[5]
+    else:
+        for k in range(3):
+            out[3 + k] = V[3 + k]
 
 
 @njit(cache=True, inline="always", _nrt=False)

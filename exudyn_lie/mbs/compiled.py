@@ -27,6 +27,8 @@ SceneData = namedtuple("SceneData", [
     "tint", "trot", "tpar",           # torsional springs: [A, B]; [rotA, rotB]; [k, d, offset, torque]
     "kint", "kpar",                   # coordinate springs: [A, B, axis A, axis B]; [k, d, offset]
     "xint", "xpos", "xaxis", "xpar",  # linear springs: [A, B]; [posA, posB]; axis on A; [k, d, offset, force]
+    "bint", "bpos", "brot", "bpar",   # rigid-body springs: [A, B, intrinsic]; [posA, posB]; [rotA, rotB];
+                                      #   rows K (6), D (6), offset
     "jint", "jpos", "jrot", "jpar",   # joints: [A, B, first row, rows]; [posA, posB]; [rotA, rotB]; [row parameters]
     "rint",                           # constraint rows: [kind, axis of A, axis of B, body A, body B]
     "nrows", "bandwidth", "redundant", "pivotTol",
@@ -38,7 +40,9 @@ Work = namedtuple("Work", [
     "Jr", "W", "eta", "h", "lam", "Sb", "Sd", "perm", "ytmp", "info",
     "tmp6", "tmp12", "v3", "m3", "ident", "zero3", "zero6",
     "tphi", "watchBody", "watchEntry", "watchMax",
-    "ext",                            # [token of the external rhs evaluator (mbs.external), 0: none]
+    "ext",                            # [token of the external rhs evaluator (mbs.external), 0: none;
+                                      #  1 if the forces it returned were not finite]
+    "Vw",                             # (nb, 6) (omega body, world rdot) at the stage, for Python forces
 ])
 N_SCRATCH3 = 20
 
@@ -201,9 +205,7 @@ def compile_scene(scene: Scene, groups):
     S = scene.springs
     C = scene.cartesianSprings
     T = scene.torsionalSprings
-    if scene.rigidSprings:
-        raise SceneError("RigidBodySpringDamper is not supported by the compiled kernel yet "
-                         f"({scene.rigidSprings[0].name}); use a PythonForce")
+    B = scene.rigidSprings
 
     # joints: order by reverse Cuthill-McKee on the joint graph (joints sharing a body are
     # adjacent) so that S = J M^-1 J^T is banded with a small bandwidth
@@ -269,6 +271,10 @@ def compile_scene(scene: Scene, groups):
         xpos=arr([[s.posA, s.posB] for s in scene.linearSprings], (-1, 2, 3)),
         xaxis=arr([s.axisA for s in scene.linearSprings], (-1, 3)),
         xpar=arr([[s.stiffness, s.damping, s.offset, s.force] for s in scene.linearSprings], (-1, 4)),
+        bint=arr([[s.bodyA, s.bodyB, int(s.intrinsic)] for s in B], (-1, 3), np.int64),
+        bpos=arr([[s.posA, s.posB] for s in B], (-1, 2, 3)),
+        brot=arr([[s.rotA, s.rotB] for s in B], (-1, 2, 3, 3)),
+        bpar=arr([np.vstack([s.stiffness, s.damping, s.offset[None]]) for s in B], (-1, 13, 6)),
         jint=arr([[j.bodyA, j.bodyB, jrow0[k], jnrow[k]] for k, j in enumerate(J)], (-1, 4), np.int64),
         jpos=arr([[j.posA, j.posB] for j in J], (-1, 2, 3)),
         jrot=arr([[j.rotA, j.rotB] for j in J], (-1, 2, 3, 3)),
@@ -293,8 +299,8 @@ def make_work(sd, nstages):
         Jr=np.zeros((m, 12)), W=np.zeros((m, 12)), eta=np.zeros(m), h=np.zeros(m), lam=np.zeros(m),
         Sb=np.zeros((m, sd.bandwidth + 1)), Sd=np.zeros((m, m)) if sd.redundant else np.zeros((0, 0)),
         perm=np.zeros(m, np.int64), ytmp=np.zeros(m), info=np.zeros(4, np.int64),
-        tmp6=np.zeros(6), tmp12=np.zeros(12), v3=np.zeros((N_SCRATCH3, 3)), m3=np.zeros((2, 3, 3)),
+        tmp6=np.zeros(6), tmp12=np.zeros(12), v3=np.zeros((N_SCRATCH3, 3)), m3=np.zeros((4, 3, 3)),
         ident=np.eye(3), zero3=np.zeros(3), zero6=np.zeros(6), tphi=np.zeros(sd.tint.shape[0]),
         watchBody=np.zeros(0, np.int64), watchEntry=np.zeros((0, 2), np.int64), watchMax=np.zeros(0),
-        ext=np.zeros(1, np.int64),
+        ext=np.zeros(2, np.int64), Vw=np.zeros((nb, 6) if sd.hasQext else (0, 6)),
     )

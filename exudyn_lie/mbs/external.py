@@ -7,8 +7,10 @@ the generalised forces of Python callbacks (``Scene.AddPythonForce``, the bridge
 user functions), added to the compiled forces; a right-hand side that Exudyn evaluates
 (issue 17) plugs in here as another kind of evaluator.
 
-An evaluator is a Python callable ``f(t, Rs, rs, Vs, Qext)`` that fills ``Qext``
-(nb, 6) in the bodies' group velocity coordinates at the stage state.  It is
+An evaluator is a Python callable ``f(t)``: the stage state and the output are arrays
+of the evaluator's owner that the compiled code shares (``wk.Rs, wk.rs``, the world
+velocities ``wk.Vw`` and the output ``wk.Qext``, see ``stepper.external_forces``), so
+the objmode call boxes no array and the evaluator allocates nothing of its own.  It is
 registered under an integer token (kept in ``Work.ext[0]``, as numba cannot hold a
 Python object); an exception it raises is kept and the stepper returns
 ``STATUS_EXTERNAL``, after which the caller re-raises it with :func:`reraise`.
@@ -25,18 +27,16 @@ def register(owner, method_name):
     """Register ``getattr(owner, method_name)`` (held through a weak reference to
     ``owner``, so the registry does not keep a simulator alive); returns the token."""
     token = next(_TOKENS)
-    ref = weakref.ref(owner)
-    _EVALUATORS[token] = (ref, method_name)
+    _EVALUATORS[token] = weakref.WeakMethod(getattr(owner, method_name))
     weakref.finalize(owner, _EVALUATORS.pop, token, None)
     return token
 
 
-def evaluate(token, t, Rs, rs, Vs, Qext):
+def evaluate(token, t):
     """Called by the compiled stepper (objmode): 0 on success, 1 if the evaluator raised
     (the exception is kept for :func:`reraise`)."""
     try:
-        ref, name = _EVALUATORS[token]
-        getattr(ref(), name)(t, Rs, rs, Vs, Qext)
+        _EVALUATORS[token]()(t)
         return 0
     except BaseException as e:       # noqa: BLE001 - re-raised by the caller after the kernel returns
         _ERRORS[token] = e

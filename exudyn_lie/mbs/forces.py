@@ -4,6 +4,7 @@ and ``compute_forces``, which adds those a scene has."""
 import numpy as np
 from numba import njit
 
+from ..groups import so3
 from .bodies import _matvec, _side, add_point_force, add_world_torque, body_inertial_forces, body_point
 from .codes import L_BODY, L_FIXED, L_KIND
 from .coordinate_forces import coordinate_spring_forces
@@ -143,6 +144,120 @@ def torsional_forces(gid, tint, trot, tpar, tphi, R, r, V, Q, F, m3, ident, zero
             add_world_torque(RA, F, Q[a])
 
 
+@njit(cache=True, inline="always", _nrt=False)
+def _mat_mat(A, B, out):
+    for i in range(3):
+        for j in range(3):
+            out[i, j] = A[i, 0] * B[0, j] + A[i, 1] * B[1, j] + A[i, 2] * B[2, j]
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def _matT_vec(A, x, out):
+    for i in range(3):
+        out[i] = A[0, i] * x[0] + A[1, i] * x[1] + A[2, i] * x[2]
+
+
+@njit(cache=True, _nrt=False)
+def tait_bryan_xyz(Rr, out):
+    """The principal Tait-Bryan angles ``Rr = Rx(a0) Ry(a1) Rz(a2)`` (Exudyn's
+    RotationMatrix2RotXYZ; at cos a1 = 0 only a0 + a2 is defined, a0 = 0)."""
+    c1 = np.sqrt(Rr[1, 2] * Rr[1, 2] + Rr[2, 2] * Rr[2, 2])
+    out[1] = np.arctan2(Rr[0, 2], c1)
+    if c1 < 1e-14:
+        out[0] = 0.0
+        out[2] = np.arctan2(Rr[1, 0], Rr[1, 1])
+    else:
+        out[0] = np.arctan2(-Rr[1, 2], Rr[2, 2])
+        out[2] = np.arctan2(-Rr[0, 1], Rr[0, 0])
+
+
+@njit(cache=True, _nrt=False)
+def rigid_spring_forces(gid, bint, bpos, brot, bpar, R, r, V, Q, v3, m3, ident, zero3, zero6):
+    """Exudyn's ``ObjectConnectorRigidBodySpringDamper`` between the frames ``J0 = R_A rotA``
+    at ``pA`` and ``J1 = R_B rotB`` at ``pB`` (``bpar`` rows: K (6x6), D (6x6), offset):
+
+    * Tait-Bryan form: ``u = (J0^T (pB - pA), xyz angles of J0^T J1) - offset``,
+      ``udot = (J0^T (vB - vA), J0^T (wB - wA))``, the frame of the law ``Jf = J0``;
+    * intrinsic form (``bint[s, 2]``): ``theta = log(J0^T J1)``, ``u = (V(theta)^-1 J0^T (pB - pA),
+      theta) - offset`` (``V`` the left Jacobian of SO(3), i.e. ``dexp_theta``),
+      ``udot`` in the mid frame ``Jf = Jm = J0 exp(theta / 2)``, the force acting at the mid
+      point: an extra torque ``1/2 (Jm u_t) x f`` on both sides (``u_t`` before the offset);
+
+    ``(f, m) = K u + D udot`` in the frame ``Jf``; ``Jf f`` at ``pA`` and ``-Jf f`` at ``pB``,
+    torques ``Jf m + c`` on A and ``-Jf m + c`` on B.  Checked against Exudyn's
+    ``ComputeODE2RHS`` in ``tests/test_bridge_oracle.py``."""
+    pA, pB, vA, vB, bA, bB = v3[0], v3[1], v3[2], v3[3], v3[4], v3[5]
+    F, Tq, wA, wB, dp, uT, uR, utT, utR, lever, tmp = (v3[6], v3[7], v3[8], v3[9], v3[10], v3[11], v3[12],
+                                                       v3[13], v3[14], v3[15], v3[16])
+    J0, J1, Jf, E = m3[0], m3[1], m3[2], m3[3]
+    for s in range(bint.shape[0]):
+        a = bint[s, 0]
+        b = bint[s, 1]
+        gA, RA, rA, VA = _side(gid, a, R, r, V, ident, zero3, zero6)
+        gB, RB, rB, VB = _side(gid, b, R, r, V, ident, zero3, zero6)
+        body_point(gA, RA, rA, VA, bpos[s, 0], pA, vA, bA)
+        body_point(gB, RB, rB, VB, bpos[s, 1], pB, vB, bB)
+        _matvec(RA, VA[:3], wA)                      # world angular velocities
+        _matvec(RB, VB[:3], wB)
+        _mat_mat(RA, brot[s, 0], J0)
+        _mat_mat(RB, brot[s, 1], J1)
+        for i in range(3):                           # E = J0^T J1, the relative rotation
+            for j in range(3):
+                E[i, j] = J0[0, i] * J1[0, j] + J0[1, i] * J1[1, j] + J0[2, i] * J1[2, j]
+            dp[i] = pB[i] - pA[i]
+        if bint[s, 2]:
+            so3.log_into(E, uR)                      # theta, principal
+            for i in range(3):
+                tmp[i] = 0.5 * uR[i]
+            so3.exp_into(tmp, E)
+            _mat_mat(J0, E, Jf)                      # mid frame Jm
+            _matT_vec(J0, dp, tmp)
+            so3.dexpinv_apply_into(uR, tmp, uT)      # V(theta)^-1 J0^T (pB - pA)
+            _matvec(Jf, uT, lever)
+            for i in range(3):
+                lever[i] *= 0.5
+        else:
+            for i in range(3):
+                for j in range(3):
+                    Jf[i, j] = J0[i, j]
+                lever[i] = 0.0
+            _matT_vec(J0, dp, uT)
+            tait_bryan_xyz(E, uR)
+        for i in range(3):
+            dp[i] = vB[i] - vA[i]
+            tmp[i] = wB[i] - wA[i]
+        _matT_vec(Jf, dp, utT)
+        _matT_vec(Jf, tmp, utR)
+        for i in range(3):
+            uT[i] -= bpar[s, 12, i]
+            uR[i] -= bpar[s, 12, 3 + i]
+        # (f, m) = K u + D udot in the frame Jf
+        for i in range(6):
+            x = 0.0
+            for j in range(3):
+                x += bpar[s, i, j] * uT[j] + bpar[s, i, 3 + j] * uR[j] \
+                    + bpar[s, 6 + i, j] * utT[j] + bpar[s, 6 + i, 3 + j] * utR[j]
+            if i < 3:
+                dp[i] = x
+            else:
+                tmp[i - 3] = x
+        _matvec(Jf, dp, F)                           # world force f
+        _matvec(Jf, tmp, Tq)                         # world torque m
+        c0 = lever[1] * F[2] - lever[2] * F[1]
+        c1 = lever[2] * F[0] - lever[0] * F[2]
+        c2 = lever[0] * F[1] - lever[1] * F[0]
+        if a >= 0:
+            add_point_force(gA, RA, bpos[s, 0], F, Q[a])
+            dp[0], dp[1], dp[2] = Tq[0] + c0, Tq[1] + c1, Tq[2] + c2
+            add_world_torque(RA, dp, Q[a])
+        if b >= 0:
+            for k in range(3):
+                F[k] = -F[k]
+            add_point_force(gB, RB, bpos[s, 1], F, Q[b])
+            dp[0], dp[1], dp[2] = -Tq[0] + c0, -Tq[1] + c1, -Tq[2] + c2
+            add_world_torque(RB, dp, Q[b])
+
+
 @njit(cache=True, _nrt=False)
 def torsion_angles(gid, tint, trot, tphi, R, r, V, m3, ident, zero3, zero6):
     """Store the current torsion angles as the branch reference for the next step."""
@@ -186,6 +301,9 @@ def compute_forces(sd, wk, t, R, r, V, Q):
     if sd.xint.shape[0] > 0:
         linear_spring_forces(sd.gid, sd.xint, sd.xpos, sd.xaxis, sd.xpar, R, r, V, Q, wk.v3, wk.ident, wk.zero3,
                              wk.zero6)
+    if sd.bint.shape[0] > 0:
+        rigid_spring_forces(sd.gid, sd.bint, sd.bpos, sd.brot, sd.bpar, R, r, V, Q, wk.v3, wk.m3, wk.ident,
+                            wk.zero3, wk.zero6)
     inertial_forces(sd.gid, sd.M, sd.mass, sd.com, R, V, Q)
 
 

@@ -174,9 +174,9 @@ class LinearSpringDamper:
 
 @dataclass
 class RigidBodySpringDamper:
-    """6-dof spring between two frames, Exudyn's ``ObjectConnectorRigidBodySpringDamper``
-    law: in the frame on A, displacement ``u = Aw^T (pB - pA)`` and the rotation
-    vector... see :mod:`exudyn_lie.mbs.compiled` for the exact law."""
+    """6-dof spring between two frames, Exudyn's ``ObjectConnectorRigidBodySpringDamper``:
+    ``(f, m) = K u + D udot`` in the frame on A (Tait-Bryan form) or in the mid frame
+    (``intrinsic``); the exact law is :func:`exudyn_lie.mbs.forces.rigid_spring_forces`."""
     bodyA: int
     posA: np.ndarray
     rotA: np.ndarray
@@ -187,6 +187,7 @@ class RigidBodySpringDamper:
     damping: np.ndarray          # 6x6
     offset: np.ndarray           # 6
     name: str = ""
+    intrinsic: bool = False      # Exudyn's useIntrinsicFormulation
 
 
 @dataclass
@@ -430,7 +431,8 @@ class Scene:
         return len(self.cartesianSprings) - 1
 
     def AddRigidBodySpringDamper(self, bodyA, bodyB, posA=(0, 0, 0), rotA=None, posB=(0, 0, 0),
-                                 rotB=None, stiffness=None, damping=None, offset=None, name="") -> int:
+                                 rotB=None, stiffness=None, damping=None, offset=None, name="",
+                                 intrinsic=False) -> int:
         label = name or f"rigidBodySpring{len(self.rigidSprings)}"
         self._check_body(bodyA, label)
         self._check_body(bodyB, label)
@@ -441,7 +443,7 @@ class Scene:
             raise SceneError(f"{label}: stiffness, damping and offset must be finite")
         self.rigidSprings.append(RigidBodySpringDamper(
             int(bodyA), _vec3(posA, label), _rot(rotA, label), int(bodyB), _vec3(posB, label),
-            _rot(rotB, label), K.copy(), D.copy(), o.copy(), label))
+            _rot(rotB, label), K.copy(), D.copy(), o.copy(), label, bool(intrinsic)))
         return len(self.rigidSprings) - 1
 
     def AddCoordinateSpringDamper(self, bodyA, axisA, bodyB, axisB, stiffness, damping=0.0, offset=0.0,

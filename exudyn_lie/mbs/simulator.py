@@ -416,31 +416,82 @@ class Simulator:
             return out
         return ep(*args)
 
-    def _external_forces(self, t, R, r, V, Qext):
+    def _external_forces(self, t):
         """The right-hand side seam (:mod:`.external`): called by the compiled stepper once
-        per stage with the stage state; fills ``Qext`` with the Python forces."""
-        Qext[:] = self._python_forces(t, R, r, V)
+        per stage; adds the Python forces at the stage state to ``wk.Qext`` as world forces
+        at the frame origins and world torques (the compiled caller turns them into
+        generalised forces and checks them).  Allocates nothing itself: the callbacks see
+        read-only views of the stage state (valid during the call)."""
+        st, F, T, adders = self._external_views()
+        st.t = t
+        for add in adders:
+            add(t, st, F, T)
+
+    def _add_returned(self, pf):
+        """An adder for a callback ``fn(t, st) -> (F, T)`` (checks the shapes; the compiled
+        caller checks that the sums are finite)."""
+        nb = self.sd.nb
+
+        def add(t, st, F, T):
+            Fi, Ti = pf.fn(t, st)
+            Fi = np.asarray(Fi, float)
+            Ti = np.asarray(Ti, float)
+            if Fi.shape != F.shape or Ti.shape != T.shape:
+                raise SimulationError(f"{pf.name} must return finite (F, T) arrays of shape "
+                                      f"({nb}, 3); got {Fi.shape}, {Ti.shape}")
+            F += Fi
+            T += Ti
+        return add
+
+    def _external_views(self):
+        """(BodyStates, F, T, adders) for the external seam, made once per work set: views
+        of the work arrays (the state read-only, so a callback cannot change the stage) and
+        one ``add(t, st, F, T)`` per Python force (its ``add_into`` if it has one)."""
+        wk = self.wk
+        cached = getattr(self, "_extViews", None)
+        if cached is not None and cached[0] is wk:
+            return cached[1]
+
+        def ro(a):
+            v = a.view()
+            v.flags.writeable = False
+            return v
+        st = BodyStates(self.t, ro(wk.Rs), ro(wk.rs), ro(wk.Vw[:, :3]), ro(wk.Vw[:, 3:]))
+        adders = tuple(getattr(pf.fn, "add_into", None) or self._add_returned(pf) for pf in self.scene.pythonForces)
+        views = (st, wk.Qext[:, :3], wk.Qext[:, 3:], adders)
+        self._extViews = (wk, views)
+        return views
 
     def _python_forces(self, t, R, r, V):
+        """The generalised Python forces (nb, 6) at a state (tests, diagnostics): the same
+        evaluation as the compiled seam, on copies."""
         omega, vel = twist_to_world_velocity(self.gid, R, V)
         st = BodyStates(t, R.copy(), r.copy(), omega, vel)
-        Q = np.zeros((self.sd.nb, 6))
+        F = np.zeros((self.sd.nb, 3))
+        T = np.zeros((self.sd.nb, 3))
         for pf in self.scene.pythonForces:
-            out = pf.fn(t, st)
-            F, T = (np.asarray(x, float) for x in out)
-            if F.shape != (self.sd.nb, 3) or T.shape != (self.sd.nb, 3) or not (
-                    np.all(np.isfinite(F)) and np.all(np.isfinite(T))):
-                raise SimulationError(f"{pf.name} must return finite (F, T) arrays of shape "
-                                      f"({self.sd.nb}, 3); got {F.shape}, {T.shape}")
-            for i in range(self.sd.nb):
-                kernel.add_point_force(int(self.gid[i]), R[i], np.zeros(3), F[i], Q[i])
-                kernel.add_world_torque(R[i], T[i], Q[i])
+            add_into = getattr(pf.fn, "add_into", None)
+            if add_into is not None:
+                add_into(t, st, F, T)
+            else:
+                Fi, Ti = pf.fn(t, st)
+                F += np.asarray(Fi, float)
+                T += np.asarray(Ti, float)
+        Q = np.zeros((self.sd.nb, 6))
+        for i in range(self.sd.nb):
+            kernel.add_point_force(int(self.gid[i]), R[i], np.zeros(3), F[i], Q[i])
+            kernel.add_world_torque(R[i], T[i], Q[i])
         return Q
 
     def _raise_status(self, st, h):
         """Raise the error for a kernel status (public as :meth:`RaiseStatus`)."""
         if st == kernel.STATUS_EXTERNAL:
             external.reraise(self._extToken)
+            if self.wk.ext[1]:
+                self.wk.ext[1] = 0
+                names = ", ".join(pf.name for pf in self.scene.pythonForces)
+                raise SimulationError(f"{names} must return finite (F, T) arrays of shape ({self.sd.nb}, 3); "
+                                      f"got non-finite values at t = {self.t:.6g} s")
             raise SimulationError(f"the Python forces failed at t = {self.t:.6g} s")
         if st == kernel.STATUS_SINGULAR:
             # the failing stage's state (same rule as the kernel: linalg module docstring)

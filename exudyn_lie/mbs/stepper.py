@@ -40,7 +40,7 @@ import numpy as np
 from numba import njit, objmode
 
 from . import external
-from .bodies import body_dexpinv_stage, exp_compose
+from .bodies import body_dexpinv_stage, body_world_velocity, exp_compose, add_point_force_origin, add_world_torque_row
 from .codes import (STAB_NONE, STAGE_ARG_MAX2, STATUS_BLOWUP, STATUS_EXTERNAL, STATUS_NONFINITE, STATUS_OK,
                     STATUS_STAGE_ARG)
 from .forces import update_torsion_tracking
@@ -185,12 +185,38 @@ def mk_finish(sd, wk, tab, h, R, r, V):
 
 
 @njit(cache=True, _nrt=False)
-def external_forces(token, t, Rs, rs, Vs, Qext):
-    """The right-hand side seam: the registered Python evaluator fills ``Qext`` at the
-    stage state (:mod:`.external`).  Returns a status code."""
+def external_forces(token, gid, t, Rs, Vs, Vw, Qext, ext):
+    """The right-hand side seam (:mod:`.external`), one Python call per stage.
+
+    Before the call, compiled: the world velocities ``Vw = (omega, rdot)`` of the stage
+    state and ``Qext = 0``.  The call passes only ``(token, t)`` (no array is boxed: the
+    evaluator holds views of ``wk.Rs, wk.rs, wk.Vw, wk.Qext``) and the evaluator adds the
+    world forces at the frame origins and the world torques, ``Qext[i] = (F_i, T_i)``.
+    After it, compiled: ``Qext[i]`` becomes the generalised force of ``(F_i, T_i)``
+    (:func:`~.bodies.add_point_force`, :func:`~.bodies.add_world_torque`), after a check
+    that they are finite (``ext[1] = 1`` otherwise).  Returns a status code."""
+    for i in range(gid.shape[0]):
+        body_world_velocity(gid[i], Rs[i], Vs[i], Vw[i])
+        for k in range(6):
+            Qext[i, k] = 0.0
     with objmode(fail="int64"):
-        fail = external.evaluate(token, t, Rs, rs, Vs, Qext)
-    return STATUS_EXTERNAL if fail else STATUS_OK
+        fail = external.evaluate(token, t)
+    if fail:
+        return STATUS_EXTERNAL
+    for i in range(gid.shape[0]):
+        f0, f1, f2 = Qext[i, 0], Qext[i, 1], Qext[i, 2]
+        m0, m1, m2 = Qext[i, 3], Qext[i, 4], Qext[i, 5]
+        if not (np.isfinite(f0 + f1 + f2) and np.isfinite(m0 + m1 + m2)):
+            ext[1] = 1
+            return STATUS_EXTERNAL
+        # the world force (at the frame origin) and torque in place of the row: Vw[i] is free now
+        Vw[i, 0], Vw[i, 1], Vw[i, 2] = f0, f1, f2
+        Vw[i, 3], Vw[i, 4], Vw[i, 5] = m0, m1, m2
+        for k in range(6):
+            Qext[i, k] = 0.0
+        add_point_force_origin(gid[i], Rs[i], Vw[i], Qext[i])
+        add_world_torque_row(Rs[i], Vw[i], Qext[i])
+    return STATUS_OK
 
 
 @njit(cache=True, inline="always", _nrt=False)
@@ -198,7 +224,7 @@ def stage_rhs(sd, wk, t, Vdot):
     """``Vdot_j = F(t, g_j, V_j)`` at the stage state ``wk.Rs, wk.rs, wk.Vs``: the
     external part first (if the scene has one), then the compiled index-1 rhs."""
     if sd.hasQext:
-        st = external_forces(wk.ext[0], t, wk.Rs, wk.rs, wk.Vs, wk.Qext)
+        st = external_forces(wk.ext[0], sd.gid, t, wk.Rs, wk.Vs, wk.Vw, wk.Qext, wk.ext)
         if st != STATUS_OK:
             return st
     return rhs(sd, wk, t, wk.Rs, wk.rs, wk.Vs, wk.Qext, Vdot)

@@ -461,6 +461,8 @@ class Simulator:
 
     def _raise_status(self, st, h):
         """Raise the error for a kernel status (public as :meth:`RaiseStatus`)."""
+        if st == kernel.STATUS_STEP_MIN:
+            self._raise_step_min()
         if st == kernel.STATUS_EXTERNAL:
             external.reraise(self._extToken)
             raise SimulationError(f"the Python forces failed at t = {self.t:.6g} s")
@@ -698,16 +700,26 @@ class Simulator:
     def AdvanceTo(self, endTime, outputTimes=None):
         """Adaptive steps (after :meth:`SetAdaptive`) from the current time to ``endTime``
         (the last step clipped to it), with the states at ``outputTimes`` (sorted, in
-        ``(t, endTime]``) by dense output on the group.  Returns ``(R, r, V)`` at the
-        output times.  A step below the minimum raises :class:`StepSizeError` with ``.time``
-        and ``.step``; the state then is the last accepted step."""
+        ``[t, endTime]``) by dense output on the group: the call returns once every output
+        is written (the state may then be up to one step ahead of the last output).
+        Returns ``(R, r, V)`` at the output times.  A step below the minimum raises
+        :class:`StepSizeError` with ``.time`` and ``.step``; the state then is the last
+        accepted step."""
+        tout = np.ascontiguousarray(np.zeros(0) if outputTimes is None else outputTimes, dtype=np.float64)
+        nb = self.sd.nb
+        Ro, ro, Vo = np.zeros((tout.size, nb, 3, 3)), np.zeros((tout.size, nb, 3)), np.zeros((tout.size, nb, 6))
+        st, k = self.AdvanceToInto(endTime, tout, Ro, ro, Vo)
+        if st != kernel.STATUS_OK:
+            self._raise_status(st, float(self._ad["fs"][_adaptive.FS_H]))
+        return Ro[:k], ro[:k], Vo[:k]
+
+    def AdvanceToInto(self, endTime, tout, Ro, ro, Vo):
+        """:meth:`AdvanceTo` writing into the given output rows; returns ``(kernel status,
+        outputs written)`` without raising for a failure (:meth:`RaiseStatus` does)."""
         ad = getattr(self, "_ad", None)
         if ad is None:
             raise RuntimeError("AdvanceTo needs SetAdaptive(rtol=..., atol=...) first")
         tEnd = float(endTime)
-        tout = np.ascontiguousarray(np.zeros(0) if outputTimes is None else outputTimes, dtype=np.float64)
-        nb = self.sd.nb
-        Ro, ro, Vo = np.zeros((tout.size, nb, 3, 3)), np.zeros((tout.size, nb, 3)), np.zeros((tout.size, nb, 6))
         if tEnd < self.t:
             raise ValueError(f"endTime {tEnd} is before the current time {self.t}")
         if tout.size and (np.any(np.diff(tout) < 0) or tout[-1] > tEnd):
@@ -721,15 +733,22 @@ class Simulator:
         args = (self.sd, self.wk, ad["am"], ad["par"], ad["S"], ad["tol"], ad["fs"], ad["ist"], tEnd,
                 self.R, self.r, self.V, ad["R0"], ad["r0"], ad["V0"], ad["dPhi"], ad["dV"], ad["w"],
                 float(self._vmaxValue), tout, Ro, ro, Vo)
-        st, k = _adaptive.mk_adaptive_steps(*args)
+        ep = ad.get("entry")
+        if ep is None:
+            st, k = _adaptive.mk_adaptive_steps(*args)
+            sig = tuple(_adaptive.mk_adaptive_steps.typeof_pyval(a) for a in args)
+            ov = _adaptive.mk_adaptive_steps.overloads.get(sig)
+            ad["entry"] = ov.entry_point if ov is not None else _adaptive.mk_adaptive_steps
+        else:
+            st, k = ep(*args)
         self.t = float(ad["fs"][_adaptive.FS_T])
-        if st == kernel.STATUS_STEP_MIN:
-            S = ad["S"]
-            _control.raise_step_size_error(self.t, S[_control.S_H], ad["par"][_control.P_H_MIN], S[_control.S_ERR],
-                                           self.tableau.name)
-        if st != kernel.STATUS_OK:
-            self._raise_status(st, float(ad["fs"][_adaptive.FS_H]))
-        return Ro[:k], ro[:k], Vo[:k]
+        return st, k
+
+    def _raise_step_min(self):
+        ad = self._ad
+        S = ad["S"]
+        _control.raise_step_size_error(self.t, S[_control.S_H], ad["par"][_control.P_H_MIN], S[_control.S_ERR],
+                                       self.tableau.name)
 
     @property
     def adaptiveCounters(self):

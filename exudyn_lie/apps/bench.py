@@ -51,7 +51,7 @@ EXL_METHODS = ("RK4", "DOPRI5", "RK6")
 NATIVE_CONSTRAINED = ("GeneralizedAlpha", "GeneralizedAlpha-mN", "TrapezoidalIndex2")
 NATIVE_FREE = ("RK44", "RK67", "DOPRI5")
 EPS_LEVELS = (1e-4, 1e-5, 1e-6, 1e-7, 1e-8)
-SECTIONS = ("wp", "perstep", "scaling", "startup", "overhead", "groups", "mujoco", "params")
+SECTIONS = ("wp", "perstep", "scaling", "startup", "overhead", "groups", "mujoco", "params", "adaptive")
 TARGET_RATIO = 10.0
 # absolute per-step targets (MK-RK4, SE3, median step, this 2-core machine)
 KERNEL_STEP_TARGETS_US = {"heavytop": 3.0, "doublependulum": 6.0}
@@ -917,6 +917,9 @@ def write_report(cfg, out, cmdline):
         A("")
     from .bench_params import report_lines as _params_lines
     L += _params_lines(out.get("params"))
+    if out.get("adaptive"):
+        from .bench_adaptive import report_lines as _adaptive_lines
+        L += _adaptive_lines(out["adaptive"], out["adaptive"].get("figures", ()))
     # ---- profile notes
     A("## 7. Profile and optimisation record")
     A("")
@@ -1034,6 +1037,9 @@ def main(argv=None):
         from .bench_params import parameter_updates
         log("parameters changed during a solve (serialRobotTest PD controller)")
         out["params"] = parameter_updates(T=0.1 if cfg.quick else 0.5, repeats=3 if cfg.quick else 7)
+    if "adaptive" in cfg.sections:
+        from . import bench_adaptive
+        out["adaptive"] = bench_adaptive.run_section(cfg, log)
     out["env"]["loadEnd"] = loadavg()
     out["profileExtra"] = PROFILE_EXTRA
     os.makedirs(cfg.out, exist_ok=True)
@@ -1042,6 +1048,11 @@ def main(argv=None):
         from .bench_mujoco import plot as mujoco_plot
         out["figures"].append(mujoco_plot(out["mujoco"], os.path.join(cfg.figdir, "wp_mujoco.png")))
         out["mujoco"]["figure"] = "bench_figures/wp_mujoco.png"
+    if out.get("adaptive"):
+        from .bench_adaptive import plot as adaptive_plot
+        figs = adaptive_plot(out["adaptive"], cfg.figdir)
+        out["figures"] += figs
+        out["adaptive"]["figures"] = [os.path.join("bench_figures", os.path.basename(f)) for f in figs]
     write_report(cfg, out, cmdline)
     if args.readme:
         from .generated import update_file_block

@@ -14,43 +14,12 @@ chunk is one output long.  Both calls go through entry points resolved once
 import numpy as np
 
 from ..mbs import kernel, stepper
+from ..mbs.entry import entry_point
 from .nodes import NCOORD_MAX, write_rows
 
 CHUNK_SECONDS = 0.05        # aimed wall time of one chunk (progress, responsiveness)
 CHUNK_DOUBLES = 1 << 22     # at most this many doubles of chunk buffers (32 MiB)
 CHUNK_ROWS = 256            # at most this many outputs per chunk
-
-_ENTRY_CACHE = {}
-
-
-def _type_key(x):
-    """A cheap key that determines numba's type of an argument (arrays: dtype, ndim,
-    layout, writeability; namedtuples: their class and fields)."""
-    if isinstance(x, np.ndarray):
-        return (x.dtype.str, x.ndim, x.flags.c_contiguous, x.flags.writeable)
-    if isinstance(x, tuple):
-        return (type(x),) + tuple(_type_key(v) for v in x)
-    return type(x)
-
-
-def entry_point(dispatcher, args):
-    """The compiled entry point of a numba ``dispatcher`` for exactly these argument
-    types (the dispatcher must have been called with them once); None if unavailable.
-    Resolved signatures are cached by a cheap structural key of the arguments, so a
-    repeated solve does not pay numba's type resolution (~1 ms per namedtuple) again."""
-    try:
-        key = (id(dispatcher),) + tuple(_type_key(a) for a in args)
-        ep = _ENTRY_CACHE.get(key)
-        if ep is None:
-            sig = tuple(dispatcher.typeof_pyval(a) for a in args)
-            ov = dispatcher.overloads.get(sig)
-            if ov is None:
-                return None
-            ep = _ENTRY_CACHE[key] = ov.entry_point
-        return ep
-    except Exception:
-        return None
-
 
 def _call(cache, name, dispatcher, args):
     """``dispatcher(*args)``, through its entry point from the second call on."""

@@ -27,6 +27,7 @@ from .scene import Scene, SceneError
 from .state import BodyStates, twist_to_world_velocity, world_velocity_to_twist
 from .stepper import fixed_step_control, method_arrays
 from . import adaptive as _adaptive
+from .entry import entry_point
 from ..integrators import control as _control
 
 
@@ -431,11 +432,12 @@ class Simulator:
                 float(self._vmaxValue)) + self.NoOutputs()
         ep = getattr(self, "_mkEntry", None)
         if ep is None:
-            out = kernel.mk_steps(*args)
-            sig = tuple(kernel.mk_steps.typeof_pyval(a) for a in args)
-            ov = kernel.mk_steps.overloads.get(sig)
-            self._mkEntry = ov.entry_point if ov is not None else kernel.mk_steps
-            return out
+            ep = entry_point(kernel.mk_steps, args)      # cached per argument structure (mbs/entry.py)
+            if ep is None:
+                out = kernel.mk_steps(*args)
+                self._mkEntry = entry_point(kernel.mk_steps, args) or kernel.mk_steps
+                return out
+            self._mkEntry = ep
         return ep(*args)
 
     def _external_forces(self, t, R, r, V, Qext):
@@ -734,11 +736,14 @@ class Simulator:
                 self.R, self.r, self.V, ad["R0"], ad["r0"], ad["V0"], ad["dPhi"], ad["dV"], ad["w"],
                 float(self._vmaxValue), tout, Ro, ro, Vo)
         ep = ad.get("entry")
-        if ep is None:
-            st, k = _adaptive.mk_adaptive_steps(*args)
-            sig = tuple(_adaptive.mk_adaptive_steps.typeof_pyval(a) for a in args)
-            ov = _adaptive.mk_adaptive_steps.overloads.get(sig)
-            ad["entry"] = ov.entry_point if ov is not None else _adaptive.mk_adaptive_steps
+        if ep is None:                  # resolved once per argument structure (mbs/entry.py)
+            ep = entry_point(_adaptive.mk_adaptive_steps, args)
+            if ep is None:
+                st, k = _adaptive.mk_adaptive_steps(*args)
+                ad["entry"] = entry_point(_adaptive.mk_adaptive_steps, args) or _adaptive.mk_adaptive_steps
+            else:
+                ad["entry"] = ep
+                st, k = ep(*args)
         else:
             st, k = ep(*args)
         self.t = float(ad["fs"][_adaptive.FS_T])

@@ -57,7 +57,7 @@ NATIVE_CONSTRAINED = ("GeneralizedAlpha", "GeneralizedAlpha-mN", "TrapezoidalInd
 NATIVE_FREE = ("RK44", "RK67", "DOPRI5")
 EPS_LEVELS = (1e-4, 1e-5, 1e-6, 1e-7, 1e-8)
 SECTIONS = ("wp", "perstep", "scaling", "startup", "overhead", "groups", "mujoco", "params", "items",
-            "userfunctions", "topology")
+            "userfunctions", "topology", "adaptive")
 TARGET_RATIO = 10.0
 # absolute per-step targets (MK-RK4, SE3, median step, this 2-core machine)
 KERNEL_STEP_TARGETS_US = {"heavytop": 3.0, "doublependulum": 6.0}
@@ -929,6 +929,9 @@ def write_report(cfg, out, cmdline):
     L += _params_lines(out.get("params"))
     from .bench_items import report_lines as _items_lines
     L += _items_lines(out.get("items"))
+    if out.get("adaptive"):
+        from .bench_adaptive import report_lines as _adaptive_lines
+        L += _adaptive_lines(out["adaptive"], out["adaptive"].get("figures", ()))
     # ---- profile notes
     A("## 7. Profile and optimisation record")
     A("")
@@ -1062,6 +1065,9 @@ def main(argv=None):
     if "topology" in cfg.sections:
         from . import bench_topology
         out["topology"] = bench_topology.run_section(cfg, log)
+    if "adaptive" in cfg.sections:
+        from . import bench_adaptive
+        out["adaptive"] = bench_adaptive.run_section(cfg, log)
     out["env"]["loadEnd"] = loadavg()
     out["profileExtra"] = PROFILE_EXTRA
     os.makedirs(cfg.out, exist_ok=True)
@@ -1070,6 +1076,11 @@ def main(argv=None):
         from .bench_mujoco import plot as mujoco_plot
         out["figures"].append(mujoco_plot(out["mujoco"], os.path.join(cfg.figdir, "wp_mujoco.png")))
         out["mujoco"]["figure"] = "bench_figures/wp_mujoco.png"
+    if out.get("adaptive"):
+        from .bench_adaptive import plot as adaptive_plot
+        figs = adaptive_plot(out["adaptive"], cfg.figdir)
+        out["figures"] += figs
+        out["adaptive"]["figures"] = [os.path.join("bench_figures", os.path.basename(f)) for f in figs]
     write_report(cfg, out, cmdline)
     if args.readme:
         from .generated import update_file_block

@@ -14,43 +14,12 @@ chunk is one output long.  Both calls go through entry points resolved once
 import numpy as np
 
 from ..mbs import kernel, stepper
+from ..mbs.entry import entry_point
 from .nodes import NCOORD_MAX, write_rows
 
 CHUNK_SECONDS = 0.05        # aimed wall time of one chunk (progress, responsiveness)
 CHUNK_DOUBLES = 1 << 22     # at most this many doubles of chunk buffers (32 MiB)
 CHUNK_ROWS = 256            # at most this many outputs per chunk
-
-_ENTRY_CACHE = {}
-
-
-def _type_key(x):
-    """A cheap key that determines numba's type of an argument (arrays: dtype, ndim,
-    layout, writeability; namedtuples: their class and fields)."""
-    if isinstance(x, np.ndarray):
-        return (x.dtype.str, x.ndim, x.flags.c_contiguous, x.flags.writeable)
-    if isinstance(x, tuple):
-        return (type(x),) + tuple(_type_key(v) for v in x)
-    return type(x)
-
-
-def entry_point(dispatcher, args):
-    """The compiled entry point of a numba ``dispatcher`` for exactly these argument
-    types (the dispatcher must have been called with them once); None if unavailable.
-    Resolved signatures are cached by a cheap structural key of the arguments, so a
-    repeated solve does not pay numba's type resolution (~1 ms per namedtuple) again."""
-    try:
-        key = (id(dispatcher),) + tuple(_type_key(a) for a in args)
-        ep = _ENTRY_CACHE.get(key)
-        if ep is None:
-            sig = tuple(dispatcher.typeof_pyval(a) for a in args)
-            ov = dispatcher.overloads.get(sig)
-            if ov is None:
-                return None
-            ep = _ENTRY_CACHE[key] = ov.entry_point
-        return ep
-    except Exception:
-        return None
-
 
 def _call(cache, name, dispatcher, args):
     """``dispatcher(*args)``, through its entry point from the second call on."""
@@ -144,6 +113,60 @@ class OutputChunks:
             if ae.size:
                 ae[:] = AEr[o]
         self.next = o + 1
+
+
+class AdaptiveOutputChunks(OutputChunks):
+    """Exudyn's output times on adaptive steps (:mod:`~exudyn_lie.mbs.adaptive`): the same
+    grid of outputs every ``nsub * h`` as :class:`OutputChunks` (the last at ``tEnd``), each
+    from the dense output on the group of the step that contains it; no step is shortened
+    for an output.  Accelerations and multipliers at an output (``doacc``) are one
+    evaluation of the equations of motion at its state (not counted as integration work)."""
+
+    def __init__(self, sim, nodes, vmax, bufs, jac, nsub, h, doacc, tEnd, maxRows=CHUNK_ROWS):
+        super().__init__(sim, nodes, vmax, bufs, jac, nsub, h, doacc, maxRows=maxRows)
+        self.tEnd = float(tEnd)
+        self.restart(sim.t)
+
+    def restart(self, t):
+        """Outputs from Exudyn's time ``t`` on (start, or a restart from the state in mbs)."""
+        self.t0, self.done = float(t), 0
+        self.total = max(1, int(round((self.tEnd - self.t0) / (self.nsub * self.h))))
+
+    def _output_times(self, n):
+        dt = self.nsub * self.h
+        idx = self.done + 1 + np.arange(n)
+        t = self.t0 + idx * dt
+        t[idx >= self.total] = self.tEnd           # Exudyn's last step ends at endTime
+        return t
+
+    def refill(self, nout):
+        sim = self.sim
+        n = max(1, min(int(nout), self.size, self.total - self.done))
+        tout = self._output_times(n)
+        tPrev = self.t0 + self.done * self.nsub * self.h
+        st, rows = sim.AdvanceToInto(self.tEnd, tout, self.Ro[:n], self.ro[:n], self.Vo[:n])
+        if self.doacc and rows > 0:
+            wk = sim.wk
+            keep0, keepLam = wk.Vd[0].copy(), wk.lam.copy()     # stage 1 / dense data of the step
+            for o in range(rows):
+                est = sim._evaluate(float(tout[o]), self.Ro[o], self.ro[o], self.Vo[o])
+                if est != kernel.STATUS_OK:
+                    rows, st = o, est
+                    break
+                self.Vdo[o] = wk.Vd[0]
+                self.lamo[o] = wk.lam
+            wk.Vd[0] = keep0
+            wk.lam[:] = keepLam
+        nt = self.nodes
+        q, qt, qtt, ae = self.bufs
+        jrow, jae = self.jac
+        a2 = (rows, sim.sd.gid, self.Ro, self.ro, self.Vo, self.Vdo, self.lamo, self.doacc, nt.code, nt.body,
+              nt.idx, nt.nq, nt.qref, nt.prev, self.Q, self.Qt, self.Qtt, nt.flags, jrow, jae, self.AE)
+        nflag = _call(self._ep, "write", write_rows, a2)
+        self.tStart, self.rows, self.next = tPrev, rows, 0
+        self.done += rows
+        self.failure = None if st == kernel.STATUS_OK else st
+        return rows, nflag
 
 
 class NodeTable:

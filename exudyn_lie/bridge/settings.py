@@ -32,6 +32,18 @@ SETTINGS = (
     ("timeIntegration.simulateInRealtime", HONOURED, _LOOP),
     ("timeIntegration.realtimeFactor", HONOURED, _LOOP),
     ("timeIntegration.realtimeWaitMicroseconds", HONOURED, _LOOP),
+    # adaptive steps (docs/ADAPTIVE.md): with a method that has an embedded pair (DOPRI5, BS3 = ODE23, Vern6)
+    ("timeIntegration.adaptiveStep", HONOURED, "True (Exudyn's default) with an embedded pair: adaptive steps with "
+                                               "error control on the group; False, or a method without a pair: fixed "
+                                               "steps"),
+    ("timeIntegration.absoluteTolerance", HONOURED, "adaptive steps: atol of every SI quantity (rad, m, rad/s, m/s)"),
+    ("timeIntegration.relativeTolerance", HONOURED, "adaptive steps: rtol"),
+    ("timeIntegration.minimumStepSize", HONOURED, "adaptive steps: a step below it stops with StepSizeError"),
+    ("timeIntegration.initialStepSize", HONOURED, "adaptive steps: the first step if automaticStepSize and > 0"),
+    ("timeIntegration.automaticStepSize", HONOURED, "adaptive steps: False starts at the largest step, as Exudyn; "
+                                                    "True with initialStepSize = 0: Hairer's HINIT"),
+    ("timeIntegration.stepSizeSafety", HONOURED, "adaptive steps: the PI controller's safety factor"),
+    ("timeIntegration.stepSizeMaxIncrease", HONOURED, "adaptive steps: the largest growth of a step"),
     ("timeIntegration.solverType", HONOURED, "read as Exudyn reads it (when SolveDynamic's solverType is None): "
                                              "an explicit type selects its tableau, the implicit ones are replaced "
                                              "by method=...; see bridge/solvertype.py"),

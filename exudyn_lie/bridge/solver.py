@@ -41,11 +41,12 @@ import numpy as np
 
 from .. import __version__
 from ..compiling import compile_timer
-from ..integrators.tableau import ButcherTableau, get_method, method_names
+from ..integrators.mk_adaptive import resolve_pair
+from ..integrators.tableau import ButcherTableau, method_names
 from ..mbs.compiled import auto_groups
 from ..mbs.simulator import Simulator
 from ..userwarn import warn_user
-from .fast import CHUNK_ROWS, NodeTable, OutputChunks
+from .fast import CHUNK_ROWS, AdaptiveOutputChunks, NodeTable, OutputChunks
 from .params import ParameterWatch
 from .settings import check_settings
 from .solvertype import resolve_solver_type
@@ -73,7 +74,7 @@ def _check_method(method):
         return method
     if isinstance(method, str):
         try:
-            return get_method(method)
+            return resolve_pair(method)          # the catalogue, or an embedded pair (BS3 = ODE23, Vern6)
         except ValueError as e:
             raise BridgeError(f"unknown method {method!r}; available: {str(e).partition('available: ')[2]} or an "
                               f"exudyn_lie.integrators.ButcherTableau") from None
@@ -201,11 +202,17 @@ class LieGroupSolver:
                       f"{what} (Exudyn's own solvers start from it unchanged; pass projectInitial=False to "
                       f"raise instead)")
 
-    def _solution_information(self, nsteps, h, t0, tEnd, k):
+    def _solution_information(self, nsteps, h, t0, tEnd, k, adaptive=None):
         """What was integrated, for the solution file's header and the log."""
         groups = ", ".join(f"{g} ({self.groups.count(g)} {'body' if self.groups.count(g) == 1 else 'bodies'})"
                            for g in dict.fromkeys(self.groups))
         tab = self.tableau
+        if adaptive is not None:
+            return (f"exudyn_lie {__version__}: explicit Munthe-Kaas {tab.name} (order {tab.order}, {tab.stages} "
+                    f"stages) with adaptive steps (error control on the group, absoluteTolerance = "
+                    f"{adaptive['atol']:g}, relativeTolerance = {adaptive['rtol']:g}, step size <= {h:.6g} s, >= "
+                    f"{adaptive['minStep']:g} s), Lie group {groups or 'none'}, from t = {t0:g} to {tEnd:g} s; "
+                    f"Exudyn's time loop made {nsteps // k} output steps (dense output at their exact times)")
         return (f"exudyn_lie {__version__}: explicit Munthe-Kaas {tab.name} (order {tab.order}, {tab.stages} stages), "
                 f"Lie group {groups or 'none'}, step size h = {h:.6g} s, {nsteps} steps from t = {t0:g} to "
                 f"{tEnd:g} s; Exudyn's time loop made {nsteps // k} steps of {k} integration step(s) each (the "
@@ -390,6 +397,9 @@ class LieGroupSolver:
         if ch is not None:
             ch.rows = ch.next = 0
             ch.failure = None
+            if isinstance(ch, AdaptiveOutputChunks):     # a new first step, no FSAL reuse
+                ch.restart(t)
+                self.sim.RestartAdaptive()
 
     def _apply_parameters(self, t):
         """Parameters changed by user functions since the last step: the simulator must not
@@ -478,6 +488,42 @@ class LieGroupSolver:
                     return True          # joint outputs are the multipliers
         return False
 
+    # ------------------------------------------------------------------ adaptive steps
+    def _adaptive_settings(self, ss, h):
+        """Keywords of :meth:`Simulator.SetAdaptive` from Exudyn's settings, or None for fixed
+        steps (docs/ADAPTIVE.md).  Adaptive: a method with an embedded pair and
+        ``timeIntegration.adaptiveStep`` (Exudyn's default True); tolerances
+        ``absoluteTolerance`` / ``relativeTolerance`` (with L = 1 m, T = 1 s: every SI
+        quantity, as Exudyn applies them to every coordinate); the largest step
+        ``(endTime - startTime) / numberOfSteps`` (Exudyn: CSolverBase.cpp, no
+        maximumStepSize); ``minimumStepSize``; the first step ``initialStepSize`` if
+        ``automaticStepSize`` and it is > 0, h_max without ``automaticStepSize`` (as Exudyn),
+        else Hairer's HINIT (Exudyn starts at h_max and rejects its way down); the PI
+        controller with Exudyn's ``stepSizeSafety`` and ``stepSizeMaxIncrease``."""
+        ti = ss.timeIntegration
+        if self.tableau.b_hat is None or not ti.adaptiveStep:
+            return None
+        atol, rtol = float(ti.absoluteTolerance), float(ti.relativeTolerance)
+        hmin, h0 = float(ti.minimumStepSize), float(ti.initialStepSize)
+        safety, inc = float(ti.stepSizeSafety), float(ti.stepSizeMaxIncrease)
+        bad = [f"{name} = {v}" for name, v, ok in (
+            ("absoluteTolerance", atol, atol > 0), ("relativeTolerance", rtol, rtol >= 0),
+            ("minimumStepSize", hmin, 0 <= hmin < h), ("initialStepSize", h0, h0 >= 0),
+            ("stepSizeSafety", safety, 0 < safety <= 1), ("stepSizeMaxIncrease", inc, inc > 1)) if not ok]
+        if bad:
+            raise BridgeError(f"timeIntegration: {', '.join(bad)} cannot control adaptive steps (need "
+                              f"absoluteTolerance > 0, relativeTolerance >= 0, 0 <= minimumStepSize < (endTime - "
+                              f"startTime) / numberOfSteps = {h:g}, initialStepSize >= 0, 0 < stepSizeSafety <= 1, "
+                              f"stepSizeMaxIncrease > 1); or set timeIntegration.adaptiveStep = False for fixed steps")
+        if not ti.automaticStepSize:
+            first = h
+        elif h0 > 0:
+            first = min(h0, h)
+        else:
+            first = None
+        return dict(rtol=rtol, atol=atol, maxStep=h, minStep=hmin, firstStep=first, safety=safety,
+                    maxIncrease=inc)
+
     # ------------------------------------------------------------------ solve
     @staticmethod
     def _time_settings(ss):
@@ -495,6 +541,7 @@ class LieGroupSolver:
         nothing; SolveDynamic calls it before it assembles mbs)."""
         nsteps, t0, tEnd, h = self._time_settings(ss)
         self._plan(ss, nsteps, h, substeps)
+        self._adaptive_settings(ss, h)
 
     def _use_assembled(self):
         """After SolveDynamic validated an unassembled mbs ('items') and assembled it: read
@@ -550,7 +597,8 @@ class LieGroupSolver:
         k, userStep = self._plan(ss, nsteps, h, substeps)
         needAcc = self._needs_accelerations(ss, userStep) if accelerations is None else bool(accelerations)
         self._watch = userStep          # a pre/post-step function may change the state
-        info = self._solution_information(nsteps, h, t0, tEnd, k)
+        adaptive = self._adaptive_settings(ss, h)
+        info = self._solution_information(nsteps, h, t0, tEnd, k, adaptive)
         log = self.verbose or ss.timeIntegration.verboseMode >= 1
         if log:
             print(f"{info}; accelerations {'written' if needAcc else 'not needed'}")
@@ -605,9 +653,14 @@ class LieGroupSolver:
             # chunks of outputs from the one compiled stepper; one output per chunk if a user
             # function may change the state in between or Python forces (Exudyn user
             # functions) run, so that they are called in step with Exudyn's outputs
-            self._chunks = OutputChunks(
-                sim, self._nodes, vmax, (self._q, self._qt, self._qtt, self._ae), (self._jrow, self._jae),
-                k, h, needAcc, maxRows=1 if (self._watch or sim.sd.hasQext) else CHUNK_ROWS)
+            bufs, jac = (self._q, self._qt, self._qtt, self._ae), (self._jrow, self._jae)
+            maxRows = 1 if (self._watch or sim.sd.hasQext) else CHUNK_ROWS
+            if adaptive is None:
+                self._chunks = OutputChunks(sim, self._nodes, vmax, bufs, jac, k, h, needAcc, maxRows=maxRows)
+            else:
+                sim.SetAdaptive(**adaptive)
+                self._chunks = AdaptiveOutputChunks(sim, self._nodes, vmax, bufs, jac, k, h, needAcc, tEnd,
+                                                    maxRows=maxRows)
             # the hook, per Exudyn step (kept lean: it runs per output)
             sdat = self.mbs.systemData
             cur = exu.ConfigurationType.Current
@@ -731,10 +784,14 @@ class LieGroupSolver:
         integ = self.timing["integration"]
         self.timing.update(total=setUp + loop, setUp=setUp, loop=loop, compile=compiled,
                            bridgeOverhead=max(loopNet - integ, 0.0) / loopNet if loopNet > 0 else 0.0)
+        if adaptive is not None:
+            acc, rej, nrhs = sim.adaptiveCounters
+            self.timing.update(adaptive=True, accepted=acc, rejected=rej, rhsEvaluations=nrhs, steps=acc)
+            nsteps = acc
         if log:
             print(f"exudyn_lie: {nsteps} steps in {setUp + loop:.3g} s: set-up {setUp:.3g} s (reading the model, "
                   f"building the simulator), time loop {loop:.3g} s (integration {integ:.3g} s = "
-                  f"{1e6 * integ / nsteps:.3g} us/step, bridge + Exudyn output "
+                  f"{1e6 * integ / max(nsteps, 1):.3g} us/step, bridge + Exudyn output "
                   f"{100 * self.timing['bridgeOverhead']:.1f} %)"
                   + (f"; numba compilation {compiled:.3g} s of it (first run on this machine, cached from now on)"
                      if compiled > 0.05 else ""))

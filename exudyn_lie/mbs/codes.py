@@ -27,6 +27,7 @@ STATUS_BLOWUP = 3
 STATUS_PROJECTION = 4      # the position projection did not converge
 STATUS_STAGE_ARG = 5       # a stage argument Psi_j left the domain of dexpinv (wk.info[2] = body)
 STATUS_EXTERNAL = 6        # the right-hand side evaluated in Python raised (mbs.external)
+STATUS_STEP_MIN = 7        # adaptive steps: the error control asks for a step below the minimum (mbs.adaptive)
 
 # Domain of the MK stage equation k_j = dexpinv_{-Psi_j} V_j (eq. MK1): dexpinv of SO(3)
 # (and of SE(3), whose blocks share the coefficient) is singular at |rotation part| = 2 pi,

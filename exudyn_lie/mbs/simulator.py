@@ -18,7 +18,7 @@ from ..compiling import announce_cold_compile
 from ..errors import ConstraintError, SimulationError, StepSizeError  # noqa: F401 (re-exported)
 from ..groups import so3
 from ..integrators.stability import stability_radius
-from ..integrators.tableau import get_method
+from ..integrators.mk_adaptive import resolve_pair
 from ..userwarn import warn_user
 from . import external, kernel
 from .bodies import body_dexpinv_stage, exp_compose
@@ -27,6 +27,9 @@ from .linalg import REL_PIVOT_TOL, rows_in_null_space, schur_rank_and_null
 from .scene import Scene, SceneError
 from .state import BodyStates, twist_to_world_velocity, world_velocity_to_twist
 from .stepper import fixed_step_control, method_arrays
+from . import adaptive as _adaptive
+from .entry import entry_point
+from ..integrators import control as _control
 
 
 # relative size of the constraint residual/velocity error accepted at the start
@@ -51,6 +54,11 @@ class Result:
     stepSize: float
     cpuTime: float = 0.0
     steps: int = 0
+    # adaptive runs (rtol / atol): rejected steps and right-hand-side evaluations
+    # (``steps`` counts the accepted ones); fixed-step runs: rhsEvaluations = steps x stages
+    rejectedSteps: int = 0
+    rhsEvaluations: int = 0
+    adaptive: bool = False
 
     @property
     def totalEnergy(self):
@@ -127,7 +135,7 @@ class Simulator:
         self.scene = scene
         scene.validate()
         announce_cold_compile(kernel.mk_steps)      # one line on the first run on a machine (numba compiles)
-        self.tableau = get_method(method)
+        self.tableau = resolve_pair(method)          # the catalogue, or an embedded pair by name (BS3, Vern6)
         self.groups = resolve_groups(scene, liegroup)
         if stabilization not in (None, "none", "velocity", "position"):
             raise ValueError(f"unknown stabilization {stabilization!r}; use None, 'velocity' or 'position'")
@@ -151,7 +159,10 @@ class Simulator:
                 print(f"exudyn_lie: body {i} ({b.name}): {self.groups[i]}")
 
     def _make_work(self):
-        wk = make_work(self.sd, len(self.method.b))
+        dense = self.tableau.dense
+        # room for the dense-output extra stages of an embedded pair (adaptive steps)
+        extra = dense.extra_stages if (dense is not None and self.tableau.b_hat is not None) else 0
+        wk = make_work(self.sd, len(self.method.b) + extra)
         wk.ext[0] = self._extToken
         return wk
 
@@ -409,11 +420,12 @@ class Simulator:
                 float(self._vmaxValue)) + self.NoOutputs()
         ep = getattr(self, "_mkEntry", None)
         if ep is None:
-            out = kernel.mk_steps(*args)
-            sig = tuple(kernel.mk_steps.typeof_pyval(a) for a in args)
-            ov = kernel.mk_steps.overloads.get(sig)
-            self._mkEntry = ov.entry_point if ov is not None else kernel.mk_steps
-            return out
+            ep = entry_point(kernel.mk_steps, args)      # cached per argument structure (mbs/entry.py)
+            if ep is None:
+                out = kernel.mk_steps(*args)
+                self._mkEntry = entry_point(kernel.mk_steps, args) or kernel.mk_steps
+                return out
+            self._mkEntry = ep
         return ep(*args)
 
     def _external_forces(self, t):
@@ -485,6 +497,8 @@ class Simulator:
 
     def _raise_status(self, st, h):
         """Raise the error for a kernel status (public as :meth:`RaiseStatus`)."""
+        if st == kernel.STATUS_STEP_MIN:
+            self._raise_step_min()
         if st == kernel.STATUS_EXTERNAL:
             external.reraise(self._extToken)
             if self.wk.ext[1]:
@@ -614,12 +628,14 @@ class Simulator:
         return st
 
     # ----------------------------------------------------------------- diagnostics
-    def Diagnostics(self):
-        """(energy[3], residuals[m], joint position violation[nj], joint rotation violation[nj])."""
+    def Diagnostics(self, R=None, r=None, V=None):
+        """(energy[3], residuals[m], joint position violation[nj], joint rotation violation[nj])
+        at the current state (or at ``R, r, V``)."""
         sd, wk = self.sd, self.wk
         e = np.zeros(3)
         h = np.zeros(sd.nrows)
-        kernel.all_rows(sd, wk, self.R, self.r, self.V, h, wk.Jr, wk.eta, e)
+        kernel.all_rows(sd, wk, self.R if R is None else R, self.r if r is None else r, self.V if V is None else V,
+                        h, wk.Jr, wk.eta, e)
         nj = len(self.scene.joints)
         if not hasattr(self, "_rowIsRot"):
             self._rowIsRot = sd.rint[:, kernel.ROW_KIND] == kernel.ROW_ROT
@@ -644,10 +660,222 @@ class Simulator:
             L += np.cross(xc, b.mass * vc) + R @ (Jc @ omega[i])
         return p, L
 
-    def Run(self, endTime, stepSize, outputEvery=1, startTime=None, progress=False):
+    # ----------------------------------------------------------------- adaptive steps (issue 18)
+    def SetAdaptive(self, rtol=1e-3, atol=1e-6, maxStep=np.inf, minStep=0.0, firstStep=None, safety=0.9,
+                    maxIncrease=10.0, lengthScale=1.0, timeScale=1.0):
+        """Prepare adaptive steps of the embedded pair (:mod:`.adaptive`) with the scaled
+        error ``atol + rtol * size`` per physical kind (``integrators/control.py``: angles
+        atol [rad], lengths atol L, angular velocities atol / T, velocities atol L / T with
+        ``lengthScale`` L, ``timeScale`` T), the PI controller (safety factor ``safety``,
+        growth per step at most ``maxIncrease``), steps in ``[minStep, maxStep]`` and the
+        first step ``firstStep`` (None: Hairer's HINIT).  The next :meth:`AdvanceTo` starts
+        afresh from the current state."""
+        tab = self.tableau
+        am = _adaptive.adaptive_method(tab)
+        maxStep = float(np.inf if maxStep is None else maxStep)
+        minStep = float(0.0 if minStep is None else minStep)
+        if not maxStep > 0:
+            raise ValueError(f"maxStep must be positive, got {maxStep}")
+        if not (minStep >= 0 and minStep < maxStep):
+            raise ValueError(f"minStep must be >= 0 and below maxStep, got {minStep} (maxStep {maxStep})")
+        if firstStep is not None and not (np.isfinite(firstStep) and firstStep > 0):
+            raise ValueError(f"firstStep must be positive and finite, got {firstStep}")
+        nb = self.sd.nb
+        self._ad = dict(
+            am=am, tol=_control.tolerances(atol, rtol, lengthScale, timeScale),
+            par=_control.controller_params(tab.order_hat, safety=safety, fac_max=maxIncrease, h_min=minStep,
+                                           h_max=maxStep),
+            S=_control.controller_state(), fs=np.zeros(4), ist=np.zeros(3, np.int64),
+            R0=np.zeros((nb, 3, 3)), r0=np.zeros((nb, 3)), V0=np.zeros((nb, 6)),
+            dPhi=np.zeros((nb, 6)), dV=np.zeros((nb, 6)), w=np.zeros(am.A.shape[0]),
+            firstStep=firstStep, started=False, rtol=rtol, atol=atol)
+
+    def RestartAdaptive(self):
+        """Start the adaptive integration afresh at the next :meth:`AdvanceTo` (a new first
+        step, no FSAL reuse): after the state was changed from outside."""
+        if getattr(self, "_ad", None) is not None:
+            self._ad["started"] = False
+
+    def _hinit(self, ad):
+        """Hairer's HINIT on the group (``integrators/control.py``; as ``mk_adaptive.initial_step``):
+        two evaluations; the first is kept as the first step's stage 1."""
+        tol, P = ad["tol"], ad["par"]
+        R, r, V, t = self.R, self.r, self.V, self.t
+        st = self._evaluate(t, R, r, V)
+        if st != kernel.STATUS_OK:
+            self._raise_status(st, 0.0)
+        Vd0 = self.wk.Vd[0].copy()
+        size = np.zeros_like(V)
+        size[:, 0] = 1.0                                     # a rotation's size: 1 rad
+        size[:, 3:] = r
+        d0 = _control.weighted_rms(size, V, r, r, V, V, tol)
+        d1 = _control.weighted_rms(V, Vd0, r, r, V, V, tol)
+        h0 = min(_control.hinit_first(d0, d1), P[_control.P_H_MAX])
+        R1, r1 = np.empty_like(R), np.empty_like(r)         # explicit Euler probe (g exp(h0 V), V + h0 Vdot)
+        ER, Er = np.zeros((3, 3)), np.zeros(3)
+        for i in range(self.sd.nb):
+            exp_compose(int(self.gid[i]), R[i], r[i], h0 * V[i], R1[i], r1[i], ER, Er)
+        V1 = V + h0 * Vd0
+        st = self._evaluate(t + h0, R1, r1, V1)
+        if st != kernel.STATUS_OK:
+            self._raise_status(st, 0.0)
+        d2 = _control.weighted_rms(V1 - V, self.wk.Vd[0] - Vd0, r, r, V, V, tol) / h0
+        self.wk.Vd[0] = Vd0
+        ad["S"][_control.S_N_RHS] += 2
+        return _control.hinit_second(h0, d1, d2, P[_control.P_Q], P[_control.P_H_MAX])
+
+    def _adaptive_start(self, ad):
+        ad["S"][:] = _control.controller_state()
+        fs, ist = ad["fs"], ad["ist"]
+        ist[:] = 0
+        h = ad["firstStep"]
+        if h is None:
+            h = self._hinit(ad)                               # leaves stage 1 in wk.Vd[0]
+            ist[_adaptive.IS_HAVE0] = _adaptive.HAVE0_STAGE1
+        P = ad["par"]
+        fs[_adaptive.FS_T] = self.t
+        fs[_adaptive.FS_H] = max(min(float(h), P[_control.P_H_MAX]), P[_control.P_H_MIN])
+        ad["hInitial"] = fs[_adaptive.FS_H]
+        ad["started"] = True
+
+    def AdvanceTo(self, endTime, outputTimes=None):
+        """Adaptive steps (after :meth:`SetAdaptive`) from the current time to ``endTime``
+        (the last step clipped to it), with the states at ``outputTimes`` (sorted, in
+        ``[t, endTime]``) by dense output on the group: the call returns once every output
+        is written (the state may then be up to one step ahead of the last output).
+        Returns ``(R, r, V)`` at the output times.  A step below the minimum raises
+        :class:`StepSizeError` with ``.time`` and ``.step``; the state then is the last
+        accepted step."""
+        tout = np.ascontiguousarray(np.zeros(0) if outputTimes is None else outputTimes, dtype=np.float64)
+        nb = self.sd.nb
+        Ro, ro, Vo = np.zeros((tout.size, nb, 3, 3)), np.zeros((tout.size, nb, 3)), np.zeros((tout.size, nb, 6))
+        st, k = self.AdvanceToInto(endTime, tout, Ro, ro, Vo)
+        if st != kernel.STATUS_OK:
+            self._raise_status(st, float(self._ad["fs"][_adaptive.FS_H]))
+        return Ro[:k], ro[:k], Vo[:k]
+
+    def AdvanceToInto(self, endTime, tout, Ro, ro, Vo):
+        """:meth:`AdvanceTo` writing into the given output rows; returns ``(kernel status,
+        outputs written)`` without raising for a failure (:meth:`RaiseStatus` does)."""
+        ad = getattr(self, "_ad", None)
+        if ad is None:
+            raise RuntimeError("AdvanceTo needs SetAdaptive(rtol=..., atol=...) first")
+        tEnd = float(endTime)
+        if tEnd < self.t:
+            raise ValueError(f"endTime {tEnd} is before the current time {self.t}")
+        if tout.size and (np.any(np.diff(tout) < 0) or tout[-1] > tEnd):
+            raise ValueError("outputTimes must be sorted and at most endTime")
+        if not ad["started"]:
+            if tout.size and tout[0] < self.t:
+                raise ValueError("outputTimes before the current time")
+            self._adaptive_start(ad)
+        if not hasattr(self, "_vmaxValue"):
+            self._vmaxValue = self._vmax()
+        args = (self.sd, self.wk, ad["am"], ad["par"], ad["S"], ad["tol"], ad["fs"], ad["ist"], tEnd,
+                self.R, self.r, self.V, ad["R0"], ad["r0"], ad["V0"], ad["dPhi"], ad["dV"], ad["w"],
+                float(self._vmaxValue), tout, Ro, ro, Vo)
+        ep = ad.get("entry")
+        if ep is None:                  # resolved once per argument structure (mbs/entry.py)
+            ep = entry_point(_adaptive.mk_adaptive_steps, args)
+            if ep is None:
+                st, k = _adaptive.mk_adaptive_steps(*args)
+                ad["entry"] = entry_point(_adaptive.mk_adaptive_steps, args) or _adaptive.mk_adaptive_steps
+            else:
+                ad["entry"] = ep
+                st, k = ep(*args)
+        else:
+            st, k = ep(*args)
+        self.t = float(ad["fs"][_adaptive.FS_T])
+        return st, k
+
+    def _raise_step_min(self):
+        ad = self._ad
+        S = ad["S"]
+        _control.raise_step_size_error(self.t, S[_control.S_H], ad["par"][_control.P_H_MIN], S[_control.S_ERR],
+                                       self.tableau.name)
+
+    @property
+    def adaptiveCounters(self):
+        """(accepted steps, rejected steps, right-hand-side evaluations) since SetAdaptive
+        or the last restart (HINIT's two evaluations and the dense extra stages included)."""
+        S = self._ad["S"]
+        return int(S[_control.S_N_ACCEPT]), int(S[_control.S_N_REJECT]), int(S[_control.S_N_RHS])
+
+    def _run_adaptive(self, endTime, t0, outputTimes, progress, **kw):
+        self.t = t0
+        self.SetAdaptive(**kw)
+        tout = np.asarray(outputTimes, dtype=np.float64)
+        nout = tout.size
+        nb, m, nj = self.sd.nb, self.sd.nrows, len(self.scene.joints)
+        R, r, V = np.zeros((nout, nb, 3, 3)), np.zeros((nout, nb, 3)), np.zeros((nout, nb, 6))
+        k0 = 0
+        while k0 < nout and tout[k0] <= t0:
+            R[k0], r[k0], V[k0] = self.R, self.r, self.V
+            k0 += 1
+        cpu = 0.0
+        tlast = _time.time()
+        chunk = 64
+        k = k0
+        while k < nout or self.t < endTime:
+            sl = tout[k:k + chunk]
+            tic = _time.perf_counter()
+            Ro, ro, Vo = self.AdvanceTo(endTime, sl)
+            cpu += _time.perf_counter() - tic
+            n = Ro.shape[0]
+            R[k:k + n], r[k:k + n], V[k:k + n] = Ro, ro, Vo
+            k += n
+            if progress and _time.time() - tlast > 2.0:
+                tlast = _time.time()
+                print(f"exudyn_lie: t = {self.t:.4g} / {endTime:.4g} s", flush=True)
+        energy, res, pv, rv = np.zeros((nout, 3)), np.zeros((nout, m)), np.zeros((nout, nj)), np.zeros((nout, nj))
+        for q in range(nout):
+            energy[q], res[q], pv[q], rv[q] = self.Diagnostics(R[q], r[q], V[q])
+        omega, vel = twist_to_world_velocity(np.tile(self.gid, nout), R.reshape(-1, 3, 3), V.reshape(-1, 6))
+        acc, rej, nrhs = self.adaptiveCounters
+        return Result(tout.copy(), R, r, V, omega.reshape(nout, nb, 3), vel.reshape(nout, nb, 3), energy, res, pv,
+                      rv, list(self.groups), self.tableau.name, float(self._ad["hInitial"]), cpu, acc,
+                      rejectedSteps=rej, rhsEvaluations=nrhs, adaptive=True)
+
+    def Run(self, endTime, stepSize=None, outputEvery=1, startTime=None, progress=False, *, rtol=None, atol=None,
+            outputTimes=None, maxStep=None, minStep=0.0, firstStep=None):
         """Integrate from the current state to ``endTime``; returns a :class:`Result`.
 
-        ``outputEvery`` steps between stored outputs (diagnostics are evaluated there)."""
+        Fixed steps (the default): ``stepSize``, with ``outputEvery`` steps between stored
+        outputs (diagnostics are evaluated there).
+
+        Adaptive steps, in scipy's style, when ``rtol`` or ``atol`` is given (an embedded
+        pair: DOPRI5, BS3 = ODE23, Vern6; scipy's defaults rtol = 1e-3, atol = 1e-6 for the
+        one not given): error control on the group (:mod:`.adaptive`), steps in
+        ``[minStep, maxStep]`` (default ``[0, endTime - startTime]``), first step
+        ``firstStep`` (default: HINIT).  Outputs at ``outputTimes``, or else every
+        ``stepSize * outputEvery`` (if ``stepSize`` is given; it does not bound the steps)
+        and at ``endTime``, by dense output: exact times, no step shortened.  The result
+        has ``steps`` (accepted), ``rejectedSteps`` and ``rhsEvaluations``; its
+        ``stepSize`` is the first step."""
+        if rtol is not None or atol is not None:
+            t0 = self.t if startTime is None else float(startTime)
+            if not (np.isfinite(t0) and np.isfinite(endTime) and endTime >= t0):
+                raise ValueError(f"need finite startTime <= endTime, got {t0}, {endTime}")
+            if outputTimes is None:
+                if stepSize is not None:
+                    dt = float(stepSize) * max(1, int(outputEvery))
+                    if not (np.isfinite(dt) and dt > 0):
+                        raise ValueError(f"stepSize must be positive and finite, got {stepSize}")
+                    nfull = int(np.floor((endTime - t0) / dt + 1e-9))
+                    outputTimes = t0 + dt * np.arange(nfull + 1)
+                    if endTime - outputTimes[-1] > 1e-9 * max(1.0, abs(endTime)):
+                        outputTimes = np.append(outputTimes, endTime)
+                    else:
+                        outputTimes[-1] = endTime
+                else:
+                    outputTimes = [t0, endTime]
+            span = endTime - t0
+            return self._run_adaptive(
+                float(endTime), t0, outputTimes, progress, rtol=1e-3 if rtol is None else rtol,
+                atol=1e-6 if atol is None else atol, maxStep=span if maxStep is None else min(maxStep, span),
+                minStep=minStep, firstStep=firstStep)
+        if stepSize is None:
+            raise ValueError("Run needs a stepSize (fixed steps) or rtol / atol (adaptive steps)")
         h = float(stepSize)
         if not np.isfinite(h) or h <= 0:
             raise ValueError(f"stepSize must be positive and finite, got {stepSize}")
@@ -718,4 +946,4 @@ class Simulator:
         vel = vel.reshape(nout, nb, 3)
         return Result(out["times"], out["R"], out["r"], out["V"], omega, vel, out["energy"],
                       out["residuals"], out["pv"], out["rv"], list(self.groups), self.tableau.name,
-                      h, cpu, nsteps)
+                      h, cpu, nsteps, rhsEvaluations=nsteps * len(self.method.stages))

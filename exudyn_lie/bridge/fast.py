@@ -162,7 +162,7 @@ class NodeTable:
         i = 0
         for kind, bodies in zip(kinds, kindBodies):
             n = len(kind)
-            m = 3 + kind.nrot
+            m = kind.npos + kind.nrot
             self.code[i:i + n] = kind.code
             self.body[i:i + n] = bodies
             self.idx[i:i + n, :m] = kind.idx

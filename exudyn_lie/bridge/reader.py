@@ -52,17 +52,20 @@ import numpy as np
 
 from ..mbs.compiled import joint_row_descriptors
 from ..mbs.kernel import ROW_ROT
-from ..mbs.scene import GROUND, Scene, SceneError
+from ..mbs.scene import GROUND, Scene, SceneError, frame_with_axis
 from . import pyforces
 from .nodes import NODE_KINDS
 
-SUPPORTED_NODES = ("NodeRigidBodyRotVecLG", "NodeRigidBodyEP", "NodeRigidBodyRxyz", "NodePointGround",
+SUPPORTED_NODES = ("NodeRigidBodyRotVecLG", "NodeRigidBodyEP", "NodeRigidBodyRxyz", "NodeRigidBody2D", "NodePointGround",
                    "NodeGenericData (data only)")
 SUPPORTED_MARKERS = ("MarkerBodyRigid", "MarkerBodyPosition", "MarkerNodeRigid", "MarkerNodePosition",
                      "MarkerBodyMass")
 SUPPORTED_LOADS = ("LoadForceVector", "LoadTorqueVector", "LoadMassProportional")
 
-JOINT_TYPES = ("JointSpherical", "JointRevoluteZ", "JointPrismaticX", "JointGeneric")
+JOINT_TYPES = ("JointSpherical", "JointRevoluteZ", "JointPrismaticX", "JointGeneric", "JointRevolute2D",
+               "JointPrismatic2D")
+# body objects -> whether the body is planar (its node must be planar too: NODE_KINDS[...].planar)
+BODY_OBJECTS = {"RigidBody": False, "RigidBody2D": True}
 # connectors: Exudyn object type -> (reader method of _Reader, markers need an orientation);
 # the one list of the connectors the bridge reads
 CONNECTOR_READERS = {
@@ -72,7 +75,8 @@ CONNECTOR_READERS = {
     "ConnectorTorsionalSpringDamper": ("read_torsional_spring_damper", True),
 }
 CONNECTOR_TYPES = tuple(CONNECTOR_READERS)
-SUPPORTED_OBJECTS = ("ObjectGround", "ObjectRigidBody") + tuple("Object" + t for t in JOINT_TYPES + CONNECTOR_TYPES)
+SUPPORTED_OBJECTS = (("ObjectGround",) + tuple("Object" + t for t in BODY_OBJECTS)
+                     + tuple("Object" + t for t in JOINT_TYPES + CONNECTOR_TYPES))
 
 
 class BridgeError(SceneError):
@@ -331,13 +335,14 @@ class _Reader:
             if t == "Ground":
                 R = np.asarray(d.get("referenceRotation", np.eye(3)), float)
                 self.ground[o] = (np.asarray(d.get("referencePosition", [0, 0, 0]), float), R)
-            elif t == "RigidBody":
+            elif t in BODY_OBJECTS:
                 n = int(d["nodeNumber"])
                 nt = sc.nodeTypes.get(n)
-                if nt not in NODE_KINDS:
-                    raise BridgeError(f"object {o} ('{d.get('name', '')}') ObjectRigidBody uses node {n} of "
-                                      f"type Node{nt}; supported rigid-body nodes: "
-                                      f"{', '.join('Node' + k for k in NODE_KINDS)}")
+                if nt not in NODE_KINDS or getattr(NODE_KINDS[nt], "planar", False) != BODY_OBJECTS[t]:
+                    ok = [k for k, c in NODE_KINDS.items() if getattr(c, "planar", False) == BODY_OBJECTS[t]]
+                    raise BridgeError(f"object {o} ('{d.get('name', '')}') Object{t} uses node {n} of "
+                                      f"type Node{nt}; supported nodes of Object{t}: "
+                                      f"{', '.join('Node' + k for k in ok)}")
                 if n in bodyOfNode:
                     raise BridgeError(f"object {o} ('{d.get('name', '')}') ObjectRigidBody shares node {n} with "
                                       f"object {bodyOfNode[n]}; one rigid body per node is supported")
@@ -366,17 +371,23 @@ class _Reader:
             sc.nodeKinds.append(kind)
         # bodies in object order
         for o, d in enumerate(self.objects):
-            if d["objectType"] != "RigidBody":
+            if d["objectType"] not in BODY_OBJECTS:
                 continue
             n = int(d["nodeNumber"])
             R, r, om, vel = states[n]
             label = d.get("name", "") or f"object{o}"
             try:
-                b = sc.AddBody(mass=float(d["mass"]), inertia=_inertia_matrix(d["inertia"]),
-                               com=np.asarray(d.get("centerOfMass", [0, 0, 0]), float), R0=_orthonormal(R),
-                               r0=r, omega0=om, vel0=vel, name=label)
+                if BODY_OBJECTS[d["objectType"]]:
+                    b = sc.AddBody2D(mass=float(d["mass"]), inertia=float(d["inertia"]), position=r[:2],
+                                     angle=float(np.arctan2(R[1, 0], R[0, 0])), omega=float(om[2]),
+                                     velocity=vel[:2], com=np.asarray(d.get("centerOfMass", [0, 0]), float),
+                                     name=label)
+                else:
+                        b = sc.AddBody(mass=float(d["mass"]), inertia=_inertia_matrix(d["inertia"]),
+                                   com=np.asarray(d.get("centerOfMass", [0, 0, 0]), float), R0=_orthonormal(R),
+                                   r0=r, omega0=om, vel0=vel, name=label)
             except SceneError as e:
-                raise BridgeError(f"object {o} ObjectRigidBody: {e}") from None
+                raise BridgeError(f"object {o} Object{d['objectType']}: {e}") from None
             sc.bodyObject.append(o)
             sc.bodyNode.append(n)
             self.rigidNodeBody[n] = b
@@ -408,7 +419,7 @@ class _Reader:
                 if o in self.ground:
                     gp, gR = self.ground[o]
                     body, pos, Rm = GROUND, gp + gR @ pos, (None if Rm is None else gR @ Rm)
-                elif self.objects[o]["objectType"] == "RigidBody":
+                elif self.objects[o]["objectType"] in BODY_OBJECTS:
                     body = self._body_of_object(o)
                 else:
                     raise BridgeError(f"{what}: marker {m} (Marker{t}) is attached to object {o} of type "
@@ -428,7 +439,7 @@ class _Reader:
                         pos = np.zeros(3)
                 else:
                     raise BridgeError(f"{what}: marker {m} (Marker{t}) is attached to node {n} of type Node{nt}, "
-                                      f"which belongs to no ObjectRigidBody")
+                                      f"which belongs to no ObjectRigidBody / ObjectRigidBody2D")
             else:
                 raise BridgeError(f"{what}: marker {m} of type Marker{t} is not supported by exudyn_lie; "
                                   f"supported markers: {', '.join(SUPPORTED_MARKERS)}")
@@ -475,6 +486,8 @@ class _Reader:
             raise BridgeError(f"{what}: alternativeConstraints=True is not supported by exudyn_lie; use the "
                               f"default rotation constraints")
         m0, m1 = (int(m) for m in d["markerNumbers"])
+        if t in ("JointRevolute2D", "JointPrismatic2D"):
+            return self.read_joint_2d(sc, o, d, what, aeAll, m0, m1)
         spherical = t == "JointSpherical"
         A = self.marker(m0, what, need_rotation=not spherical)
         B = self.marker(m1, what, need_rotation=not spherical)
@@ -516,6 +529,46 @@ class _Reader:
         sc.joints_info.append(JointInfo(o, t, j, aeRows, aeAll))
         # AE rows of unlocked axes (g = lambda) stay 0
         sc.aeZero.extend(sorted(set(aeAll.tolist()) - set(aeRows.tolist())))
+
+    def read_joint_2d(self, sc, o, d, what, aeAll, m0, m1):
+        """ObjectJointRevolute2D: ``(p1 - p0)_x = (p1 - p0)_y = 0`` (world rows, as the
+        spherical joint's).  ObjectJointPrismatic2D (CObjectJointPrismatic2D): ``(p1 - p0) . n1 = 0``
+        and ``t0 . n1 = 0`` with ``n1 = A1 normalMarker1``, ``t0 = A0 axisMarker0``: the normal
+        lives on marker 1, so the scene joint runs from marker 1 (side A, whose local axis the
+        translation row takes) to marker 0, with the axes negated so that both rows equal
+        Exudyn's: ``(-n1) . (p0 - p1)`` and ``(-n1) . (-t0)``."""
+        t = d["objectType"]
+        name = d.get("name", "") or f"object{o}"
+        prismatic = t == "JointPrismatic2D"
+        A = self.marker(m0, what, need_rotation=prismatic)
+        B = self.marker(m1, what, need_rotation=prismatic)
+        if A.body == GROUND and B.body == GROUND:
+            sc.skipped.append((what, "connects ground to ground"))
+            sc.aeZero.extend(aeAll.tolist())
+            return
+        try:
+            if not prismatic:
+                j = sc.AddJoint(A.body, B.body, (1, 1, 0, 0, 0, 0), posA=A.pos, posB=B.pos, kind="revolute2D",
+                                name=name, worldTranslation=True)
+            else:
+                if not d.get("constrainRotation", True):
+                    raise BridgeError(f"{what}: constrainRotation=False is not supported by exudyn_lie; use the "
+                                      f"default constrainRotation=True (or a 2D body with a coordinate constraint)")
+                axes = {}
+                for key in ("axisMarker0", "normalMarker1"):
+                    v = np.asarray(d.get(key), float).reshape(-1)
+                    if v.shape != (3,) or not np.all(np.isfinite(v)) or abs(np.linalg.norm(v) - 1.0) > 1e-12:
+                        raise BridgeError(f"{what}: {key} = {v} must be a finite unit 3-vector for exudyn_lie "
+                                          f"(Exudyn uses it unnormalised, so its length scales the constraint)")
+                    axes[key] = v
+                rotA = B.rotation() @ frame_with_axis(-axes["normalMarker1"], 0)      # column 0: -n1
+                rotB = A.rotation() @ frame_with_axis(-axes["axisMarker0"], 1)        # column 1: -t0
+                j = sc.AddJoint(B.body, A.body, (1, 0, 0, 0, 0, 1), posA=B.pos, rotA=_orthonormal(rotA),
+                                posB=A.pos, rotB=_orthonormal(rotB), kind="prismatic2D", name=name)
+        except SceneError as e:
+            raise BridgeError(f"{what}: {e}") from None
+        aeRows = aeAll[[0, 1]] if len(aeAll) else np.zeros(0, np.int64)
+        sc.joints_info.append(JointInfo(o, t, j, aeRows, aeAll))
 
     def read_connector(self, sc, o, d):
         t = d["objectType"]

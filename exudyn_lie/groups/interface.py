@@ -41,10 +41,24 @@ OPERATIONS = {
 }
 
 
+#: module constants every registered group declares: ``TWIST``, the velocity representation
+#: of a body on it (``"body"``: ``rdot = R v`` as SE3; ``"mixed"``: ``rdot = v`` as SO3xR3);
+#: optional ``ALGEBRA_AXES``, the axes of the 6-vector its algebra spans (default all six;
+#: the planar groups (2, 3, 4)) -- the kernel and the tests read both from here.
+TWISTS = ("body", "mixed")
+
+
+def algebra_axes(module):
+    """Axes of the 6-vector spanned by the group's algebra (a subalgebra for the planar groups)."""
+    return tuple(getattr(module, "ALGEBRA_AXES", range(6)))
+
+
 def missing_operations(module):
     """``[(operation, problem)]`` where ``module`` departs from :data:`OPERATIONS`
     (empty for a conforming group)."""
     out = []
+    if getattr(module, "TWIST", None) not in TWISTS:
+        out.append(("TWIST", f"module constant TWIST must be one of {TWISTS}"))
     for name, params in OPERATIONS.items():
         f = getattr(module, name, None)
         if f is None:

@@ -276,7 +276,7 @@ def write_nodes(gid, R, r, V, Vdot, doacc, code, body, idx, nq, qref, prev, firs
                 qtt[idx[i, k]] = acc[k]
         for k in range(nq[i] - npos):
             j = idx[i, npos + k]
-            q[j] = p[k] - qref[i, 3 + k]
+            q[j] = p[k] - qref[i, npos + k]
             qt[j] = pt[k]
             if doacc:
                 qtt[j] = ptt[k]

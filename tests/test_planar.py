@@ -227,3 +227,13 @@ def test_2d_bodies_run_on_the_planar_subgroups():
     sc3.AddBody(1.0, np.eye(3))
     with pytest.raises(ValueError, match="planar group"):
         Simulator(sc3, "RK4", ["SE2"])
+
+
+def test_paper_extension_planar_claims_hold():
+    """The extension section of the paper reproduction (apps/paper_planar.py) at dt = 1e-2, 1e-3:
+    every claim holds (corollary 1 for the joints to ground, same order elsewhere)."""
+    from exudyn_lie.apps.paper_planar import planar_extension, report_lines
+    ext = planar_extension((1e-2, 1e-3))
+    bad = [r for r in ext["rows"] if not r["holds"]]
+    assert not bad, bad
+    assert len(ext["rows"]) == 9 and "Extension: planar" in report_lines(ext)[0]

@@ -39,7 +39,8 @@ C7 = so3xr3.to_matrix
 
 
 def test_registry():
-    assert GROUPS == {"SE3": se3, "SO3xR3": so3xr3}
+    assert GROUPS["SE3"] is se3 and GROUPS["SO3xR3"] is so3xr3
+    assert list(GROUPS)[:2] == ["SE3", "SO3xR3"]        # group ids 0, 1 (codes.GID_*)
 
 
 @pytest.mark.parametrize("kind", POINTS)

@@ -19,6 +19,7 @@ from exudyn.utilities import InertiaCuboid, MarkerBodyPosition, MarkerBodyRigid,
 from exudyn_lie.bridge import SceneFromExudyn
 from exudyn_lie.mbs import Simulator, kernel
 from exudyn_lie.mbs.state import BodyStates
+from exudyn_lie.mbs.codes import BODY_TWIST
 
 warnings.simplefilter("ignore", DeprecationWarning)
 
@@ -159,14 +160,14 @@ def package(mbs, groups, q, qt, t=0.0):
         Td = kind.velocity_map_dot(q, qt)
         for k, b in enumerate(bodies):
             D = np.eye(6)
-            if sim.groups[b] == "SE3":
+            if BODY_TWIST[sim.gid[b]]:
                 D[3:, 3:] = R[b]
             P[np.ix_(kind.idx[k], range(6 * b, 6 * b + 6))] = T[k] @ D
             PdV[kind.idx[k]] = Td[k]
     sim.SetInitialState(R, r, om, vel, t0=t)
     V = sim.V
     for b in range(nb):
-        if sim.groups[b] == "SE3":
+        if BODY_TWIST[sim.gid[b]]:
             vb = V[b, 3:]
             kind_i = [(kd, list(bs).index(b)) for kd, bs in zip(sc.nodeKinds, sc.kindBodies) if b in bs][0]
             kd, k = kind_i
@@ -175,7 +176,7 @@ def package(mbs, groups, q, qt, t=0.0):
     M = np.zeros((6 * nb, 6 * nb))
     for b in range(nb):
         Mb = sim.sd.M[b]
-        if sim.groups[b] == "SO3xR3":
+        if not BODY_TWIST[sim.gid[b]]:
             D = np.eye(6)
             D[3:, 3:] = R[b]
             Mb = D @ Mb @ D.T
@@ -208,6 +209,11 @@ def compare(mbs, groups, q, qt, t=0.0):
     def rel(a, b):
         return float(np.max(np.abs(a - b)) / max(1.0, np.max(np.abs(b)))) if np.size(b) else 0.0
 
+    # Exudyn's coordinates span the package's velocity axes that P reaches: all six for a 3D
+    # body, (omega_z, v_x, v_y) for a 2D body (whose off-plane entries never act)
+    ax = np.nonzero(np.any(P != 0, axis=0))[0]
+    Mx, fx, P = Mx[np.ix_(ax, ax)], fx[ax], P[:, ax]
+    pk = dict(pk, M=pk["M"][np.ix_(ax, ax)], Q=pk["Q"][ax], J=pk["J"][:, ax])
     out = dict(M=rel(pk["M"], Mx), f=rel(pk["Q"], fx), g=0.0, J=0.0, nrows=0)
     sim, sc = pk["sim"], pk["scene"]
     for ji in sc.joints_info:

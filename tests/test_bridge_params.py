@@ -523,6 +523,15 @@ def _models_with_every_item():
     mbs.CreateGenericJoint(itemNumbers=[g, bodies[2]], position=[2, 0, 0], constrainedAxes=[0, 0, 1, 0, 0, 0])
     mbs.CreateSpringDamper(itemNumbers=[g, bodies[1]], localPosition0=[1, 1, 0], stiffness=10)
     mbs.CreateCartesianSpringDamper(itemNumbers=[g, bodies[1]], localPosition0=[1, 1, 0], stiffness=[1, 1, 1])
+    # 2D bodies: one on a revolute 2D joint, one on a prismatic 2D joint to ground
+    from exudyn.utilities import (MarkerBodyRigid, NodeRigidBody2D, ObjectJointPrismatic2D, ObjectJointRevolute2D,
+                                  ObjectRigidBody2D)
+    gm = mbs.AddMarker(MarkerBodyRigid(bodyNumber=g, localPosition=[5, 0, 0]))
+    for k, joint in enumerate((ObjectJointRevolute2D, ObjectJointPrismatic2D)):
+        n2 = mbs.AddNode(NodeRigidBody2D(referenceCoordinates=[5, 0, 0]))
+        b2 = mbs.AddObject(ObjectRigidBody2D(nodeNumber=n2, mass=1, inertia=0.1))
+        m2 = mbs.AddMarker(MarkerBodyRigid(bodyNumber=b2, localPosition=[0, 0, 0]))
+        mbs.AddObject(joint(markerNumbers=[gm, m2]))
     mbs.CreateTorsionalSpringDamper(itemNumbers=[bodies[0], bodies[1]], position=[0.5, 0, 0], axis=[0, 1, 0],
                                     stiffness=1)
     mbs.CreateRigidBodySpringDamper(itemNumbers=[g, bodies[2]], localPosition0=[2, 0, 0],

@@ -20,6 +20,8 @@ Sections (``--sections``, default all):
 * ``mujoco``  MuJoCo (optional, ``pip install .[bench]``) as a peer on the heavy top and the
   double pendulum: agreement, cost per step, work-precision
   (:mod:`exudyn_lie.apps.bench_mujoco`; skipped with one line without MuJoCo).
+* ``planar``  the planar four-bar of 2D bodies against the 3D planar four-bar, per step, and
+  SE2's maps against SE3's on planar screws (:mod:`.bench_planar`).
 * ``params``  parameters changed during a solve: serialRobotTest's PD controller (12 load
   vectors per step) against the same model without it (:mod:`.bench_params`).
 * ``items``   a point mass against a rigid body per step (:mod:`.bench_items`).
@@ -57,7 +59,7 @@ NATIVE_CONSTRAINED = ("GeneralizedAlpha", "GeneralizedAlpha-mN", "TrapezoidalInd
 NATIVE_FREE = ("RK44", "RK67", "DOPRI5")
 EPS_LEVELS = (1e-4, 1e-5, 1e-6, 1e-7, 1e-8)
 SECTIONS = ("wp", "perstep", "scaling", "startup", "overhead", "groups", "mujoco", "params", "items",
-            "userfunctions", "topology", "adaptive")
+            "userfunctions", "topology", "adaptive", "planar")
 TARGET_RATIO = 10.0
 # absolute per-step targets (MK-RK4, SE3, median step, this 2-core machine)
 KERNEL_STEP_TARGETS_US = {"heavytop": 3.0, "doublependulum": 6.0}
@@ -932,6 +934,8 @@ def write_report(cfg, out, cmdline):
     if out.get("adaptive"):
         from .bench_adaptive import report_lines as _adaptive_lines
         L += _adaptive_lines(out["adaptive"], out["adaptive"].get("figures", ()))
+    from .bench_planar import report_lines as _planar_lines
+    L += _planar_lines(out.get("planar"))
     # ---- profile notes
     A("## 7. Profile and optimisation record")
     A("")
@@ -1068,6 +1072,10 @@ def main(argv=None):
     if "adaptive" in cfg.sections:
         from . import bench_adaptive
         out["adaptive"] = bench_adaptive.run_section(cfg, log)
+    if "planar" in cfg.sections:
+        from .bench_planar import planar_section
+        log("planar four-bar of 2D bodies vs the 3D planar four-bar; SE2 vs SE3 maps")
+        out["planar"] = planar_section(quick=cfg.quick)
     out["env"]["loadEnd"] = loadavg()
     out["profileExtra"] = PROFILE_EXTRA
     os.makedirs(cfg.out, exist_ok=True)

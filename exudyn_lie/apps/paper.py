@@ -57,6 +57,7 @@ class Context:
     heavyTop: dict = None
     figures: Dict[str, list] = field(default_factory=dict)
     wallTime: float = 0.0
+    planar: dict = None          # the extension section (apps/paper_planar.py), full runs only
 
 
 def _task(args):
@@ -237,6 +238,9 @@ def main(argv=None):
     ctx.infos, ctx.results, ctx.natives, ctx.figures = run_all(
         names, dts, ctx.jobs, native=not args.no_native, out=None if args.no_figures else args.out)
     evaluate(ctx)
+    if names is None:
+        from exudyn_lie.apps.paper_planar import planar_extension
+        ctx.planar = planar_extension(dts)
     ctx.wallTime = time.perf_counter() - tic
     path = write(ctx, args.out, args.readme)
     counts = {}

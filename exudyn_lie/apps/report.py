@@ -260,6 +260,8 @@ def write_report(ctx) -> str:
             cells = [f"{runs[(s, dt)].cpuTime:.3f}" if (s, dt) in runs else "-" for dt in dts]
             L.append(f"| {info.name} | {'MK-RK4 ' + s if s in ('SE3', 'SO3xR3') else s} | " + " | ".join(cells) + " |")
     L.append("")
+    from exudyn_lie.apps.paper_planar import report_lines as planar_lines
+    L += planar_lines(getattr(ctx, "planar", None))
     L.append(f"Total wall time of the command: {ctx.wallTime:.1f} s with {ctx.jobs} process(es).")
     L.append("")
     return "\n".join(L)

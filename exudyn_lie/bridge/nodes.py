@@ -25,7 +25,7 @@ import math
 import numpy as np
 from numba import njit
 
-from ..mbs.codes import GID_SE3
+from ..mbs.codes import BODY_TWIST
 from ..userwarn import warn_user
 from . import rotations as rot
 
@@ -34,6 +34,7 @@ CODE_EP = 1
 CODE_RXYZ = 2
 CODE_POINT = 3          # NodePoint: 3 position coordinates, no rotation
 CODE_POINT2D = 4        # NodePoint2D: x, y
+CODE_2D = 5             # NodeRigidBody2D: [x, y, phi]
 NCOORD_MAX = 7          # position (3) + at most 4 rotation parameters
 TWO_PI = 2.0 * math.pi
 ROTVEC_LIMIT = 1.5 * math.pi
@@ -203,9 +204,23 @@ def rxyz_row(R, omega, omegad, prev, first, p, p_t, p_tt):
 
 
 @njit(cache=True)
+def planar_row(R, omega, omegad, prev, first, p, p_t, p_tt):
+    """NodeRigidBody2D: the angle phi of R = Rz(phi), continuous (nearest 2 pi shift of the
+    previous angle), phi_t = omega_z, phi_tt = omegadot_z."""
+    a = math.atan2(R[1, 0], R[0, 0])
+    p[0] = a if first else _wrap_near(a, prev[0])
+    prev[0] = p[0]
+    p_t[0] = omega[2]
+    p_tt[0] = omegad[2]
+    return 0
+
+
+@njit(cache=True)
 def write_row(code, R, omega, omegad, prev, first, p, p_t, p_tt):
     if code == CODE_POINT or code == CODE_POINT2D:
         return 0                         # no rotation parameters
+    if code == CODE_2D:
+        return planar_row(R, omega, omegad, prev, first, p, p_t, p_tt)
     if code == CODE_ROTVEC:
         return rotvec_row(R, omega, omegad, prev, first, p, p_t, p_tt)
     elif code == CODE_EP:
@@ -232,7 +247,7 @@ def write_nodes(gid, R, r, V, Vdot, doacc, code, body, idx, nq, qref, prev, firs
         Rb = R[b]
         for k in range(3):
             om[k] = V[b, k]
-        if gid[b] == GID_SE3:
+        if BODY_TWIST[gid[b]]:
             for k in range(3):
                 vel[k] = Rb[k, 0] * V[b, 3] + Rb[k, 1] * V[b, 4] + Rb[k, 2] * V[b, 5]
         else:
@@ -241,7 +256,7 @@ def write_nodes(gid, R, r, V, Vdot, doacc, code, body, idx, nq, qref, prev, firs
         if doacc:
             for k in range(3):
                 omd[k] = Vdot[b, k]
-            if gid[b] == GID_SE3:
+            if BODY_TWIST[gid[b]]:
                 # a = R (vdot + omega x v)
                 w0, w1, w2 = V[b, 0], V[b, 1], V[b, 2]
                 v0, v1, v2 = V[b, 3], V[b, 4], V[b, 5]
@@ -257,7 +272,7 @@ def write_nodes(gid, R, r, V, Vdot, doacc, code, body, idx, nq, qref, prev, firs
         if f:
             flags[i] = 1                 # kept until the warning is given (warn_flags)
             nflag += 1
-        npos = 2 if code[i] == CODE_POINT2D else 3
+        npos = 2 if (code[i] == CODE_POINT2D or code[i] == CODE_2D) else 3
         for k in range(npos):
             q[idx[i, k]] = r[b, k] - qref[i, k]
             qt[idx[i, k]] = vel[k]
@@ -265,7 +280,7 @@ def write_nodes(gid, R, r, V, Vdot, doacc, code, body, idx, nq, qref, prev, firs
                 qtt[idx[i, k]] = acc[k]
         for k in range(nq[i] - npos):
             j = idx[i, npos + k]
-            q[j] = p[k] - qref[i, 3 + k]
+            q[j] = p[k] - qref[i, npos + k]
             qt[j] = pt[k]
             if doacc:
                 qtt[j] = ptt[k]
@@ -313,6 +328,7 @@ class NodeKind:
     typeName = ""
     code = -1
     nrot = 3
+    npos = 3                # position coordinates before the rotation parameters
     # ((i, j), limit): the coordinates are singular where |R[i, j]| reaches 1; the bridge
     # watches the entry at every internal step and warns above ``limit`` (None: regular)
     singularity = None
@@ -323,8 +339,8 @@ class NodeKind:
     def __init__(self, ids, idx, qref):
         self.ids = np.asarray(ids, dtype=np.int64)
         n = len(self.ids)
-        self.idx = np.asarray(idx, dtype=np.int64).reshape(n, 3 + self.nrot)
-        self.qref = np.asarray(qref, float).reshape(n, 3 + self.nrot)
+        self.idx = np.asarray(idx, dtype=np.int64).reshape(n, self.npos + self.nrot)
+        self.qref = np.asarray(qref, float).reshape(n, self.npos + self.nrot)
         self.prev = np.zeros((n, 4))        # last total rotation parameters (continuity)
         self.first = True
         self.warned = np.zeros(n, bool)
@@ -573,5 +589,67 @@ class Point2DNode(PointNode):
     positionCoordinates = 2
 
 
+
+class Rigid2DNode(NodeKind):
+    """``NodeRigidBody2D``: coordinates ``[x, y, phi]``, ``R = Rz(phi)``, velocities
+    ``[vx, vy, omega_z]`` (CNodeRigidBody2D).  The body moves in the world x-y plane
+    (z = 0); written angles stay continuous (no wrap to (-pi, pi])."""
+    typeName = "RigidBody2D"
+    code = CODE_2D
+    nrot = 1
+    npos = 2
+    positionCoordinates = 2
+    planar = True
+
+    @staticmethod
+    def _rz(phi):
+        c, s = np.cos(phi), np.sin(phi)
+        R = np.zeros((len(phi), 3, 3))
+        R[:, 0, 0], R[:, 0, 1], R[:, 1, 0], R[:, 1, 1], R[:, 2, 2] = c, -s, s, c, 1.0
+        return R
+
+    def read(self, q, q_t):
+        tot = self.qref + q[self.idx]
+        vel = q_t[self.idx]
+        n = len(self)
+        self.prev[:, 0] = tot[:, 2]
+        self.first = False
+        r = np.zeros((n, 3))
+        r[:, :2] = tot[:, :2]
+        om = np.zeros((n, 3))
+        om[:, 2] = vel[:, 2]
+        v = np.zeros((n, 3))
+        v[:, :2] = vel[:, :2]
+        return self._rz(tot[:, 2]), r, om, v
+
+    def write(self, R, r, omega, vel, omegad=None, acc=None, q=None, q_t=None, q_tt=None):
+        out = np.zeros((len(self), 1))
+        p_t = np.zeros(1)
+        p_tt = np.zeros(1)
+        for i in range(len(self)):
+            planar_row(np.ascontiguousarray(R[i], dtype=float), np.asarray(omega[i], float),
+                       np.zeros(3) if omegad is None else np.asarray(omegad[i], float),
+                       self.prev[i], self.first, out[i], p_t, p_tt)
+            ix = self.idx[i]
+            q[ix[:2]] = np.asarray(r[i])[:2] - self.qref[i, :2]
+            q[ix[2]] = out[i, 0] - self.qref[i, 2]
+            q_t[ix[:2]] = np.asarray(vel[i])[:2]
+            q_t[ix[2]] = p_t[0]
+            if q_tt is not None and omegad is not None:
+                q_tt[ix[:2]] = np.asarray(acc[i])[:2]
+                q_tt[ix[2]] = p_tt[0]
+        self.first = False
+        return out
+
+    def velocity_map(self, q):
+        T = np.zeros((len(self), 3, 6))
+        T[:, 0, 3] = T[:, 1, 4] = T[:, 2, 2] = 1.0
+        return T
+
+    def velocity_map_dot(self, q, q_t):
+        return np.zeros((len(self), 3))
+
+
+
 #: the registry: Exudyn ``nodeType`` string -> class
-NODE_KINDS = {cls.typeName: cls for cls in (RotVecLGNode, EPNode, RxyzNode, PointNode, Point2DNode)}
+NODE_KINDS = {cls.typeName: cls for cls in (RotVecLGNode, EPNode, RxyzNode, PointNode, Point2DNode, Rigid2DNode)}

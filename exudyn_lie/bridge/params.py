@@ -106,6 +106,16 @@ FIELDS = {
     ("object", "RigidBody"): {
         "mass": (FIXED, "compiled mass matrix"), "inertia": (FIXED, "compiled mass matrix"),
         "centerOfMass": (FIXED, "compiled mass matrix"), "nodeNumber": (FIXED, "the body's node")},
+    ("node", "RigidBody2D"): dict(_RIGID_NODE),
+    ("object", "RigidBody2D"): {
+        "mass": (FIXED, "compiled mass matrix"), "inertia": (FIXED, "compiled mass matrix"),
+        "centerOfMass": (FIXED, "compiled mass matrix"), "nodeNumber": (FIXED, "the body's node")},
+    ("object", "JointRevolute2D"): {k: _JOINT[k] for k in ("markerNumbers", "activeConnector")},
+    ("object", "JointPrismatic2D"): {
+        **{k: _JOINT[k] for k in ("markerNumbers", "activeConnector")},
+        "axisMarker0": (FIXED, "the joint's constraint rows (its axis on marker 0)"),
+        "normalMarker1": (FIXED, "the joint's constraint rows (its normal on marker 1)"),
+        "constrainRotation": (REFUSED, "False is refused (the rotation row is compiled)")},
     ("object", "JointSpherical"): {k: v for k, v in _JOINT.items() if not k.startswith("rotationMarker")},
     ("object", "JointRevoluteZ"): {k: v for k, v in _JOINT.items() if k != "constrainedAxes"},
     ("object", "JointPrismaticX"): {k: v for k, v in _JOINT.items() if k != "constrainedAxes"},

@@ -52,22 +52,23 @@ import numpy as np
 
 from ..mbs.compiled import joint_row_descriptors
 from ..mbs.kernel import ROW_ROT
-from ..mbs.scene import GROUND, Scene, SceneError
+from ..mbs.scene import GROUND, Scene, SceneError, frame_with_axis
 from . import pyforces
 from .nodes import NODE_KINDS
 
-SUPPORTED_NODES = ("NodeRigidBodyRotVecLG", "NodeRigidBodyEP", "NodeRigidBodyRxyz", "NodePoint", "NodePoint2D",
-                   "NodePointGround", "NodeGenericData (data only)")
+SUPPORTED_NODES = ("NodeRigidBodyRotVecLG", "NodeRigidBodyEP", "NodeRigidBodyRxyz", "NodeRigidBody2D", "NodePoint",
+                   "NodePoint2D", "NodePointGround", "NodeGenericData (data only)")
 # objects that are bodies of the scene: Exudyn object type -> the node types it accepts
 RIGID_NODE_TYPES = ("RigidBodyRotVecLG", "RigidBodyEP", "RigidBodyRxyz")
-BODY_OBJECTS = {"RigidBody": RIGID_NODE_TYPES, "MassPoint": ("Point",), "MassPoint2D": ("Point2D",)}
+BODY_OBJECTS = {"RigidBody": RIGID_NODE_TYPES, "RigidBody2D": ("RigidBody2D",), "MassPoint": ("Point",),
+                "MassPoint2D": ("Point2D",)}
 SUPPORTED_MARKERS = ("MarkerBodyRigid", "MarkerBodyPosition", "MarkerNodeRigid", "MarkerNodePosition",
                      "MarkerBodyMass", "MarkerNodeCoordinate")
 POSITION_MARKERS = SUPPORTED_MARKERS[:5]        # the markers with a position (and orientation)
 SUPPORTED_LOADS = ("LoadForceVector", "LoadTorqueVector", "LoadMassProportional", "LoadCoordinate")
 
-JOINT_TYPES = ("JointSpherical", "JointRevoluteZ", "JointPrismaticX", "JointGeneric", "ConnectorCoordinate",
-               "ConnectorDistance")
+JOINT_TYPES = ("JointSpherical", "JointRevoluteZ", "JointPrismaticX", "JointGeneric", "JointRevolute2D",
+               "JointPrismatic2D", "ConnectorCoordinate", "ConnectorDistance")
 # joints with a reader of their own (the others: read_joint): Exudyn object type -> reader method
 JOINT_READERS = {"ConnectorCoordinate": "read_coordinate_constraint", "ConnectorDistance": "read_distance_constraint"}
 # connectors: Exudyn object type -> (reader method of _Reader, markers need an orientation);
@@ -392,11 +393,16 @@ class _Reader:
             R, r, om, vel = states[n]
             label = d.get("name", "") or f"object{o}"
             try:
-                if d["objectType"] != "RigidBody":
+                if d["objectType"] == "RigidBody2D":
+                    b = sc.AddBody2D(mass=float(d["mass"]), inertia=float(d["inertia"]), position=r[:2],
+                                     angle=float(np.arctan2(R[1, 0], R[0, 0])), omega=float(om[2]),
+                                     velocity=vel[:2], com=np.asarray(d.get("centerOfMass", [0, 0]), float),
+                                     name=label)
+                elif d["objectType"] != "RigidBody":
                     b = sc.AddPointMass(float(d.get("mass", d.get("physicsMass"))), r0=r, vel0=vel, name=label,
                                         freeDirections=np.diag([1.0, 1.0, float(d["objectType"] == "MassPoint")]))
                 else:
-                        b = sc.AddBody(mass=float(d["mass"]), inertia=_inertia_matrix(d["inertia"]),
+                    b = sc.AddBody(mass=float(d["mass"]), inertia=_inertia_matrix(d["inertia"]),
                                    com=np.asarray(d.get("centerOfMass", [0, 0, 0]), float), R0=_orthonormal(R),
                                    r0=r, omega0=om, vel0=vel, name=label)
             except SceneError as e:
@@ -452,7 +458,7 @@ class _Reader:
                         pos = np.zeros(3)
                 else:
                     raise BridgeError(f"{what}: marker {m} (Marker{t}) is attached to node {n} of type Node{nt}, "
-                                      f"which belongs to no ObjectRigidBody")
+                                      f"which belongs to no ObjectRigidBody / ObjectRigidBody2D")
             else:
                 raise BridgeError(f"{what}: marker {m} of type Marker{t} is not supported for this item; it "
                                   f"needs one of: {', '.join(POSITION_MARKERS)}")
@@ -501,6 +507,8 @@ class _Reader:
             raise BridgeError(f"{what}: alternativeConstraints=True is not supported by exudyn_lie; use the "
                               f"default rotation constraints")
         m0, m1 = (int(m) for m in d["markerNumbers"])
+        if t in ("JointRevolute2D", "JointPrismatic2D"):
+            return self.read_joint_2d(sc, o, d, what, aeAll, m0, m1)
         spherical = t == "JointSpherical"
         A = self.marker(m0, what, need_rotation=not spherical)
         B = self.marker(m1, what, need_rotation=not spherical)
@@ -634,6 +642,46 @@ class _Reader:
         except SceneError as e:
             raise BridgeError(f"{what}: {e}") from None
         sc.joints_info.append(JointInfo(o, d["objectType"], j, aeAll[:1], aeAll))
+
+    def read_joint_2d(self, sc, o, d, what, aeAll, m0, m1):
+        """ObjectJointRevolute2D: ``(p1 - p0)_x = (p1 - p0)_y = 0`` (world rows, as the
+        spherical joint's).  ObjectJointPrismatic2D (CObjectJointPrismatic2D): ``(p1 - p0) . n1 = 0``
+        and ``t0 . n1 = 0`` with ``n1 = A1 normalMarker1``, ``t0 = A0 axisMarker0``: the normal
+        lives on marker 1, so the scene joint runs from marker 1 (side A, whose local axis the
+        translation row takes) to marker 0, with the axes negated so that both rows equal
+        Exudyn's: ``(-n1) . (p0 - p1)`` and ``(-n1) . (-t0)``."""
+        t = d["objectType"]
+        name = d.get("name", "") or f"object{o}"
+        prismatic = t == "JointPrismatic2D"
+        A = self.marker(m0, what, need_rotation=prismatic)
+        B = self.marker(m1, what, need_rotation=prismatic)
+        if A.body == GROUND and B.body == GROUND:
+            sc.skipped.append((what, "connects ground to ground"))
+            sc.aeZero.extend(aeAll.tolist())
+            return
+        try:
+            if not prismatic:
+                j = sc.AddJoint(A.body, B.body, (1, 1, 0, 0, 0, 0), posA=A.pos, posB=B.pos, kind="revolute2D",
+                                name=name, worldTranslation=True)
+            else:
+                if not d.get("constrainRotation", True):
+                    raise BridgeError(f"{what}: constrainRotation=False is not supported by exudyn_lie; use the "
+                                      f"default constrainRotation=True (or a 2D body with a coordinate constraint)")
+                axes = {}
+                for key in ("axisMarker0", "normalMarker1"):
+                    v = np.asarray(d.get(key), float).reshape(-1)
+                    if v.shape != (3,) or not np.all(np.isfinite(v)) or abs(np.linalg.norm(v) - 1.0) > 1e-12:
+                        raise BridgeError(f"{what}: {key} = {v} must be a finite unit 3-vector for exudyn_lie "
+                                          f"(Exudyn uses it unnormalised, so its length scales the constraint)")
+                    axes[key] = v
+                rotA = B.rotation() @ frame_with_axis(-axes["normalMarker1"], 0)      # column 0: -n1
+                rotB = A.rotation() @ frame_with_axis(-axes["axisMarker0"], 1)        # column 1: -t0
+                j = sc.AddJoint(B.body, A.body, (1, 0, 0, 0, 0, 1), posA=B.pos, rotA=_orthonormal(rotA),
+                                posB=A.pos, rotB=_orthonormal(rotB), kind="prismatic2D", name=name)
+        except SceneError as e:
+            raise BridgeError(f"{what}: {e}") from None
+        aeRows = aeAll[[0, 1]] if len(aeAll) else np.zeros(0, np.int64)
+        sc.joints_info.append(JointInfo(o, t, j, aeRows, aeAll))
 
     def read_connector(self, sc, o, d):
         t = d["objectType"]

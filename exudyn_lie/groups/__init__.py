@@ -42,14 +42,14 @@ and dualquat is called from inside an njit function in tests/test_groups_njit.py
 which also checks that the _into variants do not allocate.
 """
 from .. import _numba_cache  # noqa: F401  (first: the cache key of every compiled function)
-from . import so3, se3, so3xr3, quaternion, dualquat, rn
+from . import so3, se3, so3xr3, rn, se2, so2xr2, quaternion, dualquat
 
 # The one registry of body configuration groups (name -> module).  Every entry implements
 # the interface of :mod:`.interface` with the same signatures; its position is the group
 # id the compiled kernel uses (exudyn_lie.mbs.codes).  A new group: its module, one line here.
-GROUPS = {'SE3': se3, 'SO3xR3': so3xr3, 'R3': rn}
+GROUPS = {'SE3': se3, 'SO3xR3': so3xr3, 'R3': rn, 'SE2': se2, 'SO2xR2': so2xr2}
 
-__all__ = ["so3", "se3", "so3xr3", "rn", "quaternion", "dualquat", "GROUPS", "switch_report"]
+__all__ = ["so3", "se3", "so3xr3", "rn", "se2", "so2xr2", "quaternion", "dualquat", "GROUPS", "switch_report"]
 
 
 def switch_report():

@@ -8,9 +8,9 @@ tangent vector is a 6-vector ``X = (rotation, translation)``.  ``dexp`` is right
 trivialised (see the package docstring).  The ``_into`` variants write into arrays the
 caller provides and do not allocate (the compiled kernel uses them).
 
-A group whose algebra is a subspace of the 6-vectors (R^3 of the point masses) says which
-components are its coordinates with a module attribute ``ALGEBRA_MASK`` (6 floats, 1 = a
-coordinate); the others are ignored by ``exp`` and 0 in ``log``.  Without it, all six are.
+A group whose algebra is a subspace of the 6-vectors (R^3 of the point masses, the planar
+groups) names the axes that are its coordinates with a module constant ``ALGEBRA_AXES``;
+the others are ignored by ``exp`` and 0 in ``log``.  Without it, all six are.
 
 ``so3`` is the rotation factor shared by both groups, not a body group: its elements are
 ``R`` alone and its algebra 3-vectors, so its signatures lack the translation arguments.
@@ -45,10 +45,24 @@ OPERATIONS = {
 }
 
 
+#: module constants every registered group declares: ``TWIST``, the velocity representation
+#: of a body on it (``"body"``: ``rdot = R v`` as SE3; ``"mixed"``: ``rdot = v`` as SO3xR3);
+#: optional ``ALGEBRA_AXES``, the axes of the 6-vector its algebra spans (default all six;
+#: the planar groups (2, 3, 4)) -- the kernel and the tests read both from here.
+TWISTS = ("body", "mixed")
+
+
+def algebra_axes(module):
+    """Axes of the 6-vector spanned by the group's algebra (a subalgebra for the planar groups)."""
+    return tuple(getattr(module, "ALGEBRA_AXES", range(6)))
+
+
 def missing_operations(module):
     """``[(operation, problem)]`` where ``module`` departs from :data:`OPERATIONS`
     (empty for a conforming group)."""
     out = []
+    if getattr(module, "TWIST", None) not in TWISTS:
+        out.append(("TWIST", f"module constant TWIST must be one of {TWISTS}"))
     for name, params in OPERATIONS.items():
         f = getattr(module, name, None)
         if f is None:

@@ -11,8 +11,8 @@ mass has no orientation); the algebra vector is ``X = (0, 0, 0, r)`` and the vel
     (I, r1)(I, r2) = (I, r1 + r2)
 
 and a Munthe-Kaas method on R^3 is the underlying Runge-Kutta method.  Only the translation
-part of the algebra is a coordinate of the group: :data:`ALGEBRA_MASK` marks it (the interface
-laws are tested on masked vectors); the rotation part of an argument is ignored by ``exp`` and
+part of the algebra is a coordinate of the group: :data:`ALGEBRA_AXES` names it (the interface
+laws are tested on vectors in that subspace); the rotation part of an argument is ignored by ``exp`` and
 ``log`` returns 0 there.  ``hat`` is the 4x4 homogeneous matrix [[0, r], [0, 0]].
 
 The kernel (:mod:`exudyn_lie.mbs.bodies`) keeps the rotation rows of such a body at zero: its
@@ -21,8 +21,10 @@ The kernel (:mod:`exudyn_lie.mbs.bodies`) keeps the rotation rows of such a body
 import numpy as np
 from numba import njit
 
-#: which algebra components are coordinates of this group (rotation first)
-ALGEBRA_MASK = np.array([0.0, 0.0, 0.0, 1.0, 1.0, 1.0])
+#: velocity representation (interface.TWISTS): v = rdot spatial, as SO3xR3
+TWIST = "mixed"
+#: the axes of the 6-vector that are coordinates of this group (rotation first)
+ALGEBRA_AXES = (3, 4, 5)
 
 
 @njit(cache=True)

@@ -56,6 +56,8 @@ from ._taylor import FM as _FM
 from . import so3
 from ._taylor import ad_series, horner, mm, DEXP_SERIES_COEFFS, DEXPINV_SERIES_COEFFS
 
+TWIST = "body"      # velocity representation of a body on this group (interface.TWISTS)
+
 # ---------------------------------------------------------------- switch points
 T_SWITCH_DEXP, _NP = _taylor.plan(("B", "C", "Q3", "Q4"))
 U_SWITCH_DEXP = T_SWITCH_DEXP ** 2

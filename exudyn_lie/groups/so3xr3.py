@@ -26,6 +26,8 @@ from numba import njit
 from . import so3
 from ._taylor import ad_series, DEXP_SERIES_COEFFS, DEXPINV_SERIES_COEFFS
 
+TWIST = "mixed"     # velocity representation of a body on this group (interface.TWISTS)
+
 
 @njit(cache=True)
 def hat(X):

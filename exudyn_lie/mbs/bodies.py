@@ -2,7 +2,11 @@
 depends on the group of a body (``gid``, see :mod:`.codes` and :mod:`exudyn_lie.groups`).
 
 * ``SE3`` (0): twist ``V = (omega, v)`` with ``v`` body-fixed, ``rdot = R v``;
-* ``SO3xR3`` (1): mixed velocity, ``v = rdot`` spatial (eq. hybridvel).
+* ``SO3xR3`` (1): mixed velocity, ``v = rdot`` spatial (eq. hybridvel);
+* ``SE2`` / ``SO2xR2``: the planar subgroups, with the velocity representation of SE3 /
+  SO3xR3 (``codes.BODY_TWIST``, from each group's ``TWIST``).  A planar body keeps 6-vector
+  velocities whose off-plane entries stay zero: its ``M^-1`` is zero off the plane
+  (``compiled.planar_minv``), so off-plane forces do nothing, as for Exudyn's 2D bodies;
 * ``R3`` (2): point masses (``groups/rn.py``): ``R = I`` and ``omega = 0`` for all time,
   ``v = rdot``; the rotation block of ``Minv`` is 0 and the translation block the (pseudo-)
   inverse of the mass on the free directions.  Every map that does not branch on ``R3``
@@ -20,8 +24,8 @@ body's velocity coordinates, the configuration update ``g exp(X)`` and the MK st
 """
 from numba import njit
 
-from ..groups import se3, so3
-from .codes import GID_R3, GID_SE3, GID_SO3xR3
+from ..groups import se2, se3, so2xr2, so3
+from .codes import BODY_TWIST, GID_R3, GID_SE2, GID_SE3, GID_SO3xR3
 
 
 # --------------------------------------------------------------------------- small vector helpers
@@ -58,7 +62,7 @@ def body_point(gid, R, r, V, s, p, pd, beta):
     w0, w1, w2 = V[0], V[1], V[2]
     ws0, ws1, ws2 = _cross(w0, w1, w2, s[0], s[1], s[2])            # omega x s
     wws0, wws1, wws2 = _cross(w0, w1, w2, ws0, ws1, ws2)            # omega x (omega x s)
-    if gid == GID_SE3:
+    if BODY_TWIST[gid]:
         # rdot = R v : pd = R (v + omega x s); beta = R (omega x (omega x s) + omega x v)
         wv0, wv1, wv2 = _cross(w0, w1, w2, V[3], V[4], V[5])
         l0 = V[3] + ws0
@@ -106,7 +110,7 @@ def add_point_force(gid, R, s, F, Q):
     Q[0] += m0
     Q[1] += m1
     Q[2] += m2
-    if gid == GID_SE3:
+    if BODY_TWIST[gid]:
         Q[3] += f0
         Q[4] += f1
         Q[5] += f2
@@ -147,9 +151,8 @@ def apply_minv(gid, Minv, R, x, out, tmp):
     """``out = M_rep^-1 x`` for the body's velocity representation.
 
     SE3: ``M`` is the constant J_P, ``Minv`` its inverse.  SO3xR3: ``V^m = D V`` with
-    ``D = diag(I, R)``, hence ``(M^m)^-1 = D M^-1 D^T``.  R3: the constant ``Minv`` (its
-    velocity is spatial and ``R = I``)."""
-    if gid != GID_SO3xR3:
+    ``D = diag(I, R)``, hence ``(M^m)^-1 = D M^-1 D^T``."""
+    if BODY_TWIST[gid]:
         for i in range(6):
             s = 0.0
             for k in range(6):
@@ -176,7 +179,8 @@ def apply_minv(gid, Minv, R, x, out, tmp):
 
 @njit(cache=True, _nrt=False)
 def exp_compose(gid, R, r, X, Rout, rout, ER, Er):
-    """``(Rout, rout) = (R, r) exp(X)`` in the body's group (eqs. expX / expSO3xR3)."""
+    """``(Rout, rout) = (R, r) exp(X)`` in the body's group (eqs. expX / expSO3xR3, and
+    their planar restrictions)."""
     if gid == GID_R3:
         # the abelian R^3 (groups/rn.py): r + X_trans; R = I is kept
         for i in range(3):
@@ -184,12 +188,18 @@ def exp_compose(gid, R, r, X, Rout, rout, ER, Er):
             for j in range(3):
                 Rout[i, j] = R[i, j]
         return
-    if gid == GID_SE3:
-        se3.exp_into(X, ER, Er)
+    if BODY_TWIST[gid]:
+        if gid == GID_SE3:
+            se3.exp_into(X, ER, Er)
+        else:
+            se2.exp_into(X, ER, Er)
         for i in range(3):
             rout[i] = r[i] + R[i, 0] * Er[0] + R[i, 1] * Er[1] + R[i, 2] * Er[2]
     else:
-        so3.exp_into(X[0:3], ER)
+        if gid == GID_SO3xR3:
+            so3.exp_into(X[0:3], ER)
+        else:
+            so2xr2.exp_into(X, ER, Er)
         for i in range(3):
             rout[i] = r[i] + X[3 + i]
     for i in range(3):
@@ -201,16 +211,22 @@ def exp_compose(gid, R, r, X, Rout, rout, ER, Er):
 def body_dexpinv_stage(gid, X, Y, out):
     """``out = dexp^-1_X Y`` in the body's group (the MK stage map, eq. MK1, with
     ``X = -Psi_j``): SE3 the full 6x6 map; SO3xR3 SO3's on the rotation part, the
-    identity on the translation (the R3 factor is abelian)."""
+    identity on the translation (the R3 factor is abelian); SE2 the planar closed form;
+    SO2xR2 the identity (abelian)."""
     if gid == GID_SE3:
         se3.dexpinv_apply_into(X, Y, out)
     elif gid == GID_R3:
         for k in range(6):          # abelian: dexpinv = identity
             out[k] = Y[k]
-    else:
+    elif gid == GID_SO3xR3:
         so3.dexpinv_apply_into(X[0:3], Y[0:3], out[0:3])
         for k in range(3):
             out[3 + k] = Y[3 + k]
+    elif gid == GID_SE2:
+        se2.dexpinv_apply_into(X, Y, out)
+    else:
+        for k in range(6):          # SO(2) x R^2 is abelian: dexpinv = I
+            out[k] = Y[k]
 
 
 @njit(cache=True, inline="always", _nrt=False)
@@ -221,7 +237,7 @@ def body_inertial_forces(gid, Mi, mass, com, R, Vi, Qi):
     SE3, eq. (NE1): ``M Vdot = W + ad_V^T (M V)``, ``ad_V^T (L, p) = (-(w x L) - v x p, -(w x p))``.
     SO3xR3: ``M^m Vdot = W - (w x Theta_P w, m R (w x (w x c)))``."""
     w0, w1, w2 = Vi[0], Vi[1], Vi[2]
-    if gid == GID_SE3:
+    if BODY_TWIST[gid]:
         Lx = Mi[0, 0] * w0 + Mi[0, 1] * w1 + Mi[0, 2] * w2 + Mi[0, 3] * Vi[3] + Mi[0, 4] * Vi[4] + Mi[0, 5] * Vi[5]
         Ly = Mi[1, 0] * w0 + Mi[1, 1] * w1 + Mi[1, 2] * w2 + Mi[1, 3] * Vi[3] + Mi[1, 4] * Vi[4] + Mi[1, 5] * Vi[5]
         Lz = Mi[2, 0] * w0 + Mi[2, 1] * w1 + Mi[2, 2] * w2 + Mi[2, 3] * Vi[3] + Mi[2, 4] * Vi[4] + Mi[2, 5] * Vi[5]
@@ -259,7 +275,7 @@ def body_twist(gid, R, V, Vb):
     (SE3: ``V`` itself; SO3xR3: ``v_b = R^T v``)."""
     for k in range(3):
         Vb[k] = V[k]
-    if gid == GID_SE3:
+    if BODY_TWIST[gid]:
         for k in range(3):
             Vb[3 + k] = V[3 + k]
     else:
@@ -287,6 +303,6 @@ def translation_dual(gid, a, RTa):
     """``T^T a`` for a world vector ``a``, given ``RTa = R^T a``: the translational
     velocity coordinates' share of ``a . rdot`` (``rdot = T v``: ``T = R`` for SE3,
     ``I`` for SO3xR3).  Returns one of the two arrays (no copy)."""
-    if gid == GID_SE3:
+    if BODY_TWIST[gid]:
         return RTa
     return a

@@ -1,6 +1,8 @@
 """Constants shared by the compiled kernel modules: group ids, constraint-row kinds, the
 columns of the integer tables of ``SceneData``, status codes, the stage-argument bound and
 the stabilisation levels."""
+import numpy as np
+
 from ..groups import GROUPS, so3
 
 # group id of a body = position of its group in the one registry, exudyn_lie.groups.GROUPS
@@ -8,6 +10,11 @@ GROUP_NAMES = tuple(GROUPS)
 GID_SE3 = GROUP_NAMES.index("SE3")
 GID_SO3xR3 = GROUP_NAMES.index("SO3xR3")
 GID_R3 = GROUP_NAMES.index("R3")         # point masses (groups/rn.py): R = I, omega = 0
+GID_SE2 = GROUP_NAMES.index("SE2")
+GID_SO2xR2 = GROUP_NAMES.index("SO2xR2")
+# velocity representation per group id (groups.interface.TWISTS): True = body-fixed v
+# (rdot = R v, as SE3), False = mixed (rdot = v, as SO3xR3); a frozen constant in numba
+BODY_TWIST = np.array([GROUPS[g].TWIST == "body" for g in GROUP_NAMES])
 
 ROW_TRANS_LOCAL = 0   # a = (R_A rotA)[:, ax] ; h = a . (pB - pA)
 ROW_TRANS_WORLD = 1   # a = e_ax (world)       ; h = a . (pB - pA)

@@ -96,6 +96,23 @@ def joint_parameters(joint):
     return [0.0] * N_JPAR
 
 
+#: the planar subgroup of each c-space: a 2D body (Scene.AddBody2D) on c-space 'SE3' is
+#: integrated on SE2, on 'SO3xR3' on SO2xR2 (issue 16)
+PLANAR_GROUP = {"SE3": "SE2", "SO3xR3": "SO2xR2"}
+_SPACE_OF = {v: k for k, v in PLANAR_GROUP.items()}
+PLANAR_AXES = [2, 3, 4]          # (omega_z, v_x, v_y) in the 6-vector velocity
+
+
+def planar_minv(M):
+    """``M^-1`` of a 2D body in its 6-vector velocity: the inverse of the planar block
+    (axes ``PLANAR_AXES``), zero elsewhere, so off-plane forces produce no acceleration and
+    the velocity stays in the plane (Exudyn's 2D body has exactly these 3 coordinates)."""
+    Minv = np.zeros((6, 6))
+    ix = np.ix_(PLANAR_AXES, PLANAR_AXES)
+    Minv[ix] = np.linalg.inv(M[ix])
+    return Minv
+
+
 def joint_row_descriptors(constrainedAxes, worldTranslation=False):
     """Rows of Exudyn's ObjectJointGeneric for the given locks, as (kind, ax, bx):
 
@@ -137,7 +154,7 @@ def _rigid_groups(scene: Scene, liegroup):
         key = _group_key(liegroup, "liegroup")
         if key == "auto":
             return auto_groups(scene)
-        return [key] * nb
+        return _planar_subgroups(scene, [_SPACE_OF.get(key, key)] * nb)
     if isinstance(liegroup, dict):
         out = []
         for i in range(nb):
@@ -151,20 +168,39 @@ def _rigid_groups(scene: Scene, liegroup):
         extra = set(liegroup) - set(range(nb))
         if extra:
             raise SceneError(f"liegroup mapping names unknown bodies {sorted(extra)}")
-        return out
-    seq = list(liegroup)
-    if len(seq) != nb:
-        raise SceneError(f"liegroup sequence has {len(seq)} entries for {nb} bodies")
-    return [_group_key(g, f"liegroup[{i}]") for i, g in enumerate(seq)]
+    else:
+        seq = list(liegroup)
+        if len(seq) != nb:
+            raise SceneError(f"liegroup sequence has {len(seq)} entries for {nb} bodies")
+        out = [_group_key(g, f"liegroup[{i}]") for i, g in enumerate(seq)]
+    return _planar_subgroups(scene, out)
+
+
+def _planar_subgroups(scene, names):
+    """A c-space name per body -> the group of each body: a 2D body on the planar subgroup
+    of its c-space (``PLANAR_GROUP``); a planar group name given for a 3D body is refused."""
+    out = []
+    for i, (b, g) in enumerate(zip(scene.bodies, names)):
+        space = _SPACE_OF.get(g, g)
+        if b.planar:
+            out.append(PLANAR_GROUP[space])
+        elif g in _SPACE_OF:
+            raise SceneError(f"liegroup[{i}] = {g!r} is a planar group but body {i} ({b.name}) is a 3D body; "
+                             f"use {space!r}")
+        else:
+            out.append(g)
+    return out
 
 
 def _group_key(name, what):
     if isinstance(name, str):
         low = name.strip().lower().replace("(", "").replace(")", "").replace(" ", "")
-        table = {"se3": "SE3", "so3xr3": "SO3xR3", "so3r3": "SO3xR3", "auto": "auto"}
+        table = {"se3": "SE3", "so3xr3": "SO3xR3", "so3r3": "SO3xR3", "auto": "auto",
+                 "se2": "SE2", "so2xr2": "SO2xR2", "so2r2": "SO2xR2"}
         if low in table:
             return table[low]
-    raise SceneError(f"{what}: unknown Lie group {name!r}; use 'SE3', 'SO3xR3' or 'auto'")
+    raise SceneError(f"{what}: unknown Lie group {name!r}; use 'SE3', 'SO3xR3' or 'auto' "
+                     f"(2D bodies then run on SE2 / SO2xR2)")
 
 
 def auto_groups(scene: Scene):
@@ -182,7 +218,7 @@ def auto_groups(scene: Scene):
         free = i not in constrained
         at_com = np.linalg.norm(b.com) == 0.0
         out.append("SO3xR3" if (free and at_com) else "SE3")
-    return out
+    return _planar_subgroups(scene, out)
 
 
 def compile_scene(scene: Scene, groups):
@@ -190,12 +226,14 @@ def compile_scene(scene: Scene, groups):
     nb = scene.nBodies
     if nb == 0:
         raise SceneError("the scene has no bodies")
+    groups = _planar_subgroups(scene, list(groups))     # 2D bodies: the planar subgroup of their c-space
     gid = np.array([GROUP_IDS[g] for g in groups], dtype=np.int64)
     mass = np.array([b.mass for b in scene.bodies], float)
     com = np.array([b.com for b in scene.bodies], float).reshape(nb, 3)
     M = np.array([point_mass_matrix(b) if b.isPoint else body_mass_matrix(b.mass, b.inertia, b.com)
                   for b in scene.bodies])
-    Minv = np.array([point_minv(b) if b.isPoint else np.linalg.inv(Mi) for b, Mi in zip(scene.bodies, M)])
+    Minv = np.array([point_minv(b) if b.isPoint else planar_minv(Mi) if b.planar else np.linalg.inv(Mi)
+                     for b, Mi in zip(scene.bodies, M)])
 
     def arr(x, shape, dtype=float):
         a = np.array(x, dtype=dtype)

@@ -73,6 +73,7 @@ class Body:
     # a point mass (group R3, groups/rn.py): the projector (3x3, world) onto the directions it
     # moves in (I for NodePoint, diag(1, 1, 0) for NodePoint2D, e e^T for Node1D); None: rigid
     freeDirections: np.ndarray = None
+    planar: bool = False         # a 2D body: 3 DOF in the x-y plane (AddBody2D)
 
     @property
     def isPoint(self):
@@ -271,6 +272,32 @@ class Scene:
         v = _vec3(vel0, f"{label}: vel0")
         self.bodies.append(Body(m, np.zeros((3, 3)), np.zeros(3), np.eye(3), _vec3(r0, f"{label}: r0"),
                                 np.zeros(3), P @ v, label, P))
+
+    def AddBody2D(self, mass, inertia, position=(0, 0), angle=0.0, omega=0.0, velocity=(0, 0), com=(0, 0),
+                  name: str = "") -> int:
+        """Add a planar rigid body (Exudyn's ObjectRigidBody2D): 3 DOF, moving in the world
+        x-y plane; ``inertia`` about the z axis through the body frame origin (Exudyn's
+        reference point), ``com`` the centre of mass in body x-y coordinates.
+        It is integrated on the planar subgroup (SE2 / SO2xR2) of the chosen c-space; forces
+        and constraint reactions off the plane do not act on it, as in Exudyn."""
+        idx = len(self.bodies)
+        label = name or f"body{idx}"
+        J = _finite(float(inertia), f"{label}: inertia")
+        if J <= 0:
+            raise SceneError(f"{label}: the inertia of a 2D body must be positive, got {J}")
+        cxy = np.asarray(com, float).reshape(-1)
+        c3 = (cxy[0], cxy[1], 0.0)
+        # the off-plane inertias never act (M^-1 is zero off the plane, compiled.planar_minv);
+        # chosen so that the tensor about the COM is positive definite
+        Jo = J + 2.0 * float(mass) * float(cxy @ cxy)
+        m, Jt, c = _checked_mass_properties(label, mass, np.diag([Jo, Jo, J]), c3)
+        ca, sa = np.cos(angle), np.sin(angle)
+        R0 = np.array([[ca, -sa, 0.0], [sa, ca, 0.0], [0.0, 0.0, 1.0]])
+        p = np.asarray(position, float).reshape(-1)
+        v = np.asarray(velocity, float).reshape(-1)
+        self.bodies.append(Body(m, Jt, c, R0, _vec3((p[0], p[1], 0.0), f"{label}: position"),
+                                _vec3((0.0, 0.0, omega), f"{label}: omega"),
+                                _vec3((v[0], v[1], 0.0), f"{label}: velocity"), label, planar=True))
         return idx
 
     def _check_body(self, b, what, allow_ground=True):

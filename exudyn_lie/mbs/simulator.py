@@ -21,6 +21,7 @@ from ..integrators.stability import stability_radius
 from ..integrators.mk_adaptive import resolve_pair
 from ..userwarn import warn_user
 from . import external, kernel
+from .codes import BODY_TWIST
 from .bodies import body_dexpinv_stage, exp_compose
 from .compiled import compile_scene, make_work, resolve_groups, with_redundant
 from .linalg import REL_PIVOT_TOL, rows_in_null_space, schur_rank_and_null
@@ -102,7 +103,7 @@ def schur_complement(sd, wk, R, r, V):
                 blocks.setdefault(b, []).append((q, col))
     for b, lst in blocks.items():
         Mi = sd.Minv[b]
-        if sd.gid[b] == kernel.GID_SO3xR3:
+        if not BODY_TWIST[sd.gid[b]]:
             D = np.eye(6)
             D[3:, 3:] = R[b]
             Mi = D @ Mi @ D.T

@@ -3,7 +3,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .codes import GID_SE3
+from .codes import BODY_TWIST
 
 
 @dataclass
@@ -23,7 +23,7 @@ def twist_to_world_velocity(gid, R, V):
     """(omega body, world velocity of the frame origin) from the group velocity."""
     omega = V[:, :3].copy()
     vel = V[:, 3:].copy()
-    se3 = gid == GID_SE3
+    se3 = BODY_TWIST[np.asarray(gid)]
     if np.any(se3):
         vel[se3] = np.einsum("nij,nj->ni", R[se3], V[se3, 3:])
     return omega, vel
@@ -34,7 +34,7 @@ def world_velocity_to_twist(gid, R, omega, vel):
     V = np.zeros((len(gid), 6))
     V[:, :3] = omega
     V[:, 3:] = vel
-    se3 = gid == GID_SE3
+    se3 = BODY_TWIST[np.asarray(gid)]
     if np.any(se3):
         V[se3, 3:] = np.einsum("nji,nj->ni", R[se3], vel[se3])
     return V

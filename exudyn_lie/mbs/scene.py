@@ -272,6 +272,7 @@ class Scene:
         v = _vec3(vel0, f"{label}: vel0")
         self.bodies.append(Body(m, np.zeros((3, 3)), np.zeros(3), np.eye(3), _vec3(r0, f"{label}: r0"),
                                 np.zeros(3), P @ v, label, P))
+        return idx
 
     def AddBody2D(self, mass, inertia, position=(0, 0), angle=0.0, omega=0.0, velocity=(0, 0), com=(0, 0),
                   name: str = "") -> int:

@@ -223,10 +223,13 @@ def test_2d_bodies_run_on_the_planar_subgroups():
     assert Simulator(sc, "RK4", "SE3").groups == ["SE2"]
     assert Simulator(sc, "RK4", "SO3xR3").groups == ["SO2xR2"]
     assert Simulator(sc, "RK4", "auto").groups == ["SE2"]
+    # users name the c-space; the planar groups follow from it (a planar name is refused)
+    with pytest.raises(ValueError, match="unknown Lie group 'SE2'.*2D bodies then run on SE2"):
+        Simulator(sc, "RK4", "SE2")
     sc3 = Scene()
     sc3.AddBody(1.0, np.eye(3))
     with pytest.raises(ValueError, match="planar group"):
-        Simulator(sc3, "RK4", ["SE2"])
+        compile_scene(sc3, ["SE2"])
 
 
 def test_paper_extension_planar_claims_hold():

@@ -80,8 +80,10 @@ STAGE_ANGLE_MAX = so3.DEXP_ANGLE_MAX
 
 # --------------------------------------------------------------------------- helpers
 def _groups_table():
-    from ..groups import GROUPS  # imported lazily: groups/ is a sibling package
-    return GROUPS
+    from ..groups import GROUPS, interface  # imported lazily: groups/ is a sibling package
+    # the reference stepper integrates 3D poses: the groups whose algebra spans all six axes
+    # (not the planar subgroups SE2 / SO2xR2 of the 2D bodies)
+    return {k: m for k, m in GROUPS.items() if interface.algebra_axes(m) == tuple(range(6))}
 
 
 def _resolve_one(gm):

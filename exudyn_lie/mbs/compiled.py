@@ -153,8 +153,8 @@ def _rigid_groups(scene: Scene, liegroup):
     if isinstance(liegroup, str):
         key = _group_key(liegroup, "liegroup")
         if key == "auto":
-            return auto_groups(scene)
-        return _planar_subgroups(scene, [_SPACE_OF.get(key, key)] * nb)
+            return _planar_subgroups(scene, auto_groups(scene))
+        return _planar_subgroups(scene, [key] * nb)
     if isinstance(liegroup, dict):
         out = []
         for i in range(nb):
@@ -178,7 +178,9 @@ def _rigid_groups(scene: Scene, liegroup):
 
 def _planar_subgroups(scene, names):
     """A c-space name per body -> the group of each body: a 2D body on the planar subgroup
-    of its c-space (``PLANAR_GROUP``); a planar group name given for a 3D body is refused."""
+    of its c-space (``PLANAR_GROUP``).  The user names c-spaces only ('SE3', 'SO3xR3',
+    ``_group_key``); a planar name reaches here from ``compile_scene`` (idempotent) and is
+    refused for a 3D body."""
     out = []
     for i, (b, g) in enumerate(zip(scene.bodies, names)):
         space = _SPACE_OF.get(g, g)
@@ -195,8 +197,7 @@ def _planar_subgroups(scene, names):
 def _group_key(name, what):
     if isinstance(name, str):
         low = name.strip().lower().replace("(", "").replace(")", "").replace(" ", "")
-        table = {"se3": "SE3", "so3xr3": "SO3xR3", "so3r3": "SO3xR3", "auto": "auto",
-                 "se2": "SE2", "so2xr2": "SO2xR2", "so2r2": "SO2xR2"}
+        table = {"se3": "SE3", "so3xr3": "SO3xR3", "so3r3": "SO3xR3", "auto": "auto"}
         if low in table:
             return table[low]
     raise SceneError(f"{what}: unknown Lie group {name!r}; use 'SE3', 'SO3xR3' or 'auto' "
@@ -218,7 +219,7 @@ def auto_groups(scene: Scene):
         free = i not in constrained
         at_com = np.linalg.norm(b.com) == 0.0
         out.append("SO3xR3" if (free and at_com) else "SE3")
-    return _planar_subgroups(scene, out)
+    return out
 
 
 def compile_scene(scene: Scene, groups):

@@ -88,3 +88,12 @@ def test_point_masses_agree_with_generalized_alpha_at_a_fine_step():
     ql, vl = _solve(point_model(), 1e-3, T, True)
     assert np.max(np.abs(ql - qn)) < 2e-6 * max(1, np.abs(qn).max())
     assert np.max(np.abs(vl - vn)) < 2e-5 * max(1, np.abs(vn).max())
+
+
+def test_R3_is_refused_for_a_rigid_body():
+    from exudyn_lie.bridge import SceneFromExudyn
+    from exudyn_lie.mbs import SceneError, Simulator
+    sc = SceneFromExudyn(point_model(), "initial")
+    with pytest.raises(SceneError, match="R3 is the group of point masses"):
+        Simulator(sc, "RK4", ["R3", "R3", "R3"])
+    assert Simulator(sc, "RK4", ["R3", "R3", "SO3xR3"]).groups == ["R3", "R3", "SO3xR3"]

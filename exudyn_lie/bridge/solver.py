@@ -175,6 +175,9 @@ class LieGroupSolver:
                                       f"(rigid bodies: objects {sc.bodyObject})")
                 groups[b] = g
                 why[b] = "given"
+        for b, body in enumerate(sc.bodies):
+            if body.isPoint:                 # a point mass has one group (compiled.resolve_groups)
+                groups[b], why[b] = "R3", "point mass"
         return groups, why
 
     def _prepare(self, announce=False):

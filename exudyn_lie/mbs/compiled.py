@@ -145,7 +145,13 @@ def joint_row_descriptors(constrainedAxes, worldTranslation=False):
 def resolve_groups(scene: Scene, liegroup):
     """Per-body group names from ``'SE3'``, ``'SO3xR3'``, ``'auto'`` or a mapping/sequence;
     point masses are on ``R3`` whatever is asked (their only group)."""
-    return [("R3" if b.isPoint else g) for b, g in zip(scene.bodies, _rigid_groups(scene, liegroup))]
+    out = []
+    for i, (b, g) in enumerate(zip(scene.bodies, _rigid_groups(scene, liegroup))):
+        if g == "R3" and not b.isPoint:
+            raise SceneError(f"liegroup for body {i} ({b.name}): R3 is the group of point masses; use 'SE3', "
+                             f"'SO3xR3' or 'auto' for a rigid body")
+        out.append("R3" if b.isPoint else g)
+    return out
 
 
 def _rigid_groups(scene: Scene, liegroup):
@@ -197,7 +203,7 @@ def _planar_subgroups(scene, names):
 def _group_key(name, what):
     if isinstance(name, str):
         low = name.strip().lower().replace("(", "").replace(")", "").replace(" ", "")
-        table = {"se3": "SE3", "so3xr3": "SO3xR3", "so3r3": "SO3xR3", "auto": "auto"}
+        table = {"se3": "SE3", "so3xr3": "SO3xR3", "so3r3": "SO3xR3", "auto": "auto", "r3": "R3"}
         if low in table:
             return table[low]
     raise SceneError(f"{what}: unknown Lie group {name!r}; use 'SE3', 'SO3xR3' or 'auto' "

@@ -10,7 +10,7 @@ from exudyn_lie.integrators import mk
 from exudyn_lie.integrators import mk_adaptive as MA
 from exudyn_lie.integrators.tableau import BS3, DOPRI5, RK4, Vern6
 from exudyn_lie.mbs.simulator import StepSizeError
-from models._torque_free import TorqueFreeRotation
+from exudyn_lie.models._torque_free import TorqueFreeRotation
 
 # ------------------------------------------------------------------ the test problem
 # A free asymmetric body tumbling (torque-free, frame at the COM: Euler-Poinsot, exact by

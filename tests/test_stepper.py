@@ -149,7 +149,7 @@ def test_stability_radius_from_the_coefficients():
 
 
 def test_custom_tableau_in_simulator_with_step_size_error():
-    from exudyn_lie.analysis import stress_models as M
+    from exudyn_lie.apps import stress_models as M
     k = 1e6
     tab = _ralston3()
     hmax = 2.5 / math.sqrt(k)
@@ -177,7 +177,15 @@ def test_custom_tableau_equal_coefficients_bit_identical():
 def test_custom_tableau_in_solve_dynamic():
     exu = pytest.importorskip("exudyn")
     import exudyn_lie as exl
-    from exudyn_lie.bridge.example_heavytop import build
+    from exudyn_lie.models import heavy_top as HT
+
+    def build():                                     # the paper's heavy top with a position sensor
+        mbs, info = HT.build(endTime=0.2)
+        b = info.bodies[0].objectIndex
+        s = mbs.AddSensor(exu.itemInterface.SensorBody(bodyNumber=b, storeInternal=True,
+                                                       outputVariableType=exu.OutputVariableType.Position))
+        mbs.Assemble()
+        return None, mbs, b, s
     rk4 = get_method("RK4")
     mine = ButcherTableau(name="MyRK4", order=4, A=rk4._exact_coeffs[0], b=rk4._exact_coeffs[1],
                           c=rk4._exact_coeffs[2])

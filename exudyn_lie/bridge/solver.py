@@ -183,7 +183,7 @@ class LieGroupSolver:
         groups, why = self._groups(sc)
         with warnings.catch_warnings(), compile_timer() as ct:
             warnings.simplefilter("ignore", DeprecationWarning)
-            sim = Simulator(sc, self.method, groups, self.stabilization, self.projectInitial, verbose=False)
+            sim = Simulator(sc, self.tableau, groups, self.stabilization, self.projectInitial, verbose=False)
         self._compileSeconds += ct.seconds
         self._prepareSeconds += time.perf_counter() - tic
         self.scene, self.sim, self.groups = sc, sim, groups

@@ -48,7 +48,7 @@ A rejected step is retried with ``h / min(1/fac_min, err^(1/q - 0.75 beta) / saf
 is the error of the last accepted step (at least 1e-4; 1e-4 before the first).  Steps are
 clipped to ``[h_min, h_max]``; a rejected step whose retry would be below ``h_min`` stops
 the integration (the tolerance cannot be met with steps >= h_min): the caller raises
-:class:`~exudyn_lie.mbs.simulator.StepSizeError` with the time and the step
+:class:`~exudyn_lie.errors.StepSizeError` with the time and the step
 (:func:`raise_step_size_error`).
 
 The initial step (:func:`hinit_first`, :func:`hinit_second`)
@@ -66,6 +66,8 @@ import math
 
 import numpy as np
 from numba import njit
+
+from ..errors import StepSizeError
 
 __all__ = [
     "P_SAFETY", "P_FAC_MIN", "P_FAC_MAX", "P_BETA", "P_EXPO", "P_H_MIN", "P_H_MAX", "P_Q",
@@ -258,9 +260,8 @@ def hinit_second(h0, d1, d2, q, h_max):
 
 
 def raise_step_size_error(t, h, h_min, err, method=""):
-    """Raise :class:`~exudyn_lie.mbs.simulator.StepSizeError` for a step below the minimum,
+    """Raise :class:`~exudyn_lie.errors.StepSizeError` for a step below the minimum,
     with ``.time`` and ``.step`` attributes (Python side of STATUS_H_MIN)."""
-    from ..mbs.simulator import StepSizeError  # lazily: mbs sits above integrators
     exc = StepSizeError(
         f"adaptive step{' (' + method + ')' if method else ''} at t = {t:.17g}: the error "
         f"control asks for h = {h:.6g} < minimum step {h_min:.6g} (scaled error {err:.3g} of "

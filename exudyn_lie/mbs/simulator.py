@@ -15,6 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..compiling import announce_cold_compile
+from ..errors import ConstraintError, SimulationError, StepSizeError  # noqa: F401 - exported from here too
 from ..groups import so3
 from ..integrators.stability import stability_radius
 from ..integrators.mk_adaptive import resolve_pair
@@ -31,17 +32,6 @@ from .entry import entry_point
 from ..integrators import control as _control
 
 
-class SimulationError(RuntimeError):
-    """A run that cannot continue (singular constraints, blow-up, non-finite state)."""
-
-
-class ConstraintError(SimulationError):
-    """Singular or inconsistent constraints."""
-
-
-class StepSizeError(SimulationError):
-    """The step size is beyond the stability limit of the method, or a stage rotation
-    argument of the MK step left the domain of dexp^-1 (``kernel.STAGE_ARG_MAX``)."""
 
 
 # relative size of the constraint residual/velocity error accepted at the start

@@ -1,6 +1,7 @@
-"""The errors of a run, shared by every layer (the integrators raise them as well as the
-multibody simulator and the bridge): one module below all others, so that no layer has to
-import a higher one for them."""
+"""The package's run-time errors, below every layer: the adaptive controller of
+``integrators`` raises :class:`StepSizeError` as the compiled driver of ``mbs`` does, and
+neither layer imports the other for it.  Re-exported by ``exudyn_lie.mbs.simulator`` and
+the package."""
 
 
 class SimulationError(RuntimeError):
@@ -12,6 +13,6 @@ class ConstraintError(SimulationError):
 
 
 class StepSizeError(SimulationError):
-    """The step size is beyond the stability limit of the method, or a stage rotation
-    argument of the MK step left the domain of dexp^-1 (``kernel.STAGE_ARG_MAX``), or an
-    adaptive step fell below the minimum step size."""
+    """The step size is beyond the stability limit of the method, a stage rotation argument
+    of the MK step left the domain of dexp^-1 (``kernel.STAGE_ARG_MAX``), or adaptive steps
+    would fall below the minimum step (``.time``, ``.step``)."""

@@ -48,7 +48,7 @@ A rejected step is retried with ``h / min(1/fac_min, err^(1/q - 0.75 beta) / saf
 is the error of the last accepted step (at least 1e-4; 1e-4 before the first).  Steps are
 clipped to ``[h_min, h_max]``; a rejected step whose retry would be below ``h_min`` stops
 the integration (the tolerance cannot be met with steps >= h_min): the caller raises
-:class:`~exudyn_lie.mbs.simulator.StepSizeError` with the time and the step
+:class:`~exudyn_lie.errors.StepSizeError` with the time and the step
 (:func:`raise_step_size_error`).
 
 The initial step (:func:`hinit_first`, :func:`hinit_second`)

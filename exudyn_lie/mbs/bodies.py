@@ -131,7 +131,7 @@ def add_world_torque(R, T, Q):
 def add_point_force_origin(gid, R, FT, Q):
     """:func:`add_point_force` of the world force ``FT[0:3]`` at the frame origin
     (``s = 0``): ``Q += (0, T^T F)``."""
-    if gid == GID_SE3:
+    if BODY_TWIST[gid]:
         for k in range(3):
             Q[3 + k] += R[0, k] * FT[0] + R[1, k] * FT[1] + R[2, k] * FT[2]
     else:
@@ -253,7 +253,7 @@ def body_inertial_forces(gid, Mi, mass, com, R, Vi, Qi):
         Qi[3] -= c0
         Qi[4] -= c1
         Qi[5] -= c2
-    elif gid == GID_SO3xR3:         # R3 (a point mass) has no velocity-dependent terms
+    elif gid != GID_R3:             # mixed velocities (SO3xR3, SO2xR2); R3 (a point mass) has none
         Lx = Mi[0, 0] * w0 + Mi[0, 1] * w1 + Mi[0, 2] * w2
         Ly = Mi[1, 0] * w0 + Mi[1, 1] * w1 + Mi[1, 2] * w2
         Lz = Mi[2, 0] * w0 + Mi[2, 1] * w1 + Mi[2, 2] * w2
@@ -286,11 +286,11 @@ def body_twist(gid, R, V, Vb):
 @njit(cache=True, inline="always", _nrt=False)
 def body_world_velocity(gid, R, V, out):
     """``out = (omega, rdot)``: the body-fixed angular velocity and the world velocity of the
-    frame origin, from the body's group velocity ``V`` (SE3: ``rdot = R v``; SO3xR3:
-    ``rdot = v``).  What :class:`~exudyn_lie.mbs.state.BodyStates` hands to Python forces."""
+    frame origin, from the body's group velocity ``V`` (body twists, SE3 / SE2: ``rdot = R v``;
+    mixed, SO3xR3 / SO2xR2 / R3: ``rdot = v``).  What :class:`~exudyn_lie.mbs.state.BodyStates` hands to Python forces."""
     for k in range(3):
         out[k] = V[k]
-    if gid == GID_SE3:
+    if BODY_TWIST[gid]:
         for k in range(3):
             out[3 + k] = R[k, 0] * V[3] + R[k, 1] * V[4] + R[k, 2] * V[5]
     else:

@@ -18,6 +18,12 @@ def test_kernel_group_ids_come_from_the_registry():
     assert codes.GROUP_NAMES[codes.GID_SE3] == "SE3" and codes.GROUP_NAMES[codes.GID_SO3xR3] == "SO3xR3"
     assert codes.GROUP_NAMES[codes.GID_SE2] == "SE2" and codes.GROUP_NAMES[codes.GID_SO2xR2] == "SO2xR2"
     assert list(codes.BODY_TWIST) == [GROUPS[g].TWIST == "body" for g in GROUPS]
+    # the compiled test (an integer constant) says the same for every group id, from Python
+    # and from compiled code
+    from numba import njit
+    probe = njit(lambda g: codes.uses_body_twist(g))
+    for gid, g in enumerate(GROUPS):
+        assert codes.uses_body_twist(gid) == probe(gid) == (GROUPS[g].TWIST == "body")
 
 
 @pytest.mark.parametrize("name", list(GROUPS))

@@ -25,7 +25,7 @@ import math
 import numpy as np
 from numba import njit
 
-from ..mbs.codes import BODY_TWIST
+from ..mbs.codes import uses_body_twist
 from ..userwarn import warn_user
 from . import rotations as rot
 
@@ -247,7 +247,7 @@ def write_nodes(gid, R, r, V, Vdot, doacc, code, body, idx, nq, qref, prev, firs
         Rb = R[b]
         for k in range(3):
             om[k] = V[b, k]
-        if BODY_TWIST[gid[b]]:
+        if uses_body_twist(gid[b]):
             for k in range(3):
                 vel[k] = Rb[k, 0] * V[b, 3] + Rb[k, 1] * V[b, 4] + Rb[k, 2] * V[b, 5]
         else:
@@ -256,7 +256,7 @@ def write_nodes(gid, R, r, V, Vdot, doacc, code, body, idx, nq, qref, prev, firs
         if doacc:
             for k in range(3):
                 omd[k] = Vdot[b, k]
-            if BODY_TWIST[gid[b]]:
+            if uses_body_twist(gid[b]):
                 # a = R (vdot + omega x v)
                 w0, w1, w2 = V[b, 0], V[b, 1], V[b, 2]
                 v0, v1, v2 = V[b, 3], V[b, 4], V[b, 5]

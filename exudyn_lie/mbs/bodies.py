@@ -4,7 +4,7 @@ depends on the group of a body (``gid``, see :mod:`.codes` and :mod:`exudyn_lie.
 * ``SE3`` (0): twist ``V = (omega, v)`` with ``v`` body-fixed, ``rdot = R v``;
 * ``SO3xR3`` (1): mixed velocity, ``v = rdot`` spatial (eq. hybridvel);
 * ``SE2`` / ``SO2xR2``: the planar subgroups, with the velocity representation of SE3 /
-  SO3xR3 (``codes.BODY_TWIST``, from each group's ``TWIST``).  A planar body keeps 6-vector
+  SO3xR3 (``codes.uses_body_twist``, from each group's ``TWIST``).  A planar body keeps 6-vector
   velocities whose off-plane entries stay zero: its ``M^-1`` is zero off the plane
   (``compiled.planar_minv``), so off-plane forces do nothing, as for Exudyn's 2D bodies;
 * ``R3`` (2): point masses (``groups/rn.py``): ``R = I`` and ``omega = 0`` for all time,
@@ -25,7 +25,7 @@ body's velocity coordinates, the configuration update ``g exp(X)`` and the MK st
 from numba import njit
 
 from ..groups import se2, se3, so2xr2, so3
-from .codes import BODY_TWIST, GID_R3, GID_SE2, GID_SE3, GID_SO3xR3
+from .codes import uses_body_twist, GID_R3, GID_SE2, GID_SE3, GID_SO3xR3
 
 
 # --------------------------------------------------------------------------- small vector helpers
@@ -62,7 +62,7 @@ def body_point(gid, R, r, V, s, p, pd, beta):
     w0, w1, w2 = V[0], V[1], V[2]
     ws0, ws1, ws2 = _cross(w0, w1, w2, s[0], s[1], s[2])            # omega x s
     wws0, wws1, wws2 = _cross(w0, w1, w2, ws0, ws1, ws2)            # omega x (omega x s)
-    if BODY_TWIST[gid]:
+    if uses_body_twist(gid):
         # rdot = R v : pd = R (v + omega x s); beta = R (omega x (omega x s) + omega x v)
         wv0, wv1, wv2 = _cross(w0, w1, w2, V[3], V[4], V[5])
         l0 = V[3] + ws0
@@ -110,7 +110,7 @@ def add_point_force(gid, R, s, F, Q):
     Q[0] += m0
     Q[1] += m1
     Q[2] += m2
-    if BODY_TWIST[gid]:
+    if uses_body_twist(gid):
         Q[3] += f0
         Q[4] += f1
         Q[5] += f2
@@ -131,7 +131,7 @@ def add_world_torque(R, T, Q):
 def add_point_force_origin(gid, R, FT, Q):
     """:func:`add_point_force` of the world force ``FT[0:3]`` at the frame origin
     (``s = 0``): ``Q += (0, T^T F)``."""
-    if BODY_TWIST[gid]:
+    if uses_body_twist(gid):
         for k in range(3):
             Q[3 + k] += R[0, k] * FT[0] + R[1, k] * FT[1] + R[2, k] * FT[2]
     else:
@@ -152,7 +152,7 @@ def apply_minv(gid, Minv, R, x, out, tmp):
 
     SE3: ``M`` is the constant J_P, ``Minv`` its inverse.  SO3xR3: ``V^m = D V`` with
     ``D = diag(I, R)``, hence ``(M^m)^-1 = D M^-1 D^T``."""
-    if BODY_TWIST[gid]:
+    if uses_body_twist(gid):
         for i in range(6):
             s = 0.0
             for k in range(6):
@@ -188,7 +188,7 @@ def exp_compose(gid, R, r, X, Rout, rout, ER, Er):
             for j in range(3):
                 Rout[i, j] = R[i, j]
         return
-    if BODY_TWIST[gid]:
+    if uses_body_twist(gid):
         if gid == GID_SE3:
             se3.exp_into(X, ER, Er)
         else:
@@ -237,7 +237,7 @@ def body_inertial_forces(gid, Mi, mass, com, R, Vi, Qi):
     SE3, eq. (NE1): ``M Vdot = W + ad_V^T (M V)``, ``ad_V^T (L, p) = (-(w x L) - v x p, -(w x p))``.
     SO3xR3: ``M^m Vdot = W - (w x Theta_P w, m R (w x (w x c)))``."""
     w0, w1, w2 = Vi[0], Vi[1], Vi[2]
-    if BODY_TWIST[gid]:
+    if uses_body_twist(gid):
         Lx = Mi[0, 0] * w0 + Mi[0, 1] * w1 + Mi[0, 2] * w2 + Mi[0, 3] * Vi[3] + Mi[0, 4] * Vi[4] + Mi[0, 5] * Vi[5]
         Ly = Mi[1, 0] * w0 + Mi[1, 1] * w1 + Mi[1, 2] * w2 + Mi[1, 3] * Vi[3] + Mi[1, 4] * Vi[4] + Mi[1, 5] * Vi[5]
         Lz = Mi[2, 0] * w0 + Mi[2, 1] * w1 + Mi[2, 2] * w2 + Mi[2, 3] * Vi[3] + Mi[2, 4] * Vi[4] + Mi[2, 5] * Vi[5]
@@ -275,7 +275,7 @@ def body_twist(gid, R, V, Vb):
     (SE3: ``V`` itself; SO3xR3: ``v_b = R^T v``)."""
     for k in range(3):
         Vb[k] = V[k]
-    if BODY_TWIST[gid]:
+    if uses_body_twist(gid):
         for k in range(3):
             Vb[3 + k] = V[3 + k]
     else:
@@ -290,7 +290,7 @@ def body_world_velocity(gid, R, V, out):
     mixed, SO3xR3 / SO2xR2 / R3: ``rdot = v``).  What :class:`~exudyn_lie.mbs.state.BodyStates` hands to Python forces."""
     for k in range(3):
         out[k] = V[k]
-    if BODY_TWIST[gid]:
+    if uses_body_twist(gid):
         for k in range(3):
             out[3 + k] = R[k, 0] * V[3] + R[k, 1] * V[4] + R[k, 2] * V[5]
     else:
@@ -303,6 +303,6 @@ def translation_dual(gid, a, RTa):
     """``T^T a`` for a world vector ``a``, given ``RTa = R^T a``: the translational
     velocity coordinates' share of ``a . rdot`` (``rdot = T v``: ``T = R`` for SE3,
     ``I`` for SO3xR3).  Returns one of the two arrays (no copy)."""
-    if BODY_TWIST[gid]:
+    if uses_body_twist(gid):
         return RTa
     return a

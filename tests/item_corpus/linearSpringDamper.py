@@ -17,7 +17,7 @@ def Build():
                              referencePosition=[0.25, 0, 0], initialAngularVelocity=[0, 0, 1],
                              initialVelocity=[0, 0.25, 0], gravity=[0, 0, -9.81],
                              nodeType=exu.NodeType.RotationEulerParameters)
-    mbs.CreateSphericalJoint(bodyNumbers=[oGround, b0], position=[0, 0, 0])
+    mbs.CreateSphericalJoint(itemNumbers=[oGround, b0], position=[0, 0, 0])
     mG = mbs.AddMarker(MarkerBodyRigid(bodyNumber=oGround, localPosition=[0.6, 0.3, 0]))
     mB = mbs.AddMarker(MarkerBodyRigid(bodyNumber=b0, localPosition=[0.25, 0, 0]))
     mbs.AddObject(ObjectConnectorLinearSpringDamper(markerNumbers=[mG, mB], axisMarker0=[1, 0, 0], stiffness=500,

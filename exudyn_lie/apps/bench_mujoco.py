@@ -509,23 +509,23 @@ def target_lines(res):
     if not res:
         return []
     if "skipped" in res:
-        return [f"| (m) MuJoCo peer (issue 19) | {res['skipped']} | - |"]
+        return [f"| MuJoCo peer | {res['skipped']} | - |"]
     ag = res["agreement"]
-    L = [f"| (m) heavytop: MuJoCo {res['version']} RK4 = exudyn_lie MK-RK4 SE3 to round-off ({ag['T']:g} s, "
+    L = [f"| MuJoCo peer, heavytop: MuJoCo {res['version']} RK4 = exudyn_lie MK-RK4 SE3 to round-off ({ag['T']:g} s, "
          f"h = {ag['h']:g}, tolerance {ag['tol']:g}) | |dr| = {ag['dr']:.2g} m, |dR| = {ag['dR']:.2g} rad "
          f"(either run is {ag['discretisation']:.2g} from RK6 at h/10) | {'yes' if ag['ok'] else 'no'} |"]
     if "failed" in res:
-        return L + [f"| (m) per-step targets against MuJoCo | not measured: {res['failed']} | no |"]
+        return L + [f"| MuJoCo peer, per-step targets against MuJoCo | not measured: {res['failed']} | no |"]
     for name, dh in res["perstep"].items():
         target = TARGET_RATIO[name]
         cells = [f"h = {h:g}: {d['exl']:.3g} us vs {d['mujoco']:.3g} us ({d['ratio']:.2f}x)"
                  for h, d in sorted(dh.items(), reverse=True)]
         ok = all(d["ratio"] >= target for d in dh.values())
-        L.append(f"| (m) {name}: MK-RK4 (SE3) step >= {target:g}x cheaper than MuJoCo's RK4 step (mj_step, same "
+        L.append(f"| MuJoCo peer, {name}: MK-RK4 (SE3) step >= {target:g}x cheaper than MuJoCo's RK4 step (mj_step, same "
                  f"model and step) | {'; '.join(cells)} | {'yes' if ok else 'no'} |")
     for name, w in res["wp"].items():
         sm = w["summary"]
-        L.append(f"| (m) {name}: MuJoCo's model converges to the package's solution (MuJoCo RK4 against exudyn_lie "
+        L.append(f"| MuJoCo peer, {name}: MuJoCo's model converges to the package's solution (MuJoCo RK4 against exudyn_lie "
                  f"RK6 at h = {w['href']:g}, T = {w['T']:g} s: observed order 3.5 ... 5 over its runs with errors in "
                  f"1e-4 ... 1e-8) "
                  f"| order {sm['order']['MuJoCo RK4']:.2f} (its most accurate run in the band: {sm['finestErr']:.2g} at "
@@ -533,7 +533,7 @@ def target_lines(res):
                  f"| {'yes' if sm['converges'] else 'no'} |")
     for name, w in res["wp"].items():
         cells = [f"{_r(r['ratioRK4'])} at {r['eps']:.0e}" for r in w["summary"]["rows"]]
-        L.append(f"| (m) {name}: work-precision, MuJoCo RK4 time / MK-RK4 SE3 time to reach 1e-4 ... 1e-8 "
+        L.append(f"| MuJoCo peer, {name}: work-precision, MuJoCo RK4 time / MK-RK4 SE3 time to reach 1e-4 ... 1e-8 "
                  f"(informative) | {', '.join(cells)} | - |")
     return L
 

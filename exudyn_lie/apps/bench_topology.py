@@ -153,18 +153,18 @@ def target_lines(res):
     L_ = []
     for k in ("chain", "star", "tree"):
         e = res["fits"][k]
-        L_.append(f"| (t) {k}: cost per step ~ N^p with p <= {TARGET_EXPONENT:g} (N >= 20) | p = {e:.2f} | "
+        L_.append(f"| topology, {k}: cost per step ~ N^p with p <= {TARGET_EXPONENT:g} (N >= 20) | p = {e:.2f} | "
                   f"{'yes' if e <= TARGET_EXPONENT else 'no'} |")
     r = res.get("starOverChain160")
     if r is not None:
-        L_.append(f"| (t) star of 160 bodies per body <= {TARGET_STAR_OVER_CHAIN:g}x the chain per body | {r:.3g}x | "
+        L_.append(f"| topology, star of 160 bodies per body <= {TARGET_STAR_OVER_CHAIN:g}x the chain per body | {r:.3g}x | "
                   f"{'yes' if r <= TARGET_STAR_OVER_CHAIN else 'no'} |")
-    L_.append(f"| (t) ladder: cost vs loop count (informative) | p = {res['fits']['ladder']:.2f} | - |")
+    L_.append(f"| topology, ladder: cost vs loop count (informative) | p = {res['fits']['ladder']:.2f} | - |")
     return L_
 
 
 def report_lines(res):
-    L_ = ["## Topologies (issue 19, section 1)", "",
+    L_ = ["## Topologies", "",
           f"MK-RK4 SE3, h = {res['h']:g}, spherical joints; load average {res.get('load', '?')}.", "",
           "| family | N | loops | rows | bandwidth | us per step | us per body |", "|---|---|---|---|---|---|---|"]
     for k, r in res["rows"].items():

@@ -117,7 +117,7 @@ def target_lines(res):
     L = []
     for k, title in (("zero", "zero user load"), ("pd", "PD-controller torque (springTorqueUserFunction)")):
         d = res[k]
-        L.append(f"| (u) heavy top with a {title}: step <= compiled step + user function's own cost + "
+        L.append(f"| Python user functions: heavy top with a {title}: step <= compiled step + user function's own cost + "
                  f"{TARGET_OVERHEAD_US:g} us per call | {res['us'][k]:.3g} us/step vs compiled "
                  f"{res['us']['compiled']:.3g}, own {d['own']:.2g} us x {res['callsPerStep']}: overhead "
                  f"{d['overhead']:.2g} us/call | {'yes' if d['overhead'] <= TARGET_OVERHEAD_US else 'no'} |")
@@ -125,7 +125,7 @@ def target_lines(res):
 
 
 def report_lines(res):
-    L = ["## Python user functions (issue 19, section 2)", "",
+    L = ["## Python user functions", "",
          f"Heavy top, MK-RK4 SE3, h = {res['h']:g}, {res['steps']} steps, median of {res['repeat']} interleaved "
          f"repetitions (load average {res.get('load', '?')}).", "",
          "| variant | us per step (median) | min | user function's own cost per call | overhead per call |",

@@ -55,6 +55,30 @@ def _side(gid, b, R, r, V, ident, zero3, zero6):
 
 
 # --------------------------------------------------------------------------- body kinematics
+@njit(cache=True, inline="always", _nrt=False)
+def connector_ends(gid, a, b, posA, posB, R, r, V, v3, ident, zero3, zero6):
+    """The two ends of a point-to-point connector between bodies ``a`` and ``b`` (ground
+    < 0): positions, velocities and velocity-product terms into ``v3[0..5]`` (pA, pB, vA,
+    vB, bA, bB); returns the group and rotation of each side for the force that follows."""
+    gA, RA, rA, VA = _side(gid, a, R, r, V, ident, zero3, zero6)
+    gB, RB, rB, VB = _side(gid, b, R, r, V, ident, zero3, zero6)
+    body_point(gA, RA, rA, VA, posA, v3[0], v3[2], v3[4])
+    body_point(gB, RB, rB, VB, posB, v3[1], v3[3], v3[5])
+    return gA, RA, gB, RB
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def add_pair_force(gA, RA, posA, a, gB, RB, posB, b, F, Q):
+    """World force ``F`` on body ``a`` at ``posA`` and ``-F`` on body ``b`` at ``posB``
+    (ground < 0 takes none); ``F`` is left negated if ``b`` is a body."""
+    if a >= 0:
+        add_point_force(gA, RA, posA, F, Q[a])
+    if b >= 0:
+        for k in range(3):
+            F[k] = -F[k]
+        add_point_force(gB, RB, posB, F, Q[b])
+
+
 @njit(cache=True, _nrt=False)
 def body_point(gid, R, r, V, s, p, pd, beta):
     """World position ``p``, velocity ``pd`` and velocity-product acceleration ``beta``

@@ -5,7 +5,8 @@ import numpy as np
 from numba import njit
 
 from ..groups import so3
-from .bodies import _matvec, _side, add_point_force, add_world_torque, body_inertial_forces, body_point
+from .bodies import (_matvec, _side, add_pair_force, add_point_force, add_world_torque, body_inertial_forces,
+                     body_point, connector_ends)
 from .codes import L_BODY, L_FIXED, L_KIND
 from .coordinate_forces import coordinate_spring_forces
 from .linear_spring_forces import linear_spring_forces
@@ -45,14 +46,11 @@ def load_forces(gid, lint, lvec, R, Q, F):
 def spring_forces(gid, sint, spos, spar, R, r, V, Q, v3, ident, zero3, zero6):
     """Point-to-point spring-dampers: tension ``f = k (L - L0) + d Ldot + f0``
     (``spar`` = k, d, L0, f0)."""
-    pA, pB, vA, vB, bA, bB, F = v3[0], v3[1], v3[2], v3[3], v3[4], v3[5], v3[6]
+    pA, pB, vA, vB, F = v3[0], v3[1], v3[2], v3[3], v3[6]
     for s in range(sint.shape[0]):
         a = sint[s, 0]
         b = sint[s, 1]
-        gA, RA, rA, VA = _side(gid, a, R, r, V, ident, zero3, zero6)
-        gB, RB, rB, VB = _side(gid, b, R, r, V, ident, zero3, zero6)
-        body_point(gA, RA, rA, VA, spos[s, 0], pA, vA, bA)
-        body_point(gB, RB, rB, VB, spos[s, 1], pB, vB, bB)
+        gA, RA, gB, RB = connector_ends(gid, a, b, spos[s, 0], spos[s, 1], R, r, V, v3, ident, zero3, zero6)
         L = 0.0
         for k in range(3):
             L += (pB[k] - pA[k]) ** 2
@@ -64,36 +62,23 @@ def spring_forces(gid, sint, spos, spar, R, r, V, Q, v3, ident, zero3, zero6):
             Ld += (pB[k] - pA[k]) * (vB[k] - vA[k])
         Ld /= L
         f = spar[s, 0] * (L - spar[s, 2]) + spar[s, 1] * Ld + spar[s, 3]
-        if a >= 0:
-            for k in range(3):
-                F[k] = f * (pB[k] - pA[k]) / L
-            add_point_force(gA, RA, spos[s, 0], F, Q[a])
-        if b >= 0:
-            for k in range(3):
-                F[k] = -f * (pB[k] - pA[k]) / L
-            add_point_force(gB, RB, spos[s, 1], F, Q[b])
+        for k in range(3):
+            F[k] = f * (pB[k] - pA[k]) / L
+        add_pair_force(gA, RA, spos[s, 0], a, gB, RB, spos[s, 1], b, F, Q)
 
 
 @njit(cache=True, _nrt=False)
 def cartesian_forces(gid, cint, cpos, cpar, R, r, V, Q, v3, ident, zero3, zero6):
     """Cartesian spring-dampers, world components ``f_i = k_i (d_i - o_i) + c_i ddot_i``
     (``cpar[s]`` = rows k, c, o)."""
-    pA, pB, vA, vB, bA, bB, F = v3[0], v3[1], v3[2], v3[3], v3[4], v3[5], v3[6]
+    pA, pB, vA, vB, F = v3[0], v3[1], v3[2], v3[3], v3[6]
     for s in range(cint.shape[0]):
         a = cint[s, 0]
         b = cint[s, 1]
-        gA, RA, rA, VA = _side(gid, a, R, r, V, ident, zero3, zero6)
-        gB, RB, rB, VB = _side(gid, b, R, r, V, ident, zero3, zero6)
-        body_point(gA, RA, rA, VA, cpos[s, 0], pA, vA, bA)
-        body_point(gB, RB, rB, VB, cpos[s, 1], pB, vB, bB)
+        gA, RA, gB, RB = connector_ends(gid, a, b, cpos[s, 0], cpos[s, 1], R, r, V, v3, ident, zero3, zero6)
         for k in range(3):
             F[k] = cpar[s, 0, k] * (pB[k] - pA[k] - cpar[s, 2, k]) + cpar[s, 1, k] * (vB[k] - vA[k])
-        if a >= 0:
-            add_point_force(gA, RA, cpos[s, 0], F, Q[a])
-        if b >= 0:
-            for k in range(3):
-                F[k] = -F[k]
-            add_point_force(gB, RB, cpos[s, 1], F, Q[b])
+        add_pair_force(gA, RA, cpos[s, 0], a, gB, RB, cpos[s, 1], b, F, Q)
 
 
 @njit(cache=True, _nrt=False)

@@ -13,19 +13,16 @@ velocityOffset].
 """
 from numba import njit
 
-from .bodies import _side, add_point_force, body_point
+from .bodies import add_pair_force, connector_ends
 
 
 @njit(cache=True, _nrt=False)
 def linear_spring_forces(gid, xint, xpos, xaxis, xpar, R, r, V, Q, v3, ident, zero3, zero6):
-    pA, pB, vA, vB, bA, bB, F, a = v3[0], v3[1], v3[2], v3[3], v3[4], v3[5], v3[6], v3[7]
+    pA, pB, vA, vB, F, a = v3[0], v3[1], v3[2], v3[3], v3[6], v3[7]
     for s in range(xint.shape[0]):
         ia = xint[s, 0]
         ib = xint[s, 1]
-        gA, RA, rA, VA = _side(gid, ia, R, r, V, ident, zero3, zero6)
-        gB, RB, rB, VB = _side(gid, ib, R, r, V, ident, zero3, zero6)
-        body_point(gA, RA, rA, VA, xpos[s, 0], pA, vA, bA)
-        body_point(gB, RB, rB, VB, xpos[s, 1], pB, vB, bB)
+        gA, RA, gB, RB = connector_ends(gid, ia, ib, xpos[s, 0], xpos[s, 1], R, r, V, v3, ident, zero3, zero6)
         u = 0.0
         v = 0.0
         for k in range(3):
@@ -34,11 +31,6 @@ def linear_spring_forces(gid, xint, xpos, xaxis, xpar, R, r, V, Q, v3, ident, ze
             u += a[k] * (pB[k] - pA[k])
             v += a[k] * (vB[k] - vA[k])
         f = xpar[s, 0] * (u - xpar[s, 2]) + xpar[s, 1] * v + xpar[s, 3]
-        if ia >= 0:
-            for k in range(3):
-                F[k] = f * a[k]
-            add_point_force(gA, RA, xpos[s, 0], F, Q[ia])
-        if ib >= 0:
-            for k in range(3):
-                F[k] = -f * a[k]
-            add_point_force(gB, RB, xpos[s, 1], F, Q[ib])
+        for k in range(3):
+            F[k] = f * a[k]
+        add_pair_force(gA, RA, xpos[s, 0], ia, gB, RB, xpos[s, 1], ib, F, Q)

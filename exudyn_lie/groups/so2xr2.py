@@ -16,6 +16,8 @@ import numpy as np
 from numba import njit
 
 from . import so3xr3
+# abelian: dexp and its inverse are the identity, the same maps as the vector space R3's
+from .rn import dexp, dexp_apply_into, dexpinv, dexpinv_apply_into  # noqa: F401
 
 TWIST = "mixed"
 ALGEBRA_AXES = (2, 3, 4)
@@ -83,29 +85,6 @@ def log(R, r):
     X = np.empty(6)
     log_into(R, r, X)
     return X
-
-
-@njit(cache=True)
-def dexp_apply_into(X, Y, out):
-    """``out = Y`` (abelian group); ``out`` may alias ``Y``."""
-    for k in range(6):
-        out[k] = Y[k]
-
-
-@njit(cache=True)
-def dexpinv_apply_into(X, Y, out):
-    for k in range(6):
-        out[k] = Y[k]
-
-
-@njit(cache=True)
-def dexp(X):
-    return np.eye(6)
-
-
-@njit(cache=True)
-def dexpinv(X):
-    return np.eye(6)
 
 
 @njit(cache=True)

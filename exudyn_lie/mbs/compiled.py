@@ -12,6 +12,7 @@ import numpy as np
 from .codes import GROUP_NAMES, ROW_COORD, ROW_DIST, ROW_ROT, ROW_TRANS_LOCAL, ROW_TRANS_WORLD
 from .linalg import REL_PIVOT_TOL, rcm_order
 from .scene import GROUND, Scene, SceneError
+from .tree_solve import tree_plan
 
 GROUP_IDS = {name: gid for gid, name in enumerate(GROUP_NAMES)}
 GROUP_NAMES = {v: k for k, v in GROUP_IDS.items()}
@@ -33,6 +34,7 @@ SceneData = namedtuple("SceneData", [
     "rint",                           # constraint rows: [kind, axis of A, axis of B, body A, body B]
     "nrows", "bandwidth", "redundant", "pivotTol",
     "stabilization",                  # kernel.STAB_*: projection after every step
+    "tplan", "trows",                 # tree solve (mbs.tree_solve.tree_plan); 0 rows: the band solve
 ])
 
 Work = namedtuple("Work", [
@@ -43,6 +45,7 @@ Work = namedtuple("Work", [
     "ext",                            # [token of the external rhs evaluator (mbs.external), 0: none;
                                       #  1 if the forces it returned were not finite]
     "Vw",                             # (nb, 6) (omega body, world rdot) at the stage, for Python forces
+    "Tb", "Tv", "Tr", "Tl",           # tree solve work (mbs.tree_solve.tree_solve), empty without it
 ])
 N_SCRATCH3 = 20
 
@@ -252,49 +255,13 @@ def compile_scene(scene: Scene, groups):
     T = scene.torsionalSprings
     B = scene.rigidSprings
 
-    # joints: order by reverse Cuthill-McKee on the joint graph (joints sharing a body are
-    # adjacent) so that S = J M^-1 J^T is banded with a small bandwidth
+    # the constraint rows, joint by joint, in the order of the solve that serves the scene
+    # (choose_solve): reverse Cuthill-McKee for the band Cholesky, as given for the tree solve
     J = scene.joints
     nj = len(J)
-    edges = []
-    by_body = {}
-    for k, jt in enumerate(J):
-        for b in (jt.bodyA, jt.bodyB):
-            if b != GROUND:
-                by_body.setdefault(b, []).append(k)
-    for lst in by_body.values():
-        for x in range(len(lst)):
-            for y in range(x + 1, len(lst)):
-                edges.append((lst[x], lst[y]))
-    order = rcm_order(nj, edges) if nj else []
-    jrow0 = np.zeros(nj, np.int64)
-    jnrow = np.zeros(nj, np.int64)
-    rkind, rax, rbx, rA, rB, rjoint = [], [], [], [], [], []
-    for k in order:
-        jt = J[k]
-        rows = joint_rows_of(jt)
-        jrow0[k] = len(rkind)
-        jnrow[k] = len(rows)
-        for kind, a, b in rows:
-            rkind.append(kind)
-            rax.append(a)
-            rbx.append(b)
-            rA.append(jt.bodyA)
-            rB.append(jt.bodyB)
-            rjoint.append(k)
+    jrow0, jnrow, cols, bw, plan = choose_solve(nb, J)
+    rkind, rax, rbx, rA, rB, rjoint = cols
     m = len(rkind)
-    # bandwidth of S: rows q > l couple iff they share a body; the farthest coupled
-    # earlier row of q is the first row that touched one of q's bodies
-    bw = 0
-    first_row_of_body = {}
-    for q in range(m):
-        for b in (rA[q], rB[q]):
-            if b == GROUND:
-                continue
-            if b not in first_row_of_body:
-                first_row_of_body[b] = q
-            bw = max(bw, q - first_row_of_body[b])
-
     sd = SceneData(
         nb=nb, gid=gid, mass=mass, com=com, M=M, Minv=Minv,
         gravity=scene.gravity.astype(float), hasGravity=bool(np.any(scene.gravity != 0)),
@@ -326,8 +293,100 @@ def compile_scene(scene: Scene, groups):
         jpar=arr([joint_parameters(j) for j in J], (-1, N_JPAR)),
         rint=arr([list(x) for x in zip(rkind, rax, rbx, rA, rB)], (-1, 5), np.int64),
         nrows=m, bandwidth=bw, redundant=False, pivotTol=REL_PIVOT_TOL, stabilization=0,
+        tplan=plan[0] if plan else np.zeros((0, 7), np.int64), trows=plan[1] if plan else np.zeros(0, np.int64),
     )
     return sd, np.array(rjoint, dtype=np.int64)
+
+
+#: the index-1 solve is the tree solve (mbs.tree_solve) when the rows form a forest and the
+#: band of S in reverse Cuthill-McKee order is at least this wide: the band Cholesky costs
+#: ~bandwidth^2 per row, the tree solve a constant per body.  Measured crossover (topology
+#: bench scenes, MK-RK4): a star of 5 bars on spherical joints (bandwidth 14) costs the same
+#: either way (27.7 vs 27.2 us per step), 4 bars (11) 15 % more on the tree, 7 (20) 17 % less.
+TREE_MIN_BANDWIDTH = 14
+
+
+def choose_solve(nb, J):
+    """``(jrow0, jnrow, cols, bandwidth, plan)``: the rows of the joints ``J`` (see
+    ``_joint_rows_in_order``), the bandwidth of ``S`` in their order and the tree solve's
+    plan (``tree_plan``; ``None``: the band solve).  A body carrying more than
+    ``TREE_MIN_BANDWIDTH`` rows makes them mutually coupled in ``S`` (bandwidth at least that
+    of the clique), so a forest with such a body skips the ordering."""
+    nj = len(J)
+    if nj == 0:
+        jrow0, jnrow, cols = _joint_rows_in_order(J, [])
+        return jrow0, jnrow, cols, 0, None
+    jrow0, jnrow, cols = _joint_rows_in_order(J, range(nj))
+    forest = tree_plan(nb, _rint_of(cols)) is not None
+    per_body = np.bincount([b for b in cols[3] + cols[4] if b != GROUND], minlength=nb)
+    if not (forest and per_body.max() > TREE_MIN_BANDWIDTH):
+        jrow0, jnrow, cols = _joint_rows_in_order(J, rcm_order(nj, _joint_graph(J)))
+    bw = _bandwidth(cols[3], cols[4])
+    plan = tree_plan(nb, _rint_of(cols)) if forest and bw >= TREE_MIN_BANDWIDTH else None
+    return jrow0, jnrow, cols, bw, plan
+
+
+def _rint_of(cols):
+    return np.array(cols[:5], np.int64).T.reshape(-1, 5)
+
+
+def _bandwidth(rA, rB):
+    """Bandwidth of S: rows q > l couple iff they share a body; the farthest coupled earlier
+    row of q is the first row that touched one of q's bodies."""
+    bw = 0
+    first_row_of_body = {}
+    for q in range(len(rA)):
+        for b in (rA[q], rB[q]):
+            if b == GROUND:
+                continue
+            if b not in first_row_of_body:
+                first_row_of_body[b] = q
+            bw = max(bw, q - first_row_of_body[b])
+    return bw
+
+
+def _joint_graph(J):
+    """Edges between joints that share a body (the graph of S's rows, joint by joint)."""
+    edges = []
+    by_body = {}
+    for k, jt in enumerate(J):
+        for b in (jt.bodyA, jt.bodyB):
+            if b != GROUND:
+                by_body.setdefault(b, []).append(k)
+    for lst in by_body.values():
+        for x in range(len(lst)):
+            for y in range(x + 1, len(lst)):
+                edges.append((lst[x], lst[y]))
+    return edges
+
+
+def _joint_rows_in_order(J, order):
+    """First row and row count per joint, and the row columns (kind, ax, bx, A, B, joint)
+    with the joints' rows in ``order``."""
+    jrow0 = np.zeros(len(J), np.int64)
+    jnrow = np.zeros(len(J), np.int64)
+    cols = ([], [], [], [], [], [])
+    for k in order:
+        jt = J[k]
+        rows = joint_rows_of(jt)
+        jrow0[k] = len(cols[0])
+        jnrow[k] = len(rows)
+        for kind, a, b in rows:
+            for col, v in zip(cols, (kind, a, b, jt.bodyA, jt.bodyB, k)):
+                col.append(v)
+    return jrow0, jnrow, cols
+
+
+def with_solve(sd, solve):
+    """``sd`` served by the ``'tree'`` or the ``'band'`` solve, rows unchanged (to compare the
+    two on one scene: tests, the topology bench); a scene whose rows close a loop has no tree."""
+    if solve == "band":
+        return sd._replace(tplan=np.zeros((0, 7), np.int64), trows=np.zeros(0, np.int64),
+                           bandwidth=_bandwidth(sd.rint[:, 3], sd.rint[:, 4]))
+    plan = tree_plan(sd.nb, sd.rint) if sd.nrows else None
+    if plan is None:
+        raise SceneError("the constraint rows close a loop between bodies: no tree solve")
+    return sd._replace(tplan=plan[0], trows=plan[1])
 
 
 def with_redundant(sd, flag):
@@ -337,15 +396,19 @@ def with_redundant(sd, flag):
 def make_work(sd, nstages):
     nb = sd.nb
     m = sd.nrows
+    tree = sd.tplan.shape[0] > 0
     return Work(
         Rs=np.zeros((nb, 3, 3)), rs=np.zeros((nb, 3)), Vs=np.zeros((nb, 6)),
         Rb=np.zeros((nb, 3, 3)), rb=np.zeros((nb, 3)), Vb=np.zeros((nb, 6)), Psi=np.zeros((nb, 6)),
         K=np.zeros((nstages, nb, 6)), Vd=np.zeros((nstages, nb, 6)), Q=np.zeros((nb, 6)), Qext=np.zeros((nb, 6)),
         Jr=np.zeros((m, 12)), W=np.zeros((m, 12)), eta=np.zeros(m), h=np.zeros(m), lam=np.zeros(m),
-        Sb=np.zeros((m, sd.bandwidth + 1)), Sd=np.zeros((m, m)) if sd.redundant else np.zeros((0, 0)),
+        Sb=np.zeros((0 if tree and not sd.redundant else m, sd.bandwidth + 1)),
+        Sd=np.zeros((m, m)) if sd.redundant else np.zeros((0, 0)),
         perm=np.zeros(m, np.int64), ytmp=np.zeros(m), info=np.zeros(4, np.int64),
         tmp6=np.zeros(6), tmp12=np.zeros(12), v3=np.zeros((N_SCRATCH3, 3)), m3=np.zeros((4, 3, 3)),
         ident=np.eye(3), zero3=np.zeros(3), zero6=np.zeros(6), tphi=np.zeros(sd.tint.shape[0]),
         watchBody=np.zeros(0, np.int64), watchEntry=np.zeros((0, 2), np.int64), watchMax=np.zeros(0),
         ext=np.zeros(2, np.int64), Vw=np.zeros((nb, 6) if sd.hasQext else (0, 6)),
+        Tb=np.zeros((nb if tree else 0, 3, 6, 6)), Tv=np.zeros((nb if tree else 0, 4, 6)),
+        Tr=np.zeros((m if tree else 0, 7)), Tl=np.zeros(int(sd.tplan[nb, 4]) if tree else 0),
     )

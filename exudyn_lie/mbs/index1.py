@@ -1,6 +1,8 @@
 """The index-1 solve (eq. index1): ``[M J^T; J 0][Vdot; lambda] = [Q; eta]`` by the Schur
 complement ``J M^-1 J^T`` (band Cholesky, or pivoted Cholesky for redundant rows), and
 the stage right-hand side ``rhs`` that assembles forces, rows and the solve."""
+from collections import namedtuple
+
 from numba import njit
 
 from .bodies import apply_minv
@@ -8,6 +10,7 @@ from .codes import ROW_BODY_A, ROW_BODY_B, STATUS_OK, STATUS_SINGULAR
 from .constraints import joints_rows
 from .forces import compute_forces
 from .linalg import band_cholesky_inplace, band_cholesky_solve_inplace, pivoted_cholesky_solve
+from .tree_solve import tree_correction, tree_solve
 
 
 @njit(cache=True, inline="always", _nrt=False)
@@ -66,12 +69,34 @@ def subtract_rows_transposed(rint, W, lam, X):
                 X[b, k] -= W[q, 6 + k] * lq
 
 
+@njit(cache=True, inline="always", _nrt=False)
+def uses_tree(redundant, tree):
+    """The tree solve serves the scene (a plan exists) unless redundant rows need pivoting."""
+    return tree.plan.shape[0] > 0 and not redundant
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def apply_correction(rint, W, lam, X, redundant, tree):
+    """``X -= M^-1 J^T lam`` after :func:`schur_solve`: from the row blocks ``W``, or the tree
+    solve's per-body ``y``."""
+    if uses_tree(redundant, tree):
+        tree_correction(tree.plan, tree.Tv, X)
+    else:
+        subtract_rows_transposed(rint, W, lam, X)
+
+
 @njit(cache=True, _nrt=False)
-def schur_solve(gid, Minv, rint, bw, redundant, pivotTol, R, Jr, W, lam, Sb, Sd, perm, ytmp, info, tmp12):
+def schur_solve(gid, Minv, rint, bw, redundant, pivotTol, R, Jr, W, lam, Sb, Sd, perm, ytmp, info, tmp12, tree):
     """``W = M^-1 J^T`` (row blocks) and ``lam <- (J M^-1 J^T)^-1 lam``: the Schur
-    complement shared by the index-1 solve and the projections.  ``S`` is banded (band
-    Cholesky); with redundant rows the pivoted Cholesky drops the dependent ones.
-    Returns a status code (info[0] = failing row, info[1] = rank if redundant)."""
+    complement shared by the index-1 solve and the projections.  Tree-structured rows
+    (``tree.plan`` not empty, :mod:`.tree_solve`): the leaves-to-root elimination, linear in
+    the number of bodies; otherwise ``S`` is banded (band Cholesky); with redundant rows
+    the pivoted Cholesky drops the dependent ones.
+    Returns a status code (info[0] = failing row, info[1] = rank if redundant).  The tree
+    solve needs no ``W``: its correction is ``y = A J^T lam`` per body (``apply_correction``)."""
+    if uses_tree(redundant, tree):
+        return tree_solve(gid, Minv, rint, R, Jr, lam, tree.plan, tree.rows, tree.Tb, tree.Tv, tree.Tr, tree.Tl,
+                          pivotTol, info)
     m = rint.shape[0]
     for q in range(m):
         a = rint[q, ROW_BODY_A]
@@ -112,16 +137,26 @@ def schur_solve(gid, Minv, rint, bw, redundant, pivotTol, R, Jr, W, lam, Sb, Sd,
 
 
 @njit(cache=True, inline="always", _nrt=False)
-def schur_correct(gid, Minv, rint, bw, redundant, pivotTol, R, X, c, y, Jr, W, lam, Sb, Sd, perm, ytmp, info, tmp12):
+def schur_correct(gid, Minv, rint, bw, redundant, pivotTol, R, X, c, y, Jr, W, lam, Sb, Sd, perm, ytmp, info, tmp12,
+                  tree):
     """``X -= M^-1 J^T lambda`` with ``(J M^-1 J^T) lambda = c y + J X``: the correction that
     makes ``J X = -c y``.  The index-1 solve (eq. index1) is ``X = Vdot = M^-1 Q``,
     ``c y = -eta``; the velocity projection ``X = V``, ``c = 0``.  Returns a status code."""
     rows_times(rint, Jr, X, c, y, lam)
-    st = schur_solve(gid, Minv, rint, bw, redundant, pivotTol, R, Jr, W, lam, Sb, Sd, perm, ytmp, info, tmp12)
+    st = schur_solve(gid, Minv, rint, bw, redundant, pivotTol, R, Jr, W, lam, Sb, Sd, perm, ytmp, info, tmp12, tree)
     if st != STATUS_OK:
         return st
-    subtract_rows_transposed(rint, W, lam, X)
+    apply_correction(rint, W, lam, X, redundant, tree)
     return STATUS_OK
+
+
+# the tree solve's plan (SceneData.tplan, trows; empty: not a tree) and work (Work.Tb, Tv, Tr, Tl)
+TreeSolve = namedtuple("TreeSolve", ["plan", "rows", "Tb", "Tv", "Tr", "Tl"])
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def tree_of(sd, wk):
+    return TreeSolve(sd.tplan, sd.trows, wk.Tb, wk.Tv, wk.Tr, wk.Tl)
 
 
 @njit(cache=True, inline="always", _nrt=False)
@@ -147,4 +182,4 @@ def rhs(sd, wk, t, R, r, V, Qext, Vdot):
     joints_rows(sd.gid, sd.jint, sd.jpos, sd.jrot, sd.jpar, sd.rint, R, r, V, wk.h, wk.Jr, wk.eta, wk.v3, wk.ident,
                 wk.zero3, wk.zero6)
     return schur_correct(sd.gid, sd.Minv, sd.rint, sd.bandwidth, sd.redundant, sd.pivotTol, R, Vdot, -1.0, wk.eta,
-                         wk.Jr, wk.W, wk.lam, wk.Sb, wk.Sd, wk.perm, wk.ytmp, wk.info, wk.tmp12)
+                         wk.Jr, wk.W, wk.lam, wk.Sb, wk.Sd, wk.perm, wk.ytmp, wk.info, wk.tmp12, tree_of(sd, wk))

@@ -6,13 +6,14 @@ from numba import njit
 from .bodies import exp_compose
 from .codes import PROJ_FAIL, PROJ_MAX_ITER, PROJ_TOL, STAB_POSITION, STATUS_OK, STATUS_PROJECTION
 from .constraints import joints_rows
-from .index1 import schur_correct, schur_solve, subtract_rows_transposed
+from .index1 import apply_correction, schur_correct, schur_solve, tree_of
 
 
 # the arguments of project, by what they are (built by project_state from SceneData / Work)
 Joints = namedtuple("Joints", ["gid", "jint", "jpos", "jrot", "jpar", "rint"])           # the joint tables
 Schur = namedtuple("Schur", ["Minv", "bw", "redundant", "pivotTol",              # J M^-1 J^T: data...
-                             "W", "lam", "Sb", "Sd", "perm", "ytmp", "info", "tmp12"])   # ... and work
+                             "W", "lam", "Sb", "Sd", "perm", "ytmp", "info", "tmp12",    # ... and work
+                             "tree"])                                            # index1.TreeSolve
 Rows = namedtuple("Rows", ["h", "Jr", "eta"])                                    # the rows at a state
 Scratch = namedtuple("Scratch", ["Psi", "v3", "m3", "ident", "zero3", "zero6"])
 
@@ -28,7 +29,7 @@ def project(level, joints, schur, rows, scratch, R, r, V):
 
     Returns a status code (STATUS_PROJECTION if max |h| stays above the tolerance)."""
     gid, jint, jpos, jrot, jpar, rint = joints
-    Minv, bw, redundant, pivotTol, W, lam, Sb, Sd, perm, ytmp, info, tmp12 = schur
+    Minv, bw, redundant, pivotTol, W, lam, Sb, Sd, perm, ytmp, info, tmp12, tree = schur
     h, Jr, eta = rows
     Psi, v3, m3, ident, zero3, zero6 = scratch
     nb = gid.shape[0]
@@ -51,13 +52,13 @@ def project(level, joints, schur, rows, scratch, R, r, V):
             for q in range(rint.shape[0]):
                 lam[q] = h[q]
             st = schur_solve(gid, Minv, rint, bw, redundant, pivotTol, R, Jr, W, lam, Sb, Sd, perm, ytmp, info,
-                             tmp12)
+                             tmp12, tree)
             if st != STATUS_OK:
                 return st
             for i in range(nb):
                 for k in range(6):
                     Psi[i, k] = 0.0
-            subtract_rows_transposed(rint, W, lam, Psi)
+            apply_correction(rint, W, lam, Psi, redundant, tree)
             for i in range(nb):
                 exp_compose(gid[i], R[i], r[i], Psi[i], m3[1], v3[1], m3[0], v3[0])
                 for a in range(3):
@@ -69,7 +70,7 @@ def project(level, joints, schur, rows, scratch, R, r, V):
     else:
         joints_rows(gid, jint, jpos, jrot, jpar, rint, R, r, V, h, Jr, eta, v3, ident, zero3, zero6)
     return schur_correct(gid, Minv, rint, bw, redundant, pivotTol, R, V, 0.0, eta, Jr, W, lam, Sb, Sd, perm, ytmp,
-                         info, tmp12)
+                         info, tmp12, tree)
 
 
 @njit(cache=True, inline="always", _nrt=False)
@@ -78,5 +79,5 @@ def project_state(sd, wk, level, R, r, V):
         return STATUS_OK
     return project(level, Joints(sd.gid, sd.jint, sd.jpos, sd.jrot, sd.jpar, sd.rint),
                    Schur(sd.Minv, sd.bandwidth, sd.redundant, sd.pivotTol, wk.W, wk.lam, wk.Sb, wk.Sd, wk.perm,
-                         wk.ytmp, wk.info, wk.tmp12),
+                         wk.ytmp, wk.info, wk.tmp12, tree_of(sd, wk)),
                    Rows(wk.h, wk.Jr, wk.eta), Scratch(wk.Psi, wk.v3, wk.m3, wk.ident, wk.zero3, wk.zero6), R, r, V)

@@ -12,6 +12,10 @@ with MK-RK4 on SE(3) by the compiled stepper (``Simulator.Advance``) at h = 1e-4
 * ``ladder``: two chains of N/2 bars side by side, rung k (a ball joint between the k-th
   bars of both chains, k >= 1) closing N/2 - 1 loops.
 
+The index-1 solve is chosen when the scene is compiled (``mbs.compiled.choose_solve``): the
+tree solve (``mbs.tree_solve``, linear in N) for the star and the binary tree, the band
+Cholesky for the chain (bandwidth 5) and the ladder (loops); the ``solve`` column says which.
+
 Reported: us per step and per body, the exponent fitted to log(us per step) against
 log N (least squares over N >= 20), the star's cost per body against the chain's at
 N = 160, and the ladder's cost against its number of loops.  Targets (issue 19): exponent
@@ -28,7 +32,7 @@ import numpy as np
 H = 1e-4
 NS = (10, 20, 40, 80, 160, 320, 640, 1000)
 NS_QUICK = (10, 20, 40, 80, 160)
-MAX_N = {"star": 320}           # the banded factorisation of a star costs ~N^3 per step
+MAX_N = {}                      # (the star was capped at 320 while its band Cholesky cost ~N^3 per step)
 TARGET_EXPONENT = 1.1
 TARGET_STAR_OVER_CHAIN = 2.0
 L = 0.5
@@ -128,11 +132,12 @@ def measure(Ns=NS, budget=0.2, repeat=3, log=None):
                 continue
             sim = simulator(k, N)
             us = time_per_step(sim, budget, repeat)
+            solve = "tree" if sim.sd.tplan.shape[0] else "band"
             rows[k][N] = dict(us=us, perBody=us / N, rows=int(sim.sd.nrows), bandwidth=int(sim.sd.bandwidth),
-                              loops=(max(N // 2, 1) - 1) if k == "ladder" else 0)
+                              loops=(max(N // 2, 1) - 1) if k == "ladder" else 0, solve=solve)
             if log:
                 log(f"topology {k:6s} N = {N:4d}: {us:9.1f} us/step, {us / N:7.2f} us/body, "
-                    f"rows {sim.sd.nrows}, bandwidth {sim.sd.bandwidth}")
+                    f"rows {sim.sd.nrows}, bandwidth {sim.sd.bandwidth}, {solve} solve")
     fits = {k: fit_exponent(list(r), [d["us"] for d in r.values()]) for k, r in rows.items()}
     res = dict(h=H, rows=rows, fits=fits)
     if 160 in rows["star"] and 160 in rows["chain"]:
@@ -166,11 +171,12 @@ def target_lines(res):
 def report_lines(res):
     L_ = ["## Topologies", "",
           f"MK-RK4 SE3, h = {res['h']:g}, spherical joints; load average {res.get('load', '?')}.", "",
-          "| family | N | loops | rows | bandwidth | us per step | us per body |", "|---|---|---|---|---|---|---|"]
+          "| family | N | loops | rows | bandwidth | solve | us per step | us per body |",
+          "|---|---|---|---|---|---|---|---|"]
     for k, r in res["rows"].items():
         for N, d in sorted(r.items()):
-            L_.append(f"| {k} | {N} | {d['loops']} | {d['rows']} | {d['bandwidth']} | {d['us']:.4g} | "
-                      f"{d['perBody']:.3g} |")
+            L_.append(f"| {k} | {N} | {d['loops']} | {d['rows']} | {d['bandwidth']} | {d.get('solve', '-')} | "
+                      f"{d['us']:.4g} | {d['perBody']:.3g} |")
     L_ += ["", "Fitted exponents (N >= 20): " + ", ".join(f"{k} {e:.2f}" for k, e in res["fits"].items()), ""]
     return L_
 

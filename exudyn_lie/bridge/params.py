@@ -93,6 +93,9 @@ FIELDS = {
                                       "activeConnector")},
         "springForceUserFunction": (REFUSED, "a user function is refused"),
         "markerNumbers": (FIXED, "the connected bodies")},
+    ("object", "JointRollingDisc"): {
+        **{k: _JOINT[k] for k in ("markerNumbers", "activeConnector", "constrainedAxes")},
+        **{k: _COMPILED_ROW for k in ("discRadius", "discAxis", "planeNormal")}},
     ("marker", "NodeCoordinate"): {"nodeNumber": (FIXED, "the marker's node"),
                                    "coordinate": (FIXED, "the marker's coordinate")},
     ("load", "Coordinate"): {

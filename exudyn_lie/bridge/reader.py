@@ -68,9 +68,10 @@ POSITION_MARKERS = SUPPORTED_MARKERS[:5]        # the markers with a position (a
 SUPPORTED_LOADS = ("LoadForceVector", "LoadTorqueVector", "LoadMassProportional", "LoadCoordinate")
 
 JOINT_TYPES = ("JointSpherical", "JointRevoluteZ", "JointPrismaticX", "JointGeneric", "JointRevolute2D",
-               "JointPrismatic2D", "ConnectorCoordinate", "ConnectorDistance")
+               "JointPrismatic2D", "ConnectorCoordinate", "ConnectorDistance", "JointRollingDisc")
 # joints with a reader of their own (the others: read_joint): Exudyn object type -> reader method
-JOINT_READERS = {"ConnectorCoordinate": "read_coordinate_constraint", "ConnectorDistance": "read_distance_constraint"}
+JOINT_READERS = {"ConnectorCoordinate": "read_coordinate_constraint", "ConnectorDistance": "read_distance_constraint",
+                 "JointRollingDisc": "read_rolling_disc"}
 # connectors: Exudyn object type -> (reader method of _Reader, markers need an orientation);
 # the one list of the connectors the bridge reads
 CONNECTOR_READERS = {
@@ -582,6 +583,39 @@ class _Reader:
         except SceneError as e:
             raise BridgeError(f"{what}: {e}") from None
         sc.joints_info.append(JointInfo(o, d["objectType"], j, aeAll[:1], aeAll))
+
+    def read_rolling_disc(self, sc, o, d):
+        """ObjectJointRollingDisc (CObjectJointRollingDisc): velocity-level rows, the velocity of
+        the disc's contact point relative to the plane in (lateral, forward, normal) directions
+        for the locked ``constrainedAxes``; marker 0 the plane (a 3D rigid body or ground), marker
+        1 the disc centre on a 3D rigid body; free axes keep their multiplier 0 (as Exudyn)."""
+        what = self._what("object", o, d)
+        aeAll = self._constraint_ae(o, d, what, sc)
+        if aeAll is None:
+            return
+        m0, m1 = (int(m) for m in d["markerNumbers"])
+        A = self.marker(m0, what, need_rotation=True)
+        B = self.marker(m1, what, need_rotation=True)
+        if B.body == GROUND:
+            raise BridgeError(f"{what}: marker 1 (the disc) is on the ground; Exudyn's rolling disc has the disc "
+                              f"on marker 1 and the plane (ground or body) on marker 0")
+        ca = [int(c) for c in np.asarray(d.get("constrainedAxes", [1, 1, 1])).reshape(-1)]
+        if not any(ca):
+            sc.skipped.append((what, "constrains no axis"))
+            sc.aeZero.extend(aeAll.tolist())
+            return
+        try:
+            j = sc.AddRollingDisc(A.body, B.body, float(d["discRadius"]), posA=A.pos, rotA=_orthonormal(A.rotation()),
+                                  posB=B.pos, rotB=_orthonormal(B.rotation()),
+                                  planeNormal=np.asarray(d.get("planeNormal", [0, 0, 1]), float),
+                                  discAxis=np.asarray(d.get("discAxis", [1, 0, 0]), float), constrainedAxes=ca,
+                                  name=d.get("name", "") or f"object{o}")
+        except SceneError as e:
+            raise BridgeError(f"{what}: {e}") from None
+        locked = [i for i in range(3) if ca[i]]
+        aeRows = aeAll[locked] if len(aeAll) else np.zeros(0, np.int64)
+        sc.joints_info.append(JointInfo(o, d["objectType"], j, aeRows, aeAll))
+        sc.aeZero.extend(sorted(set(aeAll.tolist()) - set(aeRows.tolist())))
 
     def coordinate_marker(self, m, what):
         """(body, position axis, reference value) of a MarkerNodeCoordinate: the marker value

@@ -9,7 +9,7 @@ from collections import namedtuple
 
 import numpy as np
 
-from .codes import GROUP_NAMES, ROW_COORD, ROW_DIST, ROW_ROT, ROW_TRANS_LOCAL, ROW_TRANS_WORLD
+from .codes import GROUP_NAMES, ROW_COORD, ROW_DIST, ROW_ROLL, ROW_ROT, ROW_TRANS_LOCAL, ROW_TRANS_WORLD
 from .linalg import REL_PIVOT_TOL, rcm_order
 from .scene import GROUND, Scene, SceneError
 
@@ -75,7 +75,8 @@ def point_minv(body):
     return out
 
 
-N_JPAR = 2      # float parameters per joint (ROW_COORD: factor, constant; ROW_DIST: distance)
+N_JPAR = 7      # float parameters per joint (ROW_COORD: factor, constant; ROW_DIST: distance;
+                # ROW_ROLL: disc radius, plane normal (3), disc axis (3))
 
 
 def joint_rows_of(joint):
@@ -84,15 +85,20 @@ def joint_rows_of(joint):
         return [(ROW_COORD, joint.coordinate[0], joint.coordinate[1])]
     if joint.distance is not None:
         return [(ROW_DIST, 0, 0)]
+    if joint.rollingDisc is not None:
+        return [(ROW_ROLL, i, 0) for i in range(3) if joint.constrainedAxes[i]]
     return joint_row_descriptors(joint.constrainedAxes, joint.worldTranslation)
 
 
 def joint_parameters(joint):
     """The float parameters of the joint's rows (``SceneData.jpar``)."""
     if joint.coordinate is not None:
-        return [joint.coordinate[2], joint.coordinate[3]]
+        return [joint.coordinate[2], joint.coordinate[3]] + [0.0] * (N_JPAR - 2)
     if joint.distance is not None:
-        return [joint.distance, 0.0]
+        return [joint.distance] + [0.0] * (N_JPAR - 1)
+    if joint.rollingDisc is not None:
+        radius, normal, axis = joint.rollingDisc
+        return [radius, *normal, *axis]
     return [0.0] * N_JPAR
 
 

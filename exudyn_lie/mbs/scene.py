@@ -96,6 +96,9 @@ class Joint:
     # (axis of A, axis of B, factor f, constant c), h = f p_B[axis B] - p_A[axis A] - c
     coordinate: tuple = None
     distance: float = None           # kind 'distance' (ObjectConnectorDistance): h = |p_B - p_A| - distance
+    # kind 'rollingDisc' (ObjectJointRollingDisc, velocity-level rows, mbs/rolling_disc_rows.py):
+    # (discRadius, planeNormal in A's marker frame rotA, discAxis in B's marker frame rotB)
+    rollingDisc: tuple = None
 
 
 @dataclass
@@ -375,6 +378,42 @@ class Scene:
         self.joints.append(Joint(int(bodyA), int(bodyB), _vec3(posA, f"{label}: posA"), np.eye(3),
                                  _vec3(posB, f"{label}: posB"), np.eye(3), (1, 0, 0, 0, 0, 0), "distance", label,
                                  False, None, L0))
+        return idx
+
+    def AddRollingDisc(self, bodyA, bodyB, discRadius, posA=(0, 0, 0), rotA=None, posB=(0, 0, 0), rotB=None,
+                       planeNormal=(0, 0, 1), discAxis=(1, 0, 0), constrainedAxes=(1, 1, 1), name="") -> int:
+        """Exudyn's ``ObjectJointRollingDisc``: a disc (body B, centre ``posB``, axis
+        ``rotB discAxis`` in B's coordinates) rolls on the plane of body A (or GROUND) through
+        ``posA`` with normal ``rotA planeNormal``.  Velocity-level rows (nonholonomic): the
+        velocity of the disc's material contact point relative to A's, in the (lateral,
+        forward, normal) directions locked by ``constrainedAxes`` (mbs/rolling_disc_rows.py).
+        ``planeNormal`` and ``discAxis`` are used as given (Exudyn does not normalise them)."""
+        idx = len(self.joints)
+        label = name or f"joint{idx}(rollingDisc)"
+        self._check_body(bodyA, label)
+        self._check_body(bodyB, label, allow_ground=False)
+        if bodyA == bodyB:
+            raise SceneError(f"{label}: the disc and the plane are the same body")
+        for b, side in ((bodyA, "plane (A)"), (bodyB, "disc (B)")):
+            if b != GROUND and (self.bodies[b].isPoint or self.bodies[b].planar):
+                raise SceneError(f"{label}: the {side} must be a 3D rigid body or the ground, "
+                                 f"not {'a point mass' if self.bodies[b].isPoint else 'a 2D body'}")
+        ax = tuple(int(a) for a in constrainedAxes)
+        if len(ax) != 3 or any(a not in (0, 1) for a in ax) or sum(ax) == 0:
+            raise SceneError(f"{label}: constrainedAxes must be three 0/1 flags (lateral, forward, normal) "
+                             f"locking at least one, got {constrainedAxes}")
+        r = _finite(discRadius, f"{label}: discRadius")
+        n = _vec3(planeNormal, f"{label}: planeNormal")
+        a = _vec3(discAxis, f"{label}: discAxis")
+        RA, RB = _rot(rotA, f"{label}: rotA"), _rot(rotB, f"{label}: rotB")
+        nw = RA @ n if bodyA == GROUND else self.bodies[bodyA].R0 @ RA @ n
+        aw = self.bodies[bodyB].R0 @ RB @ a
+        if np.linalg.norm(np.cross(aw, nw)) <= 1e-12 * max(1e-300, np.linalg.norm(aw) * np.linalg.norm(nw)):
+            raise SceneError(f"{label}: the disc axis is parallel to the plane normal (or zero); the rolling "
+                             f"direction (discAxis x planeNormal) is undefined")
+        self.joints.append(Joint(int(bodyA), int(bodyB), _vec3(posA, f"{label}: posA"), RA,
+                                 _vec3(posB, f"{label}: posB"), RB, ax + (0, 0, 0), "rollingDisc", label, False,
+                                 None, None, (r, n, a)))
         return idx
 
     def _joint_at(self, kind, bodyA, bodyB, position, rotation, name):

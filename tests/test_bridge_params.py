@@ -560,6 +560,10 @@ def _models_with_every_item():
     mbs.AddObject(U.ObjectConnectorLinearSpringDamper(markerNumbers=[
         mbs.AddMarker(U.MarkerBodyRigid(bodyNumber=g)), mbs.AddMarker(U.MarkerBodyRigid(bodyNumber=bodies[2]))],
         stiffness=1))
+    disc = mbs.CreateRigidBody(inertia=InertiaCuboid(800, [0.05, 0.5, 0.5]), referencePosition=[0, 5, 0.25])
+    mbs.AddObject(U.ObjectJointRollingDisc(markerNumbers=[mbs.AddMarker(U.MarkerBodyRigid(bodyNumber=g)),
+                                                          mbs.AddMarker(U.MarkerBodyRigid(bodyNumber=disc))],
+                                           discRadius=0.25))
     return mbs
 
 

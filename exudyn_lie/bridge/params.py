@@ -446,7 +446,7 @@ class ParameterWatch:
             return
         cm = self.reader.coordinate_marker(d["markerNumber"], what)
         sd = self.solver.sim.sd
-        sd.lvec[k, 0] = load * np.eye(3)[cm.axis]
+        sd.lvec[k, 0] = load * cm.direction
 
     def _load_vector(self, l, row, value, t):
         """Only ``loadVector`` of a compiled load changed: the new vector (the value Exudyn

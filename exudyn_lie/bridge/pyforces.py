@@ -337,17 +337,17 @@ def combined(items, nb):
 
 def coordinate_state(cm, st):
     """(current coordinate, its rate) of a node position coordinate (reader.CoordinateMarker):
-    ``p[axis] - ref`` of the body frame origin, 0 on the ground."""
+    ``direction . p - ref`` of the body frame origin, 0 on the ground."""
     if cm.body == GROUND:
         return 0.0, 0.0
-    return st.r[cm.body][cm.axis] - cm.ref, st.vel[cm.body][cm.axis]
+    return float(cm.direction @ st.r[cm.body]) - cm.ref, float(cm.direction @ st.vel[cm.body])
 
 
 def apply_coordinate(cm, f, F):
-    """A generalised force ``f`` on a node position coordinate: world force ``f e_axis`` at
+    """A generalised force ``f`` on a node position coordinate: world force ``f direction`` at
     the node (the body frame origin)."""
     if cm.body != GROUND:
-        F[cm.body][cm.axis] += f
+        F[cm.body] += f * cm.direction
 
 
 class CoordinateSpringDamperUF(_Connector):

@@ -88,11 +88,13 @@ SUPPORTED_OBJECTS = ("ObjectGround",) + tuple("Object" + t for t in BODY_OBJECTS
 
 @dataclass
 class CoordinateMarker:
-    """A MarkerNodeCoordinate on a position coordinate: the value is ``p[axis] - ref`` of
-    the body frame origin (the node), 0 on ground."""
+    """A MarkerNodeCoordinate on a position coordinate: the value is ``direction . p - ref``
+    of the body frame origin (the node), 0 on ground; ``direction`` is the world axis of the
+    coordinate (``e_k`` for coordinate k of a point or rigid node, the Mass1D's axis
+    ``referenceRotation e_x`` for a Node1D)."""
     index: int
     body: int
-    axis: int
+    direction: np.ndarray
     ref: float
     markerType: str = "NodeCoordinate"
 
@@ -285,6 +287,7 @@ class _Reader:
         self.markers = {}
         self.ground = {}          # object index -> (pos, rot) of ObjectGround
         self.rigidNodeBody = {}   # node index -> scene body
+        self.nodeAxisFrame = {}   # Node1D index -> (world axis, origin) of its one coordinate
         self.badNodes = []
 
     def _items_coordinates(self):
@@ -630,7 +633,7 @@ class _Reader:
         n, k = int(d["nodeNumber"]), int(d["coordinate"])
         nt = self.mbs.GetNode(n)["nodeType"]
         if nt == "PointGround":
-            return CoordinateMarker(m, GROUND, 0, 0.0)
+            return CoordinateMarker(m, GROUND, np.eye(3)[0], 0.0)
         if n not in self.rigidNodeBody:
             raise BridgeError(f"{what}: marker {m} (MarkerNodeCoordinate) is on node {n} of type Node{nt}, which "
                               f"belongs to no body exudyn_lie integrates")
@@ -641,7 +644,11 @@ class _Reader:
                               f"coordinate items on node position coordinates only so far"
                               + (f" (0..{npos - 1} of this node)" if npos else ""))
         ref = float(np.asarray(self.mbs.GetNode(n)["referenceCoordinates"], float).reshape(-1)[k])
-        return CoordinateMarker(m, self.rigidNodeBody[n], k, ref)
+        frame = self.nodeAxisFrame.get(n)
+        if frame is None:
+            return CoordinateMarker(m, self.rigidNodeBody[n], np.eye(3)[k], ref)
+        axis, origin = frame         # a Node1D: value = axis . (p - origin) - ref
+        return CoordinateMarker(m, self.rigidNodeBody[n], axis, ref + float(axis @ origin))
 
     def read_coordinate_constraint(self, sc, o, d):
         """ObjectConnectorCoordinate: ``f q_B - q_A - offset = 0`` (CObjectConnectorCoordinate)."""
@@ -664,7 +671,7 @@ class _Reader:
         m0, m1 = (int(m) for m in d["markerNumbers"])
         cA = self.coordinate_marker(m0, what)
         cB = self.coordinate_marker(m1, what)
-        A, ka, refA, B, kb, refB = cA.body, cA.axis, cA.ref, cB.body, cB.axis, cB.ref
+        A, ka, refA, B, kb, refB = cA.body, cA.direction, cA.ref, cB.body, cB.direction, cB.ref
         f = float(d.get("factor1", d.get("factorValue1", 1.0)))      # factorValue1: before 1.12.258
         if A == GROUND and (B == GROUND or f == 0.0):
             sc.skipped.append((what, "constrains no body coordinate"))
@@ -765,7 +772,7 @@ class _Reader:
         """CObjectConnectorCoordinateSpringDamper: f = k (q_B - q_A - offset) + d (rates)."""
         uf = _userfunction(d, "springForceUserFunction", what)
         if uf is None:
-            sc.AddCoordinateSpringDamper(A.body, A.axis, B.body, B.axis, d["stiffness"], d["damping"],
+            sc.AddCoordinateSpringDamper(A.body, A.direction, B.body, B.direction, d["stiffness"], d["damping"],
                                          float(d["offset"]) + B.ref - A.ref, name=name)
         else:
             self._py(sc, pyforces.CoordinateSpringDamperUF(self.mbs, o, d, A, B, uf))
@@ -908,7 +915,7 @@ class _Reader:
             sc.pyItems.append(pyforces.CoordinateLoadUF(self.mbs, l, load, cm, uf))
             return
         sc.itemRows[("load", l)] = ("load", len(sc.loads))
-        sc.AddForce(cm.body, load * np.eye(3)[cm.axis], name=d.get("name", "") or f"load{l}")
+        sc.AddForce(cm.body, load * cm.direction, name=d.get("name", "") or f"load{l}")
 
 
 def _new_row(sc, nPy, counts):

@@ -25,7 +25,7 @@ SceneData = namedtuple("SceneData", [
     "sint", "spos", "spar",           # springs: [A, B]; [posA, posB]; [k, d, L0, f0]
     "cint", "cpos", "cpar",           # Cartesian springs: [A, B]; [posA, posB]; [k(3), d(3), offset(3)]
     "tint", "trot", "tpar",           # torsional springs: [A, B]; [rotA, rotB]; [k, d, offset, torque]
-    "kint", "kpar",                   # coordinate springs: [A, B, axis A, axis B]; [k, d, offset]
+    "kint", "kpar",                   # coordinate springs: [A, B]; [k, d, offset, direction A (3), direction B (3)]
     "xint", "xpos", "xaxis", "xpar",  # linear springs: [A, B]; [posA, posB]; axis on A; [k, d, offset, force]
     "bint", "bpos", "brot", "bpar",   # rigid-body springs: [A, B, intrinsic]; [posA, posB]; [rotA, rotB];
                                       #   rows K (6), D (6), offset
@@ -75,14 +75,14 @@ def point_minv(body):
     return out
 
 
-N_JPAR = 7      # float parameters per joint (ROW_COORD: factor, constant; ROW_DIST: distance;
+N_JPAR = 8      # float parameters per joint (ROW_COORD: factor, constant, directions d_A, d_B; ROW_DIST: distance;
                 # ROW_ROLL: disc radius, plane normal (3), disc axis (3))
 
 
 def joint_rows_of(joint):
     """(kind, ax, bx) of the rows of a scene joint."""
     if joint.coordinate is not None:
-        return [(ROW_COORD, joint.coordinate[0], joint.coordinate[1])]
+        return [(ROW_COORD, 0, 0)]
     if joint.distance is not None:
         return [(ROW_DIST, 0, 0)]
     if joint.rollingDisc is not None:
@@ -93,12 +93,13 @@ def joint_rows_of(joint):
 def joint_parameters(joint):
     """The float parameters of the joint's rows (``SceneData.jpar``)."""
     if joint.coordinate is not None:
-        return [joint.coordinate[2], joint.coordinate[3]] + [0.0] * (N_JPAR - 2)
+        dA, dB, f, c = joint.coordinate
+        return [f, c, *dA, *dB]
     if joint.distance is not None:
         return [joint.distance] + [0.0] * (N_JPAR - 1)
     if joint.rollingDisc is not None:
         radius, normal, axis = joint.rollingDisc
-        return [radius, *normal, *axis]
+        return [radius, *normal, *axis] + [0.0] * (N_JPAR - 7)
     return [0.0] * N_JPAR
 
 
@@ -316,8 +317,8 @@ def compile_scene(scene: Scene, groups):
         tint=arr([[s.bodyA, s.bodyB] for s in T], (-1, 2), np.int64),
         trot=arr([[s.rotA, s.rotB] for s in T], (-1, 2, 3, 3)),
         tpar=arr([[s.stiffness, s.damping, s.offset, s.torque] for s in T], (-1, 4)),
-        kint=arr([[s.bodyA, s.bodyB, s.axisA, s.axisB] for s in scene.coordinateSprings], (-1, 4), np.int64),
-        kpar=arr([[s.stiffness, s.damping, s.offset] for s in scene.coordinateSprings], (-1, 3)),
+        kint=arr([[s.bodyA, s.bodyB] for s in scene.coordinateSprings], (-1, 2), np.int64),
+        kpar=arr([[s.stiffness, s.damping, s.offset, *s.axisA, *s.axisB] for s in scene.coordinateSprings], (-1, 9)),
         xint=arr([[s.bodyA, s.bodyB] for s in scene.linearSprings], (-1, 2), np.int64),
         xpos=arr([[s.posA, s.posB] for s in scene.linearSprings], (-1, 2, 3)),
         xaxis=arr([s.axisA for s in scene.linearSprings], (-1, 3)),

@@ -93,7 +93,7 @@ class Joint:
     name: str = ""
     worldTranslation: bool = False   # translation rows along world axes (Exudyn's spherical joint)
     # kind 'coordinate' (Exudyn's ObjectConnectorCoordinate on position coordinates):
-    # (axis of A, axis of B, factor f, constant c), h = f p_B[axis B] - p_A[axis A] - c
+    # (world direction d_A, d_B, factor f, constant c), h = f d_B . p_B - d_A . p_A - c
     coordinate: tuple = None
     distance: float = None           # kind 'distance' (ObjectConnectorDistance): h = |p_B - p_A| - distance
     # kind 'rollingDisc' (ObjectJointRollingDisc, velocity-level rows, mbs/rolling_disc_rows.py):
@@ -146,13 +146,13 @@ class CartesianSpringDamper:
 
 @dataclass
 class CoordinateSpringDamper:
-    """Exudyn's ``ObjectConnectorCoordinateSpringDamper`` on world position coordinates of the
-    body frame origins: ``f = k (p_B[axisB] - p_A[axisA] - offset) + d (rates)``, ``+f`` on A's
-    coordinate, ``-f`` on B's (mbs/coordinate_forces.py)."""
+    """Exudyn's ``ObjectConnectorCoordinateSpringDamper`` on position coordinates of the body
+    frame origins along world directions: ``f = k (d_B . p_B - d_A . p_A - offset) + d (rates)``,
+    ``+f`` on A's coordinate, ``-f`` on B's (mbs/coordinate_forces.py)."""
     bodyA: int
-    axisA: int
+    axisA: np.ndarray            # world direction d_A of A's coordinate (e_k: world axis k)
     bodyB: int
-    axisB: int
+    axisB: np.ndarray
     stiffness: float
     damping: float
     offset: float = 0.0
@@ -341,8 +341,9 @@ class Scene:
         return idx
 
     def AddCoordinateConstraint(self, bodyA, axisA, bodyB, axisB, factor=1.0, constant=0.0, name="") -> int:
-        """One row ``h = factor * p_B[axisB] - p_A[axisA] - constant`` on the world position
-        coordinates of the body frame origins (0 for GROUND); Exudyn's
+        """One row ``h = factor * d_B . p_B - d_A . p_A - constant`` on position coordinates of
+        the body frame origins (0 for GROUND) along world directions ``d = axis`` (an index
+        0, 1, 2: the world axis; or a 3-vector, e.g. a Mass1D's axis); Exudyn's
         ``ObjectConnectorCoordinate`` on node position coordinates (the bridge folds the
         node reference coordinates into ``constant``)."""
         idx = len(self.joints)
@@ -351,16 +352,14 @@ class Scene:
         self._check_body(bodyB, label)
         if bodyA == GROUND and bodyB == GROUND:
             raise SceneError(f"{label}: both sides are on the ground")
-        for ax in (axisA, axisB):
-            if ax not in (0, 1, 2):
-                raise SceneError(f"{label}: position coordinate index must be 0, 1 or 2, got {ax}")
+        dA, dB = (_coordinate_direction(ax, label) for ax in (axisA, axisB))
         f = _finite(factor, f"{label}: factor")
         c = _finite(constant, f"{label}: constant")
         if bodyB == GROUND or f == 0.0:
             if bodyA == GROUND:
                 raise SceneError(f"{label}: the row acts on no body (factor 0 and side A on the ground)")
         self.joints.append(Joint(int(bodyA), int(bodyB), np.zeros(3), np.eye(3), np.zeros(3), np.eye(3),
-                                 (1, 0, 0, 0, 0, 0), "coordinate", label, False, (int(axisA), int(axisB), f, c)))
+                                 (1, 0, 0, 0, 0, 0), "coordinate", label, False, (dA, dB, f, c)))
         return idx
 
     def AddDistanceConstraint(self, bodyA, posA, bodyB, posB, distance, name="") -> int:
@@ -516,16 +515,15 @@ class Scene:
     def AddCoordinateSpringDamper(self, bodyA, axisA, bodyB, axisB, stiffness, damping=0.0, offset=0.0,
                                   name="") -> int:
         """Spring-damper between two world position coordinates of body frame origins
-        (GROUND: 0): ``f = k (p_B[axisB] - p_A[axisA] - offset) + d (pdot_B[axisB] - pdot_A[axisA])``,
-        ``+f`` along ``e_axisA`` on A, ``-f`` along ``e_axisB`` on B."""
+        (GROUND: 0) along world directions ``d = axis`` (index or 3-vector, as in
+        :meth:`AddCoordinateConstraint`): ``f = k (d_B . p_B - d_A . p_A - offset) + d (rates)``,
+        ``+f`` along ``d_A`` on A, ``-f`` along ``d_B`` on B."""
         label = name or f"coordinateSpring{len(self.coordinateSprings)}"
         self._check_body(bodyA, label)
         self._check_body(bodyB, label)
-        for ax in (axisA, axisB):
-            if ax not in (0, 1, 2):
-                raise SceneError(f"{label}: position coordinate index must be 0, 1 or 2, got {ax}")
+        dA, dB = (_coordinate_direction(ax, label) for ax in (axisA, axisB))
         self.coordinateSprings.append(CoordinateSpringDamper(
-            int(bodyA), int(axisA), int(bodyB), int(axisB), _finite(stiffness, f"{label}: stiffness"),
+            int(bodyA), dA, int(bodyB), dB, _finite(stiffness, f"{label}: stiffness"),
             _finite(damping, f"{label}: damping"), _finite(offset, f"{label}: offset"), label))
         return len(self.coordinateSprings) - 1
 
@@ -649,6 +647,19 @@ def _checked_point_mass(label, mass):
     if not np.isfinite(m) or m <= 0:
         raise SceneError(f"{label}: mass must be positive and finite, got {mass}")
     return m
+
+
+def _coordinate_direction(axis, label):
+    """World direction of a position coordinate: ``e_axis`` for an index 0, 1, 2, else the
+    given nonzero 3-vector (used as it is)."""
+    if isinstance(axis, (int, np.integer)):
+        if axis not in (0, 1, 2):
+            raise SceneError(f"{label}: position coordinate index must be 0, 1 or 2, got {axis}")
+        return np.eye(3)[int(axis)]
+    d = _vec3(axis, f"{label}: coordinate direction")
+    if not np.any(d):
+        raise SceneError(f"{label}: coordinate direction is zero")
+    return d
 
 
 def _projector(P, what):

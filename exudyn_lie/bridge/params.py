@@ -96,6 +96,15 @@ FIELDS = {
     ("object", "JointRollingDisc"): {
         **{k: _JOINT[k] for k in ("markerNumbers", "activeConnector", "constrainedAxes")},
         **{k: _COMPILED_ROW for k in ("discRadius", "discAxis", "planeNormal")}},
+    ("node", "1D"): dict(_RIGID_NODE),
+    ("object", "Mass1D"): {
+        "mass": (FIXED, "compiled mass matrix"), "nodeNumber": (FIXED, "the body's node"),
+        "referencePosition": (FIXED, "the line the mass moves on (compiled point mass)"),
+        "referenceRotation": (FIXED, "the line the mass moves on (compiled point mass)")},
+    ("object", "RotationalMass1D"): {
+        "inertia": (FIXED, "compiled mass matrix"), "nodeNumber": (FIXED, "the body's node"),
+        "referencePosition": (IGNORED, "the rotor is integrated through its angle (its body markers are refused)"),
+        "referenceRotation": (IGNORED, "the rotor is integrated through its angle (its body markers are refused)")},
     ("marker", "NodeCoordinate"): {"nodeNumber": (FIXED, "the marker's node"),
                                    "coordinate": (FIXED, "the marker's coordinate")},
     ("load", "Coordinate"): {

@@ -57,11 +57,13 @@ from . import pyforces
 from .nodes import NODE_KINDS
 
 SUPPORTED_NODES = ("NodeRigidBodyRotVecLG", "NodeRigidBodyEP", "NodeRigidBodyRxyz", "NodeRigidBody2D", "NodePoint",
-                   "NodePoint2D", "NodePointGround", "NodeGenericData (data only)")
+                   "NodePoint2D", "Node1D", "NodePointGround", "NodeGenericData (data only)")
 # objects that are bodies of the scene: Exudyn object type -> the node types it accepts
 RIGID_NODE_TYPES = ("RigidBodyRotVecLG", "RigidBodyEP", "RigidBodyRxyz")
 BODY_OBJECTS = {"RigidBody": RIGID_NODE_TYPES, "RigidBody2D": ("RigidBody2D",), "MassPoint": ("Point",),
-                "MassPoint2D": ("Point2D",)}
+                "MassPoint2D": ("Point2D",), "Mass1D": ("1D",), "RotationalMass1D": ("1D",)}
+# bodies integrated as a scalar in coordinate space (nodes.Node1DNode): no body markers
+COORDINATE_SPACE_BODIES = ("RotationalMass1D",)
 SUPPORTED_MARKERS = ("MarkerBodyRigid", "MarkerBodyPosition", "MarkerNodeRigid", "MarkerNodePosition",
                      "MarkerBodyMass", "MarkerNodeCoordinate")
 POSITION_MARKERS = SUPPORTED_MARKERS[:5]        # the markers with a position (and orientation)
@@ -385,6 +387,10 @@ class _Reader:
                         raise BridgeError(f"node {n} ({t}, body object {bodyOfNode[n]}): initial {name} are not "
                                           f"finite: {arr[idx[k]] if np.all(np.isfinite(qref[k])) else qref[k]}")
             kind = NODE_KINDS[t](nodes, idx, qref)
+            kind.bind_objects([self.objects[bodyOfNode[n]] for n in nodes])
+            if hasattr(kind, "coordinate_frame"):
+                for k, n in enumerate(nodes):
+                    self.nodeAxisFrame[n] = kind.coordinate_frame(k)
             R, r, om, vel = kind.read(self.q, self.q_t)
             for k, n in enumerate(nodes):
                 states[n] = (R[k], r[k], om[k], vel[k])
@@ -402,6 +408,13 @@ class _Reader:
                                      angle=float(np.arctan2(R[1, 0], R[0, 0])), omega=float(om[2]),
                                      velocity=vel[:2], com=np.asarray(d.get("centerOfMass", [0, 0]), float),
                                      name=label)
+                elif d["objectType"] in ("Mass1D", "RotationalMass1D"):
+                    # nodes.Node1DNode: a point mass on the line origin + axis x (Mass1D), or the
+                    # angle as a scalar body in coordinate space (RotationalMass1D)
+                    axis = self.nodeAxisFrame[n][0]
+                    m1 = d.get("mass", d.get("physicsMass")) if d["objectType"] == "Mass1D" else \
+                        d.get("inertia", d.get("physicsInertia"))
+                    b = sc.AddPointMass(float(m1), r0=r, vel0=vel, name=label, freeDirections=np.outer(axis, axis))
                 elif d["objectType"] != "RigidBody":
                     b = sc.AddPointMass(float(d.get("mass", d.get("physicsMass"))), r0=r, vel0=vel, name=label,
                                         freeDirections=np.diag([1.0, 1.0, float(d["objectType"] == "MassPoint")]))
@@ -442,8 +455,19 @@ class _Reader:
                 if o in self.ground:
                     gp, gR = self.ground[o]
                     body, pos, Rm = GROUND, gp + gR @ pos, (None if Rm is None else gR @ Rm)
+                elif self.objects[o]["objectType"] in COORDINATE_SPACE_BODIES:
+                    raise BridgeError(f"{what}: marker {m} (Marker{t}) is on object {o} (Object"
+                                      f"{self.objects[o]['objectType']}), which exudyn_lie integrates through its "
+                                      f"Node1D coordinate only; connect it with a MarkerNodeCoordinate (coordinate "
+                                      f"constraints, springs, loads), or solve with exudyn.SolveDynamic")
                 elif self.objects[o]["objectType"] in BODY_OBJECTS:
                     body = self._body_of_object(o)
+                    if self.objects[o]["objectType"] == "Mass1D":
+                        # CObjectMass1D: p = referencePosition + referenceRotation (node + local);
+                        # the point mass has R = I, so body coordinates are world directions
+                        Rref = np.asarray(self.objects[o].get("referenceRotation", np.eye(3)), float)
+                        pos = Rref @ pos
+                        Rm = Rref if (Rm is None and t == "BodyRigid") else (None if Rm is None else Rref @ Rm)
                 else:
                     raise BridgeError(f"{what}: marker {m} (Marker{t}) is attached to object {o} of type "
                                       f"Object{self.objects[o]['objectType']}, not to a rigid body or ground")
@@ -456,6 +480,10 @@ class _Reader:
                     body = GROUND
                     pos = np.asarray(self.mbs.GetNode(n)["referenceCoordinates"], float)[:3] + (
                         np.zeros(3) if t == "NodePosition" else pos)
+                elif nt == "1D":
+                    raise BridgeError(f"{what}: marker {m} (Marker{t}) is on Node1D {n}, which has no position or "
+                                      f"orientation (Exudyn refuses it too); use a MarkerNodeCoordinate, or a body "
+                                      f"marker on its ObjectMass1D")
                 elif n in self.rigidNodeBody:
                     body = self.rigidNodeBody[n]
                     if t == "NodePosition":

@@ -52,7 +52,7 @@ import numpy as np
 
 from ..mbs.compiled import joint_row_descriptors
 from ..mbs.kernel import ROW_ROT
-from ..mbs.scene import GROUND, Scene, SceneError, frame_with_axis
+from ..mbs.scene import GROUND, AngleCoordinate, Scene, SceneError, frame_with_axis
 from . import pyforces
 from .nodes import NODE_KINDS
 
@@ -99,6 +99,13 @@ class CoordinateMarker:
     direction: np.ndarray
     ref: float
     markerType: str = "NodeCoordinate"
+    # a rotation coordinate (the angle of a NodeRigidBody2D): value = tracked angle - ref
+    angle: Optional[AngleCoordinate] = None
+
+    @property
+    def spec(self):
+        """The coordinate for Scene.AddCoordinate*: a direction, or the AngleCoordinate."""
+        return self.direction if self.angle is None else self.angle
 
 
 class BridgeError(SceneError):
@@ -666,6 +673,13 @@ class _Reader:
             raise BridgeError(f"{what}: marker {m} (MarkerNodeCoordinate) is on node {n} of type Node{nt}, which "
                               f"belongs to no body exudyn_lie integrates")
         npos = getattr(NODE_KINDS.get(nt), "positionCoordinates", None) or 0
+        if nt == "RigidBody2D" and k == 2:
+            # the angle phi of R = Rz(phi): a rotation coordinate about the world z axis, tracked
+            # over turns from its total value (reference + current) in the configuration read
+            ref = float(np.asarray(self.mbs.GetNode(n)["referenceCoordinates"], float).reshape(-1)[2])
+            total = ref + float(self.q[self.node_ltg(n)[2]])
+            return CoordinateMarker(m, self.rigidNodeBody[n], np.eye(3)[2], ref,
+                                    angle=AngleCoordinate(np.eye(3), total))
         if not 0 <= k < npos:
             raise BridgeError(f"{what}: marker {m} (MarkerNodeCoordinate) is on coordinate {k} of node {n} "
                               f"(Node{nt}), not a position coordinate (a rotation coordinate); exudyn_lie supports "
@@ -699,7 +713,7 @@ class _Reader:
         m0, m1 = (int(m) for m in d["markerNumbers"])
         cA = self.coordinate_marker(m0, what)
         cB = self.coordinate_marker(m1, what)
-        A, ka, refA, B, kb, refB = cA.body, cA.direction, cA.ref, cB.body, cB.direction, cB.ref
+        A, ka, refA, B, kb, refB = cA.body, cA.spec, cA.ref, cB.body, cB.spec, cB.ref
         f = float(d.get("factor1", d.get("factorValue1", 1.0)))      # factorValue1: before 1.12.258
         if A == GROUND and (B == GROUND or f == 0.0):
             sc.skipped.append((what, "constrains no body coordinate"))
@@ -800,7 +814,7 @@ class _Reader:
         """CObjectConnectorCoordinateSpringDamper: f = k (q_B - q_A - offset) + d (rates)."""
         uf = _userfunction(d, "springForceUserFunction", what)
         if uf is None:
-            sc.AddCoordinateSpringDamper(A.body, A.direction, B.body, B.direction, d["stiffness"], d["damping"],
+            sc.AddCoordinateSpringDamper(A.body, A.spec, B.body, B.spec, d["stiffness"], d["damping"],
                                          float(d["offset"]) + B.ref - A.ref, name=name)
         else:
             self._py(sc, pyforces.CoordinateSpringDamperUF(self.mbs, o, d, A, B, uf))
@@ -943,7 +957,10 @@ class _Reader:
             sc.pyItems.append(pyforces.CoordinateLoadUF(self.mbs, l, load, cm, uf))
             return
         sc.itemRows[("load", l)] = ("load", len(sc.loads))
-        sc.AddForce(cm.body, load * cm.direction, name=d.get("name", "") or f"load{l}")
+        if cm.angle is not None:        # a rotation coordinate: the world torque load d
+            sc.AddTorque(cm.body, load * cm.direction, name=d.get("name", "") or f"load{l}")
+        else:
+            sc.AddForce(cm.body, load * cm.direction, name=d.get("name", "") or f"load{l}")
 
 
 def _new_row(sc, nPy, counts):

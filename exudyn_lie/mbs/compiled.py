@@ -25,7 +25,9 @@ SceneData = namedtuple("SceneData", [
     "sint", "spos", "spar",           # springs: [A, B]; [posA, posB]; [k, d, L0, f0]
     "cint", "cpos", "cpar",           # Cartesian springs: [A, B]; [posA, posB]; [k(3), d(3), offset(3)]
     "tint", "trot", "tpar",           # torsional springs: [A, B]; [rotA, rotB]; [k, d, offset, torque]
-    "kint", "kpar",                   # coordinate springs: [A, B]; [k, d, offset, direction A (3), direction B (3)]
+    "kint", "kpar", "krot",           # coordinate springs: [A, B, rotation A, rotation B]; [k, d, offset,
+                                      #   direction A (3), direction B (3), angle A, angle B]; [frame A, frame B]
+    "nangles",                        # rotation coordinates of coordinate items (tracked: coordinate_angles)
     "xint", "xpos", "xaxis", "xpar",  # linear springs: [A, B]; [posA, posB]; axis on A; [k, d, offset, force]
     "bint", "bpos", "brot", "bpar",   # rigid-body springs: [A, B, intrinsic]; [posA, posB]; [rotA, rotB];
                                       #   rows K (6), D (6), offset
@@ -75,14 +77,15 @@ def point_minv(body):
     return out
 
 
-N_JPAR = 8      # float parameters per joint (ROW_COORD: factor, constant, directions d_A, d_B; ROW_DIST: distance;
+N_JPAR = 10     # float parameters per joint (ROW_COORD: factor, constant, directions d_A, d_B, tracked angles of
+                # rotation coordinates A, B (coordinate_angles); ROW_DIST: distance;
                 # ROW_ROLL: disc radius, plane normal (3), disc axis (3))
 
 
 def joint_rows_of(joint):
     """(kind, ax, bx) of the rows of a scene joint."""
     if joint.coordinate is not None:
-        return [(ROW_COORD, 0, 0)]
+        return [(ROW_COORD, int(joint.coordinate[4]), int(joint.coordinate[5]))]    # 1: a rotation coordinate
     if joint.distance is not None:
         return [(ROW_DIST, 0, 0)]
     if joint.rollingDisc is not None:
@@ -93,8 +96,8 @@ def joint_rows_of(joint):
 def joint_parameters(joint):
     """The float parameters of the joint's rows (``SceneData.jpar``)."""
     if joint.coordinate is not None:
-        dA, dB, f, c = joint.coordinate
-        return [f, c, *dA, *dB]
+        dA, dB, f, c, _, _, angleA, angleB = joint.coordinate
+        return [f, c, *dA, *dB, angleA, angleB]
     if joint.distance is not None:
         return [joint.distance] + [0.0] * (N_JPAR - 1)
     if joint.rollingDisc is not None:
@@ -317,8 +320,13 @@ def compile_scene(scene: Scene, groups):
         tint=arr([[s.bodyA, s.bodyB] for s in T], (-1, 2), np.int64),
         trot=arr([[s.rotA, s.rotB] for s in T], (-1, 2, 3, 3)),
         tpar=arr([[s.stiffness, s.damping, s.offset, s.torque] for s in T], (-1, 4)),
-        kint=arr([[s.bodyA, s.bodyB] for s in scene.coordinateSprings], (-1, 2), np.int64),
-        kpar=arr([[s.stiffness, s.damping, s.offset, *s.axisA, *s.axisB] for s in scene.coordinateSprings], (-1, 9)),
+        kint=arr([[s.bodyA, s.bodyB, int(s.angleA[0]), int(s.angleB[0])] for s in scene.coordinateSprings], (-1, 4),
+                 np.int64),
+        kpar=arr([[s.stiffness, s.damping, s.offset, *s.axisA, *s.axisB, s.angleA[2], s.angleB[2]]
+                  for s in scene.coordinateSprings], (-1, 11)),
+        krot=arr([[s.angleA[1], s.angleB[1]] for s in scene.coordinateSprings], (-1, 2, 3, 3)),
+        nangles=int(sum(s.angleA[0] + s.angleB[0] for s in scene.coordinateSprings)
+                    + sum(j.coordinate[4] + j.coordinate[5] for j in J if j.coordinate is not None)),
         xint=arr([[s.bodyA, s.bodyB] for s in scene.linearSprings], (-1, 2), np.int64),
         xpos=arr([[s.posA, s.posB] for s in scene.linearSprings], (-1, 2, 3)),
         xaxis=arr([s.axisA for s in scene.linearSprings], (-1, 3)),

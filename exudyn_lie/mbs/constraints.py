@@ -49,7 +49,8 @@ def joint_rows(j, gid, jint, jpos, jrot, jpar, rint, R, r, V, h, Jr, eta, v3, id
         kind = rint[q, ROW_KIND]
         rax = rint[q, ROW_AX]
         if kind == ROW_COORD:
-            coordinate_row(q, a, b, gA, gB, RA, RB, jpar[j], pA, pB, bA, bB, u, RtA, h, Jr, eta)
+            coordinate_row(q, a, b, gA, gB, RA, RB, rax, rint[q, ROW_BX], rotA, rotB, jpar[j], pA, pB, bA, bB, u, RtA,
+                           h, Jr, eta)
         elif kind == ROW_ROLL:
             rolling_disc_row(q, rax, a, b, gA, gB, RA, RB, rA, rB, VA, VB, rotA, rotB, jpar[j], pB, vB, ax, axd, axb,
                              bx, bxd, bxb, u, h, Jr, eta)

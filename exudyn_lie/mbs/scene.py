@@ -92,8 +92,10 @@ class Joint:
     kind: str = "generic"
     name: str = ""
     worldTranslation: bool = False   # translation rows along world axes (Exudyn's spherical joint)
-    # kind 'coordinate' (Exudyn's ObjectConnectorCoordinate on position coordinates):
-    # (world direction d_A, d_B, factor f, constant c), h = f d_B . p_B - d_A . p_A - c
+    # kind 'coordinate' (Exudyn's ObjectConnectorCoordinate): (d_A, d_B, f, c, rotation A, rotation B,
+    # angle0 A, angle0 B), h = f q_B - q_A - c with q_X = d_X . p_X (position coordinate along the
+    # world direction d_X) or the angle of X about the z axis of the frame rotX (rotation coordinate,
+    # d_X = rotX e_z, tracked over turns from angle0 X; mbs/coordinate_angles.py)
     coordinate: tuple = None
     distance: float = None           # kind 'distance' (ObjectConnectorDistance): h = |p_B - p_A| - distance
     # kind 'rollingDisc' (ObjectJointRollingDisc, velocity-level rows, mbs/rolling_disc_rows.py):
@@ -157,6 +159,20 @@ class CoordinateSpringDamper:
     damping: float
     offset: float = 0.0
     name: str = ""
+    # rotation coordinates (AngleCoordinate): per side (is a rotation, frame F, angle0); d = F e_z
+    angleA: tuple = (False, np.eye(3), 0.0)
+    angleB: tuple = (False, np.eye(3), 0.0)
+
+
+@dataclass(frozen=True)
+class AngleCoordinate:
+    """A rotation coordinate for the coordinate items (``axis`` argument of
+    :meth:`Scene.AddCoordinateConstraint` / :meth:`Scene.AddCoordinateSpringDamper`): the angle
+    ``phi`` of the body about the z axis of the world frame ``frame`` (``R = frame Rz(phi)`` for a
+    body turning about that axis, e.g. a 2D body with ``frame = I``), continued over turns from
+    ``angle0``, the angle at the initial state.  Its rate is ``(frame e_z) . omega_world``."""
+    frame: object = None
+    angle0: float = 0.0
 
 
 @dataclass
@@ -352,14 +368,15 @@ class Scene:
         self._check_body(bodyB, label)
         if bodyA == GROUND and bodyB == GROUND:
             raise SceneError(f"{label}: both sides are on the ground")
-        dA, dB = (_coordinate_direction(ax, label) for ax in (axisA, axisB))
+        (dA, angA), (dB, angB) = (self._coordinate_end(b, ax, label) for b, ax in ((bodyA, axisA), (bodyB, axisB)))
         f = _finite(factor, f"{label}: factor")
         c = _finite(constant, f"{label}: constant")
         if bodyB == GROUND or f == 0.0:
             if bodyA == GROUND:
                 raise SceneError(f"{label}: the row acts on no body (factor 0 and side A on the ground)")
-        self.joints.append(Joint(int(bodyA), int(bodyB), np.zeros(3), np.eye(3), np.zeros(3), np.eye(3),
-                                 (1, 0, 0, 0, 0, 0), "coordinate", label, False, (dA, dB, f, c)))
+        self.joints.append(Joint(int(bodyA), int(bodyB), np.zeros(3), angA[1], np.zeros(3), angB[1],
+                                 (1, 0, 0, 0, 0, 0), "coordinate", label, False,
+                                 (dA, dB, f, c, angA[0], angB[0], angA[2], angB[2])))
         return idx
 
     def AddDistanceConstraint(self, bodyA, posA, bodyB, posB, distance, name="") -> int:
@@ -521,11 +538,21 @@ class Scene:
         label = name or f"coordinateSpring{len(self.coordinateSprings)}"
         self._check_body(bodyA, label)
         self._check_body(bodyB, label)
-        dA, dB = (_coordinate_direction(ax, label) for ax in (axisA, axisB))
+        (dA, angA), (dB, angB) = (self._coordinate_end(b, ax, label) for b, ax in ((bodyA, axisA), (bodyB, axisB)))
         self.coordinateSprings.append(CoordinateSpringDamper(
             int(bodyA), dA, int(bodyB), dB, _finite(stiffness, f"{label}: stiffness"),
-            _finite(damping, f"{label}: damping"), _finite(offset, f"{label}: offset"), label))
+            _finite(damping, f"{label}: damping"), _finite(offset, f"{label}: offset"), label, angA, angB))
         return len(self.coordinateSprings) - 1
+
+    def _coordinate_end(self, body, axis, label):
+        """(world direction d, (is rotation, frame, angle0)) of one side of a coordinate item."""
+        if not isinstance(axis, AngleCoordinate):
+            return _coordinate_direction(axis, label), (False, np.eye(3), 0.0)
+        if body == GROUND or self.bodies[body].isPoint:
+            raise SceneError(f"{label}: a rotation coordinate needs a rigid body (2D or 3D), not "
+                             f"{'the ground' if body == GROUND else 'a point mass'}")
+        F = _rot(axis.frame, f"{label}: rotation coordinate frame")
+        return F[:, 2].copy(), (True, F, _finite(axis.angle0, f"{label}: rotation coordinate angle0"))
 
     def AddLinearSpringDamper(self, bodyA, posA, axisA, bodyB, posB, stiffness, damping=0.0, offset=0.0, force=0.0,
                               name="") -> int:

@@ -195,6 +195,9 @@ def package(mbs, groups, q, qt, t=0.0):
             Q[b, :3] = 0.0
             Q[b, 3:] = sc.bodies[b].freeDirections @ Q[b, 3:]
     h, J, eta = sim.jacobian()
+    for b in range(nb):
+        if sc.bodies[b].isPoint:        # only the free directions of a point mass are velocity coordinates
+            J[:, 6 * b + 3:6 * b + 6] = J[:, 6 * b + 3:6 * b + 6] @ sc.bodies[b].freeDirections
     return dict(M=M, Q=Q.reshape(-1), h=h, J=J, P=P, PdV=PdV, sim=sim, scene=sc)
 
 

@@ -560,6 +560,17 @@ def _models_with_every_item():
     mbs.AddObject(U.ObjectConnectorLinearSpringDamper(markerNumbers=[
         mbs.AddMarker(U.MarkerBodyRigid(bodyNumber=g)), mbs.AddMarker(U.MarkerBodyRigid(bodyNumber=bodies[2]))],
         stiffness=1))
+    disc = mbs.CreateRigidBody(inertia=InertiaCuboid(800, [0.05, 0.5, 0.5]), referencePosition=[0, 5, 0.25])
+    mbs.AddObject(U.ObjectJointRollingDisc(markerNumbers=[mbs.AddMarker(U.MarkerBodyRigid(bodyNumber=g)),
+                                                          mbs.AddMarker(U.MarkerBodyRigid(bodyNumber=disc))],
+                                           discRadius=0.25))
+    n1 = mbs.AddNode(U.Node1D(referenceCoordinates=[0]))
+    mbs.AddObject(U.ObjectMass1D(nodeNumber=n1, mass=1, referenceRotation=U.RotationMatrixZ(0.2)))
+    n1r = mbs.AddNode(U.Node1D(referenceCoordinates=[0]))
+    mbs.AddObject(U.ObjectRotationalMass1D(nodeNumber=n1r, inertia=1))
+    mbs.AddObject(U.ObjectConnectorCoordinateSpringDamper(markerNumbers=[
+        mbs.AddMarker(U.MarkerNodeCoordinate(nodeNumber=n1, coordinate=0)),
+        mbs.AddMarker(U.MarkerNodeCoordinate(nodeNumber=n1r, coordinate=0))], stiffness=10))
     return mbs
 
 

@@ -190,7 +190,8 @@ class NodeTable:
             self.body[i:i + n] = bodies
             self.idx[i:i + n, :m] = kind.idx
             self.nq[i:i + n] = m
-            self.qref[i:i + n, :m] = kind.qref
+            ref = kind.table_reference()
+            self.qref[i:i + n, :ref.shape[1]] = ref
             self.prev[i:i + n] = kind.prev
             self.kindOfRow += [(kind, k) for k in range(n)]
             i += n

@@ -35,6 +35,7 @@ CODE_RXYZ = 2
 CODE_POINT = 3          # NodePoint: 3 position coordinates, no rotation
 CODE_POINT2D = 4        # NodePoint2D: x, y
 CODE_2D = 5             # NodeRigidBody2D: [x, y, phi]
+CODE_1D = 6             # Node1D: one coordinate x = axis . (r - origin) (ObjectMass1D / ObjectRotationalMass1D)
 NCOORD_MAX = 7          # position (3) + at most 4 rotation parameters
 TWO_PI = 2.0 * math.pi
 ROTVEC_LIMIT = 1.5 * math.pi
@@ -217,7 +218,7 @@ def planar_row(R, omega, omegad, prev, first, p, p_t, p_tt):
 
 @njit(cache=True)
 def write_row(code, R, omega, omegad, prev, first, p, p_t, p_tt):
-    if code == CODE_POINT or code == CODE_POINT2D:
+    if code == CODE_POINT or code == CODE_POINT2D or code == CODE_1D:
         return 0                         # no rotation parameters
     if code == CODE_2D:
         return planar_row(R, omega, omegad, prev, first, p, p_t, p_tt)
@@ -272,6 +273,21 @@ def write_nodes(gid, R, r, V, Vdot, doacc, code, body, idx, nq, qref, prev, firs
         if f:
             flags[i] = 1                 # kept until the warning is given (warn_flags)
             nflag += 1
+        if code[i] == CODE_1D:
+            # qref row = (axis . origin + reference coordinate, axis): x = axis . r - qref[0]
+            j = idx[i, 0]
+            x = -qref[i, 0]
+            xt = 0.0
+            xtt = 0.0
+            for k in range(3):
+                x += qref[i, 1 + k] * r[b, k]
+                xt += qref[i, 1 + k] * vel[k]
+                xtt += qref[i, 1 + k] * acc[k]
+            q[j] = x
+            qt[j] = xt
+            if doacc:
+                qtt[j] = xtt
+            continue
         npos = 2 if (code[i] == CODE_POINT2D or code[i] == CODE_2D) else 3
         for k in range(npos):
             q[idx[i, k]] = r[b, k] - qref[i, k]
@@ -344,6 +360,15 @@ class NodeKind:
         self.prev = np.zeros((n, 4))        # last total rotation parameters (continuity)
         self.first = True
         self.warned = np.zeros(n, bool)
+
+    def bind_objects(self, objects):
+        """The item dictionaries of the nodes' objects (in node order); a node kind whose
+        coordinates depend on its object (Node1D) reads what it needs here."""
+
+    def table_reference(self):
+        """Per-node reference data of the compiled writer (bridge.fast.NodeTable.qref,
+        at most NCOORD_MAX columns): the reference coordinates."""
+        return self.qref
 
     def __len__(self):
         return len(self.ids)
@@ -651,5 +676,67 @@ class Rigid2DNode(NodeKind):
 
 
 
+class Node1DNode(PointNode):
+    """``Node1D``: one ODE2 coordinate ``x`` (total = reference + current), whose meaning comes
+    from its object (CObjectMass1D / CObjectRotationalMass1D):
+
+    * ``ObjectMass1D``: the point ``p = referencePosition + referenceRotation (x, 0, 0)``, a point
+      mass on the line ``origin + axis x`` (``axis = referenceRotation e_x``, ``origin =
+      referencePosition``), integrated on R^3 with the free direction ``axis``;
+    * ``ObjectRotationalMass1D``: the rotation angle about ``referenceRotation e_z``; it is
+      integrated as a scalar body in coordinate space: the point ``(x, 0, 0)`` of mass
+      ``inertia`` free along ``e_x`` (axis ``e_x``, origin 0), which the coordinate items use
+      exactly.
+
+    So ``x = axis . (r - origin)``, ``x_t = axis . rdot`` for both."""
+    typeName = "1D"
+    code = CODE_1D
+    npos = 1
+    positionCoordinates = 1
+
+    def bind_objects(self, objects):
+        n = len(self)
+        self.axis = np.zeros((n, 3))
+        self.origin = np.zeros((n, 3))
+        for k, d in enumerate(objects):
+            if d["objectType"] == "Mass1D":
+                self.axis[k] = np.asarray(d.get("referenceRotation", np.eye(3)), float).reshape(3, 3)[:, 0]
+                self.origin[k] = np.asarray(d.get("referencePosition", [0, 0, 0]), float)
+            else:                                       # RotationalMass1D: coordinate space
+                self.axis[k] = (1.0, 0.0, 0.0)
+
+    def coordinate_frame(self, k):
+        """(axis, origin) of node k's coordinate: ``x = axis . (r - origin)``."""
+        return self.axis[k].copy(), self.origin[k].copy()
+
+    def table_reference(self):
+        return np.column_stack([self.qref[:, 0] + np.einsum("ni,ni->n", self.axis, self.origin), self.axis])
+
+    def read(self, q, q_t):
+        n = len(self)
+        self.first = False
+        x = self.qref[:, 0] + q[self.idx[:, 0]]
+        return (np.repeat(np.eye(3)[None], n, axis=0), self.origin + self.axis * x[:, None], np.zeros((n, 3)),
+                self.axis * q_t[self.idx[:, 0]][:, None])
+
+    def write(self, R, r, omega, vel, omegad=None, acc=None, q=None, q_t=None, q_tt=None):
+        ix = self.idx[:, 0]
+        q[ix] = np.einsum("ni,ni->n", self.axis, np.asarray(r) - self.origin) - self.qref[:, 0]
+        q_t[ix] = np.einsum("ni,ni->n", self.axis, np.asarray(vel))
+        if q_tt is not None and acc is not None:
+            q_tt[ix] = np.einsum("ni,ni->n", self.axis, np.asarray(acc))
+        self.first = False
+        return np.zeros((len(self), 0))
+
+    def velocity_map(self, q):
+        T = np.zeros((len(self), 1, 6))
+        T[:, 0, 3:] = self.axis
+        return T
+
+    def velocity_map_dot(self, q, q_t):
+        return np.zeros((len(self), 1))
+
+
 #: the registry: Exudyn ``nodeType`` string -> class
-NODE_KINDS = {cls.typeName: cls for cls in (RotVecLGNode, EPNode, RxyzNode, PointNode, Point2DNode, Rigid2DNode)}
+NODE_KINDS = {cls.typeName: cls for cls in (RotVecLGNode, EPNode, RxyzNode, PointNode, Point2DNode, Rigid2DNode,
+                                            Node1DNode)}

@@ -93,6 +93,18 @@ FIELDS = {
                                       "activeConnector")},
         "springForceUserFunction": (REFUSED, "a user function is refused"),
         "markerNumbers": (FIXED, "the connected bodies")},
+    ("object", "JointRollingDisc"): {
+        **{k: _JOINT[k] for k in ("markerNumbers", "activeConnector", "constrainedAxes")},
+        **{k: _COMPILED_ROW for k in ("discRadius", "discAxis", "planeNormal")}},
+    ("node", "1D"): dict(_RIGID_NODE),
+    ("object", "Mass1D"): {
+        "mass": (FIXED, "compiled mass matrix"), "nodeNumber": (FIXED, "the body's node"),
+        "referencePosition": (FIXED, "the line the mass moves on (compiled point mass)"),
+        "referenceRotation": (FIXED, "the line the mass moves on (compiled point mass)")},
+    ("object", "RotationalMass1D"): {
+        "inertia": (FIXED, "compiled mass matrix"), "nodeNumber": (FIXED, "the body's node"),
+        "referencePosition": (IGNORED, "the rotor is integrated through its angle (its body markers are refused)"),
+        "referenceRotation": (IGNORED, "the rotor is integrated through its angle (its body markers are refused)")},
     ("marker", "NodeCoordinate"): {"nodeNumber": (FIXED, "the marker's node"),
                                    "coordinate": (FIXED, "the marker's coordinate")},
     ("load", "Coordinate"): {
@@ -443,7 +455,7 @@ class ParameterWatch:
             return
         cm = self.reader.coordinate_marker(d["markerNumber"], what)
         sd = self.solver.sim.sd
-        sd.lvec[k, 0] = load * np.eye(3)[cm.axis]
+        sd.lvec[k, 0] = load * cm.direction
 
     def _load_vector(self, l, row, value, t):
         """Only ``loadVector`` of a compiled load changed: the new vector (the value Exudyn

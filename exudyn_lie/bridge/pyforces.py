@@ -28,6 +28,8 @@ The force laws are Exudyn's (checked against ``ComputeODE2RHS`` in
   udot_v, udot_w, K, D, rotationMarker0, rotationMarker1, offset)`` (Exudyn passes the
   displacement and rotation without the offset).
 """
+import math
+
 import numpy as np
 
 from ..mbs.scene import GROUND
@@ -336,18 +338,28 @@ def combined(items, nb):
 
 
 def coordinate_state(cm, st):
-    """(current coordinate, its rate) of a node position coordinate (reader.CoordinateMarker):
-    ``p[axis] - ref`` of the body frame origin, 0 on the ground."""
+    """(current coordinate, its rate) of a node coordinate (reader.CoordinateMarker):
+    ``direction . p - ref`` of the body frame origin, 0 on the ground; a rotation coordinate:
+    the angle about ``direction`` (mbs.coordinate_angles), continued from the last value this
+    marker returned, minus ``ref``, and ``direction . omega_world``."""
     if cm.body == GROUND:
         return 0.0, 0.0
-    return st.r[cm.body][cm.axis] - cm.ref, st.vel[cm.body][cm.axis]
+    if cm.angle is not None:
+        R = st.R[cm.body]
+        F = np.asarray(cm.angle.frame, float)
+        prev = getattr(cm, "prev", cm.angle.angle0)
+        a = math.atan2(-(F[:, 0] @ R[:, 1]), F[:, 0] @ R[:, 0])
+        a += 2.0 * math.pi * round((prev - a) / (2.0 * math.pi))
+        cm.prev = a
+        return a - cm.ref, float(cm.direction @ (R @ st.omega[cm.body]))
+    return float(cm.direction @ st.r[cm.body]) - cm.ref, float(cm.direction @ st.vel[cm.body])
 
 
-def apply_coordinate(cm, f, F):
-    """A generalised force ``f`` on a node position coordinate: world force ``f e_axis`` at
-    the node (the body frame origin)."""
+def apply_coordinate(cm, f, F, T):
+    """A generalised force ``f`` on a node coordinate: world force ``f direction`` at the node
+    (the body frame origin), or the world torque ``f direction`` on a rotation coordinate."""
     if cm.body != GROUND:
-        F[cm.body][cm.axis] += f
+        (F if cm.angle is None else T)[cm.body] += f * cm.direction
 
 
 class CoordinateSpringDamperUF(_Connector):
@@ -364,8 +376,8 @@ class CoordinateSpringDamperUF(_Connector):
         qB, vB = coordinate_state(self.B, st)
         f = float(_call(self.label, self.uf, self.mbs, t, self.o, qB - qA, vB - vA, d["stiffness"], d["damping"],
                         d["offset"]))
-        apply_coordinate(self.A, f, F)
-        apply_coordinate(self.B, -f, F)
+        apply_coordinate(self.A, f, F, T)
+        apply_coordinate(self.B, -f, F, T)
 
 
 class CoordinateLoadUF(PyItem):
@@ -384,4 +396,4 @@ class CoordinateLoadUF(PyItem):
         return [self.cm.body]
 
     def add(self, t, st, F, T):
-        apply_coordinate(self.cm, float(_call(self.label, self.uf, self.mbs, t, self.load)), F)
+        apply_coordinate(self.cm, float(_call(self.label, self.uf, self.mbs, t, self.load)), F, T)

@@ -52,25 +52,28 @@ import numpy as np
 
 from ..mbs.compiled import joint_row_descriptors
 from ..mbs.kernel import ROW_ROT
-from ..mbs.scene import GROUND, Scene, SceneError, frame_with_axis
+from ..mbs.scene import GROUND, AngleCoordinate, Scene, SceneError, frame_with_axis
 from . import pyforces
 from .nodes import NODE_KINDS
 
 SUPPORTED_NODES = ("NodeRigidBodyRotVecLG", "NodeRigidBodyEP", "NodeRigidBodyRxyz", "NodeRigidBody2D", "NodePoint",
-                   "NodePoint2D", "NodePointGround", "NodeGenericData (data only)")
+                   "NodePoint2D", "Node1D", "NodePointGround", "NodeGenericData (data only)")
 # objects that are bodies of the scene: Exudyn object type -> the node types it accepts
 RIGID_NODE_TYPES = ("RigidBodyRotVecLG", "RigidBodyEP", "RigidBodyRxyz")
 BODY_OBJECTS = {"RigidBody": RIGID_NODE_TYPES, "RigidBody2D": ("RigidBody2D",), "MassPoint": ("Point",),
-                "MassPoint2D": ("Point2D",)}
+                "MassPoint2D": ("Point2D",), "Mass1D": ("1D",), "RotationalMass1D": ("1D",)}
+# bodies integrated as a scalar in coordinate space (nodes.Node1DNode): no body markers
+COORDINATE_SPACE_BODIES = ("RotationalMass1D",)
 SUPPORTED_MARKERS = ("MarkerBodyRigid", "MarkerBodyPosition", "MarkerNodeRigid", "MarkerNodePosition",
                      "MarkerBodyMass", "MarkerNodeCoordinate")
 POSITION_MARKERS = SUPPORTED_MARKERS[:5]        # the markers with a position (and orientation)
 SUPPORTED_LOADS = ("LoadForceVector", "LoadTorqueVector", "LoadMassProportional", "LoadCoordinate")
 
 JOINT_TYPES = ("JointSpherical", "JointRevoluteZ", "JointPrismaticX", "JointGeneric", "JointRevolute2D",
-               "JointPrismatic2D", "ConnectorCoordinate", "ConnectorDistance")
+               "JointPrismatic2D", "ConnectorCoordinate", "ConnectorDistance", "JointRollingDisc")
 # joints with a reader of their own (the others: read_joint): Exudyn object type -> reader method
-JOINT_READERS = {"ConnectorCoordinate": "read_coordinate_constraint", "ConnectorDistance": "read_distance_constraint"}
+JOINT_READERS = {"ConnectorCoordinate": "read_coordinate_constraint", "ConnectorDistance": "read_distance_constraint",
+                 "JointRollingDisc": "read_rolling_disc"}
 # connectors: Exudyn object type -> (reader method of _Reader, markers need an orientation);
 # the one list of the connectors the bridge reads
 CONNECTOR_READERS = {
@@ -87,13 +90,22 @@ SUPPORTED_OBJECTS = ("ObjectGround",) + tuple("Object" + t for t in BODY_OBJECTS
 
 @dataclass
 class CoordinateMarker:
-    """A MarkerNodeCoordinate on a position coordinate: the value is ``p[axis] - ref`` of
-    the body frame origin (the node), 0 on ground."""
+    """A MarkerNodeCoordinate on a position coordinate: the value is ``direction . p - ref``
+    of the body frame origin (the node), 0 on ground; ``direction`` is the world axis of the
+    coordinate (``e_k`` for coordinate k of a point or rigid node, the Mass1D's axis
+    ``referenceRotation e_x`` for a Node1D)."""
     index: int
     body: int
-    axis: int
+    direction: np.ndarray
     ref: float
     markerType: str = "NodeCoordinate"
+    # a rotation coordinate (the angle of a NodeRigidBody2D): value = tracked angle - ref
+    angle: Optional[AngleCoordinate] = None
+
+    @property
+    def spec(self):
+        """The coordinate for Scene.AddCoordinate*: a direction, or the AngleCoordinate."""
+        return self.direction if self.angle is None else self.angle
 
 
 class BridgeError(SceneError):
@@ -284,6 +296,7 @@ class _Reader:
         self.markers = {}
         self.ground = {}          # object index -> (pos, rot) of ObjectGround
         self.rigidNodeBody = {}   # node index -> scene body
+        self.nodeAxisFrame = {}   # Node1D index -> (world axis, origin) of its one coordinate
         self.badNodes = []
 
     def _items_coordinates(self):
@@ -381,6 +394,10 @@ class _Reader:
                         raise BridgeError(f"node {n} ({t}, body object {bodyOfNode[n]}): initial {name} are not "
                                           f"finite: {arr[idx[k]] if np.all(np.isfinite(qref[k])) else qref[k]}")
             kind = NODE_KINDS[t](nodes, idx, qref)
+            kind.bind_objects([self.objects[bodyOfNode[n]] for n in nodes])
+            if hasattr(kind, "coordinate_frame"):
+                for k, n in enumerate(nodes):
+                    self.nodeAxisFrame[n] = kind.coordinate_frame(k)
             R, r, om, vel = kind.read(self.q, self.q_t)
             for k, n in enumerate(nodes):
                 states[n] = (R[k], r[k], om[k], vel[k])
@@ -398,6 +415,13 @@ class _Reader:
                                      angle=float(np.arctan2(R[1, 0], R[0, 0])), omega=float(om[2]),
                                      velocity=vel[:2], com=np.asarray(d.get("centerOfMass", [0, 0]), float),
                                      name=label)
+                elif d["objectType"] in ("Mass1D", "RotationalMass1D"):
+                    # nodes.Node1DNode: a point mass on the line origin + axis x (Mass1D), or the
+                    # angle as a scalar body in coordinate space (RotationalMass1D)
+                    axis = self.nodeAxisFrame[n][0]
+                    m1 = d.get("mass", d.get("physicsMass")) if d["objectType"] == "Mass1D" else \
+                        d.get("inertia", d.get("physicsInertia"))
+                    b = sc.AddPointMass(float(m1), r0=r, vel0=vel, name=label, freeDirections=np.outer(axis, axis))
                 elif d["objectType"] != "RigidBody":
                     b = sc.AddPointMass(float(d.get("mass", d.get("physicsMass"))), r0=r, vel0=vel, name=label,
                                         freeDirections=np.diag([1.0, 1.0, float(d["objectType"] == "MassPoint")]))
@@ -438,8 +462,19 @@ class _Reader:
                 if o in self.ground:
                     gp, gR = self.ground[o]
                     body, pos, Rm = GROUND, gp + gR @ pos, (None if Rm is None else gR @ Rm)
+                elif self.objects[o]["objectType"] in COORDINATE_SPACE_BODIES:
+                    raise BridgeError(f"{what}: marker {m} (Marker{t}) is on object {o} (Object"
+                                      f"{self.objects[o]['objectType']}), which exudyn_lie integrates through its "
+                                      f"Node1D coordinate only; connect it with a MarkerNodeCoordinate (coordinate "
+                                      f"constraints, springs, loads), or solve with exudyn.SolveDynamic")
                 elif self.objects[o]["objectType"] in BODY_OBJECTS:
                     body = self._body_of_object(o)
+                    if self.objects[o]["objectType"] == "Mass1D":
+                        # CObjectMass1D: p = referencePosition + referenceRotation (node + local);
+                        # the point mass has R = I, so body coordinates are world directions
+                        Rref = np.asarray(self.objects[o].get("referenceRotation", np.eye(3)), float)
+                        pos = Rref @ pos
+                        Rm = Rref if (Rm is None and t == "BodyRigid") else (None if Rm is None else Rref @ Rm)
                 else:
                     raise BridgeError(f"{what}: marker {m} (Marker{t}) is attached to object {o} of type "
                                       f"Object{self.objects[o]['objectType']}, not to a rigid body or ground")
@@ -452,6 +487,10 @@ class _Reader:
                     body = GROUND
                     pos = np.asarray(self.mbs.GetNode(n)["referenceCoordinates"], float)[:3] + (
                         np.zeros(3) if t == "NodePosition" else pos)
+                elif nt == "1D":
+                    raise BridgeError(f"{what}: marker {m} (Marker{t}) is on Node1D {n}, which has no position or "
+                                      f"orientation (Exudyn refuses it too); use a MarkerNodeCoordinate, or a body "
+                                      f"marker on its ObjectMass1D")
                 elif n in self.rigidNodeBody:
                     body = self.rigidNodeBody[n]
                     if t == "NodePosition":
@@ -583,6 +622,39 @@ class _Reader:
             raise BridgeError(f"{what}: {e}") from None
         sc.joints_info.append(JointInfo(o, d["objectType"], j, aeAll[:1], aeAll))
 
+    def read_rolling_disc(self, sc, o, d):
+        """ObjectJointRollingDisc (CObjectJointRollingDisc): velocity-level rows, the velocity of
+        the disc's contact point relative to the plane in (lateral, forward, normal) directions
+        for the locked ``constrainedAxes``; marker 0 the plane (a 3D rigid body or ground), marker
+        1 the disc centre on a 3D rigid body; free axes keep their multiplier 0 (as Exudyn)."""
+        what = self._what("object", o, d)
+        aeAll = self._constraint_ae(o, d, what, sc)
+        if aeAll is None:
+            return
+        m0, m1 = (int(m) for m in d["markerNumbers"])
+        A = self.marker(m0, what, need_rotation=True)
+        B = self.marker(m1, what, need_rotation=True)
+        if B.body == GROUND:
+            raise BridgeError(f"{what}: marker 1 (the disc) is on the ground; Exudyn's rolling disc has the disc "
+                              f"on marker 1 and the plane (ground or body) on marker 0")
+        ca = [int(c) for c in np.asarray(d.get("constrainedAxes", [1, 1, 1])).reshape(-1)]
+        if not any(ca):
+            sc.skipped.append((what, "constrains no axis"))
+            sc.aeZero.extend(aeAll.tolist())
+            return
+        try:
+            j = sc.AddRollingDisc(A.body, B.body, float(d["discRadius"]), posA=A.pos, rotA=_orthonormal(A.rotation()),
+                                  posB=B.pos, rotB=_orthonormal(B.rotation()),
+                                  planeNormal=np.asarray(d.get("planeNormal", [0, 0, 1]), float),
+                                  discAxis=np.asarray(d.get("discAxis", [1, 0, 0]), float), constrainedAxes=ca,
+                                  name=d.get("name", "") or f"object{o}")
+        except SceneError as e:
+            raise BridgeError(f"{what}: {e}") from None
+        locked = [i for i in range(3) if ca[i]]
+        aeRows = aeAll[locked] if len(aeAll) else np.zeros(0, np.int64)
+        sc.joints_info.append(JointInfo(o, d["objectType"], j, aeRows, aeAll))
+        sc.aeZero.extend(sorted(set(aeAll.tolist()) - set(aeRows.tolist())))
+
     def coordinate_marker(self, m, what):
         """(body, position axis, reference value) of a MarkerNodeCoordinate: the marker value
         is the node's current coordinate ``p[axis] - reference`` (0 on a ground node)."""
@@ -596,18 +668,29 @@ class _Reader:
         n, k = int(d["nodeNumber"]), int(d["coordinate"])
         nt = self.mbs.GetNode(n)["nodeType"]
         if nt == "PointGround":
-            return CoordinateMarker(m, GROUND, 0, 0.0)
+            return CoordinateMarker(m, GROUND, np.eye(3)[0], 0.0)
         if n not in self.rigidNodeBody:
             raise BridgeError(f"{what}: marker {m} (MarkerNodeCoordinate) is on node {n} of type Node{nt}, which "
                               f"belongs to no body exudyn_lie integrates")
         npos = getattr(NODE_KINDS.get(nt), "positionCoordinates", None) or 0
+        if nt == "RigidBody2D" and k == 2:
+            # the angle phi of R = Rz(phi): a rotation coordinate about the world z axis, tracked
+            # over turns from its total value (reference + current) in the configuration read
+            ref = float(np.asarray(self.mbs.GetNode(n)["referenceCoordinates"], float).reshape(-1)[2])
+            total = ref + float(self.q[self.node_ltg(n)[2]])
+            return CoordinateMarker(m, self.rigidNodeBody[n], np.eye(3)[2], ref,
+                                    angle=AngleCoordinate(np.eye(3), total))
         if not 0 <= k < npos:
             raise BridgeError(f"{what}: marker {m} (MarkerNodeCoordinate) is on coordinate {k} of node {n} "
                               f"(Node{nt}), not a position coordinate (a rotation coordinate); exudyn_lie supports "
                               f"coordinate items on node position coordinates only so far"
                               + (f" (0..{npos - 1} of this node)" if npos else ""))
         ref = float(np.asarray(self.mbs.GetNode(n)["referenceCoordinates"], float).reshape(-1)[k])
-        return CoordinateMarker(m, self.rigidNodeBody[n], k, ref)
+        frame = self.nodeAxisFrame.get(n)
+        if frame is None:
+            return CoordinateMarker(m, self.rigidNodeBody[n], np.eye(3)[k], ref)
+        axis, origin = frame         # a Node1D: value = axis . (p - origin) - ref
+        return CoordinateMarker(m, self.rigidNodeBody[n], axis, ref + float(axis @ origin))
 
     def read_coordinate_constraint(self, sc, o, d):
         """ObjectConnectorCoordinate: ``f q_B - q_A - offset = 0`` (CObjectConnectorCoordinate)."""
@@ -630,7 +713,7 @@ class _Reader:
         m0, m1 = (int(m) for m in d["markerNumbers"])
         cA = self.coordinate_marker(m0, what)
         cB = self.coordinate_marker(m1, what)
-        A, ka, refA, B, kb, refB = cA.body, cA.axis, cA.ref, cB.body, cB.axis, cB.ref
+        A, ka, refA, B, kb, refB = cA.body, cA.spec, cA.ref, cB.body, cB.spec, cB.ref
         f = float(d.get("factor1", d.get("factorValue1", 1.0)))      # factorValue1: before 1.12.258
         if A == GROUND and (B == GROUND or f == 0.0):
             sc.skipped.append((what, "constrains no body coordinate"))
@@ -731,7 +814,7 @@ class _Reader:
         """CObjectConnectorCoordinateSpringDamper: f = k (q_B - q_A - offset) + d (rates)."""
         uf = _userfunction(d, "springForceUserFunction", what)
         if uf is None:
-            sc.AddCoordinateSpringDamper(A.body, A.axis, B.body, B.axis, d["stiffness"], d["damping"],
+            sc.AddCoordinateSpringDamper(A.body, A.spec, B.body, B.spec, d["stiffness"], d["damping"],
                                          float(d["offset"]) + B.ref - A.ref, name=name)
         else:
             self._py(sc, pyforces.CoordinateSpringDamperUF(self.mbs, o, d, A, B, uf))
@@ -874,7 +957,10 @@ class _Reader:
             sc.pyItems.append(pyforces.CoordinateLoadUF(self.mbs, l, load, cm, uf))
             return
         sc.itemRows[("load", l)] = ("load", len(sc.loads))
-        sc.AddForce(cm.body, load * np.eye(3)[cm.axis], name=d.get("name", "") or f"load{l}")
+        if cm.angle is not None:        # a rotation coordinate: the world torque load d
+            sc.AddTorque(cm.body, load * cm.direction, name=d.get("name", "") or f"load{l}")
+        else:
+            sc.AddForce(cm.body, load * cm.direction, name=d.get("name", "") or f"load{l}")
 
 
 def _new_row(sc, nPy, counts):

@@ -9,7 +9,7 @@ from collections import namedtuple
 
 import numpy as np
 
-from .codes import GROUP_NAMES, ROW_COORD, ROW_DIST, ROW_ROT, ROW_TRANS_LOCAL, ROW_TRANS_WORLD
+from .codes import GROUP_NAMES, ROW_COORD, ROW_DIST, ROW_ROLL, ROW_ROT, ROW_TRANS_LOCAL, ROW_TRANS_WORLD
 from .linalg import REL_PIVOT_TOL, rcm_order
 from .scene import GROUND, Scene, SceneError
 from .tree_solve import tree_plan
@@ -26,7 +26,9 @@ SceneData = namedtuple("SceneData", [
     "sint", "spos", "spar",           # springs: [A, B]; [posA, posB]; [k, d, L0, f0]
     "cint", "cpos", "cpar",           # Cartesian springs: [A, B]; [posA, posB]; [k(3), d(3), offset(3)]
     "tint", "trot", "tpar",           # torsional springs: [A, B]; [rotA, rotB]; [k, d, offset, torque]
-    "kint", "kpar",                   # coordinate springs: [A, B, axis A, axis B]; [k, d, offset]
+    "kint", "kpar", "krot",           # coordinate springs: [A, B, rotation A, rotation B]; [k, d, offset,
+                                      #   direction A (3), direction B (3), angle A, angle B]; [frame A, frame B]
+    "nangles",                        # rotation coordinates of coordinate items (tracked: coordinate_angles)
     "xint", "xpos", "xaxis", "xpar",  # linear springs: [A, B]; [posA, posB]; axis on A; [k, d, offset, force]
     "bint", "bpos", "brot", "bpar",   # rigid-body springs: [A, B, intrinsic]; [posA, posB]; [rotA, rotB];
                                       #   rows K (6), D (6), offset
@@ -78,24 +80,32 @@ def point_minv(body):
     return out
 
 
-N_JPAR = 2      # float parameters per joint (ROW_COORD: factor, constant; ROW_DIST: distance)
+N_JPAR = 10     # float parameters per joint (ROW_COORD: factor, constant, directions d_A, d_B, tracked angles of
+                # rotation coordinates A, B (coordinate_angles); ROW_DIST: distance;
+                # ROW_ROLL: disc radius, plane normal (3), disc axis (3))
 
 
 def joint_rows_of(joint):
     """(kind, ax, bx) of the rows of a scene joint."""
     if joint.coordinate is not None:
-        return [(ROW_COORD, joint.coordinate[0], joint.coordinate[1])]
+        return [(ROW_COORD, int(joint.coordinate[4]), int(joint.coordinate[5]))]    # 1: a rotation coordinate
     if joint.distance is not None:
         return [(ROW_DIST, 0, 0)]
+    if joint.rollingDisc is not None:
+        return [(ROW_ROLL, i, 0) for i in range(3) if joint.constrainedAxes[i]]
     return joint_row_descriptors(joint.constrainedAxes, joint.worldTranslation)
 
 
 def joint_parameters(joint):
     """The float parameters of the joint's rows (``SceneData.jpar``)."""
     if joint.coordinate is not None:
-        return [joint.coordinate[2], joint.coordinate[3]]
+        dA, dB, f, c, _, _, angleA, angleB = joint.coordinate
+        return [f, c, *dA, *dB, angleA, angleB]
     if joint.distance is not None:
-        return [joint.distance, 0.0]
+        return [joint.distance] + [0.0] * (N_JPAR - 1)
+    if joint.rollingDisc is not None:
+        radius, normal, axis = joint.rollingDisc
+        return [radius, *normal, *axis] + [0.0] * (N_JPAR - 7)
     return [0.0] * N_JPAR
 
 
@@ -277,8 +287,13 @@ def compile_scene(scene: Scene, groups):
         tint=arr([[s.bodyA, s.bodyB] for s in T], (-1, 2), np.int64),
         trot=arr([[s.rotA, s.rotB] for s in T], (-1, 2, 3, 3)),
         tpar=arr([[s.stiffness, s.damping, s.offset, s.torque] for s in T], (-1, 4)),
-        kint=arr([[s.bodyA, s.bodyB, s.axisA, s.axisB] for s in scene.coordinateSprings], (-1, 4), np.int64),
-        kpar=arr([[s.stiffness, s.damping, s.offset] for s in scene.coordinateSprings], (-1, 3)),
+        kint=arr([[s.bodyA, s.bodyB, int(s.angleA[0]), int(s.angleB[0])] for s in scene.coordinateSprings], (-1, 4),
+                 np.int64),
+        kpar=arr([[s.stiffness, s.damping, s.offset, *s.axisA, *s.axisB, s.angleA[2], s.angleB[2]]
+                  for s in scene.coordinateSprings], (-1, 11)),
+        krot=arr([[s.angleA[1], s.angleB[1]] for s in scene.coordinateSprings], (-1, 2, 3, 3)),
+        nangles=int(sum(s.angleA[0] + s.angleB[0] for s in scene.coordinateSprings)
+                    + sum(j.coordinate[4] + j.coordinate[5] for j in J if j.coordinate is not None)),
         xint=arr([[s.bodyA, s.bodyB] for s in scene.linearSprings], (-1, 2), np.int64),
         xpos=arr([[s.posA, s.posB] for s in scene.linearSprings], (-1, 2, 3)),
         xaxis=arr([s.axisA for s in scene.linearSprings], (-1, 3)),

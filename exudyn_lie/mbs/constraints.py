@@ -8,9 +8,11 @@ is quadratic in the velocities."""
 from numba import njit
 
 from .bodies import _cross, _matTvec, _side, body_axis, body_point, translation_dual
-from .codes import J_BODY_A, J_BODY_B, J_NROW, J_ROW0, ROW_AX, ROW_BX, ROW_COORD, ROW_DIST, ROW_KIND, ROW_ROT, ROW_TRANS_LOCAL
+from .codes import (J_BODY_A, J_BODY_B, J_NROW, J_ROW0, ROW_AX, ROW_BX, ROW_COORD, ROW_DIST, ROW_KIND, ROW_ROLL, ROW_ROT,
+                    ROW_TRANS_LOCAL)
 from .coordinate_rows import coordinate_row
 from .distance_rows import distance_row
+from .rolling_disc_rows import rolling_disc_row
 
 
 # --------------------------------------------------------------------------- constraints
@@ -47,7 +49,11 @@ def joint_rows(j, gid, jint, jpos, jrot, jpar, rint, R, r, V, h, Jr, eta, v3, id
         kind = rint[q, ROW_KIND]
         rax = rint[q, ROW_AX]
         if kind == ROW_COORD:
-            coordinate_row(q, a, b, gA, gB, RA, RB, rax, rint[q, ROW_BX], jpar[j], pA, pB, bA, bB, u, RtA, h, Jr, eta)
+            coordinate_row(q, a, b, gA, gB, RA, RB, rax, rint[q, ROW_BX], rotA, rotB, jpar[j], pA, pB, bA, bB, u, RtA,
+                           h, Jr, eta)
+        elif kind == ROW_ROLL:
+            rolling_disc_row(q, rax, a, b, gA, gB, RA, RB, rA, rB, VA, VB, rotA, rotB, jpar[j], pB, vB, ax, axd, axb,
+                             bx, bxd, bxb, u, h, Jr, eta)
         elif kind == ROW_ROT:
             rbx = rint[q, ROW_BX]
             for k in range(3):

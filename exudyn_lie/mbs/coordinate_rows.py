@@ -3,41 +3,74 @@
     h = f q_B - q_A - offset,
 
 on two node coordinates ``q_A``, ``q_B`` (``MarkerNodeCoordinate``: the *current* coordinate,
-total minus reference; a ground node's coordinate is 0).  Here the coordinates are position
-coordinates of the nodes: ``q_X = p_X[k_X] - ref_X``, with ``p_X`` the node position (the
-body point ``s = 0``), so ``h = f p_B[bx] - p_A[ax] - c`` with ``c = offset + f ref_B - ref_A``
-(folded by the scene compiler; ``jpar[j] = (f, c)``).
+total minus reference; a ground node's coordinate is 0).  A coordinate is either
 
-Rows (eq. index1): ``J V = f e_bx . pdot_B - e_ax . pdot_A``, ``pdot = T v`` at s = 0, hence
-``J = (0, -T_A^T e_ax | 0, f T_B^T e_bx)``, and ``eta = -(f beta_B[bx] - beta_A[ax])`` with
-``beta`` the velocity-product acceleration of the node (``R (omega x v)`` for SE3, 0 else;
-:func:`~.bodies.body_point`).
+* a position coordinate along a fixed world direction ``d`` (``e_k`` for coordinate k of a point
+  or rigid node, the axis ``referenceRotation e_x`` of a Mass1D's Node1D):
+  ``q = d . p - ref`` with ``p`` the node position (the body point ``s = 0``), rate
+  ``d . pdot = (T^T d) . v`` (``pdot = T v``), bias ``d . beta`` (``beta`` the velocity-product
+  acceleration of the node, ``R (omega x v)`` for SE3, 0 else; :func:`~.bodies.body_point`); or
+* a rotation coordinate (``rint[q, ROW_AX / ROW_BX] = 1``): the angle ``phi`` about
+  ``d = F e_z`` tracked over turns (:mod:`.coordinate_angles`, frame ``F`` in ``jrot``), rate
+  ``(R^T d) . omega``, bias 0.
+
+The references fold into ``c = offset + f ref_B - ref_A`` (the bridge);
+``jpar[j] = (f, c, d_A, d_B, angle A, angle B)``.  Rows (eq. index1): ``J V = f qdot_B - qdot_A``
+and ``eta = -(f bias_B - bias_A)``.
 """
 from numba import njit
 
 from .bodies import translation_dual
+from .coordinate_angles import angle_rate_row, frame_angle
 
 
 @njit(cache=True, inline="always", _nrt=False)
-def coordinate_row(q, a, b, gA, gB, RA, RB, ax, bx, par, pA, pB, bA, bB, e, RTe, h, Jr, eta):
+def coordinate_row(q, a, b, gA, gB, RA, RB, rotEndA, rotEndB, FA, FB, par, pA, pB, bA, bB, e, RTe, h, Jr, eta):
     """Row ``q`` of a coordinate constraint from the node points ``pA, pB`` and their bias
-    accelerations ``bA, bB`` (body_point at s = 0); ``par = (f, c)``."""
+    accelerations ``bA, bB`` (body_point at s = 0); ``par = jpar[j]``; ``rotEndX`` 1 for a
+    rotation coordinate (frame ``FX``)."""
     f = par[0]
-    h[q] = f * pB[bx] - pA[ax] - par[1]
-    eta[q] = -(f * bB[bx] - bA[ax])
+    hv = -par[1]
+    et = 0.0
     if a >= 0:
-        _translation_column(gA, RA, ax, -1.0, e, RTe, Jr, q, 3)
+        if rotEndA == 1:
+            hv -= frame_angle(FA, RA, par[8])
+            _rotation_column(RA, par, 2, -1.0, e, RTe, Jr, q, 0)
+        else:
+            for k in range(3):
+                hv -= par[2 + k] * pA[k]
+                et -= par[2 + k] * bA[k]
+            _translation_column(gA, RA, par, 2, -1.0, e, RTe, Jr, q, 3)
     if b >= 0:
-        _translation_column(gB, RB, bx, f, e, RTe, Jr, q, 9)
+        if rotEndB == 1:
+            hv += f * frame_angle(FB, RB, par[9])
+            _rotation_column(RB, par, 5, f, e, RTe, Jr, q, 6)
+        else:
+            for k in range(3):
+                hv += f * par[5 + k] * pB[k]
+                et += f * par[5 + k] * bB[k]
+            _translation_column(gB, RB, par, 5, f, e, RTe, Jr, q, 9)
+    h[q] = hv
+    eta[q] = -et
 
 
 @njit(cache=True, inline="always", _nrt=False)
-def _translation_column(g, R, k, s, e, RTe, Jr, q, col):
-    """``Jr[q, col:col+3] = s T^T e_k`` (``rdot = T v``; bodies.translation_dual)."""
+def _translation_column(g, R, par, i0, s, e, RTe, Jr, q, col):
+    """``Jr[q, col:col+3] = s T^T d`` with ``d = par[i0:i0+3]`` (``rdot = T v``; bodies.translation_dual)."""
     for i in range(3):
-        e[i] = 0.0
-        RTe[i] = R[k, i]
-    e[k] = 1.0
+        e[i] = par[i0 + i]
+    for i in range(3):
+        RTe[i] = R[0, i] * e[0] + R[1, i] * e[1] + R[2, i] * e[2]
     Te = translation_dual(g, e, RTe)
     for i in range(3):
         Jr[q, col + i] = s * Te[i]
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def _rotation_column(R, par, i0, s, e, RTe, Jr, q, col):
+    """``Jr[q, col:col+3] = s R^T d`` with ``d = par[i0:i0+3]`` (the rate of a rotation coordinate)."""
+    for i in range(3):
+        e[i] = par[i0 + i]
+    angle_rate_row(e, R, RTe)
+    for i in range(3):
+        Jr[q, col + i] = s * RTe[i]

@@ -65,4 +65,4 @@ def all_rows(sd, wk, R, r, V, h, Jr, eta, e):
     e[2] = spring_energy(sd.gid, sd.sint, sd.spos, sd.spar, sd.cint, sd.cpos, sd.cpar, sd.tint, sd.trot, sd.tpar,
                          wk.tphi, R, r, V, wk.v3, wk.m3, wk.ident, wk.zero3, wk.zero6)
     if sd.kint.shape[0] > 0:
-        e[2] += coordinate_spring_energy(sd.gid, sd.kint, sd.kpar, R, r, V, wk.v3, wk.ident, wk.zero3, wk.zero6)
+        e[2] += coordinate_spring_energy(sd.gid, sd.kint, sd.kpar, sd.krot, R, r, V, wk.v3, wk.ident, wk.zero3, wk.zero6)

@@ -8,6 +8,7 @@ from ..groups import so3
 from .bodies import (_matvec, _side, add_pair_force, add_point_force, add_world_torque, body_inertial_forces,
                      body_point, connector_ends)
 from .codes import L_BODY, L_FIXED, L_KIND
+from .coordinate_angles import update_coordinate_angles
 from .coordinate_forces import coordinate_spring_forces
 from .linear_spring_forces import linear_spring_forces
 
@@ -282,7 +283,7 @@ def compute_forces(sd, wk, t, R, r, V, Q):
         torsional_forces(sd.gid, sd.tint, sd.trot, sd.tpar, wk.tphi, R, r, V, Q, F, wk.m3, wk.ident, wk.zero3,
                          wk.zero6)
     if sd.kint.shape[0] > 0:
-        coordinate_spring_forces(sd.gid, sd.kint, sd.kpar, R, r, V, Q, wk.v3, wk.ident, wk.zero3, wk.zero6)
+        coordinate_spring_forces(sd.gid, sd.kint, sd.kpar, sd.krot, R, r, V, Q, wk.v3, wk.ident, wk.zero3, wk.zero6)
     if sd.xint.shape[0] > 0:
         linear_spring_forces(sd.gid, sd.xint, sd.xpos, sd.xaxis, sd.xpar, R, r, V, Q, wk.v3, wk.ident, wk.zero3,
                              wk.zero6)
@@ -294,5 +295,8 @@ def compute_forces(sd, wk, t, R, r, V, Q):
 
 @njit(cache=True, inline="always", _nrt=False)
 def update_torsion_tracking(sd, wk, R, r, V):
+    """The tracked angles (torsional springs, rotation coordinates) after an accepted step."""
     if sd.tint.shape[0] > 0:
         torsion_angles(sd.gid, sd.tint, sd.trot, wk.tphi, R, r, V, wk.m3, wk.ident, wk.zero3, wk.zero6)
+    if sd.nangles > 0:
+        update_coordinate_angles(sd.jint, sd.jrot, sd.jpar, sd.rint, sd.kint, sd.krot, sd.kpar, R)

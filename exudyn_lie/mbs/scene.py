@@ -92,10 +92,15 @@ class Joint:
     kind: str = "generic"
     name: str = ""
     worldTranslation: bool = False   # translation rows along world axes (Exudyn's spherical joint)
-    # kind 'coordinate' (Exudyn's ObjectConnectorCoordinate on position coordinates):
-    # (axis of A, axis of B, factor f, constant c), h = f p_B[axis B] - p_A[axis A] - c
+    # kind 'coordinate' (Exudyn's ObjectConnectorCoordinate): (d_A, d_B, f, c, rotation A, rotation B,
+    # angle0 A, angle0 B), h = f q_B - q_A - c with q_X = d_X . p_X (position coordinate along the
+    # world direction d_X) or the angle of X about the z axis of the frame rotX (rotation coordinate,
+    # d_X = rotX e_z, tracked over turns from angle0 X; mbs/coordinate_angles.py)
     coordinate: tuple = None
     distance: float = None           # kind 'distance' (ObjectConnectorDistance): h = |p_B - p_A| - distance
+    # kind 'rollingDisc' (ObjectJointRollingDisc, velocity-level rows, mbs/rolling_disc_rows.py):
+    # (discRadius, planeNormal in A's marker frame rotA, discAxis in B's marker frame rotB)
+    rollingDisc: tuple = None
 
 
 @dataclass
@@ -143,17 +148,31 @@ class CartesianSpringDamper:
 
 @dataclass
 class CoordinateSpringDamper:
-    """Exudyn's ``ObjectConnectorCoordinateSpringDamper`` on world position coordinates of the
-    body frame origins: ``f = k (p_B[axisB] - p_A[axisA] - offset) + d (rates)``, ``+f`` on A's
-    coordinate, ``-f`` on B's (mbs/coordinate_forces.py)."""
+    """Exudyn's ``ObjectConnectorCoordinateSpringDamper`` on position coordinates of the body
+    frame origins along world directions: ``f = k (d_B . p_B - d_A . p_A - offset) + d (rates)``,
+    ``+f`` on A's coordinate, ``-f`` on B's (mbs/coordinate_forces.py)."""
     bodyA: int
-    axisA: int
+    axisA: np.ndarray            # world direction d_A of A's coordinate (e_k: world axis k)
     bodyB: int
-    axisB: int
+    axisB: np.ndarray
     stiffness: float
     damping: float
     offset: float = 0.0
     name: str = ""
+    # rotation coordinates (AngleCoordinate): per side (is a rotation, frame F, angle0); d = F e_z
+    angleA: tuple = (False, np.eye(3), 0.0)
+    angleB: tuple = (False, np.eye(3), 0.0)
+
+
+@dataclass(frozen=True)
+class AngleCoordinate:
+    """A rotation coordinate for the coordinate items (``axis`` argument of
+    :meth:`Scene.AddCoordinateConstraint` / :meth:`Scene.AddCoordinateSpringDamper`): the angle
+    ``phi`` of the body about the z axis of the world frame ``frame`` (``R = frame Rz(phi)`` for a
+    body turning about that axis, e.g. a 2D body with ``frame = I``), continued over turns from
+    ``angle0``, the angle at the initial state.  Its rate is ``(frame e_z) . omega_world``."""
+    frame: object = None
+    angle0: float = 0.0
 
 
 @dataclass
@@ -338,8 +357,9 @@ class Scene:
         return idx
 
     def AddCoordinateConstraint(self, bodyA, axisA, bodyB, axisB, factor=1.0, constant=0.0, name="") -> int:
-        """One row ``h = factor * p_B[axisB] - p_A[axisA] - constant`` on the world position
-        coordinates of the body frame origins (0 for GROUND); Exudyn's
+        """One row ``h = factor * d_B . p_B - d_A . p_A - constant`` on position coordinates of
+        the body frame origins (0 for GROUND) along world directions ``d = axis`` (an index
+        0, 1, 2: the world axis; or a 3-vector, e.g. a Mass1D's axis); Exudyn's
         ``ObjectConnectorCoordinate`` on node position coordinates (the bridge folds the
         node reference coordinates into ``constant``)."""
         idx = len(self.joints)
@@ -348,16 +368,15 @@ class Scene:
         self._check_body(bodyB, label)
         if bodyA == GROUND and bodyB == GROUND:
             raise SceneError(f"{label}: both sides are on the ground")
-        for ax in (axisA, axisB):
-            if ax not in (0, 1, 2):
-                raise SceneError(f"{label}: position coordinate index must be 0, 1 or 2, got {ax}")
+        (dA, angA), (dB, angB) = (self._coordinate_end(b, ax, label) for b, ax in ((bodyA, axisA), (bodyB, axisB)))
         f = _finite(factor, f"{label}: factor")
         c = _finite(constant, f"{label}: constant")
         if bodyB == GROUND or f == 0.0:
             if bodyA == GROUND:
                 raise SceneError(f"{label}: the row acts on no body (factor 0 and side A on the ground)")
-        self.joints.append(Joint(int(bodyA), int(bodyB), np.zeros(3), np.eye(3), np.zeros(3), np.eye(3),
-                                 (1, 0, 0, 0, 0, 0), "coordinate", label, False, (int(axisA), int(axisB), f, c)))
+        self.joints.append(Joint(int(bodyA), int(bodyB), np.zeros(3), angA[1], np.zeros(3), angB[1],
+                                 (1, 0, 0, 0, 0, 0), "coordinate", label, False,
+                                 (dA, dB, f, c, angA[0], angB[0], angA[2], angB[2])))
         return idx
 
     def AddDistanceConstraint(self, bodyA, posA, bodyB, posB, distance, name="") -> int:
@@ -375,6 +394,42 @@ class Scene:
         self.joints.append(Joint(int(bodyA), int(bodyB), _vec3(posA, f"{label}: posA"), np.eye(3),
                                  _vec3(posB, f"{label}: posB"), np.eye(3), (1, 0, 0, 0, 0, 0), "distance", label,
                                  False, None, L0))
+        return idx
+
+    def AddRollingDisc(self, bodyA, bodyB, discRadius, posA=(0, 0, 0), rotA=None, posB=(0, 0, 0), rotB=None,
+                       planeNormal=(0, 0, 1), discAxis=(1, 0, 0), constrainedAxes=(1, 1, 1), name="") -> int:
+        """Exudyn's ``ObjectJointRollingDisc``: a disc (body B, centre ``posB``, axis
+        ``rotB discAxis`` in B's coordinates) rolls on the plane of body A (or GROUND) through
+        ``posA`` with normal ``rotA planeNormal``.  Velocity-level rows (nonholonomic): the
+        velocity of the disc's material contact point relative to A's, in the (lateral,
+        forward, normal) directions locked by ``constrainedAxes`` (mbs/rolling_disc_rows.py).
+        ``planeNormal`` and ``discAxis`` are used as given (Exudyn does not normalise them)."""
+        idx = len(self.joints)
+        label = name or f"joint{idx}(rollingDisc)"
+        self._check_body(bodyA, label)
+        self._check_body(bodyB, label, allow_ground=False)
+        if bodyA == bodyB:
+            raise SceneError(f"{label}: the disc and the plane are the same body")
+        for b, side in ((bodyA, "plane (A)"), (bodyB, "disc (B)")):
+            if b != GROUND and (self.bodies[b].isPoint or self.bodies[b].planar):
+                raise SceneError(f"{label}: the {side} must be a 3D rigid body or the ground, "
+                                 f"not {'a point mass' if self.bodies[b].isPoint else 'a 2D body'}")
+        ax = tuple(int(a) for a in constrainedAxes)
+        if len(ax) != 3 or any(a not in (0, 1) for a in ax) or sum(ax) == 0:
+            raise SceneError(f"{label}: constrainedAxes must be three 0/1 flags (lateral, forward, normal) "
+                             f"locking at least one, got {constrainedAxes}")
+        r = _finite(discRadius, f"{label}: discRadius")
+        n = _vec3(planeNormal, f"{label}: planeNormal")
+        a = _vec3(discAxis, f"{label}: discAxis")
+        RA, RB = _rot(rotA, f"{label}: rotA"), _rot(rotB, f"{label}: rotB")
+        nw = RA @ n if bodyA == GROUND else self.bodies[bodyA].R0 @ RA @ n
+        aw = self.bodies[bodyB].R0 @ RB @ a
+        if np.linalg.norm(np.cross(aw, nw)) <= 1e-12 * max(1e-300, np.linalg.norm(aw) * np.linalg.norm(nw)):
+            raise SceneError(f"{label}: the disc axis is parallel to the plane normal (or zero); the rolling "
+                             f"direction (discAxis x planeNormal) is undefined")
+        self.joints.append(Joint(int(bodyA), int(bodyB), _vec3(posA, f"{label}: posA"), RA,
+                                 _vec3(posB, f"{label}: posB"), RB, ax + (0, 0, 0), "rollingDisc", label, False,
+                                 None, None, (r, n, a)))
         return idx
 
     def _joint_at(self, kind, bodyA, bodyB, position, rotation, name):
@@ -477,18 +532,27 @@ class Scene:
     def AddCoordinateSpringDamper(self, bodyA, axisA, bodyB, axisB, stiffness, damping=0.0, offset=0.0,
                                   name="") -> int:
         """Spring-damper between two world position coordinates of body frame origins
-        (GROUND: 0): ``f = k (p_B[axisB] - p_A[axisA] - offset) + d (pdot_B[axisB] - pdot_A[axisA])``,
-        ``+f`` along ``e_axisA`` on A, ``-f`` along ``e_axisB`` on B."""
+        (GROUND: 0) along world directions ``d = axis`` (index or 3-vector, as in
+        :meth:`AddCoordinateConstraint`): ``f = k (d_B . p_B - d_A . p_A - offset) + d (rates)``,
+        ``+f`` along ``d_A`` on A, ``-f`` along ``d_B`` on B."""
         label = name or f"coordinateSpring{len(self.coordinateSprings)}"
         self._check_body(bodyA, label)
         self._check_body(bodyB, label)
-        for ax in (axisA, axisB):
-            if ax not in (0, 1, 2):
-                raise SceneError(f"{label}: position coordinate index must be 0, 1 or 2, got {ax}")
+        (dA, angA), (dB, angB) = (self._coordinate_end(b, ax, label) for b, ax in ((bodyA, axisA), (bodyB, axisB)))
         self.coordinateSprings.append(CoordinateSpringDamper(
-            int(bodyA), int(axisA), int(bodyB), int(axisB), _finite(stiffness, f"{label}: stiffness"),
-            _finite(damping, f"{label}: damping"), _finite(offset, f"{label}: offset"), label))
+            int(bodyA), dA, int(bodyB), dB, _finite(stiffness, f"{label}: stiffness"),
+            _finite(damping, f"{label}: damping"), _finite(offset, f"{label}: offset"), label, angA, angB))
         return len(self.coordinateSprings) - 1
+
+    def _coordinate_end(self, body, axis, label):
+        """(world direction d, (is rotation, frame, angle0)) of one side of a coordinate item."""
+        if not isinstance(axis, AngleCoordinate):
+            return _coordinate_direction(axis, label), (False, np.eye(3), 0.0)
+        if body == GROUND or self.bodies[body].isPoint:
+            raise SceneError(f"{label}: a rotation coordinate needs a rigid body (2D or 3D), not "
+                             f"{'the ground' if body == GROUND else 'a point mass'}")
+        F = _rot(axis.frame, f"{label}: rotation coordinate frame")
+        return F[:, 2].copy(), (True, F, _finite(axis.angle0, f"{label}: rotation coordinate angle0"))
 
     def AddLinearSpringDamper(self, bodyA, posA, axisA, bodyB, posB, stiffness, damping=0.0, offset=0.0, force=0.0,
                               name="") -> int:
@@ -610,6 +674,19 @@ def _checked_point_mass(label, mass):
     if not np.isfinite(m) or m <= 0:
         raise SceneError(f"{label}: mass must be positive and finite, got {mass}")
     return m
+
+
+def _coordinate_direction(axis, label):
+    """World direction of a position coordinate: ``e_axis`` for an index 0, 1, 2, else the
+    given nonzero 3-vector (used as it is)."""
+    if isinstance(axis, (int, np.integer)):
+        if axis not in (0, 1, 2):
+            raise SceneError(f"{label}: position coordinate index must be 0, 1 or 2, got {axis}")
+        return np.eye(3)[int(axis)]
+    d = _vec3(axis, f"{label}: coordinate direction")
+    if not np.any(d):
+        raise SceneError(f"{label}: coordinate direction is zero")
+    return d
 
 
 def _projector(P, what):

@@ -1,0 +1,57 @@
+"""Rotation coordinates of the coordinate items (Scene.AngleCoordinate): the angle ``phi`` of a
+body about the z axis of a world frame ``F``,
+
+    phi = atan2(-(F^T R)[0, 1], (F^T R)[0, 0]) + 2 pi n,
+
+the third Tait-Bryan angle of ``F^T R`` as for the torsional spring (``= phi`` exactly for
+``R = F Rz(phi)``, a body turning about ``F e_z``: a 2D body with ``F = I``), with the turn count
+``n`` that puts it nearest to the angle tracked at the last accepted step.  Its rate is
+``(F e_z) . omega_world``, whose derivative at frozen V is ``(F e_z) . R (omega x omega) = 0``:
+a rotation coordinate adds nothing to ``eta`` (coordinate_rows).
+
+The tracked angles live in the items' parameter rows (``jpar[j, 8:10]`` of a coordinate
+constraint, ``kpar[s, 9:11]`` of a coordinate spring; frames in ``jrot`` / ``krot``), start at
+the angle of the initial state (``AngleCoordinate.angle0``, Exudyn's total coordinate) and are
+moved on after every accepted step by :func:`update_coordinate_angles`.
+"""
+import numpy as np
+from numba import njit
+
+from .codes import J_BODY_A, J_BODY_B, J_ROW0, ROW_AX, ROW_BX, ROW_COORD, ROW_KIND
+
+TWO_PI = 2.0 * np.pi
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def frame_angle(F, R, prev):
+    """Angle of ``R`` about ``F e_z`` (see the module text), on the branch nearest ``prev``."""
+    c = F[0, 0] * R[0, 0] + F[1, 0] * R[1, 0] + F[2, 0] * R[2, 0]
+    s = -(F[0, 0] * R[0, 1] + F[1, 0] * R[1, 1] + F[2, 0] * R[2, 1])
+    a = np.arctan2(s, c)
+    return a + TWO_PI * np.round((prev - a) / TWO_PI)
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def angle_rate_row(d, R, out):
+    """``out = R^T d``: the rate ``d . (R omega)`` of a rotation coordinate about ``d = F e_z``
+    as a row on the body-fixed omega."""
+    for i in range(3):
+        out[i] = R[0, i] * d[0] + R[1, i] * d[1] + R[2, i] * d[2]
+
+
+@njit(cache=True, _nrt=False)
+def update_coordinate_angles(jint, jrot, jpar, rint, kint, krot, kpar, R):
+    """Move every tracked angle to the current state (after an accepted step)."""
+    for j in range(jint.shape[0]):
+        q = jint[j, J_ROW0]
+        if rint[q, ROW_KIND] != ROW_COORD:
+            continue
+        if rint[q, ROW_AX] == 1:
+            jpar[j, 8] = frame_angle(jrot[j, 0], R[jint[j, J_BODY_A]], jpar[j, 8])
+        if rint[q, ROW_BX] == 1:
+            jpar[j, 9] = frame_angle(jrot[j, 1], R[jint[j, J_BODY_B]], jpar[j, 9])
+    for s in range(kint.shape[0]):
+        if kint[s, 2] == 1:
+            kpar[s, 9] = frame_angle(krot[s, 0], R[kint[s, 0]], kpar[s, 9])
+        if kint[s, 3] == 1:
+            kpar[s, 10] = frame_angle(krot[s, 1], R[kint[s, 1]], kpar[s, 10])

@@ -9,7 +9,7 @@ import pytest
 from exudyn_lie.apps import bench_topology as BT
 from exudyn_lie.apps.stress_models import planar_fourbar, random_mechanism, scene_from_spec
 from exudyn_lie.mbs import GROUND, Scene, Simulator
-from exudyn_lie.mbs.compiled import TREE_MIN_BANDWIDTH, with_solve
+from exudyn_lie.mbs.compiled import TREE_MIN_BANDWIDTH, make_work
 from exudyn_lie.mbs.simulator import constraint_jacobian
 from exudyn_lie.mbs.tree_solve import P_ORDER, tree_plan
 from exudyn_lie.mbs.codes import BODY_TWIST
@@ -20,13 +20,12 @@ def _sim(scene, group="SE3", solve=None, **kw):
         warnings.simplefilter("ignore")
         sim = Simulator(scene, "RK4", group, projectInitial=True, **kw)
     if solve is not None:
-        sim.sd = with_solve(sim.sd, solve)
-        sim.wk = sim._make_work()
+        sim.wk = sim._make_work(solve)
     return sim
 
 
 def _uses_tree(sim):
-    return sim.sd.tplan.shape[0] > 0
+    return sim.wk.tplan is not None
 
 
 def _pair(scene_fn, group="SE3", **kw):
@@ -48,7 +47,7 @@ def test_plan_of_tree_families_and_none_for_loops():
         sd = _sim(BT.build_scene(kind, 12)).sd
         plan = tree_plan(sd.nb, sd.rint)
         assert plan is not None, kind
-        order = plan[0][:sd.nb, P_ORDER]
+        order = plan[:sd.nb, P_ORDER]
         assert sorted(order) == list(range(sd.nb))
         assert order[-1] == 0, "the grounded bar is the root, eliminated last"
     sd = _sim(BT.build_scene("ladder", 12)).sd
@@ -66,7 +65,7 @@ def test_automatic_choice_by_bandwidth():
     assert not _uses_tree(chain) and chain.sd.bandwidth < TREE_MIN_BANDWIDTH
     assert not _uses_tree(_sim(BT.build_scene("ladder", 24)))
     with pytest.raises(Exception, match="loop"):
-        with_solve(_sim(BT.build_scene("ladder", 8)).sd, "tree")
+        make_work(_sim(BT.build_scene("ladder", 8)).sd, 4, "tree")
 
 
 # --------------------------------------------------------------------------- against the band solve
@@ -177,7 +176,7 @@ def test_redundant_rows_on_a_tree_switch_to_the_pivoted_solve():
     sc.AddSphericalJoint(GROUND, 0, position=(0, 0, 0), name="duplicate")
     with pytest.warns(RuntimeWarning, match="redundant"):
         sim = Simulator(sc, "RK4", "SE3", projectInitial=True)
-    assert sim.sd.redundant and _uses_tree(sim)
+    assert sim.sd.redundant and not _uses_tree(sim)
     sim.Advance(100, 1e-3)
     rJ, rV = _index1_residuals(sim)
     assert rJ < 1e-12 and rV < 1e-11

@@ -12,7 +12,7 @@ with MK-RK4 on SE(3) by the compiled stepper (``Simulator.Advance``) at h = 1e-4
 * ``ladder``: two chains of N/2 bars side by side, rung k (a ball joint between the k-th
   bars of both chains, k >= 1) closing N/2 - 1 loops.
 
-The index-1 solve is chosen when the scene is compiled (``mbs.compiled.choose_solve``): the
+The index-1 solve is chosen when the scene is compiled (``mbs.compiled.choose_solve``, ``solve_plan``): the
 tree solve (``mbs.tree_solve``, linear in N) for the star and the binary tree, the band
 Cholesky for the chain (bandwidth 5) and the ladder (loops); the ``solve`` column says which.
 
@@ -132,7 +132,7 @@ def measure(Ns=NS, budget=0.2, repeat=3, log=None):
                 continue
             sim = simulator(k, N)
             us = time_per_step(sim, budget, repeat)
-            solve = "tree" if sim.sd.tplan.shape[0] else "band"
+            solve = "band" if sim.wk.tplan is None else "tree"
             rows[k][N] = dict(us=us, perBody=us / N, rows=int(sim.sd.nrows), bandwidth=int(sim.sd.bandwidth),
                               loops=(max(N // 2, 1) - 1) if k == "ladder" else 0, solve=solve)
             if log:

@@ -12,7 +12,7 @@ import numpy as np
 from .codes import GROUP_NAMES, ROW_COORD, ROW_DIST, ROW_ROLL, ROW_ROT, ROW_TRANS_LOCAL, ROW_TRANS_WORLD
 from .linalg import REL_PIVOT_TOL, rcm_order
 from .scene import GROUND, Scene, SceneError
-from .tree_solve import tree_plan
+from .tree_solve import tree_plan, work_size
 
 GROUP_IDS = {name: gid for gid, name in enumerate(GROUP_NAMES)}
 GROUP_NAMES = {v: k for k, v in GROUP_IDS.items()}
@@ -36,7 +36,6 @@ SceneData = namedtuple("SceneData", [
     "rint",                           # constraint rows: [kind, axis of A, axis of B, body A, body B]
     "nrows", "bandwidth", "redundant", "pivotTol",
     "stabilization",                  # kernel.STAB_*: projection after every step
-    "tplan", "trows",                 # tree solve (mbs.tree_solve.tree_plan); 0 rows: the band solve
 ])
 
 Work = namedtuple("Work", [
@@ -47,7 +46,11 @@ Work = namedtuple("Work", [
     "ext",                            # [token of the external rhs evaluator (mbs.external), 0: none;
                                       #  1 if the forces it returned were not finite]
     "Vw",                             # (nb, 6) (omega body, world rdot) at the stage, for Python forces
-    "Tb", "Tv", "Tr", "Tl",           # tree solve work (mbs.tree_solve.tree_solve), empty without it
+    "tplan", "Tw",                    # the tree solve's plan (mbs.tree_solve.tree_plan) and flat work; None
+                                      # for the band solve (index1._is_tree: then no tree code is compiled).
+                                      # In Work, not SceneData: one more SceneData field made the heavy
+                                      # top's step 0.5 us slower (2.85 -> 3.35 us, measured), one more
+                                      # Work field did not
 ])
 N_SCRATCH3 = 20
 
@@ -269,7 +272,7 @@ def compile_scene(scene: Scene, groups):
     # (choose_solve): reverse Cuthill-McKee for the band Cholesky, as given for the tree solve
     J = scene.joints
     nj = len(J)
-    jrow0, jnrow, cols, bw, plan = choose_solve(nb, J)
+    jrow0, jnrow, cols, bw = choose_solve(nb, J)
     rkind, rax, rbx, rA, rB, rjoint = cols
     m = len(rkind)
     sd = SceneData(
@@ -308,7 +311,6 @@ def compile_scene(scene: Scene, groups):
         jpar=arr([joint_parameters(j) for j in J], (-1, N_JPAR)),
         rint=arr([list(x) for x in zip(rkind, rax, rbx, rA, rB)], (-1, 5), np.int64),
         nrows=m, bandwidth=bw, redundant=False, pivotTol=REL_PIVOT_TOL, stabilization=0,
-        tplan=plan[0] if plan else np.zeros((0, 7), np.int64), trows=plan[1] if plan else np.zeros(0, np.int64),
     )
     return sd, np.array(rjoint, dtype=np.int64)
 
@@ -322,23 +324,22 @@ TREE_MIN_BANDWIDTH = 14
 
 
 def choose_solve(nb, J):
-    """``(jrow0, jnrow, cols, bandwidth, plan)``: the rows of the joints ``J`` (see
-    ``_joint_rows_in_order``), the bandwidth of ``S`` in their order and the tree solve's
-    plan (``tree_plan``; ``None``: the band solve).  A body carrying more than
-    ``TREE_MIN_BANDWIDTH`` rows makes them mutually coupled in ``S`` (bandwidth at least that
-    of the clique), so a forest with such a body skips the ordering."""
+    """``(jrow0, jnrow, cols, bandwidth)``: the rows of the joints ``J`` (see
+    ``_joint_rows_in_order``) in the order of their solve and the bandwidth of ``S`` in that
+    order (``solve_plan`` then takes the tree solve for a forest with a band of at least
+    ``TREE_MIN_BANDWIDTH``).  A body carrying more than ``TREE_MIN_BANDWIDTH`` rows makes
+    them mutually coupled in ``S`` (bandwidth at least that of the clique), so a forest with
+    such a body skips the reverse Cuthill-McKee ordering (quadratic in its rows)."""
     nj = len(J)
     if nj == 0:
         jrow0, jnrow, cols = _joint_rows_in_order(J, [])
-        return jrow0, jnrow, cols, 0, None
+        return jrow0, jnrow, cols, 0
     jrow0, jnrow, cols = _joint_rows_in_order(J, range(nj))
     forest = tree_plan(nb, _rint_of(cols)) is not None
     per_body = np.bincount([b for b in cols[3] + cols[4] if b != GROUND], minlength=nb)
     if not (forest and per_body.max() > TREE_MIN_BANDWIDTH):
         jrow0, jnrow, cols = _joint_rows_in_order(J, rcm_order(nj, _joint_graph(J)))
-    bw = _bandwidth(cols[3], cols[4])
-    plan = tree_plan(nb, _rint_of(cols)) if forest and bw >= TREE_MIN_BANDWIDTH else None
-    return jrow0, jnrow, cols, bw, plan
+    return jrow0, jnrow, cols, _bandwidth(cols[3], cols[4])
 
 
 def _rint_of(cols):
@@ -392,26 +393,30 @@ def _joint_rows_in_order(J, order):
     return jrow0, jnrow, cols
 
 
-def with_solve(sd, solve):
-    """``sd`` served by the ``'tree'`` or the ``'band'`` solve, rows unchanged (to compare the
-    two on one scene: tests, the topology bench); a scene whose rows close a loop has no tree."""
-    if solve == "band":
-        return sd._replace(tplan=np.zeros((0, 7), np.int64), trows=np.zeros(0, np.int64),
-                           bandwidth=_bandwidth(sd.rint[:, 3], sd.rint[:, 4]))
-    plan = tree_plan(sd.nb, sd.rint) if sd.nrows else None
-    if plan is None:
-        raise SceneError("the constraint rows close a loop between bodies: no tree solve")
-    return sd._replace(tplan=plan[0], trows=plan[1])
+def solve_plan(sd, solve="auto"):
+    """The tree solve's plan for ``sd`` (``tree_plan``), or ``None`` for the band (or, with
+    redundant rows, the pivoted) solve.  ``solve``: ``'auto'`` (a forest whose band is at
+    least ``TREE_MIN_BANDWIDTH`` wide), or ``'tree'`` / ``'band'`` to compare the two on one
+    scene (tests, measurements); a scene whose rows close a loop has no tree solve."""
+    if sd.redundant or solve == "band" or sd.nrows == 0:
+        return None
+    plan = tree_plan(sd.nb, sd.rint)
+    if solve == "tree":
+        if plan is None:
+            raise SceneError("the constraint rows close a loop (between bodies or through the ground): no tree solve")
+        return plan
+    return plan if sd.bandwidth >= TREE_MIN_BANDWIDTH else None
 
 
 def with_redundant(sd, flag):
     return sd._replace(redundant=bool(flag), bandwidth=(sd.nrows - 1 if flag else sd.bandwidth))
 
 
-def make_work(sd, nstages):
+def make_work(sd, nstages, solve="auto"):
     nb = sd.nb
     m = sd.nrows
-    tree = sd.tplan.shape[0] > 0
+    plan = solve_plan(sd, solve)
+    tree = plan is not None
     return Work(
         Rs=np.zeros((nb, 3, 3)), rs=np.zeros((nb, 3)), Vs=np.zeros((nb, 6)),
         Rb=np.zeros((nb, 3, 3)), rb=np.zeros((nb, 3)), Vb=np.zeros((nb, 6)), Psi=np.zeros((nb, 6)),
@@ -424,6 +429,5 @@ def make_work(sd, nstages):
         ident=np.eye(3), zero3=np.zeros(3), zero6=np.zeros(6), tphi=np.zeros(sd.tint.shape[0]),
         watchBody=np.zeros(0, np.int64), watchEntry=np.zeros((0, 2), np.int64), watchMax=np.zeros(0),
         ext=np.zeros(2, np.int64), Vw=np.zeros((nb, 6) if sd.hasQext else (0, 6)),
-        Tb=np.zeros((nb if tree else 0, 3, 6, 6)), Tv=np.zeros((nb if tree else 0, 4, 6)),
-        Tr=np.zeros((m if tree else 0, 7)), Tl=np.zeros(int(sd.tplan[nb, 4]) if tree else 0),
+        tplan=plan, Tw=np.zeros(work_size(nb, m, plan)) if tree else None,
     )

@@ -6,7 +6,7 @@ from numba import njit
 from .bodies import exp_compose
 from .codes import PROJ_FAIL, PROJ_MAX_ITER, PROJ_TOL, STAB_POSITION, STATUS_OK, STATUS_PROJECTION
 from .constraints import joints_rows
-from .index1 import apply_correction, schur_correct, schur_solve, tree_of
+from .index1 import apply_correction, schur_correct, solve_multipliers, tree_of
 
 
 # the arguments of project, by what they are (built by project_state from SceneData / Work)
@@ -51,14 +51,14 @@ def project(level, joints, schur, rows, scratch, R, r, V):
                 break
             for q in range(rint.shape[0]):
                 lam[q] = h[q]
-            st = schur_solve(gid, Minv, rint, bw, redundant, pivotTol, R, Jr, W, lam, Sb, Sd, perm, ytmp, info,
-                             tmp12, tree)
+            st = solve_multipliers(gid, Minv, rint, bw, redundant, pivotTol, R, Jr, W, lam, Sb, Sd, perm, ytmp,
+                                   info, tmp12, tree)
             if st != STATUS_OK:
                 return st
             for i in range(nb):
                 for k in range(6):
                     Psi[i, k] = 0.0
-            apply_correction(rint, W, lam, Psi, redundant, tree)
+            apply_correction(rint, W, lam, Psi, tree)
             for i in range(nb):
                 exp_compose(gid[i], R[i], r[i], Psi[i], m3[1], v3[1], m3[0], v3[0])
                 for a in range(3):

@@ -159,12 +159,18 @@ class Simulator:
             for i, b in enumerate(scene.bodies):
                 print(f"exudyn_lie: body {i} ({b.name}): {self.groups[i]}")
 
-    def _make_work(self):
+    def _make_work(self, solve="auto"):
+        """New work arrays (``compiled.make_work``; ``solve``: see ``compiled.solve_plan``).
+        Their types may differ from the old ones (the tree solve's plan is None for the band
+        solve), so the resolved compiled entry points are dropped with them."""
         dense = self.tableau.dense
         # room for the dense-output extra stages of an embedded pair (adaptive steps)
         extra = dense.extra_stages if (dense is not None and self.tableau.b_hat is not None) else 0
-        wk = make_work(self.sd, len(self.method.b) + extra)
+        wk = make_work(self.sd, len(self.method.b) + extra, solve)
         wk.ext[0] = self._extToken
+        self._mkEntry = None
+        if getattr(self, "_ad", None) is not None:
+            self._ad.pop("entry", None)
         return wk
 
     # ----------------------------------------------------------------- state

@@ -42,18 +42,22 @@ from numba import njit
 
 from .codes import ROW_BODY_A, ROW_BODY_B, STATUS_OK, STATUS_SINGULAR, uses_body_twist
 
-# columns of the plan table (nb + 1, 7); row nb holds the ends of the CSR ranges and, in
-# P_ORDER, the number of bodies in the elimination order
-P_ORDER, P_PARENT, P_E0, P_G0, P_EL, P_GL, P_NCHILD = 0, 1, 2, 3, 4, 5, 6
+# columns of the plan table (max(nb + 1, rows), 8); row nb holds the ends of the CSR ranges
+# and, in P_ORDER, the number of bodies in the elimination order; column P_ROWS lists the
+# rows of the CSR ranges P_E0, P_G0.  One int table and one flat float work array
+# (``work_size``) keep the kernel's argument tuples short: numba passes every array of
+# SceneData / Work into the compiled time loop, and six more arrays cost the heavy top
+# ~0.3 us per step (measured) although it never uses them
+P_ORDER, P_PARENT, P_E0, P_G0, P_EL, P_GL, P_NCHILD, P_ROWS = 0, 1, 2, 3, 4, 5, 6, 7
 
 
 def tree_plan(nb, rint):
     """The elimination plan of the tree solve, or ``None`` if the rows close a loop
     between bodies or through the ground (then the band solve is kept).
 
-    Returns ``(plan, trows, nflat)``: the int table (``P_*`` columns), the row indices of
-    each body's parent edge and ground rows (CSR ranges ``P_E0``, ``P_G0``), and the size
-    of the flat storage of the Cholesky factors."""
+    Returns the int table (``P_*`` columns): the elimination order, parents, the row
+    indices of each body's parent edge and ground rows (CSR ranges ``P_E0``, ``P_G0`` into
+    column ``P_ROWS``), the offsets of their Cholesky factors (``P_EL``, ``P_GL``)."""
     m = rint.shape[0]
     ground = [[] for _ in range(nb)]
     pairs = {}
@@ -111,7 +115,7 @@ def tree_plan(nb, rint):
                     queue.append(w)
         bfs += queue
     order = bfs[::-1]
-    plan = np.zeros((nb + 1, 7), np.int64)
+    plan = np.zeros((max(nb + 1, m), 8), np.int64)
     plan[:, P_ORDER] = -1
     plan[:len(order), P_ORDER] = order
     plan[nb, P_ORDER] = len(order)
@@ -135,7 +139,13 @@ def tree_plan(nb, rint):
     for i in range(nb):
         if parent[i] >= 0:
             plan[parent[i], P_NCHILD] += 1
-    return plan, np.array(trows, np.int64), nflat
+    plan[:len(trows), P_ROWS] = trows
+    return plan
+
+
+def work_size(nb, m, plan):
+    """Length of the flat work array of :func:`tree_solve` (``Work.Tw``)."""
+    return nb * (3 * 36 + 4 * 6) + m * 7 + int(plan[nb, P_EL])
 
 
 # --------------------------------------------------------------------------- small dense blocks
@@ -233,9 +243,10 @@ def _psi_of(gid, Minv, Tb, plan, i):
 
 
 @njit(cache=True, _nrt=False)
-def tree_correction(plan, Tv, X):
+def tree_correction(plan, Tw, X):
     """``X -= A J^T lam`` = ``y`` of the last :func:`tree_solve` (bodies in the plan)."""
     nb = X.shape[0]
+    Tv = Tw[nb * 108:nb * 132].reshape((nb, 4, 6))
     for k in range(plan[nb, P_ORDER]):
         i = plan[k, P_ORDER]
         for a in range(6):
@@ -294,13 +305,20 @@ def _articulated(A, K, Psi, t6):
 
 
 @njit(cache=True, _nrt=False)
-def tree_solve(gid, Minv, rint, R, Jr, lam, plan, trows, Tb, Tv, Tr, Tl, pivotTol, info):
+def tree_solve(gid, Minv, rint, R, Jr, lam, plan, Tw, pivotTol, info):
     """``lam <- S^-1 lam``, ``S = J A J^T``, by the leaves-to-root elimination (module
     docstring), and ``y = A J^T lam`` per body in ``Tv[:, 2]`` (the correction the callers
-    subtract, :func:`tree_correction`).  Work: ``Tb`` (nb, 3, 6, 6) = Psi, K then Phi, A;
-    ``Tv`` (nb, 4, 6) = beta, y0, y, scratch; ``Tr`` (m, 7) = per row Z or P~ (6) and w or
-    L^-1 b - P~ beta; ``Tl`` the factors.  Returns a status code."""
+    subtract, :func:`tree_correction`).  Work ``Tw`` (flat, ``work_size``), viewed as
+    ``Tb`` (nb, 3, 6, 6) = Psi, K then Phi, A; ``Tv`` (nb, 4, 6) = beta, y0, y, scratch;
+    ``Tr`` (m, 7) = per row Z or P~ (6) and w or L^-1 b - P~ beta; ``Tl`` the factors.
+    Returns a status code."""
     nb = gid.shape[0]
+    m = rint.shape[0]
+    Tb = Tw[0:nb * 108].reshape((nb, 3, 6, 6))
+    Tv = Tw[nb * 108:nb * 132].reshape((nb, 4, 6))
+    Tr = Tw[nb * 132:nb * 132 + m * 7].reshape((m, 7))
+    Tl = Tw[nb * 132 + m * 7:]
+    trows = plan[:, P_ROWS]
     n = plan[nb, P_ORDER]
     for k in range(n):
         i = plan[k, P_ORDER]

@@ -205,23 +205,34 @@ def rxyz_row(R, omega, omegad, prev, first, p, p_t, p_tt):
 
 
 @njit(cache=True)
-def planar_row(R, omega, omegad, prev, first, p, p_t, p_tt):
-    """NodeRigidBody2D: the angle phi of R = Rz(phi), continuous (nearest 2 pi shift of the
-    previous angle), phi_t = omega_z, phi_tt = omegadot_z."""
+def planar_row(R, omega, omegad, prev, first, p, p_t, p_tt, t, tracked):
+    """NodeRigidBody2D: the angle phi of R = Rz(phi) at time ``t``, continued over turns: the
+    2 pi shift nearest to ``tracked`` if that is finite (the kernel's angle tracked step by step,
+    SceneData.bangle: exact, given for the simulator's current state), else nearest to the
+    last written angle ``prev[0]`` advanced by the trapezoidal integral of omega_z since its
+    time ``prev[2]`` (``prev[1]`` its omega_z), for outputs inside a chunk;
+    phi_t = omega_z, phi_tt = omegadot_z."""
     a = math.atan2(R[1, 0], R[0, 0])
-    p[0] = a if first else _wrap_near(a, prev[0])
+    if first:
+        p[0] = a
+    elif math.isfinite(tracked):
+        p[0] = _wrap_near(a, tracked)
+    else:
+        p[0] = _wrap_near(a, prev[0] + 0.5 * (prev[1] + omega[2]) * (t - prev[2]))
     prev[0] = p[0]
+    prev[1] = omega[2]
+    prev[2] = t
     p_t[0] = omega[2]
     p_tt[0] = omegad[2]
     return 0
 
 
 @njit(cache=True)
-def write_row(code, R, omega, omegad, prev, first, p, p_t, p_tt):
+def write_row(code, R, omega, omegad, prev, first, p, p_t, p_tt, t, tracked):
     if code == CODE_POINT or code == CODE_POINT2D or code == CODE_1D:
         return 0                         # no rotation parameters
     if code == CODE_2D:
-        return planar_row(R, omega, omegad, prev, first, p, p_t, p_tt)
+        return planar_row(R, omega, omegad, prev, first, p, p_t, p_tt, t, tracked)
     if code == CODE_ROTVEC:
         return rotvec_row(R, omega, omegad, prev, first, p, p_t, p_tt)
     elif code == CODE_EP:
@@ -232,7 +243,7 @@ def write_row(code, R, omega, omegad, prev, first, p, p_t, p_tt):
 # ---------------------------------------------------------------------------- all nodes at once
 # (kept in this file: numba's cache is invalidated only by changes of the defining file)
 @njit(cache=True)
-def write_nodes(gid, R, r, V, Vdot, doacc, code, body, idx, nq, qref, prev, first, q, qt, qtt, flags):
+def write_nodes(gid, R, r, V, Vdot, doacc, code, body, idx, nq, qref, prev, first, q, qt, qtt, flags, t, bangle, exact):
     """Node coordinates from the body states (R, r, V) and accelerations Vdot (in each
     body's group velocity coordinates: SE3 v body-fixed, SO3xR3 v = rdot)."""
     om = np.zeros(3)
@@ -269,7 +280,7 @@ def write_nodes(gid, R, r, V, Vdot, doacc, code, body, idx, nq, qref, prev, firs
             else:
                 for k in range(3):
                     acc[k] = Vdot[b, 3 + k]
-        f = write_row(code[i], Rb, om, omd, prev[i], first, p, pt, ptt)
+        f = write_row(code[i], Rb, om, omd, prev[i], first, p, pt, ptt, t, bangle[b] if exact else math.nan)
         if f:
             flags[i] = 1                 # kept until the warning is given (warn_flags)
             nflag += 1
@@ -310,25 +321,29 @@ def write_multipliers(lam, jrow, jae, ae):
 
 
 @njit(cache=True)
-def write_all(gid, R, r, V, Vdot, lam, doacc, code, body, idx, nq, qref, prev, q, qt, qtt, flags, jrow, jae, ae):
-    """write_nodes + write_multipliers of one state."""
+def write_all(gid, R, r, V, Vdot, lam, doacc, code, body, idx, nq, qref, prev, q, qt, qtt, flags, jrow, jae, ae, t,
+              bangle, exact):
+    """write_nodes + write_multipliers of one state (at time ``t``; ``exact``: it is the
+    simulator's current state, whose tracked 2D angles are ``bangle``)."""
     if doacc:
         write_multipliers(lam, jrow, jae, ae)
-    return write_nodes(gid, R, r, V, Vdot, doacc, code, body, idx, nq, qref, prev, False, q, qt, qtt, flags)
+    return write_nodes(gid, R, r, V, Vdot, doacc, code, body, idx, nq, qref, prev, False, q, qt, qtt, flags, t,
+                       bangle, exact)
 
 
 @njit(cache=True)
 def write_rows(nrows, gid, Rs, rs, Vs, Vdots, lams, doacc, code, body, idx, nq, qref, prev, Q, Qt, Qtt, flags, jrow,
-               jae, AE):
-    """:func:`write_all` of the states ``Rs[o], rs[o], Vs[o]`` (accelerations ``Vdots[o]``,
-    multipliers ``lams[o]``) into rows ``o < nrows`` of ``Q, Qt, Qtt, AE``, in order (the
-    rotation parameters stay continuous from row to row).  The single compiled entry of
+               jae, AE, To, bangle, tSim):
+    """:func:`write_all` of the states ``Rs[o], rs[o], Vs[o]`` at times ``To[o]`` (accelerations
+    ``Vdots[o]``, multipliers ``lams[o]``) into rows ``o < nrows`` of ``Q, Qt, Qtt, AE``, in order
+    (the rotation parameters stay continuous from row to row; a row at the simulator's time
+    ``tSim`` takes the 2D angles ``bangle`` the kernel tracked, SceneData.bangle).  The single compiled entry of
     the write-back: every path uses it, one state being one row.  Returns the number of
     flagged (node, row) pairs."""
     nflag = 0
     for o in range(nrows):
         nflag += write_all(gid, Rs[o], rs[o], Vs[o], Vdots[o], lams[o], doacc, code, body, idx, nq, qref, prev,
-                           Q[o], Qt[o], Qtt[o], flags, jrow, jae, AE[o])
+                           Q[o], Qt[o], Qtt[o], flags, jrow, jae, AE[o], To[o], bangle, To[o] == tSim)
     return nflag
 
 
@@ -415,7 +430,7 @@ class NodeKind:
             flag = write_row(self.code, np.ascontiguousarray(R[i], dtype=float),
                              np.ascontiguousarray(omega[i], dtype=float),
                              zero if omegad is None else np.ascontiguousarray(omegad[i], dtype=float),
-                             self.prev[i], self.first, p, p_t, p_tt)
+                             self.prev[i], self.first, p, p_t, p_tt, 0.0, math.nan)
             ix = self.idx[i]
             q[ix[:3]] = np.asarray(r[i]) - self.qref[i, :3]
             q[ix[3:]] = p - self.qref[i, 3:]
@@ -638,6 +653,7 @@ class Rigid2DNode(NodeKind):
         vel = q_t[self.idx]
         n = len(self)
         self.prev[:, 0] = tot[:, 2]
+        self.prev[:, 1] = vel[:, 2]           # omega_z; prev[:, 2] the time (bridge.fast.NodeTable)
         self.first = False
         r = np.zeros((n, 3))
         r[:, :2] = tot[:, :2]
@@ -647,14 +663,15 @@ class Rigid2DNode(NodeKind):
         v[:, :2] = vel[:, :2]
         return self._rz(tot[:, 2]), r, om, v
 
-    def write(self, R, r, omega, vel, omegad=None, acc=None, q=None, q_t=None, q_tt=None):
+    def write(self, R, r, omega, vel, omegad=None, acc=None, q=None, q_t=None, q_tt=None, t=None):
         out = np.zeros((len(self), 1))
         p_t = np.zeros(1)
         p_tt = np.zeros(1)
         for i in range(len(self)):
             planar_row(np.ascontiguousarray(R[i], dtype=float), np.asarray(omega[i], float),
                        np.zeros(3) if omegad is None else np.asarray(omegad[i], float),
-                       self.prev[i], self.first, out[i], p_t, p_tt)
+                       self.prev[i], self.first, out[i], p_t, p_tt, self.prev[i, 2] if t is None else float(t),
+                       math.nan)
             ix = self.idx[i]
             q[ix[:2]] = np.asarray(r[i])[:2] - self.qref[i, :2]
             q[ix[2]] = out[i, 0] - self.qref[i, 2]

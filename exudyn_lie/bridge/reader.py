@@ -382,6 +382,7 @@ class _Reader:
         self.check_nodes()
         # node kinds, in node order; states of all nodes of a kind at once
         states = {}
+        angles = {}         # NodeRigidBody2D: total angle
         for t, nodes in self.byKind.items():
             nodes = [n for n in nodes if n in bodyOfNode]
             if not nodes:
@@ -401,6 +402,8 @@ class _Reader:
             R, r, om, vel = kind.read(self.q, self.q_t)
             for k, n in enumerate(nodes):
                 states[n] = (R[k], r[k], om[k], vel[k])
+                if getattr(kind, "planar", False):
+                    angles[n] = float(kind.prev[k, 0])          # the total angle, turns included
             sc.nodeKinds.append(kind)
         # bodies in object order
         for o, d in enumerate(self.objects):
@@ -412,7 +415,7 @@ class _Reader:
             try:
                 if d["objectType"] == "RigidBody2D":
                     b = sc.AddBody2D(mass=float(d["mass"]), inertia=float(d["inertia"]), position=r[:2],
-                                     angle=float(np.arctan2(R[1, 0], R[0, 0])), omega=float(om[2]),
+                                     angle=angles[n], omega=float(om[2]),
                                      velocity=vel[:2], com=np.asarray(d.get("centerOfMass", [0, 0]), float),
                                      name=label)
                 elif d["objectType"] in ("Mass1D", "RotationalMass1D"):

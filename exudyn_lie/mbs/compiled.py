@@ -28,6 +28,8 @@ SceneData = namedtuple("SceneData", [
     "kint", "kpar", "krot",           # coordinate springs: [A, B, rotation A, rotation B]; [k, d, offset,
                                       #   direction A (3), direction B (3), angle A, angle B]; [frame A, frame B]
     "nangles",                        # rotation coordinates of coordinate items (tracked: coordinate_angles)
+    "bangle", "nplanar",              # angle of each 2D body, turns included (tracked after every accepted
+                                      #   step; the write-back of NodeRigidBody2D reads it); number of 2D bodies
     "xint", "xpos", "xaxis", "xpar",  # linear springs: [A, B]; [posA, posB]; axis on A; [k, d, offset, force]
     "bint", "bpos", "brot", "bpar",   # rigid-body springs: [A, B, intrinsic]; [posA, posB]; [rotA, rotB];
                                       #   rows K (6), D (6), offset
@@ -325,6 +327,8 @@ def compile_scene(scene: Scene, groups):
         kpar=arr([[s.stiffness, s.damping, s.offset, *s.axisA, *s.axisB, s.angleA[2], s.angleB[2]]
                   for s in scene.coordinateSprings], (-1, 11)),
         krot=arr([[s.angleA[1], s.angleB[1]] for s in scene.coordinateSprings], (-1, 2, 3, 3)),
+        bangle=np.array([b.angle0 if b.planar else 0.0 for b in scene.bodies], float),
+        nplanar=int(sum(b.planar for b in scene.bodies)),
         nangles=int(sum(s.angleA[0] + s.angleB[0] for s in scene.coordinateSprings)
                     + sum(j.coordinate[4] + j.coordinate[5] for j in J if j.coordinate is not None)),
         xint=arr([[s.bodyA, s.bodyB] for s in scene.linearSprings], (-1, 2), np.int64),

@@ -74,6 +74,7 @@ class Body:
     # moves in (I for NodePoint, diag(1, 1, 0) for NodePoint2D, e e^T for Node1D); None: rigid
     freeDirections: np.ndarray = None
     planar: bool = False         # a 2D body: 3 DOF in the x-y plane (AddBody2D)
+    angle0: float = 0.0          # a 2D body: its initial angle, turns included (SceneData.bangle tracks it)
 
     @property
     def isPoint(self):
@@ -317,7 +318,8 @@ class Scene:
         v = np.asarray(velocity, float).reshape(-1)
         self.bodies.append(Body(m, Jt, c, R0, _vec3((p[0], p[1], 0.0), f"{label}: position"),
                                 _vec3((0.0, 0.0, omega), f"{label}: omega"),
-                                _vec3((v[0], v[1], 0.0), f"{label}: velocity"), label, planar=True))
+                                _vec3((v[0], v[1], 0.0), f"{label}: velocity"), label, planar=True,
+                                angle0=_finite(angle, f"{label}: angle")))
         return idx
 
     def _check_body(self, b, what, allow_ground=True):

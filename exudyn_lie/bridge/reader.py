@@ -686,7 +686,8 @@ class _Reader:
         if not 0 <= k < npos:
             raise BridgeError(f"{what}: marker {m} (MarkerNodeCoordinate) is on coordinate {k} of node {n} "
                               f"(Node{nt}), not a position coordinate (a rotation coordinate); exudyn_lie supports "
-                              f"coordinate items on node position coordinates only so far"
+                              f"coordinate items on node position coordinates, the angle of a NodeRigidBody2D and "
+                              f"Node1D coordinates so far; solve with exudyn.SolveDynamic"
                               + (f" (0..{npos - 1} of this node)" if npos else ""))
         ref = float(np.asarray(self.mbs.GetNode(n)["referenceCoordinates"], float).reshape(-1)[k])
         frame = self.nodeAxisFrame.get(n)

@@ -15,7 +15,7 @@ import numpy as np
 
 from ..mbs import kernel, stepper
 from ..mbs.entry import entry_point
-from .nodes import CODE_2D, NCOORD_MAX, write_rows
+from .nodes import CODE_1D_ROT, CODE_2D, NCOORD_MAX, write_rows
 
 CHUNK_SECONDS = 0.05        # aimed wall time of one chunk (progress, responsiveness)
 CHUNK_DOUBLES = 1 << 22     # at most this many doubles of chunk buffers (32 MiB)
@@ -190,15 +190,15 @@ class NodeTable:
         for kind, bodies in zip(kinds, kindBodies):
             n = len(kind)
             m = kind.idx.shape[1]             # coordinates per node
-            self.code[i:i + n] = kind.code
+            self.code[i:i + n] = kind.row_codes()
             self.body[i:i + n] = bodies
             self.idx[i:i + n, :m] = kind.idx
             self.nq[i:i + n] = m
             ref = kind.table_reference()
             self.qref[i:i + n, :ref.shape[1]] = ref
             self.prev[i:i + n] = kind.prev
-            if kind.code == CODE_2D:
-                self.prev[i:i + n, 2] = t0                  # nodes.planar_row: time of prev
+            angles = (self.code[i:i + n] == CODE_2D) | (self.code[i:i + n] == CODE_1D_ROT)
+            self.prev[i:i + n, 2][angles] = t0             # nodes.continued_angle: time of prev
             self.kindOfRow += [(kind, k) for k in range(n)]
             i += n
 

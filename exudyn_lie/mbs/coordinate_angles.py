@@ -17,7 +17,7 @@ moved on after every accepted step by :func:`update_coordinate_angles`.
 import numpy as np
 from numba import njit
 
-from .codes import GID_SE2, GID_SO2xR2, J_BODY_A, J_BODY_B, J_ROW0, ROW_AX, ROW_BX, ROW_COORD, ROW_KIND
+from .codes import J_BODY_A, J_BODY_B, J_ROW0, ROW_AX, ROW_BX, ROW_COORD, ROW_KIND
 
 TWO_PI = 2.0 * np.pi
 
@@ -58,11 +58,10 @@ def update_coordinate_angles(jint, jrot, jpar, rint, kint, krot, kpar, R):
 
 
 @njit(cache=True, _nrt=False)
-def update_planar_angles(gid, bangle, R):
-    """The angle of every 2D body (``R = Rz(phi)``), continued over turns from its value at the
-    last accepted step (so a NodeRigidBody2D's coordinate keeps its turns however far apart the
-    outputs are; bridge.nodes.planar_row)."""
-    for i in range(gid.shape[0]):
-        if gid[i] == GID_SE2 or gid[i] == GID_SO2xR2:
-            a = np.arctan2(R[i, 1, 0], R[i, 0, 0])
-            bangle[i] = a + TWO_PI * np.round((bangle[i] - a) / TWO_PI)
+def update_planar_angles(btrack, bframe, bangle, R):
+    """The angle of every 2D body (``R = Rz(phi)``) and rotor (``R = F Rz(phi)``), continued
+    over turns from its value at the last accepted step (so their node coordinate keeps its
+    turns however far apart the outputs are; bridge.nodes)."""
+    for i in range(btrack.shape[0]):
+        if btrack[i] == 1:
+            bangle[i] = frame_angle(bframe[i], R[i], bangle[i])

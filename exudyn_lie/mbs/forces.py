@@ -301,4 +301,4 @@ def update_torsion_tracking(sd, wk, R, r, V):
     if sd.nangles > 0:
         update_coordinate_angles(sd.jint, sd.jrot, sd.jpar, sd.rint, sd.kint, sd.krot, sd.kpar, R)
     if sd.nplanar > 0:
-        update_planar_angles(sd.gid, sd.bangle, R)
+        update_planar_angles(sd.btrack, sd.bframe, sd.bangle, R)

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import exudyn as exu
-from exudyn.utilities import (ObjectConnectorGravity, Node1D, ObjectMass1D, LoadCoordinate, LoadForceVector, LoadTorqueVector, MarkerBodyPosition,
+from exudyn.utilities import (ObjectConnectorGravity, NodeGenericODE2, ObjectGenericODE2, LoadCoordinate, LoadForceVector, LoadTorqueVector, MarkerBodyPosition,
                               MarkerNodeCoordinate, MarkerNodePosition, ObjectJointSpherical, RotationMatrixX,
                               SensorBody)
 
@@ -65,8 +65,10 @@ def expect_error(mbs, exc, match, **kw):
 
 
 @pytest.mark.parametrize("extra,match", [
-    (lambda mbs, g, b: mbs.AddObject(ObjectMass1D(nodeNumber=mbs.AddNode(Node1D(referenceCoordinates=[0])), mass=1)),
-     r"object 3 .*ObjectMass1D is not supported.*supported objects: ObjectGround, ObjectRigidBody"),
+    (lambda mbs, g, b: mbs.AddObject(ObjectGenericODE2(nodeNumbers=[mbs.AddNode(NodeGenericODE2(
+        referenceCoordinates=[0], initialCoordinates=[0], initialCoordinates_t=[0], numberOfODE2Coordinates=1))],
+        massMatrix=np.eye(1))),
+     r"object 3 .*ObjectGenericODE2 is not supported.*supported objects: ObjectGround, ObjectRigidBody"),
     (lambda mbs, g, b: mbs.AddObject(ObjectConnectorGravity(markerNumbers=[
         mbs.AddMarker(MarkerBodyPosition(bodyNumber=g)), mbs.AddMarker(MarkerBodyPosition(bodyNumber=b))],
         mass0=1, mass1=1)),
@@ -276,8 +278,10 @@ def test_autoassemble_validates_before_assembling(case):
     kw, ss = {}, quiet_settings(0.01, 10)
     extra, omega = None, (1.0, 2.0, 0.5)
     if case == "unsupported item":
-        extra, err, match = (lambda mbs, g, b: mbs.AddObject(ObjectMass1D(nodeNumber=mbs.AddNode(
-            Node1D(referenceCoordinates=[0])), mass=1))), BridgeError, r"ObjectMass1D is not supported"
+        extra, err, match = (lambda mbs, g, b: mbs.AddObject(ObjectGenericODE2(nodeNumbers=[mbs.AddNode(
+            NodeGenericODE2(referenceCoordinates=[0], initialCoordinates=[0], initialCoordinates_t=[0],
+                            numberOfODE2Coordinates=1))], massMatrix=np.eye(1)))), BridgeError, \
+            r"ObjectGenericODE2 is not supported"
     elif case == "joint violated":
         extra, err, match = (lambda mbs, g, b: mbs.AddObject(ObjectJointSpherical(markerNumbers=[
             mbs.AddMarker(MarkerBodyPosition(bodyNumber=g, localPosition=[1.5, 0, 0])),

@@ -2,7 +2,8 @@
 
 * a Mass1D is a point mass on the line ``referencePosition + referenceRotation e_x x`` (R^3 with
   that one free direction), with body markers (position, rigid, mass) in Exudyn's frame;
-* a RotationalMass1D is its angle, a scalar body in coordinate space; its body markers are refused;
+* a RotationalMass1D is a rotor ``R = referenceRotation Rz(x)`` turning about its axis only, with
+  body markers on the axis (as Exudyn allows) and its angle as a rotation coordinate (turns kept);
 * coordinate items (ConnectorCoordinate, CoordinateSpringDamper, LoadCoordinate) on Node1D
   coordinates, mixed with rigid-node coordinates.
 
@@ -12,7 +13,8 @@ at a fine step (a small drive train), and refusals before ``mbs`` is touched.
 import exudyn as exu
 import numpy as np
 import pytest
-from exudyn.utilities import (LoadCoordinate, LoadForceVector, LoadMassProportional, MarkerBodyMass, MarkerBodyRigid,
+from exudyn.utilities import (LoadCoordinate, LoadForceVector, LoadMassProportional, LoadTorqueVector, MarkerBodyMass,
+                              MarkerBodyRigid, ObjectConnectorTorsionalSpringDamper, RotationMatrixX,
                               MarkerNodeCoordinate, Node1D, ObjectConnectorCoordinate,
                               ObjectConnectorCoordinateSpringDamper, ObjectConnectorDistance,
                               ObjectConnectorSpringDamper, ObjectGround, ObjectMass1D, ObjectRotationalMass1D,
@@ -35,8 +37,14 @@ def one_d_model(node="RotVecLG"):
     n = mbs.AddNode(Node1D(referenceCoordinates=[0.5], initialCoordinates=[0.1], initialVelocities=[0.2]))
     o = mbs.AddObject(ObjectMass1D(nodeNumber=n, mass=2, referencePosition=[1, 2, 3],
                                    referenceRotation=RotationMatrixZ(0.3) @ RotationMatrixY(0.2)))
-    n2 = mbs.AddNode(Node1D(referenceCoordinates=[0.3], initialVelocities=[1.5]))
-    mbs.AddObject(ObjectRotationalMass1D(nodeNumber=n2, inertia=3))
+    n2 = mbs.AddNode(Node1D(referenceCoordinates=[0.3], initialCoordinates=[4 * np.pi + 0.2], initialVelocities=[1.5]))
+    o2 = mbs.AddObject(ObjectRotationalMass1D(nodeNumber=n2, inertia=3, referencePosition=[0.5, -0.2, 0.1],
+                                              referenceRotation=RotationMatrixX(0.4) @ RotationMatrixY(-0.3)))
+    # body markers on the rotor (on its axis, as Exudyn requires): a torque load, a torsional spring
+    mt = mbs.AddMarker(MarkerBodyRigid(bodyNumber=o2, localPosition=[0, 0, 0.2]))
+    mbs.AddLoad(LoadTorqueVector(markerNumber=mt, loadVector=[0.3, -0.2, 0.5]))
+    mbs.AddObject(ObjectConnectorTorsionalSpringDamper(markerNumbers=[
+        mbs.AddMarker(MarkerBodyRigid(bodyNumber=g)), mt], stiffness=2.0, damping=0.1))
 
     def mc(nn, k=0):
         return mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=nn, coordinate=k))
@@ -44,7 +52,8 @@ def one_d_model(node="RotVecLG"):
     mbs.AddObject(ObjectConnectorCoordinateSpringDamper(markerNumbers=[mc(n), mc(n2)], stiffness=30, damping=0.4,
                                                         offset=0.1))
     mbs.AddObject(ObjectConnectorCoordinateSpringDamper(markerNumbers=[mc(n0, 1), mc(n)], stiffness=20, damping=0.2))
-    mbs.AddObject(ObjectConnectorCoordinate(markerNumbers=[mc(n0, 2), mc(n2)], factor1=0.7, offset=0.05))
+    mbs.AddObject(ObjectConnectorCoordinate(markerNumbers=[mc(n0, 2), mc(n2)], factor1=0.7,
+                                            offset=0.7 * (4 * np.pi + 0.2)))     # the rotor two turns on
     mbs.AddLoad(LoadCoordinate(markerNumber=mc(n2), load=0.8))
     mbs.AddLoad(LoadCoordinate(markerNumber=mc(n), load=-0.5))
     mbs.AddLoad(LoadMassProportional(markerNumber=mbs.AddMarker(MarkerBodyMass(bodyNumber=o)),
@@ -154,16 +163,17 @@ def _refused(mbs, match):
 
 
 def test_one_d_bad_input_is_refused_before_mbs_is_touched():
-    # a body marker on a RotationalMass1D (integrated through its angle only)
+    # a body marker off the axis of a RotationalMass1D (Exudyn raises for it during the solve)
     mbs = new_mbs()
     g = mbs.AddObject(ObjectGround())
     n = mbs.AddNode(Node1D(referenceCoordinates=[0], initialVelocities=[1.0]))
     o = mbs.AddObject(ObjectRotationalMass1D(nodeNumber=n, inertia=1))
     mbs.AddObject(ObjectConnectorSpringDamper(markerNumbers=[mbs.AddMarker(MarkerBodyRigid(bodyNumber=g)),
-                                                             mbs.AddMarker(MarkerBodyRigid(bodyNumber=o))],
+                                                             mbs.AddMarker(MarkerBodyRigid(bodyNumber=o,
+                                                                                           localPosition=[0.1, 0, 0]))],
                                               stiffness=1))
     mbs.Assemble()
-    _refused(mbs, r"ObjectConnectorSpringDamper.*ObjectRotationalMass1D.*MarkerNodeCoordinate")
+    _refused(mbs, r"ObjectConnectorSpringDamper.*ObjectRotationalMass1D.*localPosition")
     # a Mass1D without mass (Exudyn allows it; M would be singular here)
     mbs = new_mbs()
     n = mbs.AddNode(Node1D(referenceCoordinates=[0]))

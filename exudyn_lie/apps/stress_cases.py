@@ -1410,7 +1410,7 @@ def bridge_probes():
     add("unknown method 'RK5x'", lambda mbs, H: H["kw"].__setitem__("method", "RK5x"), "unknown method")
     add("unknown liegroup 'SE2'", lambda mbs, H: H["kw"].__setitem__("liegroup", "SE2"), "unknown Lie group")
     add("joint with both markers on the same body", _same_body_joint, "same")
-    add("unsupported item: ObjectMass1D", _mass_1d, "not supported")
+    add("unsupported item: ObjectGenericODE2", _generic_ode2, "not supported")
     add("unsupported item: revolute joint with offsetUserFunction", _offset_uf_joint, "not supported")
     return P
 
@@ -1436,9 +1436,11 @@ def _same_body_joint(mbs, H):
     mbs.AddObject(ObjectJointGeneric(markerNumbers=[m0, m1], constrainedAxes=[1, 1, 1, 0, 0, 0]))
 
 
-def _mass_1d(mbs, H):
-    from exudyn.itemInterface import Node1D, ObjectMass1D
-    mbs.AddObject(ObjectMass1D(nodeNumber=mbs.AddNode(Node1D(referenceCoordinates=[0.0])), mass=1.0))
+def _generic_ode2(mbs, H):
+    from exudyn.itemInterface import NodeGenericODE2, ObjectGenericODE2
+    n = mbs.AddNode(NodeGenericODE2(referenceCoordinates=[0.0], initialCoordinates=[0.0], initialCoordinates_t=[0.0],
+                                    numberOfODE2Coordinates=1))
+    mbs.AddObject(ObjectGenericODE2(nodeNumbers=[n], massMatrix=[[1.0]]))
 
 
 def _offset_uf_joint(mbs, H):

@@ -15,7 +15,7 @@ import numpy as np
 
 from ..mbs import kernel, stepper
 from ..mbs.entry import entry_point
-from .nodes import NCOORD_MAX, write_rows
+from .nodes import CODE_1D_ROT, CODE_2D, NCOORD_MAX, write_rows
 
 CHUNK_SECONDS = 0.05        # aimed wall time of one chunk (progress, responsiveness)
 CHUNK_DOUBLES = 1 << 22     # at most this many doubles of chunk buffers (32 MiB)
@@ -80,8 +80,10 @@ class OutputChunks:
         nt = self.nodes
         q, qt, qtt, ae = self.bufs
         jrow, jae = self.jac
+        To = t0 + ((np.arange(self.maxRows) + 1) * nsub) * h        # the rows' times (the last: t0 + done h)
         a2 = (rows, sim.sd.gid, self.Ro, self.ro, self.Vo, self.Vdo, self.lamo, self.doacc, nt.code, nt.body,
-              nt.idx, nt.nq, nt.qref, nt.prev, self.Q, self.Qt, self.Qtt, nt.flags, jrow, jae, self.AE)
+              nt.idx, nt.nq, nt.qref, nt.prev, self.Q, self.Qt, self.Qtt, nt.flags, jrow, jae, self.AE, To,
+              sim.sd.bangle, t0 + done * h)
         nflag = _call(self._ep, "write", write_rows, a2)
         sim.t = t0 + done * h           # on a failure: the last accepted step
         self.tStart, self.rows, self.next = t0, rows, 0
@@ -161,7 +163,8 @@ class AdaptiveOutputChunks(OutputChunks):
         q, qt, qtt, ae = self.bufs
         jrow, jae = self.jac
         a2 = (rows, sim.sd.gid, self.Ro, self.ro, self.Vo, self.Vdo, self.lamo, self.doacc, nt.code, nt.body,
-              nt.idx, nt.nq, nt.qref, nt.prev, self.Q, self.Qt, self.Qtt, nt.flags, jrow, jae, self.AE)
+              nt.idx, nt.nq, nt.qref, nt.prev, self.Q, self.Qt, self.Qtt, nt.flags, jrow, jae, self.AE,
+              np.ascontiguousarray(tout, dtype=float), sim.sd.bangle, float(sim.t))
         nflag = _call(self._ep, "write", write_rows, a2)
         self.tStart, self.rows, self.next = tPrev, rows, 0
         self.done += rows
@@ -172,7 +175,8 @@ class AdaptiveOutputChunks(OutputChunks):
 class NodeTable:
     """All rigid nodes of a scene as flat arrays for :func:`~.nodes.write_rows`."""
 
-    def __init__(self, kinds, kindBodies):
+    def __init__(self, kinds, kindBodies, t0=0.0):
+        """``t0``: the time of the state the kinds read (a 2D node's angle continues from it)."""
         rows = sum(len(k) for k in kinds)
         self.code = np.zeros(rows, np.int64)
         self.body = np.zeros(rows, np.int64)
@@ -186,13 +190,15 @@ class NodeTable:
         for kind, bodies in zip(kinds, kindBodies):
             n = len(kind)
             m = kind.idx.shape[1]             # coordinates per node
-            self.code[i:i + n] = kind.code
+            self.code[i:i + n] = kind.row_codes()
             self.body[i:i + n] = bodies
             self.idx[i:i + n, :m] = kind.idx
             self.nq[i:i + n] = m
             ref = kind.table_reference()
             self.qref[i:i + n, :ref.shape[1]] = ref
             self.prev[i:i + n] = kind.prev
+            angles = (self.code[i:i + n] == CODE_2D) | (self.code[i:i + n] == CODE_1D_ROT)
+            self.prev[i:i + n, 2][angles] = t0             # nodes.continued_angle: time of prev
             self.kindOfRow += [(kind, k) for k in range(n)]
             i += n
 
@@ -203,7 +209,7 @@ class NodeTable:
         jrow, jae, ae = multipliers
         return write_rows(1, sim.sd.gid, sim.R[None], sim.r[None], sim.V[None], Vdot[None], lam[None], bool(doacc),
                           self.code, self.body, self.idx, self.nq, self.qref, self.prev, q[None], qt[None], qtt[None],
-                          self.flags, jrow, jae, ae[None])
+                          self.flags, jrow, jae, ae[None], np.array([float(sim.t)]), sim.sd.bangle, float(sim.t))
 
     def warn_flags(self):
         for i in np.nonzero(self.flags)[0]:

@@ -35,7 +35,8 @@ CODE_RXYZ = 2
 CODE_POINT = 3          # NodePoint: 3 position coordinates, no rotation
 CODE_POINT2D = 4        # NodePoint2D: x, y
 CODE_2D = 5             # NodeRigidBody2D: [x, y, phi]
-CODE_1D = 6             # Node1D: one coordinate x = axis . (r - origin) (ObjectMass1D / ObjectRotationalMass1D)
+CODE_1D = 6             # Node1D of an ObjectMass1D: one coordinate x = axis . (r - origin)
+CODE_1D_ROT = 7         # Node1D of an ObjectRotationalMass1D: the angle of R = F Rz(x)
 NCOORD_MAX = 7          # position (3) + at most 4 rotation parameters
 TWO_PI = 2.0 * math.pi
 ROTVEC_LIMIT = 1.5 * math.pi
@@ -205,23 +206,43 @@ def rxyz_row(R, omega, omegad, prev, first, p, p_t, p_tt):
 
 
 @njit(cache=True)
-def planar_row(R, omega, omegad, prev, first, p, p_t, p_tt):
-    """NodeRigidBody2D: the angle phi of R = Rz(phi), continuous (nearest 2 pi shift of the
-    previous angle), phi_t = omega_z, phi_tt = omegadot_z."""
-    a = math.atan2(R[1, 0], R[0, 0])
-    p[0] = a if first else _wrap_near(a, prev[0])
-    prev[0] = p[0]
+def planar_row(R, omega, omegad, prev, first, p, p_t, p_tt, t, tracked):
+    """NodeRigidBody2D: the angle phi of R = Rz(phi) at time ``t``, continued over turns: the
+    2 pi shift nearest to ``tracked`` if that is finite (the kernel's angle tracked step by step,
+    SceneData.bangle: exact, given for the simulator's current state), else nearest to the
+    last written angle ``prev[0]`` advanced by the trapezoidal integral of omega_z since its
+    time ``prev[2]`` (``prev[1]`` its omega_z), for outputs inside a chunk;
+    phi_t = omega_z, phi_tt = omegadot_z."""
+    p[0] = continued_angle(math.atan2(R[1, 0], R[0, 0]), omega[2], prev, first, t, tracked)
     p_t[0] = omega[2]
     p_tt[0] = omegad[2]
     return 0
 
 
 @njit(cache=True)
-def write_row(code, R, omega, omegad, prev, first, p, p_t, p_tt):
-    if code == CODE_POINT or code == CODE_POINT2D or code == CODE_1D:
+def continued_angle(a, omz, prev, first, t, tracked):
+    """The angle ``a`` (principal) shifted by 2 pi turns: nearest to ``tracked`` if finite (the
+    kernel's angle tracked step by step, exact), else to the last written angle ``prev[0]``
+    advanced by the trapezoidal integral of its rate since ``prev[2]`` (``prev[1]`` the rate
+    then); updates ``prev`` = (angle, rate ``omz``, time ``t``)."""
+    if first:
+        out = a
+    elif math.isfinite(tracked):
+        out = _wrap_near(a, tracked)
+    else:
+        out = _wrap_near(a, prev[0] + 0.5 * (prev[1] + omz) * (t - prev[2]))
+    prev[0] = out
+    prev[1] = omz
+    prev[2] = t
+    return out
+
+
+@njit(cache=True)
+def write_row(code, R, omega, omegad, prev, first, p, p_t, p_tt, t, tracked):
+    if code == CODE_POINT or code == CODE_POINT2D or code == CODE_1D or code == CODE_1D_ROT:
         return 0                         # no rotation parameters
     if code == CODE_2D:
-        return planar_row(R, omega, omegad, prev, first, p, p_t, p_tt)
+        return planar_row(R, omega, omegad, prev, first, p, p_t, p_tt, t, tracked)
     if code == CODE_ROTVEC:
         return rotvec_row(R, omega, omegad, prev, first, p, p_t, p_tt)
     elif code == CODE_EP:
@@ -232,7 +253,7 @@ def write_row(code, R, omega, omegad, prev, first, p, p_t, p_tt):
 # ---------------------------------------------------------------------------- all nodes at once
 # (kept in this file: numba's cache is invalidated only by changes of the defining file)
 @njit(cache=True)
-def write_nodes(gid, R, r, V, Vdot, doacc, code, body, idx, nq, qref, prev, first, q, qt, qtt, flags):
+def write_nodes(gid, R, r, V, Vdot, doacc, code, body, idx, nq, qref, prev, first, q, qt, qtt, flags, t, bangle, exact):
     """Node coordinates from the body states (R, r, V) and accelerations Vdot (in each
     body's group velocity coordinates: SE3 v body-fixed, SO3xR3 v = rdot)."""
     om = np.zeros(3)
@@ -269,7 +290,7 @@ def write_nodes(gid, R, r, V, Vdot, doacc, code, body, idx, nq, qref, prev, firs
             else:
                 for k in range(3):
                     acc[k] = Vdot[b, 3 + k]
-        f = write_row(code[i], Rb, om, omd, prev[i], first, p, pt, ptt)
+        f = write_row(code[i], Rb, om, omd, prev[i], first, p, pt, ptt, t, bangle[b] if exact else math.nan)
         if f:
             flags[i] = 1                 # kept until the warning is given (warn_flags)
             nflag += 1
@@ -287,6 +308,18 @@ def write_nodes(gid, R, r, V, Vdot, doacc, code, body, idx, nq, qref, prev, firs
             qt[j] = xt
             if doacc:
                 qtt[j] = xtt
+            continue
+        if code[i] == CODE_1D_ROT:
+            # qref row = (reference angle, F e_x): the angle of R = F Rz(x), atan2(-(F e_x) . R e_y,
+            # (F e_x) . R e_x) as coordinate_angles.frame_angle, continued over turns
+            c = qref[i, 1] * Rb[0, 0] + qref[i, 2] * Rb[1, 0] + qref[i, 3] * Rb[2, 0]
+            s = -(qref[i, 1] * Rb[0, 1] + qref[i, 2] * Rb[1, 1] + qref[i, 3] * Rb[2, 1])
+            j = idx[i, 0]
+            q[j] = continued_angle(math.atan2(s, c), om[2], prev[i], first, t,
+                                   bangle[b] if exact else math.nan) - qref[i, 0]
+            qt[j] = om[2]
+            if doacc:
+                qtt[j] = omd[2]
             continue
         npos = 2 if (code[i] == CODE_POINT2D or code[i] == CODE_2D) else 3
         for k in range(npos):
@@ -310,25 +343,29 @@ def write_multipliers(lam, jrow, jae, ae):
 
 
 @njit(cache=True)
-def write_all(gid, R, r, V, Vdot, lam, doacc, code, body, idx, nq, qref, prev, q, qt, qtt, flags, jrow, jae, ae):
-    """write_nodes + write_multipliers of one state."""
+def write_all(gid, R, r, V, Vdot, lam, doacc, code, body, idx, nq, qref, prev, q, qt, qtt, flags, jrow, jae, ae, t,
+              bangle, exact):
+    """write_nodes + write_multipliers of one state (at time ``t``; ``exact``: it is the
+    simulator's current state, whose tracked 2D angles are ``bangle``)."""
     if doacc:
         write_multipliers(lam, jrow, jae, ae)
-    return write_nodes(gid, R, r, V, Vdot, doacc, code, body, idx, nq, qref, prev, False, q, qt, qtt, flags)
+    return write_nodes(gid, R, r, V, Vdot, doacc, code, body, idx, nq, qref, prev, False, q, qt, qtt, flags, t,
+                       bangle, exact)
 
 
 @njit(cache=True)
 def write_rows(nrows, gid, Rs, rs, Vs, Vdots, lams, doacc, code, body, idx, nq, qref, prev, Q, Qt, Qtt, flags, jrow,
-               jae, AE):
-    """:func:`write_all` of the states ``Rs[o], rs[o], Vs[o]`` (accelerations ``Vdots[o]``,
-    multipliers ``lams[o]``) into rows ``o < nrows`` of ``Q, Qt, Qtt, AE``, in order (the
-    rotation parameters stay continuous from row to row).  The single compiled entry of
+               jae, AE, To, bangle, tSim):
+    """:func:`write_all` of the states ``Rs[o], rs[o], Vs[o]`` at times ``To[o]`` (accelerations
+    ``Vdots[o]``, multipliers ``lams[o]``) into rows ``o < nrows`` of ``Q, Qt, Qtt, AE``, in order
+    (the rotation parameters stay continuous from row to row; a row at the simulator's time
+    ``tSim`` takes the 2D angles ``bangle`` the kernel tracked, SceneData.bangle).  The single compiled entry of
     the write-back: every path uses it, one state being one row.  Returns the number of
     flagged (node, row) pairs."""
     nflag = 0
     for o in range(nrows):
         nflag += write_all(gid, Rs[o], rs[o], Vs[o], Vdots[o], lams[o], doacc, code, body, idx, nq, qref, prev,
-                           Q[o], Qt[o], Qtt[o], flags, jrow, jae, AE[o])
+                           Q[o], Qt[o], Qtt[o], flags, jrow, jae, AE[o], To[o], bangle, To[o] == tSim)
     return nflag
 
 
@@ -369,6 +406,10 @@ class NodeKind:
         """Per-node reference data of the compiled writer (bridge.fast.NodeTable.qref,
         at most NCOORD_MAX columns): the reference coordinates."""
         return self.qref
+
+    def row_codes(self):
+        """The compiled writer's code of each node (:func:`write_row`)."""
+        return np.full(len(self), self.code, np.int64)
 
     def __len__(self):
         return len(self.ids)
@@ -415,7 +456,7 @@ class NodeKind:
             flag = write_row(self.code, np.ascontiguousarray(R[i], dtype=float),
                              np.ascontiguousarray(omega[i], dtype=float),
                              zero if omegad is None else np.ascontiguousarray(omegad[i], dtype=float),
-                             self.prev[i], self.first, p, p_t, p_tt)
+                             self.prev[i], self.first, p, p_t, p_tt, 0.0, math.nan)
             ix = self.idx[i]
             q[ix[:3]] = np.asarray(r[i]) - self.qref[i, :3]
             q[ix[3:]] = p - self.qref[i, 3:]
@@ -638,6 +679,7 @@ class Rigid2DNode(NodeKind):
         vel = q_t[self.idx]
         n = len(self)
         self.prev[:, 0] = tot[:, 2]
+        self.prev[:, 1] = vel[:, 2]           # omega_z; prev[:, 2] the time (bridge.fast.NodeTable)
         self.first = False
         r = np.zeros((n, 3))
         r[:, :2] = tot[:, :2]
@@ -647,14 +689,15 @@ class Rigid2DNode(NodeKind):
         v[:, :2] = vel[:, :2]
         return self._rz(tot[:, 2]), r, om, v
 
-    def write(self, R, r, omega, vel, omegad=None, acc=None, q=None, q_t=None, q_tt=None):
+    def write(self, R, r, omega, vel, omegad=None, acc=None, q=None, q_t=None, q_tt=None, t=None):
         out = np.zeros((len(self), 1))
         p_t = np.zeros(1)
         p_tt = np.zeros(1)
         for i in range(len(self)):
             planar_row(np.ascontiguousarray(R[i], dtype=float), np.asarray(omega[i], float),
                        np.zeros(3) if omegad is None else np.asarray(omegad[i], float),
-                       self.prev[i], self.first, out[i], p_t, p_tt)
+                       self.prev[i], self.first, out[i], p_t, p_tt, self.prev[i, 2] if t is None else float(t),
+                       math.nan)
             ix = self.idx[i]
             q[ix[:2]] = np.asarray(r[i])[:2] - self.qref[i, :2]
             q[ix[2]] = out[i, 0] - self.qref[i, 2]
@@ -682,13 +725,10 @@ class Node1DNode(PointNode):
 
     * ``ObjectMass1D``: the point ``p = referencePosition + referenceRotation (x, 0, 0)``, a point
       mass on the line ``origin + axis x`` (``axis = referenceRotation e_x``, ``origin =
-      referencePosition``), integrated on R^3 with the free direction ``axis``;
-    * ``ObjectRotationalMass1D``: the rotation angle about ``referenceRotation e_z``; it is
-      integrated as a scalar body in coordinate space: the point ``(x, 0, 0)`` of mass
-      ``inertia`` free along ``e_x`` (axis ``e_x``, origin 0), which the coordinate items use
-      exactly.
-
-    So ``x = axis . (r - origin)``, ``x_t = axis . rdot`` for both."""
+      referencePosition``), integrated on R^3 with the free direction ``axis``:
+      ``x = axis . (r - origin)``, ``x_t = axis . rdot``;
+    * ``ObjectRotationalMass1D``: a rotor (Scene.AddRotor) ``R = F Rz(x)`` at ``origin`` with
+      ``F = referenceRotation``: ``x`` its angle continued over turns, ``x_t = omega_z``."""
     typeName = "1D"
     code = CODE_1D
     npos = 1
@@ -698,39 +738,77 @@ class Node1DNode(PointNode):
         n = len(self)
         self.axis = np.zeros((n, 3))
         self.origin = np.zeros((n, 3))
+        self.frame = np.repeat(np.eye(3)[None], n, axis=0)
+        self.rotor = np.zeros(n, bool)
         for k, d in enumerate(objects):
-            if d["objectType"] == "Mass1D":
-                self.axis[k] = np.asarray(d.get("referenceRotation", np.eye(3)), float).reshape(3, 3)[:, 0]
-                self.origin[k] = np.asarray(d.get("referencePosition", [0, 0, 0]), float)
-            else:                                       # RotationalMass1D: coordinate space
-                self.axis[k] = (1.0, 0.0, 0.0)
+            F = np.asarray(d.get("referenceRotation", np.eye(3)), float).reshape(3, 3)
+            self.origin[k] = np.asarray(d.get("referencePosition", [0, 0, 0]), float)
+            self.frame[k] = F
+            self.rotor[k] = d["objectType"] == "RotationalMass1D"
+            self.axis[k] = F[:, 2] if self.rotor[k] else F[:, 0]
+
+    def row_codes(self):
+        return np.where(self.rotor, CODE_1D_ROT, CODE_1D)
 
     def coordinate_frame(self, k):
-        """(axis, origin) of node k's coordinate: ``x = axis . (r - origin)``."""
-        return self.axis[k].copy(), self.origin[k].copy()
+        """(axis, origin) of node k's coordinate: ``x = axis . (r - origin)``; None for a rotor."""
+        return None if self.rotor[k] else (self.axis[k].copy(), self.origin[k].copy())
+
+    def total_angle(self, k):
+        """A rotor's total angle (turns included) in the configuration read; None otherwise."""
+        return float(self.prev[k, 0]) if self.rotor[k] else None
 
     def table_reference(self):
-        return np.column_stack([self.qref[:, 0] + np.einsum("ni,ni->n", self.axis, self.origin), self.axis])
+        out = np.zeros((len(self), 4))
+        out[:, 0] = self.qref[:, 0] + np.where(self.rotor, 0.0, np.einsum("ni,ni->n", self.axis, self.origin))
+        out[:, 1:] = np.where(self.rotor[:, None], self.frame[:, :, 0], self.axis)
+        return out
+
+    def _rz(self, x):
+        c, s = np.cos(x), np.sin(x)
+        R = np.zeros((len(x), 3, 3))
+        R[:, 0, 0], R[:, 0, 1], R[:, 1, 0], R[:, 1, 1], R[:, 2, 2] = c, -s, s, c, 1.0
+        return R
 
     def read(self, q, q_t):
         n = len(self)
         self.first = False
         x = self.qref[:, 0] + q[self.idx[:, 0]]
-        return (np.repeat(np.eye(3)[None], n, axis=0), self.origin + self.axis * x[:, None], np.zeros((n, 3)),
-                self.axis * q_t[self.idx[:, 0]][:, None])
+        xt = q_t[self.idx[:, 0]]
+        rot = self.rotor[:, None]
+        R = np.where(rot[:, :, None], self.frame @ self._rz(x), np.eye(3)[None])
+        r = np.where(rot, self.origin, self.origin + self.axis * x[:, None])
+        om = np.zeros((n, 3))
+        om[:, 2] = np.where(self.rotor, xt, 0.0)
+        vel = np.where(rot, 0.0, self.axis * xt[:, None])
+        self.prev[:, 0] = np.where(self.rotor, x, self.prev[:, 0])
+        self.prev[:, 1] = np.where(self.rotor, xt, self.prev[:, 1])
+        return R, r, om, vel
 
-    def write(self, R, r, omega, vel, omegad=None, acc=None, q=None, q_t=None, q_tt=None):
-        ix = self.idx[:, 0]
-        q[ix] = np.einsum("ni,ni->n", self.axis, np.asarray(r) - self.origin) - self.qref[:, 0]
-        q_t[ix] = np.einsum("ni,ni->n", self.axis, np.asarray(vel))
-        if q_tt is not None and acc is not None:
-            q_tt[ix] = np.einsum("ni,ni->n", self.axis, np.asarray(acc))
+    def write(self, R, r, omega, vel, omegad=None, acc=None, q=None, q_t=None, q_tt=None, t=None):
+        for k in range(len(self)):
+            j = self.idx[k, 0]
+            if self.rotor[k]:
+                F0 = self.frame[k][:, 0]
+                a = math.atan2(-(F0 @ R[k][:, 1]), F0 @ R[k][:, 0])
+                x = continued_angle(a, float(omega[k][2]), self.prev[k], self.first,
+                                    self.prev[k, 2] if t is None else float(t), math.nan)
+                q[j] = x - self.qref[k, 0]
+                q_t[j] = omega[k][2]
+                if q_tt is not None and omegad is not None:
+                    q_tt[j] = omegad[k][2]
+            else:
+                q[j] = self.axis[k] @ (np.asarray(r[k]) - self.origin[k]) - self.qref[k, 0]
+                q_t[j] = self.axis[k] @ np.asarray(vel[k])
+                if q_tt is not None and acc is not None:
+                    q_tt[j] = self.axis[k] @ np.asarray(acc[k])
         self.first = False
         return np.zeros((len(self), 0))
 
     def velocity_map(self, q):
         T = np.zeros((len(self), 1, 6))
-        T[:, 0, 3:] = self.axis
+        T[:, 0, 3:] = np.where(self.rotor[:, None], 0.0, self.axis)
+        T[:, 0, 2] = np.where(self.rotor, 1.0, 0.0)
         return T
 
     def velocity_map_dot(self, q, q_t):

@@ -103,8 +103,8 @@ FIELDS = {
         "referenceRotation": (FIXED, "the line the mass moves on (compiled point mass)")},
     ("object", "RotationalMass1D"): {
         "inertia": (FIXED, "compiled mass matrix"), "nodeNumber": (FIXED, "the body's node"),
-        "referencePosition": (IGNORED, "the rotor is integrated through its angle (its body markers are refused)"),
-        "referenceRotation": (IGNORED, "the rotor is integrated through its angle (its body markers are refused)")},
+        "referencePosition": (FIXED, "the rotor's axis (compiled rotor)"),
+        "referenceRotation": (FIXED, "the rotor's axis (compiled rotor)")},
     ("marker", "NodeCoordinate"): {"nodeNumber": (FIXED, "the marker's node"),
                                    "coordinate": (FIXED, "the marker's coordinate")},
     ("load", "Coordinate"): {

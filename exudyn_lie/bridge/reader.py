@@ -62,8 +62,9 @@ SUPPORTED_NODES = ("NodeRigidBodyRotVecLG", "NodeRigidBodyEP", "NodeRigidBodyRxy
 RIGID_NODE_TYPES = ("RigidBodyRotVecLG", "RigidBodyEP", "RigidBodyRxyz")
 BODY_OBJECTS = {"RigidBody": RIGID_NODE_TYPES, "RigidBody2D": ("RigidBody2D",), "MassPoint": ("Point",),
                 "MassPoint2D": ("Point2D",), "Mass1D": ("1D",), "RotationalMass1D": ("1D",)}
-# bodies integrated as a scalar in coordinate space (nodes.Node1DNode): no body markers
-COORDINATE_SPACE_BODIES = ("RotationalMass1D",)
+# bodies whose body markers must sit on their axis (CObjectRotationalMass1D: Exudyn throws
+# for a marker or load at localPosition x, y != 0, and has no mass integral for MarkerBodyMass)
+ROTOR_BODIES = ("RotationalMass1D",)
 SUPPORTED_MARKERS = ("MarkerBodyRigid", "MarkerBodyPosition", "MarkerNodeRigid", "MarkerNodePosition",
                      "MarkerBodyMass", "MarkerNodeCoordinate")
 POSITION_MARKERS = SUPPORTED_MARKERS[:5]        # the markers with a position (and orientation)
@@ -296,7 +297,8 @@ class _Reader:
         self.markers = {}
         self.ground = {}          # object index -> (pos, rot) of ObjectGround
         self.rigidNodeBody = {}   # node index -> scene body
-        self.nodeAxisFrame = {}   # Node1D index -> (world axis, origin) of its one coordinate
+        self.nodeAxisFrame = {}   # Node1D of a Mass1D -> (world axis, origin) of its one coordinate
+        self.nodeRotor = {}       # Node1D of a RotationalMass1D -> (frame F, origin): R = F Rz(x)
         self.badNodes = []
 
     def _items_coordinates(self):
@@ -382,6 +384,7 @@ class _Reader:
         self.check_nodes()
         # node kinds, in node order; states of all nodes of a kind at once
         states = {}
+        angles = {}         # NodeRigidBody2D: total angle
         for t, nodes in self.byKind.items():
             nodes = [n for n in nodes if n in bodyOfNode]
             if not nodes:
@@ -397,10 +400,17 @@ class _Reader:
             kind.bind_objects([self.objects[bodyOfNode[n]] for n in nodes])
             if hasattr(kind, "coordinate_frame"):
                 for k, n in enumerate(nodes):
-                    self.nodeAxisFrame[n] = kind.coordinate_frame(k)
+                    if kind.coordinate_frame(k) is not None:
+                        self.nodeAxisFrame[n] = kind.coordinate_frame(k)
+                    else:
+                        self.nodeRotor[n] = (kind.frame[k].copy(), kind.origin[k].copy())
             R, r, om, vel = kind.read(self.q, self.q_t)
             for k, n in enumerate(nodes):
                 states[n] = (R[k], r[k], om[k], vel[k])
+                if getattr(kind, "planar", False):
+                    angles[n] = float(kind.prev[k, 0])          # the total angle, turns included
+                elif hasattr(kind, "total_angle") and kind.total_angle(k) is not None:
+                    angles[n] = kind.total_angle(k)
             sc.nodeKinds.append(kind)
         # bodies in object order
         for o, d in enumerate(self.objects):
@@ -412,16 +422,19 @@ class _Reader:
             try:
                 if d["objectType"] == "RigidBody2D":
                     b = sc.AddBody2D(mass=float(d["mass"]), inertia=float(d["inertia"]), position=r[:2],
-                                     angle=float(np.arctan2(R[1, 0], R[0, 0])), omega=float(om[2]),
+                                     angle=angles[n], omega=float(om[2]),
                                      velocity=vel[:2], com=np.asarray(d.get("centerOfMass", [0, 0]), float),
                                      name=label)
-                elif d["objectType"] in ("Mass1D", "RotationalMass1D"):
-                    # nodes.Node1DNode: a point mass on the line origin + axis x (Mass1D), or the
-                    # angle as a scalar body in coordinate space (RotationalMass1D)
+                elif d["objectType"] == "Mass1D":
+                    # nodes.Node1DNode: a point mass on the line origin + axis x
                     axis = self.nodeAxisFrame[n][0]
-                    m1 = d.get("mass", d.get("physicsMass")) if d["objectType"] == "Mass1D" else \
-                        d.get("inertia", d.get("physicsInertia"))
-                    b = sc.AddPointMass(float(m1), r0=r, vel0=vel, name=label, freeDirections=np.outer(axis, axis))
+                    b = sc.AddPointMass(float(d.get("mass", d.get("physicsMass"))), r0=r, vel0=vel, name=label,
+                                        freeDirections=np.outer(axis, axis))
+                elif d["objectType"] == "RotationalMass1D":
+                    # nodes.Node1DNode: a rotor R = F Rz(x) turning about F e_z at its reference position
+                    F, origin = self.nodeRotor[n]
+                    b = sc.AddRotor(float(d.get("inertia", d.get("physicsInertia"))), frame=_orthonormal(F),
+                                    position=origin, angle=angles[n], omega=float(om[2]), name=label)
                 elif d["objectType"] != "RigidBody":
                     b = sc.AddPointMass(float(d.get("mass", d.get("physicsMass"))), r0=r, vel0=vel, name=label,
                                         freeDirections=np.diag([1.0, 1.0, float(d["objectType"] == "MassPoint")]))
@@ -462,11 +475,13 @@ class _Reader:
                 if o in self.ground:
                     gp, gR = self.ground[o]
                     body, pos, Rm = GROUND, gp + gR @ pos, (None if Rm is None else gR @ Rm)
-                elif self.objects[o]["objectType"] in COORDINATE_SPACE_BODIES:
-                    raise BridgeError(f"{what}: marker {m} (Marker{t}) is on object {o} (Object"
-                                      f"{self.objects[o]['objectType']}), which exudyn_lie integrates through its "
-                                      f"Node1D coordinate only; connect it with a MarkerNodeCoordinate (coordinate "
-                                      f"constraints, springs, loads), or solve with exudyn.SolveDynamic")
+                elif self.objects[o]["objectType"] in ROTOR_BODIES and (t == "BodyMass" or pos[0] != 0 or pos[1] != 0):
+                    raise BridgeError(f"{what}: marker {m} (Marker{t}) on object {o} (Object"
+                                      f"{self.objects[o]['objectType']}) "
+                                      + ("has no mass integral (Exudyn cannot apply it either)" if t == "BodyMass" else
+                                         f"is at localPosition {pos.tolist()}; Exudyn applies markers and loads on a "
+                                         f"RotationalMass1D only on its axis (localPosition x = y = 0) and raises "
+                                         f"otherwise; use an ObjectRigidBody2D or ObjectRigidBody there"))
                 elif self.objects[o]["objectType"] in BODY_OBJECTS:
                     body = self._body_of_object(o)
                     if self.objects[o]["objectType"] == "Mass1D":
@@ -683,9 +698,15 @@ class _Reader:
         if not 0 <= k < npos:
             raise BridgeError(f"{what}: marker {m} (MarkerNodeCoordinate) is on coordinate {k} of node {n} "
                               f"(Node{nt}), not a position coordinate (a rotation coordinate); exudyn_lie supports "
-                              f"coordinate items on node position coordinates only so far"
+                              f"coordinate items on node position coordinates, the angle of a NodeRigidBody2D and "
+                              f"Node1D coordinates so far; solve with exudyn.SolveDynamic"
                               + (f" (0..{npos - 1} of this node)" if npos else ""))
         ref = float(np.asarray(self.mbs.GetNode(n)["referenceCoordinates"], float).reshape(-1)[k])
+        if n in self.nodeRotor:            # a rotor's angle: a rotation coordinate about F e_z
+            F = self.nodeRotor[n][0]
+            total = ref + float(self.q[self.node_ltg(n)[0]])
+            return CoordinateMarker(m, self.rigidNodeBody[n], F[:, 2].copy(), ref,
+                                    angle=AngleCoordinate(_orthonormal(F), total))
         frame = self.nodeAxisFrame.get(n)
         if frame is None:
             return CoordinateMarker(m, self.rigidNodeBody[n], np.eye(3)[k], ref)

@@ -263,7 +263,7 @@ class LieGroupSolver:
         q[0] = old
         return views if live else None
 
-    def _init_buffers_from_mbs(self):
+    def _init_buffers_from_mbs(self, t0=None):
         """Coordinate buffers: zero-copy views of mbs' Current configuration if possible
         (then nothing has to be copied per output step), else copies pushed with Set*.
         Called right after Exudyn's InitializeSolver (Current = the initial values)."""
@@ -284,7 +284,7 @@ class LieGroupSolver:
             self._ae[self.scene.aeZero] = 0.0
         for kind in self.scene.nodeKinds:       # continuity starts from the initial parameters
             kind.read(np.array(self._q), np.array(self._qt))
-        self._nodes = NodeTable(self.scene.nodeKinds, self.scene.kindBodies)
+        self._nodes = NodeTable(self.scene.nodeKinds, self.scene.kindBodies, self.sim.t if t0 is None else t0)
         jr = self._jrows
         self._jrow = np.concatenate([x[0] for x in jr]).astype(np.int64) if jr else np.zeros(0, np.int64)
         self._jae = np.concatenate([x[1] for x in jr]).astype(np.int64) if jr else np.zeros(0, np.int64)
@@ -429,7 +429,7 @@ class LieGroupSolver:
         U, _, Vt = np.linalg.svd(R)
         self.sim.SetInitialState(U @ Vt, r, om, ve, t0=t)
         self._seed_torsion()
-        self._nodes.prev[:] = NodeTable(self.scene.nodeKinds, self.scene.kindBodies).prev
+        self._nodes.prev[:] = NodeTable(self.scene.nodeKinds, self.scene.kindBodies, t).prev
 
     # ------------------------------------------------------------------ planning
     @staticmethod
@@ -886,7 +886,7 @@ class LieGroupSolver:
         self._warn_watched_nodes()
         if writeBack:
             self._watch = False
-            self._init_buffers_from_mbs()
+            self._init_buffers_from_mbs(t0=float(startTime))      # mbs still holds the start state
             self._write(True)
             self._write_torsion_data()
             self.mbs.systemData.SetTime(self.sim.t)

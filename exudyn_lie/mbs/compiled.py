@@ -29,6 +29,9 @@ SceneData = namedtuple("SceneData", [
     "kint", "kpar", "krot",           # coordinate springs: [A, B, rotation A, rotation B]; [k, d, offset,
                                       #   direction A (3), direction B (3), angle A, angle B]; [frame A, frame B]
     "nangles",                        # rotation coordinates of coordinate items (tracked: coordinate_angles)
+    "bangle", "bframe", "btrack",     # angle of each 2D body / rotor about bframe e_z, turns included (tracked
+                                      #   after every accepted step; their node write-back reads it); 1: tracked
+    "nplanar",                        # number of tracked bodies
     "xint", "xpos", "xaxis", "xpar",  # linear springs: [A, B]; [posA, posB]; axis on A; [k, d, offset, force]
     "bint", "bpos", "brot", "bpar",   # rigid-body springs: [A, B, intrinsic]; [posA, posB]; [rotA, rotB];
                                       #   rows K (6), D (6), offset
@@ -119,14 +122,20 @@ _SPACE_OF = {v: k for k, v in PLANAR_GROUP.items()}
 PLANAR_AXES = [2, 3, 4]          # (omega_z, v_x, v_y) in the 6-vector velocity
 
 
-def planar_minv(M):
-    """``M^-1`` of a 2D body in its 6-vector velocity: the inverse of the planar block
-    (axes ``PLANAR_AXES``), zero elsewhere, so off-plane forces produce no acceleration and
-    the velocity stays in the plane (Exudyn's 2D body has exactly these 3 coordinates)."""
+def axes_minv(M, axes):
+    """``M^-1`` of a body that moves along the velocity axes ``axes`` only: the inverse of
+    that block, zero elsewhere, so forces along the other axes produce no acceleration and
+    the velocity stays on those axes (a 2D body: ``PLANAR_AXES``; a rotor: omega_z)."""
     Minv = np.zeros((6, 6))
-    ix = np.ix_(PLANAR_AXES, PLANAR_AXES)
+    ix = np.ix_(list(axes), list(axes))
     Minv[ix] = np.linalg.inv(M[ix])
     return Minv
+
+
+def planar_minv(M):
+    """``M^-1`` of a 2D body in its 6-vector velocity (Exudyn's 2D body has exactly the 3
+    coordinates ``PLANAR_AXES``)."""
+    return axes_minv(M, PLANAR_AXES)
 
 
 def joint_row_descriptors(constrainedAxes, worldTranslation=False):
@@ -255,7 +264,8 @@ def compile_scene(scene: Scene, groups):
     com = np.array([b.com for b in scene.bodies], float).reshape(nb, 3)
     M = np.array([point_mass_matrix(b) if b.isPoint else body_mass_matrix(b.mass, b.inertia, b.com)
                   for b in scene.bodies])
-    Minv = np.array([point_minv(b) if b.isPoint else planar_minv(Mi) if b.planar else np.linalg.inv(Mi)
+    Minv = np.array([point_minv(b) if b.isPoint else planar_minv(Mi) if b.planar else
+                     axes_minv(Mi, b.freeAxes) if b.freeAxes is not None else np.linalg.inv(Mi)
                      for b, Mi in zip(scene.bodies, M)])
 
     def arr(x, shape, dtype=float):
@@ -295,6 +305,10 @@ def compile_scene(scene: Scene, groups):
         kpar=arr([[s.stiffness, s.damping, s.offset, *s.axisA, *s.axisB, s.angleA[2], s.angleB[2]]
                   for s in scene.coordinateSprings], (-1, 11)),
         krot=arr([[s.angleA[1], s.angleB[1]] for s in scene.coordinateSprings], (-1, 2, 3, 3)),
+        bangle=np.array([b.angle0 if (b.planar or b.angleFrame is not None) else 0.0 for b in scene.bodies], float),
+        bframe=arr([np.eye(3) if b.angleFrame is None else b.angleFrame for b in scene.bodies], (-1, 3, 3)),
+        btrack=arr([int(b.planar or b.angleFrame is not None) for b in scene.bodies], (-1,), np.int64),
+        nplanar=int(sum(b.planar or b.angleFrame is not None for b in scene.bodies)),
         nangles=int(sum(s.angleA[0] + s.angleB[0] for s in scene.coordinateSprings)
                     + sum(j.coordinate[4] + j.coordinate[5] for j in J if j.coordinate is not None)),
         xint=arr([[s.bodyA, s.bodyB] for s in scene.linearSprings], (-1, 2), np.int64),

@@ -8,7 +8,7 @@ from ..groups import so3
 from .bodies import (_matvec, _side, add_pair_force, add_point_force, add_world_torque, body_inertial_forces,
                      body_point, connector_ends)
 from .codes import L_BODY, L_FIXED, L_KIND
-from .coordinate_angles import update_coordinate_angles
+from .coordinate_angles import update_coordinate_angles, update_planar_angles
 from .coordinate_forces import coordinate_spring_forces
 from .linear_spring_forces import linear_spring_forces
 
@@ -300,3 +300,5 @@ def update_torsion_tracking(sd, wk, R, r, V):
         torsion_angles(sd.gid, sd.tint, sd.trot, wk.tphi, R, r, V, wk.m3, wk.ident, wk.zero3, wk.zero6)
     if sd.nangles > 0:
         update_coordinate_angles(sd.jint, sd.jrot, sd.jpar, sd.rint, sd.kint, sd.krot, sd.kpar, R)
+    if sd.nplanar > 0:
+        update_planar_angles(sd.btrack, sd.bframe, sd.bangle, R)

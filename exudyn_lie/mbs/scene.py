@@ -74,6 +74,11 @@ class Body:
     # moves in (I for NodePoint, diag(1, 1, 0) for NodePoint2D, e e^T for Node1D); None: rigid
     freeDirections: np.ndarray = None
     planar: bool = False         # a 2D body: 3 DOF in the x-y plane (AddBody2D)
+    angle0: float = 0.0          # a 2D body / rotor: its initial angle, turns included (SceneData.bangle tracks it)
+    # a rotor (AddRotor): turns about the z axis of the world frame ``angleFrame`` through r0 only
+    # (velocity axes ``freeAxes`` of (omega body, v)); None: all axes
+    freeAxes: tuple = None
+    angleFrame: np.ndarray = None
 
     @property
     def isPoint(self):
@@ -317,7 +322,29 @@ class Scene:
         v = np.asarray(velocity, float).reshape(-1)
         self.bodies.append(Body(m, Jt, c, R0, _vec3((p[0], p[1], 0.0), f"{label}: position"),
                                 _vec3((0.0, 0.0, omega), f"{label}: omega"),
-                                _vec3((v[0], v[1], 0.0), f"{label}: velocity"), label, planar=True))
+                                _vec3((v[0], v[1], 0.0), f"{label}: velocity"), label, planar=True,
+                                angle0=_finite(angle, f"{label}: angle")))
+        return idx
+
+    def AddRotor(self, inertia, frame=None, position=(0, 0, 0), angle=0.0, omega=0.0, name: str = "") -> int:
+        """Add a rotor (Exudyn's ObjectRotationalMass1D): a rigid body ``R = frame Rz(angle)`` at
+        ``position`` turning about ``frame e_z`` only (its velocity is omega_z; M^-1 is zero on the
+        other axes, compiled.axes_minv), ``inertia`` about that axis.  ``angle`` is the total angle,
+        turns included (SceneData.bangle tracks it)."""
+        idx = len(self.bodies)
+        label = name or f"rotor{idx}"
+        J = _finite(inertia, f"{label}: inertia")
+        if J <= 0:
+            raise SceneError(f"{label}: the inertia of a rotor must be positive, got {J}")
+        F = _rot(frame, f"{label}: frame")
+        a = _finite(angle, f"{label}: angle")
+        ca, sa = np.cos(a), np.sin(a)
+        R0 = F @ np.array([[ca, -sa, 0.0], [sa, ca, 0.0], [0.0, 0.0, 1.0]])
+        # the mass and the inertias off the axis never act (M^-1 is zero there); a sphere-like
+        # tensor J I keeps the gyroscopic term omega x J omega zero, as for a rotor
+        self.bodies.append(Body(J, J * np.eye(3), np.zeros(3), R0, _vec3(position, f"{label}: position"),
+                                _vec3((0.0, 0.0, _finite(omega, f"{label}: omega")), f"{label}: omega"), np.zeros(3),
+                                label, angle0=a, freeAxes=(2,), angleFrame=F))
         return idx
 
     def _check_body(self, b, what, allow_ground=True):

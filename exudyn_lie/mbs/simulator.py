@@ -203,7 +203,8 @@ class Simulator:
         self._segmentStart = (self.t, self.R.copy(), self.r.copy(), self.V.copy())
         if len(sc.torsionalSprings):
             self.wk.tphi[:] = 0.0
-            kernel.update_torsion_tracking(self.sd, self.wk, self.R, self.r, self.V)
+        # the tracked angles (torsional springs, rotation coordinates, 2D bodies) at this state
+        kernel.update_torsion_tracking(self.sd, self.wk, self.R, self.r, self.V)
 
     def states(self):
         omega, vel = twist_to_world_velocity(self.gid, self.R, self.V)

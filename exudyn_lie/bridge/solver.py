@@ -109,7 +109,7 @@ class LieGroupSolver:
     """
 
     def __init__(self, mbs, method="RK4", liegroup="auto", stabilization=None, projectInitial=True,
-                 verbose=False, *, _configuration="initial"):
+                 verbose=False, *, constraintTolerance=None, _configuration="initial"):
         # _configuration='items' (internal, SolveDynamic): validate an mbs that is not assembled
         # yet from its item dictionaries; Solve() then re-reads it after mbs.Assemble()
         self.mbs = mbs
@@ -119,6 +119,7 @@ class LieGroupSolver:
         if stabilization not in (None, "none", "velocity", "position"):
             raise BridgeError(f"unknown stabilization {stabilization!r}; use None, 'velocity' or 'position'")
         self.stabilization = stabilization
+        self.constraintTolerance = self._check_constraint_tolerance(constraintTolerance, stabilization)
         self.projectInitial = bool(projectInitial)
         self.verbose = bool(verbose)
         self._liegroup_arg = self._check_liegroup(liegroup)
@@ -205,6 +206,10 @@ class LieGroupSolver:
                       f"{what} (Exudyn's own solvers start from it unchanged; pass projectInitial=False to "
                       f"raise instead)")
 
+    def _constraint_tolerance_text(self):
+        ct = self.constraintTolerance
+        return "" if ct is None else f", projection on the group when the constraint drift exceeds {ct:g}"
+
     def _solution_information(self, nsteps, h, t0, tEnd, k, adaptive=None):
         """What was integrated, for the solution file's header and the log."""
         groups = ", ".join(f"{g} ({self.groups.count(g)} {'body' if self.groups.count(g) == 1 else 'bodies'})"
@@ -214,7 +219,7 @@ class LieGroupSolver:
             return (f"exudyn_lie {__version__}: explicit Munthe-Kaas {tab.name} (order {tab.order}, {tab.stages} "
                     f"stages) with adaptive steps (error control on the group, absoluteTolerance = "
                     f"{adaptive['atol']:g}, relativeTolerance = {adaptive['rtol']:g}, step size <= {h:.6g} s, >= "
-                    f"{adaptive['minStep']:g} s), Lie group {groups or 'none'}, from t = {t0:g} to {tEnd:g} s; "
+                    f"{adaptive['minStep']:g} s{self._constraint_tolerance_text()}), Lie group {groups or 'none'}, from t = {t0:g} to {tEnd:g} s; "
                     f"Exudyn's time loop made {nsteps // k} output steps (dense output at their exact times)")
         return (f"exudyn_lie {__version__}: explicit Munthe-Kaas {tab.name} (order {tab.order}, {tab.stages} stages), "
                 f"Lie group {groups or 'none'}, step size h = {h:.6g} s, {nsteps} steps from t = {t0:g} to "
@@ -492,6 +497,24 @@ class LieGroupSolver:
         return False
 
     # ------------------------------------------------------------------ adaptive steps
+    @staticmethod
+    def _check_constraint_tolerance(ct, stabilization):
+        """The keyword ``constraintTolerance`` (Exudyn has no setting of this meaning: its
+        implicit solvers meet the constraints to the Newton tolerance, its explicit ones have
+        no joints), checked: None or a positive number, not together with ``stabilization``."""
+        if ct is None:
+            return None
+        try:
+            ct = float(ct)
+        except (TypeError, ValueError):
+            ct = float("nan")
+        if not (np.isfinite(ct) and ct > 0):
+            raise BridgeError(f"constraintTolerance must be a positive number (or None: off), got {ct!r}")
+        if stabilization not in (None, "none"):
+            raise BridgeError(f"constraintTolerance projects when the constraint drift exceeds it, stabilization="
+                              f"{stabilization!r} after every step: give one of them")
+        return ct
+
     def _adaptive_settings(self, ss, h):
         """Keywords of :meth:`Simulator.SetAdaptive` from Exudyn's settings, or None for fixed
         steps (docs/ADAPTIVE.md).  Adaptive: a method with an embedded pair and
@@ -505,6 +528,11 @@ class LieGroupSolver:
         controller with Exudyn's ``stepSizeSafety`` and ``stepSizeMaxIncrease``."""
         ti = ss.timeIntegration
         if self.tableau.b_hat is None or not ti.adaptiveStep:
+            if self.constraintTolerance is not None:
+                raise BridgeError(f"constraintTolerance needs adaptive steps: a method with an embedded pair "
+                                  f"(DOPRI5, ODE23, Vern6; here {self.tableau.name}) and timeIntegration.adaptiveStep "
+                                  f"= True (here {ti.adaptiveStep}); fixed steps project with stabilization="
+                                  f"'position' or 'velocity'")
             return None
         atol, rtol = float(ti.absoluteTolerance), float(ti.relativeTolerance)
         hmin, h0 = float(ti.minimumStepSize), float(ti.initialStepSize)
@@ -525,7 +553,7 @@ class LieGroupSolver:
         else:
             first = None
         return dict(rtol=rtol, atol=atol, maxStep=h, minStep=hmin, firstStep=first, safety=safety,
-                    maxIncrease=inc)
+                    maxIncrease=inc, constraintTolerance=self.constraintTolerance)
 
     # ------------------------------------------------------------------ solve
     @staticmethod
@@ -789,7 +817,8 @@ class LieGroupSolver:
                            bridgeOverhead=max(loopNet - integ, 0.0) / loopNet if loopNet > 0 else 0.0)
         if adaptive is not None:
             acc, rej, nrhs = sim.adaptiveCounters
-            self.timing.update(adaptive=True, accepted=acc, rejected=rej, rhsEvaluations=nrhs, steps=acc)
+            self.timing.update(adaptive=True, accepted=acc, rejected=rej, rhsEvaluations=nrhs, steps=acc,
+                               constraintProjections=sim.constraintProjections)
             nsteps = acc
         if log:
             print(f"exudyn_lie: {nsteps} steps in {setUp + loop:.3g} s: set-up {setUp:.3g} s (reading the model, "
@@ -896,7 +925,7 @@ class LieGroupSolver:
 def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialValues=False, storeSolver=True,
                  showHints=False, showCausingItems=True, autoAssemble=True, *, method=None, liegroup="auto",
                  stabilization=None, projectInitial=True, verbose=False, showProgress=True, substeps=None,
-                 accelerations=None):
+                 accelerations=None, constraintTolerance=None):
     """Drop-in for ``exudyn.SolveDynamic``: integrate ``mbs`` with an explicit Munthe-Kaas
     Lie group method inside Exudyn's time loop; returns True.
 
@@ -915,7 +944,9 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
     (print the group per body, the plan and the time spent), ``showProgress`` (a progress line every 2 s on runs longer than 2 s),
     ``substeps`` (internal steps per Exudyn step; default: one Exudyn step per output
     period), ``accelerations`` (write q_tt / multipliers; default: when something reads
-    them).
+    them), ``constraintTolerance`` (adaptive steps only; default None: off): project on the
+    group when the constraint drift exceeds it, the error estimate projected onto the
+    constraint manifold's tangent space (Simbody's scheme; docs/ADAPTIVE.md).
 
     Honours ``timeIntegration.startTime / endTime / numberOfSteps``, sensors (stored and
     files), the solution and restart files, pre/post-step user functions,
@@ -935,7 +966,7 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
                                                      _check_method)
     assemble = not mbs.systemIsConsistent and autoAssemble
     solver = LieGroupSolver(mbs, method=method, liegroup=liegroup, stabilization=stabilization,
-                            projectInitial=projectInitial, verbose=verbose,
+                            projectInitial=projectInitial, verbose=verbose, constraintTolerance=constraintTolerance,
                             _configuration="items" if assemble else "initial")
     solver._check_run(settings, substeps)
     if replaced:

@@ -43,7 +43,7 @@ from ..integrators import control as C
 from .bodies import exp_compose
 from .codes import STAB_NONE, STATUS_OK, STATUS_STEP_MIN
 from .forces import update_torsion_tracking
-from .projection import project_state
+from .projection import CT_N_PROJ, CT_POS, enforce_constraint_tolerance, project_error_estimate, project_state
 from .stepper import (copy_state, mk_finish, mk_stage_k, mk_stage_state, needed_stages, stage_rhs, state_is_finite,
                       watch_rotation_entries)
 
@@ -123,9 +123,11 @@ def extra_stages(sd, wk, am, t, h, R0, r0, V0, S):
 
 
 @njit(cache=True, _nrt=False)
-def serve_outputs(sd, wk, am, fs, ist, R0, r0, V0, R, r, V, S, tout, k, Ro, ro, Vo, w):
+def serve_outputs(sd, wk, am, ctol, fs, ist, R0, r0, V0, R, r, V, S, tout, k, Ro, ro, Vo, w):
     """Outputs ``tout[k:]`` inside the last accepted step ``(tprev, t]``: the end state at
-    ``t`` itself, dense output inside.  Returns (status, next k)."""
+    ``t`` itself, dense output inside (projected on the group when its constraint drift
+    exceeds the constraint tolerance ``ctol``, as Simbody projects interpolated states).
+    Returns (status, next k)."""
     t, tp, hp = fs[FS_T], fs[FS_TPREV], fs[FS_HPREV]
     while k < tout.shape[0] and tout[k] <= t:
         if tout[k] == t or ist[IS_VALID] == 0:
@@ -138,20 +140,27 @@ def serve_outputs(sd, wk, am, fs, ist, R0, r0, V0, R, r, V, S, tout, k, Ro, ro, 
                         return st, k
                 ist[IS_EXTRA] = 1
             dense_state(sd, wk, am, (tout[k] - tp) / hp, hp, R0, r0, V0, Ro[k], ro[k], Vo[k], w)
+            if ctol[CT_POS] > 0.0:                  # as Simbody's projectInterpolatedStates
+                st, _ = enforce_constraint_tolerance(sd, wk, ctol, Ro[k], ro[k], Vo[k])
+                if st != STATUS_OK:
+                    return st, k
         k += 1
     return STATUS_OK, k
 
 
 @njit(cache=True, _nrt=False)
-def mk_adaptive_steps(sd, wk, am, par, S, tol, fs, ist, tEnd, R, r, V, R0, r0, V0, dPhi, dV, w, vmax,
+def mk_adaptive_steps(sd, wk, am, par, S, tol, ctol, fs, ist, tEnd, R, r, V, R0, r0, V0, dPhi, dV, w, vmax,
                       tout, Ro, ro, Vo):
     """Adaptive MK steps from ``fs[FS_T]`` with the next step ``fs[FS_H]`` until ``tEnd``, or
     until every output time ``tout`` (sorted, at most tEnd) is written to ``Ro, ro, Vo``.
+    ``ctol`` (:mod:`.projection`, ``CT_*``): with a constraint tolerance (``ctol[CT_POS] > 0``)
+    the error estimate is projected onto the constraint manifold's tangent space and an
+    accepted state whose drift exceeds the tolerance is projected on the group.
     Returns (status, outputs written).  On a failure (R, r, V) hold the last accepted step."""
     A, c, stages, s = am.A, am.c, am.stages, am.s
     ns = stages.shape[0]
     nt = tout.shape[0]
-    st, k = serve_outputs(sd, wk, am, fs, ist, R0, r0, V0, R, r, V, S, tout, 0, Ro, ro, Vo, w)
+    st, k = serve_outputs(sd, wk, am, ctol, fs, ist, R0, r0, V0, R, r, V, S, tout, 0, Ro, ro, Vo, w)
     if st != STATUS_OK:
         return st, k
     eps4 = 4.0 * 2.220446049250313e-16 * abs(tEnd)
@@ -186,7 +195,15 @@ def mk_adaptive_steps(sd, wk, am, par, S, tol, fs, ist, tEnd, R, r, V, R0, r0, V
         if ok:
             mk_finish(sd, wk, am, htry, R, r, V)
             if state_is_finite(sd.gid, R, r, V, vmax) == STATUS_OK:
-                err = C.embedded_error_norm(am.e, htry, wk.K[:s], wk.Vd[:s], r0, r, V0, V, tol, dPhi, dV)
+                if ctol[CT_POS] > 0.0:              # drift is the constraint tolerance's business
+                    C.increment_difference(am.e, htry, wk.K[:s], wk.Vd[:s], dPhi, dV)
+                    st = project_error_estimate(sd, wk, R, r, V, dPhi, dV)
+                    if st != STATUS_OK:
+                        copy_state(R0, r0, V0, R, r, V)
+                        return st, k
+                    err = C.weighted_rms(dPhi, dV, r0, r, V0, V, tol)
+                else:
+                    err = C.embedded_error_norm(am.e, htry, wk.K[:s], wk.Vd[:s], r0, r, V0, V, tol, dPhi, dV)
         status = C.control_step(par, S, htry, err)
         if status != C.STATUS_ACCEPT:
             copy_state(R0, r0, V0, R, r, V)         # stage 1 stays valid (same state and time)
@@ -195,11 +212,18 @@ def mk_adaptive_steps(sd, wk, am, par, S, tol, fs, ist, tEnd, R, r, V, R0, r0, V
                 return STATUS_STEP_MIN, k
             fs[FS_H] = S[C.S_H]
             continue
+        projected = False
+        st = STATUS_OK
         if sd.stabilization != STAB_NONE:
             st = project_state(sd, wk, sd.stabilization, R, r, V)
-            if st != STATUS_OK:
-                copy_state(R0, r0, V0, R, r, V)
-                return st, k
+            projected = True
+        elif ctol[CT_POS] > 0.0:
+            st, projected = enforce_constraint_tolerance(sd, wk, ctol, R, r, V)
+            if projected:
+                ctol[CT_N_PROJ] += 1.0
+        if st != STATUS_OK:
+            copy_state(R0, r0, V0, R, r, V)
+            return st, k
         update_torsion_tracking(sd, wk, R, r, V)
         if wk.watchBody.shape[0] > 0:
             watch_rotation_entries(wk.watchBody, wk.watchEntry, wk.watchMax, R)
@@ -210,8 +234,8 @@ def mk_adaptive_steps(sd, wk, am, par, S, tol, fs, ist, tEnd, R, r, V, R0, r0, V
         ist[IS_VALID] = 1
         ist[IS_EXTRA] = 0
         # FSAL: the last stage was evaluated at the step's end (not after a projection)
-        ist[IS_HAVE0] = HAVE0_FSAL if (am.fsal and sd.stabilization == STAB_NONE) else HAVE0_NONE
-        st, k = serve_outputs(sd, wk, am, fs, ist, R0, r0, V0, R, r, V, S, tout, k, Ro, ro, Vo, w)
+        ist[IS_HAVE0] = HAVE0_FSAL if (am.fsal and not projected) else HAVE0_NONE
+        st, k = serve_outputs(sd, wk, am, ctol, fs, ist, R0, r0, V0, R, r, V, S, tout, k, Ro, ro, Vo, w)
         if st != STATUS_OK:
             return st, k
     return STATUS_OK, k

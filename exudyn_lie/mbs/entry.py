@@ -8,17 +8,27 @@ the same scene structure) skip it.  Used by the bridge's output chunks and by th
 driver.
 """
 import numpy as np
+from numba._dispatcher import compute_fingerprint
 
 _ENTRY_CACHE = {}
 
 
 def _type_key(x):
-    """A cheap key that determines numba's type of an argument (arrays: dtype, ndim,
-    layout, writeability; namedtuples: their class and fields)."""
+    """A cheap key that determines numba's type of an argument: numba's own C-level
+    fingerprint (arrays: dtype, ndim, layout, writeability; tuples: their items), with the
+    class of a namedtuple (which the fingerprint does not see).  About 2 us for a scene
+    tuple of 40 arrays, against 27 us for the Python walk below (the fallback)."""
+    try:
+        return (type(x), compute_fingerprint(x))
+    except Exception:
+        return _type_key_walk(x)
+
+
+def _type_key_walk(x):
     if isinstance(x, np.ndarray):
         return (x.dtype.str, x.ndim, x.flags.c_contiguous, x.flags.writeable)
     if isinstance(x, tuple):
-        return (type(x),) + tuple(_type_key(v) for v in x)
+        return (type(x),) + tuple(_type_key_walk(v) for v in x)
     return type(x)
 
 

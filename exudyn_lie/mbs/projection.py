@@ -4,9 +4,9 @@ from collections import namedtuple
 from numba import njit
 
 from .bodies import exp_compose
-from .codes import PROJ_FAIL, PROJ_MAX_ITER, PROJ_TOL, STAB_POSITION, STATUS_OK, STATUS_PROJECTION
+from .codes import PROJ_FAIL, PROJ_MAX_ITER, PROJ_TOL, STAB_POSITION, STAB_VELOCITY, STATUS_OK, STATUS_PROJECTION
 from .constraints import joints_rows
-from .index1 import apply_correction, schur_correct, solve_multipliers, tree_of
+from .index1 import apply_correction, rows_times, schur_correct, solve_multipliers, tree_of
 
 
 # the arguments of project, by what they are (built by project_state from SceneData / Work)
@@ -81,3 +81,68 @@ def project_state(sd, wk, level, R, r, V):
                    Schur(sd.Minv, sd.bandwidth, sd.redundant, sd.pivotTol, wk.W, wk.lam, wk.Sb, wk.Sd, wk.perm,
                          wk.ytmp, wk.info, wk.tmp12, tree_of(sd, wk)),
                    Rows(wk.h, wk.Jr, wk.eta), Scratch(wk.Psi, wk.v3, wk.m3, wk.ident, wk.zero3, wk.zero6), R, r, V)
+
+
+# ---------------------------------------------------------------- constraint tolerance (adaptive steps)
+# The array ``ctol`` of the adaptive loop: position tolerance (<= 0: off), velocity tolerance,
+# and the count of projections it triggered.
+CT_POS, CT_VEL, CT_N_PROJ = range(3)
+
+
+@njit(cache=True, _nrt=False)
+def constraint_rows_at(sd, wk, R, r, V):
+    """Rows h(g), J and eta at (R, r, V) into ``wk.h``, ``wk.Jr``, ``wk.eta``; returns
+    (max |h|, max |J V|), J V computed into ``wk.lam`` (scratch)."""
+    joints_rows(sd.gid, sd.jint, sd.jpos, sd.jrot, sd.jpar, sd.rint, R, r, V, wk.h, wk.Jr, wk.eta, wk.v3, wk.ident,
+                wk.zero3, wk.zero6)
+    rows_times(sd.rint, wk.Jr, V, 0.0, wk.eta, wk.lam)
+    hmax = 0.0
+    vmax = 0.0
+    for q in range(sd.nrows):
+        if abs(wk.h[q]) > hmax:
+            hmax = abs(wk.h[q])
+        if abs(wk.lam[q]) > vmax:
+            vmax = abs(wk.lam[q])
+    return hmax, vmax
+
+
+@njit(cache=True, _nrt=False)
+def project_tangent(sd, wk, R, X):
+    """``X <- X - M^-1 J^T (J M^-1 J^T)^-1 J X``: the mass-orthogonal projection of a
+    per-body algebra vector (nb, 6) onto the tangent space ``J X = 0`` of the constraint
+    manifold, with J from the last :func:`constraint_rows_at` (same coordinates as V and as
+    the increments Phi: the derivative of h along g exp(delta))."""
+    return schur_correct(sd.gid, sd.Minv, sd.rint, sd.bandwidth, sd.redundant, sd.pivotTol, R, X, 0.0, wk.eta,
+                         wk.Jr, wk.W, wk.lam, wk.Sb, wk.Sd, wk.perm, wk.ytmp, wk.info, wk.tmp12, tree_of(sd, wk))
+
+
+@njit(cache=True, _nrt=False)
+def project_error_estimate(sd, wk, R, r, V, dPhi, dV):
+    """The error estimate (dPhi, dV) of an adaptive step, both projected onto the tangent
+    space of the constraint manifold at the step's end (R, r, V) (docs/ADAPTIVE.md,
+    "Constraint tolerance"): the normal parts are drift, which the constraint tolerance
+    controls, not the accuracy tolerance (as in Simbody)."""
+    if sd.nrows == 0:
+        return STATUS_OK
+    constraint_rows_at(sd, wk, R, r, V)
+    st = project_tangent(sd, wk, R, dPhi)
+    if st != STATUS_OK:
+        return st
+    return project_tangent(sd, wk, R, dV)
+
+
+@njit(cache=True, _nrt=False)
+def enforce_constraint_tolerance(sd, wk, ctol, R, r, V):
+    """Project the state on the group when its drift exceeds the constraint tolerance:
+    max |h(g)| > ctol[CT_POS] -> positions (Gauss-Newton on the group) and velocities;
+    else max |J V| > ctol[CT_VEL] -> velocities only.  Returns (status, projected)."""
+    if sd.nrows == 0:
+        return STATUS_OK, False
+    hmax, vmax = constraint_rows_at(sd, wk, R, r, V)
+    if hmax > ctol[CT_POS]:
+        level = STAB_POSITION
+    elif vmax > ctol[CT_VEL]:
+        level = STAB_VELOCITY
+    else:
+        return STATUS_OK, False
+    return project_state(sd, wk, level, R, r, V), True

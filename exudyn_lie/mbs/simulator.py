@@ -29,6 +29,7 @@ from .scene import Scene, SceneError
 from .state import BodyStates, twist_to_world_velocity, world_velocity_to_twist
 from .stepper import fixed_step_control, method_arrays
 from . import adaptive as _adaptive
+from . import projection as _projection
 from .entry import entry_point
 from ..integrators import control as _control
 
@@ -60,6 +61,7 @@ class Result:
     rejectedSteps: int = 0
     rhsEvaluations: int = 0
     adaptive: bool = False
+    constraintProjections: int = 0     # adaptive runs with constraintTolerance: projections triggered
 
     @property
     def totalEnergy(self):
@@ -670,14 +672,19 @@ class Simulator:
 
     # ----------------------------------------------------------------- adaptive steps (issue 18)
     def SetAdaptive(self, rtol=1e-3, atol=1e-6, maxStep=np.inf, minStep=0.0, firstStep=None, safety=0.9,
-                    maxIncrease=10.0, lengthScale=1.0, timeScale=1.0):
+                    maxIncrease=10.0, lengthScale=1.0, timeScale=1.0, constraintTolerance=None):
         """Prepare adaptive steps of the embedded pair (:mod:`.adaptive`) with the scaled
         error ``atol + rtol * size`` per physical kind (``integrators/control.py``: angles
         atol [rad], lengths atol L, angular velocities atol / T, velocities atol L / T with
         ``lengthScale`` L, ``timeScale`` T), the PI controller (safety factor ``safety``,
         growth per step at most ``maxIncrease``), steps in ``[minStep, maxStep]`` and the
-        first step ``firstStep`` (None: Hairer's HINIT).  The next :meth:`AdvanceTo` starts
-        afresh from the current state."""
+        first step ``firstStep`` (None: Hairer's HINIT).  ``constraintTolerance`` (None: off),
+        separate from the accuracy tolerances as in Simbody: after an accepted step whose
+        constraint residual max |h(g)| exceeds it the state is projected on the group
+        (positions, then velocities), and when max |J V| exceeds ``constraintTolerance / T``
+        the velocities; the error estimate of every step is projected onto the tangent space of
+        the constraint manifold (docs/ADAPTIVE.md, "Constraint tolerance").  The next
+        :meth:`AdvanceTo` starts afresh from the current state."""
         tab = self.tableau
         am = _adaptive.adaptive_method(tab)
         maxStep = float(np.inf if maxStep is None else maxStep)
@@ -688,6 +695,17 @@ class Simulator:
             raise ValueError(f"minStep must be >= 0 and below maxStep, got {minStep} (maxStep {maxStep})")
         if firstStep is not None and not (np.isfinite(firstStep) and firstStep > 0):
             raise ValueError(f"firstStep must be positive and finite, got {firstStep}")
+        ctol = np.zeros(3)                   # mbs/projection.py CT_*: off
+        if constraintTolerance is not None:
+            ct = float(constraintTolerance)
+            if not (np.isfinite(ct) and ct > 0):
+                raise ValueError(f"constraintTolerance must be positive and finite (or None: off), got "
+                                 f"{constraintTolerance}")
+            if self.stabilization is not None:
+                raise ValueError(f"constraintTolerance projects when the drift exceeds it; stabilization="
+                                 f"{self.stabilization!r} projects after every step: use one of them")
+            ctol[_projection.CT_POS] = ct
+            ctol[_projection.CT_VEL] = ct / float(timeScale)
         nb = self.sd.nb
         self._ad = dict(
             am=am, tol=_control.tolerances(atol, rtol, lengthScale, timeScale),
@@ -696,7 +714,7 @@ class Simulator:
             S=_control.controller_state(), fs=np.zeros(4), ist=np.zeros(3, np.int64),
             R0=np.zeros((nb, 3, 3)), r0=np.zeros((nb, 3)), V0=np.zeros((nb, 6)),
             dPhi=np.zeros((nb, 6)), dV=np.zeros((nb, 6)), w=np.zeros(am.A.shape[0]),
-            firstStep=firstStep, started=False, rtol=rtol, atol=atol)
+            firstStep=firstStep, started=False, rtol=rtol, atol=atol, ctol=ctol)
 
     def RestartAdaptive(self):
         """Start the adaptive integration afresh at the next :meth:`AdvanceTo` (a new first
@@ -734,6 +752,7 @@ class Simulator:
 
     def _adaptive_start(self, ad):
         ad["S"][:] = _control.controller_state()
+        ad["ctol"][_projection.CT_N_PROJ] = 0.0
         fs, ist = ad["fs"], ad["ist"]
         ist[:] = 0
         h = ad["firstStep"]
@@ -779,7 +798,7 @@ class Simulator:
             self._adaptive_start(ad)
         if not hasattr(self, "_vmaxValue"):
             self._vmaxValue = self._vmax()
-        args = (self.sd, self.wk, ad["am"], ad["par"], ad["S"], ad["tol"], ad["fs"], ad["ist"], tEnd,
+        args = (self.sd, self.wk, ad["am"], ad["par"], ad["S"], ad["tol"], ad["ctol"], ad["fs"], ad["ist"], tEnd,
                 self.R, self.r, self.V, ad["R0"], ad["r0"], ad["V0"], ad["dPhi"], ad["dV"], ad["w"],
                 float(self._vmaxValue), tout, Ro, ro, Vo)
         ep = ad.get("entry")
@@ -808,6 +827,11 @@ class Simulator:
         or the last restart (HINIT's two evaluations and the dense extra stages included)."""
         S = self._ad["S"]
         return int(S[_control.S_N_ACCEPT]), int(S[_control.S_N_REJECT]), int(S[_control.S_N_RHS])
+
+    @property
+    def constraintProjections(self):
+        """Projections the constraint tolerance triggered since SetAdaptive or the last restart."""
+        return int(self._ad["ctol"][_projection.CT_N_PROJ])
 
     def _run_adaptive(self, endTime, t0, outputTimes, progress, **kw):
         self.t = t0
@@ -842,10 +866,11 @@ class Simulator:
         acc, rej, nrhs = self.adaptiveCounters
         return Result(tout.copy(), R, r, V, omega.reshape(nout, nb, 3), vel.reshape(nout, nb, 3), energy, res, pv,
                       rv, list(self.groups), self.tableau.name, float(self._ad["hInitial"]), cpu, acc,
-                      rejectedSteps=rej, rhsEvaluations=nrhs, adaptive=True)
+                      rejectedSteps=rej, rhsEvaluations=nrhs, adaptive=True,
+                      constraintProjections=self.constraintProjections)
 
     def Run(self, endTime, stepSize=None, outputEvery=1, startTime=None, progress=False, *, rtol=None, atol=None,
-            outputTimes=None, maxStep=None, minStep=0.0, firstStep=None):
+            outputTimes=None, maxStep=None, minStep=0.0, firstStep=None, constraintTolerance=None):
         """Integrate from the current state to ``endTime``; returns a :class:`Result`.
 
         Fixed steps (the default): ``stepSize``, with ``outputEvery`` steps between stored
@@ -859,7 +884,9 @@ class Simulator:
         ``stepSize * outputEvery`` (if ``stepSize`` is given; it does not bound the steps)
         and at ``endTime``, by dense output: exact times, no step shortened.  The result
         has ``steps`` (accepted), ``rejectedSteps`` and ``rhsEvaluations``; its
-        ``stepSize`` is the first step."""
+        ``stepSize`` is the first step.  ``constraintTolerance`` (adaptive steps only):
+        projection on the group when the constraint drift exceeds it
+        (:meth:`SetAdaptive`; ``Result.constraintProjections`` counts them)."""
         if rtol is not None or atol is not None:
             t0 = self.t if startTime is None else float(startTime)
             if not (np.isfinite(t0) and np.isfinite(endTime) and endTime >= t0):
@@ -881,7 +908,10 @@ class Simulator:
             return self._run_adaptive(
                 float(endTime), t0, outputTimes, progress, rtol=1e-3 if rtol is None else rtol,
                 atol=1e-6 if atol is None else atol, maxStep=span if maxStep is None else min(maxStep, span),
-                minStep=minStep, firstStep=firstStep)
+                minStep=minStep, firstStep=firstStep, constraintTolerance=constraintTolerance)
+        if constraintTolerance is not None:
+            raise ValueError("constraintTolerance needs adaptive steps (rtol= / atol=); fixed steps project "
+                             "with Simulator(stabilization='position' or 'velocity')")
         if stepSize is None:
             raise ValueError("Run needs a stepSize (fixed steps) or rtol / atol (adaptive steps)")
         h = float(stepSize)

@@ -358,8 +358,70 @@ def kinematic_tree(h=None, T=0.5):
     return _finish("kinematic_tree", SC, mbs, T, h, 1e-3, sens, oT)
 
 
+# --------------------------------------------------------------------------- 10. FFRF reduced order
+def truss_fem(length=0.5, width=0.1, bays=4, EA=2e3, nodeMass=0.05):
+    """A small finite element model without external files: a box truss of ``bays`` bays
+    (nodes on four longitudinal lines, bars along the edges, rungs and diagonals), lumped
+    node masses; returned as an exudyn.FEM.FEMinterface (sparse M and K)."""
+    import scipy.sparse as sp
+    from exudyn.FEM import FEMinterface
+    pts = np.array([[length * i / bays, y, z] for i in range(bays + 1)
+                    for (y, z) in ((0, 0), (width, 0), (width, width), (0, width))])
+    bars = set()
+    for i in range(bays + 1):
+        bars |= {(4 * i + j, 4 * i + (j + 1) % 4) for j in range(4)} | {(4 * i, 4 * i + 2)}
+        if i < bays:
+            bars |= {(4 * i + j, 4 * (i + 1) + j) for j in range(4)} | {(4 * i + j, 4 * (i + 1) + (j + 1) % 4)
+                                                                        for j in range(4)}
+    n = 3 * len(pts)
+    K = np.zeros((n, n))
+    for p, q in sorted(bars):
+        d = pts[q] - pts[p]
+        k = EA / np.linalg.norm(d) ** 3 * np.outer(d, d)
+        for r, c, sg in ((p, p, 1), (q, q, 1), (p, q, -1), (q, p, -1)):
+            K[3 * r:3 * r + 3, 3 * c:3 * c + 3] += sg * k
+    fem = FEMinterface()
+    fem.nodes = {"Position": pts}
+    fem.massMatrix = sp.csr_matrix(np.eye(n) * nodeMass)
+    fem.stiffnessMatrix = sp.csr_matrix(K)
+    fem.surface = []
+    fem.elements = []
+    return fem
+
+
+def ffrf_pendulum(h=None, T=0.3):
+    """A flexible pendulum: an ObjectFFRFreducedOrder (a box truss, 6 eigenmodes, rigid body
+    node RotVecLG) on a spherical joint at its first mesh node, a box (RotVecLG) on a
+    spherical joint at its far end."""
+    from exudyn.FEM import ObjectFFRFreducedOrderInterface
+    from exudyn.utilities import MarkerSuperElementPosition
+    SC, mbs = _new()
+    g = [0, -9.81, 0]
+    fem = truss_fem()
+    fem.ComputeEigenmodes(6, excludeRigidBodyModes=6, useSparseSolver=False)
+    cms = ObjectFFRFreducedOrderInterface(fem, rigidBodyNodeType=exu.NodeType.RotationRotationVector)
+    w = np.array([0.5, 0, 1.0])
+    d = cms.AddObjectFFRFreducedOrder(mbs, positionRef=[0, 0, 0], initialAngularVelocity=list(w), gravity=g)
+    oF = d["oFFRFreducedOrder"]
+    ground = mbs.CreateGround()
+    mbs.AddObject(ObjectJointSpherical(markerNumbers=[
+        mbs.AddMarker(MarkerBodyPosition(bodyNumber=ground)),
+        mbs.AddMarker(MarkerSuperElementPosition(bodyNumber=oF, meshNodeNumbers=[0], weightingFactors=[1.0]))]))
+    tipNode = 4 * 4
+    tip = fem.nodes["Position"][tipNode]
+    a, wB = 0.1, np.array([0.5, 2.0, 1.0])
+    body = mbs.CreateRigidBody(inertia=InertiaCuboid(1000, [0.2, a, 0.05]), referencePosition=list(tip - [0, 0.5 * a, 0]),
+                               initialAngularVelocity=list(wB),
+                               initialVelocity=list(np.cross(w, tip) + np.cross(wB, [0, -0.5 * a, 0])),
+                               gravity=g, nodeType=ROTVEC)
+    mbs.AddObject(ObjectJointSpherical(markerNumbers=[
+        mbs.AddMarker(MarkerSuperElementPosition(bodyNumber=oF, meshNodeNumbers=[tipNode], weightingFactors=[1.0])),
+        mbs.AddMarker(MarkerBodyPosition(bodyNumber=body, localPosition=[0, 0.5 * a, 0]))]))
+    return _finish("ffrf_pendulum", SC, mbs, T, h, 1e-2, _body_sensors(mbs, body), oF)
+
+
 BUILDERS = {f.__name__: f for f in (cable2d_pendulum, cable3d_pendulum, sphere_contact, generic_ode2, generic_ode1,
-                                     hydraulic_arm, rolling_disc, beam3d_pendulum, kinematic_tree)}
+                                     hydraulic_arm, rolling_disc, beam3d_pendulum, kinematic_tree, ffrf_pendulum)}
 
 
 # --------------------------------------------------------------------------- comparison

@@ -27,7 +27,7 @@ from exudyn.utilities import (InertiaCuboid, InertiaCylinder, InertiaSphere, Loa
                               ObjectContactSphereSphere, ObjectGenericODE1, ObjectGenericODE2, ObjectJointSpherical,
                               ObjectKinematicTree, MarkerKinematicTreeRigid, RotationMatrixX, RotationMatrixZ,
                               SensorBody, SensorNode, SensorObject)
-from exudyn.beams import GenerateStraightLineANCFCable, GenerateStraightLineANCFCable2D
+from exudyn.beams import GenerateBeamElementsAlongLine
 
 O = exu.OutputVariableType
 ROTVEC = exu.NodeType.RotationRotationVector
@@ -53,9 +53,9 @@ def settings(T, h):
     ss.timeIntegration.endTime = T
     ss.timeIntegration.numberOfSteps = int(round(T / h))
     ss.timeIntegration.verboseMode = 0
-    ss.solutionSettings.writeSolutionToFile = False
-    ss.solutionSettings.sensorsWritePeriod = h
-    ss.displayStatistics = False
+    ss.solution.file.write = False
+    ss.solution.sensors.writePeriod = h
+    ss.show.statistics = False
     ss.timeIntegration.newton.relativeTolerance = 1e-10
     ss.timeIntegration.newton.absoluteTolerance = 1e-10
     ss.timeIntegration.generalizedAlpha.spectralRadius = 0.9
@@ -89,12 +89,11 @@ def cable2d_pendulum(h=None, T=0.3):
     (script step 1e-2 is beyond it)."""
     SC, mbs = _new()
     L, ne, g = 1.0, 4, [0, -9.81, 0]
-    cable = ObjectANCFCable2D(physicsMassPerLength=0.5, physicsBendingStiffness=0.5, physicsAxialStiffness=500,
-                              physicsBendingDamping=0.01, physicsAxialDamping=2.0)
-    nodes, elems, loads, _, _ = GenerateStraightLineANCFCable2D(mbs, [0, 0, 0], [0, -L, 0], ne, cable,
-                                                                massProportionalLoad=g,
-                                                                fixedConstraintsNode0=[1, 1, 0, 0])
-    mTip = mbs.AddMarker(MarkerBodyPosition(bodyNumber=elems[-1], localPosition=[L / ne, 0, 0]))
+    cable = ObjectANCFCable2D(massPerLength=0.5, bendingStiffness=0.5, axialStiffness=500,
+                              bendingDamping=0.01, axialDamping=2.0)
+    beam = GenerateBeamElementsAlongLine(mbs, [0, 0, 0], [0, -L, 0], ne, cable, gravity=g,
+                                         groundConstraintsStart=[1, 1, 0, 0])
+    mTip = mbs.AddMarker(MarkerBodyPosition(bodyNumber=beam["elements"][-1], localPosition=[L / ne, 0, 0]))
     a = 0.1
     body = mbs.CreateRigidBody(inertia=InertiaCuboid(1000, [0.2, a, 0.05]), referencePosition=[0, -L - 0.5 * a, 0],
                                initialVelocity=list(np.cross([0.5, 2.0, 1.0], [0, -0.5 * a, 0])),
@@ -102,7 +101,7 @@ def cable2d_pendulum(h=None, T=0.3):
                                gravity=g, nodeType=ROTVEC)
     mB = mbs.AddMarker(MarkerBodyPosition(bodyNumber=body, localPosition=[0, 0.5 * a, 0]))
     mbs.AddObject(ObjectJointSpherical(markerNumbers=[mTip, mB]))
-    return _finish("cable2d_pendulum", SC, mbs, T, h, 1e-2, _body_sensors(mbs, body), elems[-1])
+    return _finish("cable2d_pendulum", SC, mbs, T, h, 1e-2, _body_sensors(mbs, body), beam["elements"][-1])
 
 
 # --------------------------------------------------------------------------- 2. ANCF cable 3D
@@ -111,12 +110,11 @@ def cable3d_pendulum(h=None, T=0.3):
     swinging out of plane."""
     SC, mbs = _new()
     L, ne, g = 1.0, 4, [0, -9.81, 0]
-    cable = ObjectANCFCable(physicsMassPerLength=0.5, physicsBendingStiffness=0.5, physicsAxialStiffness=500,
-                            physicsBendingDamping=0.01, physicsAxialDamping=2.0)
-    nodes, elems, loads, _, _ = GenerateStraightLineANCFCable(mbs, [0, 0, 0], [0, -L, 0], ne, cable,
-                                                              massProportionalLoad=g,
-                                                              fixedConstraintsNode0=[1, 1, 1, 0, 0, 0])
-    mTip = mbs.AddMarker(MarkerBodyPosition(bodyNumber=elems[-1], localPosition=[L / ne, 0, 0]))
+    cable = ObjectANCFCable(massPerLength=0.5, bendingStiffness=0.5, axialStiffness=500,
+                            bendingDamping=0.01, axialDamping=2.0)
+    beam = GenerateBeamElementsAlongLine(mbs, [0, 0, 0], [0, -L, 0], ne, cable, gravity=g,
+                                         groundConstraintsStart=[1, 1, 1, 0, 0, 0])
+    mTip = mbs.AddMarker(MarkerBodyPosition(bodyNumber=beam["elements"][-1], localPosition=[L / ne, 0, 0]))
     a = 0.1
     body = mbs.CreateRigidBody(inertia=InertiaCuboid(1000, [0.2, a, 0.05]), referencePosition=[0, -L - 0.5 * a, 0],
                                initialVelocity=list(np.cross([0.5, 2.0, 1.0], [0, -0.5 * a, 0])),
@@ -124,7 +122,7 @@ def cable3d_pendulum(h=None, T=0.3):
                                gravity=g, nodeType=ROTVEC)
     mB = mbs.AddMarker(MarkerBodyPosition(bodyNumber=body, localPosition=[0, 0.5 * a, 0]))
     mbs.AddObject(ObjectJointSpherical(markerNumbers=[mTip, mB]))
-    return _finish("cable3d_pendulum", SC, mbs, T, h, 1e-2, _body_sensors(mbs, body), elems[-1])
+    return _finish("cable3d_pendulum", SC, mbs, T, h, 1e-2, _body_sensors(mbs, body), beam["elements"][-1])
 
 
 # --------------------------------------------------------------------------- 3. sphere-sphere contact
@@ -151,7 +149,7 @@ def sphere_contact(h=None, T=0.5):
     body = mbs.CreateRigidBody(inertia=InertiaSphere(m, r), referencePosition=list(p0), referenceRotationMatrix=R0,
                                initialVelocity=list(np.cross(omega, p0)),
                                initialAngularVelocity=list(omega), gravity=g, nodeType=ROTVEC)
-    mbs.CreateSphericalJoint(bodyNumbers=[0, body], position=[0, 0, 0])
+    mbs.CreateSphericalJoint(itemNumbers=[0, body], position=[0, 0, 0])
     mFixed = mbs.AddMarker(MarkerNodePosition(nodeNumber=nFixed))
     mBall = mbs.AddMarker(MarkerBodyRigid(bodyNumber=body))
     nData = mbs.AddNode(NodeGenericData(initialCoordinates=[-delta, 0, 0, 0], numberOfDataCoordinates=4))
@@ -173,7 +171,7 @@ def generic_ode2(h=None, T=0.5):
     v0 = np.cross(omega, p0)
     body = mbs.CreateRigidBody(inertia=InertiaCuboid(500, [0.2, 0.12, 0.08]), referencePosition=list(p0),
                                initialVelocity=list(v0), initialAngularVelocity=list(omega), gravity=g, nodeType=ROTVEC)
-    mbs.CreateSphericalJoint(bodyNumbers=[mbs.CreateGround(), body], position=[0, 0, 0])
+    mbs.CreateSphericalJoint(itemNumbers=[mbs.CreateGround(), body], position=[0, 0, 0])
     nG = mbs.AddNode(NodeGenericODE2(referenceCoordinates=[0, 0], initialCoordinates=[0, 0],
                                       initialCoordinates_t=[v0[0], 0], numberOfODE2Coordinates=2))
     M = np.diag([0.5, 0.3])
@@ -203,7 +201,7 @@ def generic_ode1(h=None, T=0.5):
     nB = mbs.GetObject(body)["nodeNumber"]
     # a stiff pivot (penalty spring): Exudyn's explicit RK44 then gives the fine reference
     # (its implicit solvers start ODE1 coordinates with a zero rate and do not converge here)
-    mbs.CreateCartesianSpringDamper(bodyNumbers=[mbs.CreateGround(), body], localPosition0=[0, 0, 0],
+    mbs.CreateCartesianSpringDamper(itemNumbers=[mbs.CreateGround(), body], localPosition0=[0, 0, 0],
                                     localPosition1=[-0.3, 0, 0], stiffness=[1e4] * 3, damping=[5.0] * 3)
     tau0 = -kp * (0 - 0.5) - kd * 1.0                  # the PD law at t = 0: the actuator starts at rest (zero rate)
     nA = mbs.AddNode(NodeGenericODE1(referenceCoordinates=[0], initialCoordinates=[tau0], numberOfODE1Coordinates=1))
@@ -237,7 +235,7 @@ def hydraulic_arm(h=None, T=0.5):
                                gravity=g, nodeType=ROTVEC, initialAngularVelocity=[0, 0, 0.0])
     ground = mbs.CreateGround()
     # a stiff spherical pivot (penalty spring): see generic_ode1
-    mbs.CreateCartesianSpringDamper(bodyNumbers=[ground, body], localPosition0=[0, 0, 0], localPosition1=[-0.5 * L, 0, 0],
+    mbs.CreateCartesianSpringDamper(itemNumbers=[ground, body], localPosition0=[0, 0, 0], localPosition1=[-0.5 * L, 0, 0],
                                     stiffness=[1e5] * 3, damping=[20.0] * 3)
     mG = mbs.AddMarker(MarkerBodyPosition(bodyNumber=ground, localPosition=[0, -0.25 * L, 0]))
     mR = mbs.AddMarker(MarkerBodyPosition(bodyNumber=body, localPosition=[-0.25 * L, 0, 0]))
@@ -309,7 +307,7 @@ def beam3d_pendulum(h=None, T=0.3):
     rot = [0, 0, -0.5 * np.pi]                              # beam axis (local x) along -y
     nodes = [mbs.AddNode(exu.itemInterface.NodeRigidBodyRotVecLG(referenceCoordinates=[0, -le * i, 0] + rot))
              for i in range(ne + 1)]
-    beams = [mbs.AddObject(ObjectBeamGeometricallyExact(nodeNumbers=[nodes[i], nodes[i + 1]], physicsLength=le,
+    beams = [mbs.AddObject(ObjectBeamGeometricallyExact(nodeNumbers=[nodes[i], nodes[i + 1]], length=le,
                                                         sectionData=sec)) for i in range(ne)]
     for b in beams:
         mbs.AddLoad(LoadMassProportional(markerNumber=mbs.AddMarker(MarkerBodyMass(bodyNumber=b)), loadVector=g))

@@ -1,0 +1,142 @@
+"""Scripts with items the compiled kernel does not read (issue 17, Checks).
+
+Each script of :mod:`foreign_models` (one foreign item kind each, coupled to a RotVecLG
+rigid body) goes through ``exl.SolveDynamic`` unchanged: the solver must pick the path on
+which Exudyn evaluates the model, say so in exactly one warning naming the item, and
+either
+
+* agree with a fine native reference to the order of the method (MK-RK4: the errors at
+  h and h/2 fall by 2^4 = 16; asserted: observed order log2(e(h)/e(h/2)) in [3.4, 4.8],
+  with both errors at least 10x the reference's own error estimate, so that the order is
+  the method's and not the reference's), or
+* stop with a StepSizeError that names a stable step (the flexible bodies at the script's
+  step 1e-2 s), after which a run at that step works.
+
+The references are computed here, never stored: Exudyn's generalized-alpha (spectral
+radius 0.9, order 2) at h0 ... h0/8, Richardson-extrapolated (``native_reference``; its own
+error is the distance between two extrapolations), or Exudyn's explicit RK44 for the
+scripts without joints (``native_reference_rk``; Exudyn's implicit solvers start ODE1
+coordinates with a zero rate, which makes them first order there).
+"""
+import functools
+import math
+import re
+import warnings
+
+import numpy as np
+import pytest
+
+import exudyn as exu
+
+import exudyn_lie as exl
+from exudyn_lie.errors import ConstraintError, StepSizeError
+
+import foreign_models as FM
+
+# name: (reference kind, h0 of the reference, h of the Lie group run, script step is unstable)
+CASES = {
+    "cable2d_pendulum": ("ga", 1e-4, 1e-3, True),
+    "cable3d_pendulum": ("ga", 1e-4, 1e-3, True),
+    "sphere_contact": ("ga", 1e-4, 4e-3, False),
+    "generic_ode2": ("ga", 1e-4, 4e-3, False),
+    "generic_ode1": ("rk", 2.5e-4, 4e-3, False),
+    "hydraulic_arm": ("rk", 1e-3, 4e-3, False),
+    "rolling_disc": ("ga", 1e-4, 2e-3, False),
+    "beam3d_pendulum": ("ga", 5e-5, 1e-3, True),
+    "kinematic_tree": ("ga", 1e-4, 4e-3, False),
+    "ffrf_pendulum": ("ga", 1e-4, 5e-4, True),
+}
+SLOW = {"beam3d_pendulum", "ffrf_pendulum", "kinematic_tree", "cable3d_pendulum"}
+ORDER_BAND = (3.4, 4.8)
+
+
+def _param(names):
+    return [pytest.param(n, marks=pytest.mark.slow) if n in SLOW else n for n in names]
+
+
+def _T(name):
+    return FM.BUILDERS[name].__defaults__[1]
+
+
+@functools.lru_cache(maxsize=None)
+def reference(name):
+    kind, h0, _, _ = CASES[name]
+    if kind == "rk":
+        return FM.native_reference_rk(FM.BUILDERS[name], h0, _T(name))
+    return FM.native_reference(FM.BUILDERS[name], h0, _T(name))
+
+
+def solve_lie(model, **kw):
+    """exl.SolveDynamic on the script; returns the final state and the warnings naming the
+    foreign item."""
+    short = model.foreign                       # e.g. 'ANCFCable2D' (Exudyn's objectType, without 'Object')
+    with warnings.catch_warnings(record=True) as rec:
+        warnings.simplefilter("always")
+        exl.SolveDynamic(model.mbs, model.simulationSettings, showProgress=False, **kw)
+    naming = [str(w.message) for w in rec if short in str(w.message)]
+    return FM.final_state(model.mbs), naming
+
+
+@pytest.mark.parametrize("name", _param(CASES))
+def test_native_reference_is_fine(name):
+    """The reference itself: the native runs converge at their order, and the extrapolated
+    reference's own error is far below the Lie group runs' errors (checked in the next test)."""
+    kind = CASES[name][0]
+    y, err, info = reference(name)
+    print(f"{name}: native {kind} diffs {['%.2e' % d for d in info['diffs']]}, order {info['order']:.2f}, "
+          f"reference error {err:.2e}")
+    assert np.all(np.isfinite(y))
+    nominal = 4.0 if kind == "rk" else 2.0
+    assert abs(info["order"] - nominal) < 0.3
+    assert err < 1e-6
+
+
+@pytest.mark.parametrize("name", _param(CASES))
+def test_lie_group_run_agrees_with_fine_native_reference_to_order_4(name):
+    _, _, h, _ = CASES[name]
+    T = _T(name)
+    ref, refErr, _ = reference(name)
+    errs = []
+    for hh in (h, h / 2):
+        m = FM.BUILDERS[name](h=hh, T=T)
+        y, naming = solve_lie(m)
+        assert len(naming) == 1, f"{name}: expected one warning naming {m.foreign}, got {naming}"
+        assert np.all(np.isfinite(y))
+        errs.append(FM.state_error(y, ref))
+    order = math.log2(errs[0] / errs[1])
+    print(f"{name}: MK-RK4 h = {h:g}: error {errs[0]:.3e}; h/2: {errs[1]:.3e}; observed order {order:.2f}; "
+          f"reference error {refErr:.1e}")
+    assert errs[1] > 10 * refErr, "the reference is not fine enough to measure the order"
+    assert ORDER_BAND[0] <= order <= ORDER_BAND[1]
+
+
+STIFF = [n for n, c in CASES.items() if c[3]]
+
+
+@pytest.mark.parametrize("name", _param(STIFF))
+def test_flexible_body_at_the_script_step_stops_with_a_stable_step(name):
+    """At the script's step (1e-2 s) the flexible body's modes are beyond RK4's stability
+    limit: a StepSizeError that names a step; the run at that step works and agrees with the
+    reference (RK4's error at a step near its stability limit is not small: < 1e-3 asserted
+    on displacements of ~1e-1)."""
+    T = _T(name)
+    m = FM.BUILDERS[name](T=T)
+    assert m.scriptStep == 1e-2
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        with pytest.raises(StepSizeError) as info:
+            exl.SolveDynamic(m.mbs, m.simulationSettings, showProgress=False)
+    msg = str(info.value)
+    print(msg)
+    found = re.search(r"step size of ([0-9.eE+-]+) s", msg)
+    assert found, msg
+    hs = float(found.group(1))
+    assert 0 < hs < m.scriptStep
+    m2 = FM.BUILDERS[name](h=T / math.ceil(T / hs), T=T)
+    y, naming = solve_lie(m2)
+    assert len(naming) == 1
+    assert np.all(np.isfinite(y))
+    ref, _, _ = reference(name)
+    err = FM.state_error(y, ref)
+    print(f"{name}: suggested step {hs:.3g} s: error {err:.2e}")
+    assert err < 1e-3

@@ -18,9 +18,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 import exudyn as exu
-from exudyn.utilities import (InertiaCuboid, InertiaCylinder, InertiaSphere, LoadForceVector, LoadMassProportional,
+from exudyn.utilities import (InertiaCuboid, InertiaCylinder, InertiaSphere, LoadMassProportional,
                               LoadTorqueVector, MarkerBodyMass, MarkerBodyPosition, MarkerBodyRigid,
-                              MarkerNodeCoordinate, MarkerNodePosition, MarkerNodeRigid, NodeGenericData,
+                              MarkerNodeCoordinate, MarkerNodePosition, NodeGenericData,
                               NodeGenericODE1, NodeGenericODE2, NodePointGround, ObjectANCFCable, ObjectANCFCable2D,
                               ObjectBeamGeometricallyExact, ObjectConnectorCoordinate,
                               ObjectConnectorHydraulicActuatorSimple, ObjectConnectorRollingDiscPenalty,

@@ -26,12 +26,16 @@ import warnings
 import numpy as np
 import pytest
 
-import exudyn as exu
+
 
 import exudyn_lie as exl
-from exudyn_lie.errors import ConstraintError, StepSizeError
+from exudyn.utilities import MarkerBodyRigid
+
+from exudyn_lie.bridge import BridgeError
+from exudyn_lie.errors import StepSizeError
 
 import foreign_models as FM
+from test_bridge_errors import assert_unchanged, snapshot
 
 # name: (reference kind, h0 of the reference, h of the Lie group run, script step is unstable)
 CASES = {
@@ -140,3 +144,56 @@ def test_flexible_body_at_the_script_step_stops_with_a_stable_step(name):
     err = FM.state_error(y, ref)
     print(f"{name}: suggested step {hs:.3g} s: error {err:.2e}")
     assert err < 1e-3
+
+
+# --------------------------------------------------------------------------- bad input
+def _bad(name, edit):
+    """The script ``name`` with ``edit(model)`` applied (and mbs assembled again)."""
+    m = FM.BUILDERS[name](h=1e-3, T=0.01)
+    edit(m)
+    m.mbs.Assemble()
+    return m
+
+
+def _general_contact(m):
+    gc = m.mbs.AddGeneralContact()
+    gc.SetFrictionPairings(np.zeros((1, 1)))
+
+
+def _nan_node(m):
+    n = next(i for i in range(m.mbs.systemData.NumberOfNodes()) if m.mbs.GetNode(i)["nodeType"] == "GenericODE2")
+    m.mbs.SetNodeParameter(n, "initialCoordinates", [float("nan"), 0.0])
+
+
+def _rolling_joint(m):
+    from exudyn.utilities import ObjectJointRollingDisc
+    mbs = m.mbs
+    body = next(i for i in range(mbs.systemData.NumberOfObjects()) if mbs.GetObject(i)["objectType"] == "RigidBody")
+    mG = mbs.AddMarker(MarkerBodyRigid(bodyNumber=0))
+    mD = mbs.AddMarker(MarkerBodyRigid(bodyNumber=body))
+    mbs.AddObject(ObjectJointRollingDisc(markerNumbers=[mG, mD], discRadius=0.1, constrainedAxes=[1, 1, 1]))
+
+
+BAD = {
+    "GeneralContact": ("generic_ode2", _general_contact, {}, r"GeneralContact"),
+    "non-finite initial coordinate of the foreign item's node": ("generic_ode2", _nan_node, {},
+                                                                 r"node \d+ .*NodeGenericODE2.*not finite"),
+    "nonholonomic joint": ("generic_ode2", _rolling_joint, {}, r"ObjectJointRollingDisc.*velocity level"),
+    "evaluation='compiled' with a foreign item": ("generic_ode2", lambda m: None, dict(evaluation="compiled"),
+                                                  r"ObjectGenericODE2 is not supported"),
+    "unknown evaluation": ("generic_ode2", lambda m: None, dict(evaluation="python"), r"evaluation must be"),
+    "stabilization with a foreign item": ("cable2d_pendulum", lambda m: None, dict(stabilization="velocity"),
+                                          r"stabilization"),
+}
+
+
+@pytest.mark.parametrize("case", list(BAD))
+def test_invalid_foreign_setup_is_refused_before_mbs_is_touched(case):
+    name, edit, kw, match = BAD[case]
+    m = _bad(name, edit)
+    snap = snapshot(m.mbs)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        with pytest.raises(BridgeError, match=match):
+            exl.SolveDynamic(m.mbs, m.simulationSettings, showProgress=False, **kw)
+    assert_unchanged(m.mbs, snap)

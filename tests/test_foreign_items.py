@@ -25,12 +25,9 @@ import warnings
 
 import numpy as np
 import pytest
-
-
-
-import exudyn_lie as exl
 from exudyn.utilities import MarkerBodyRigid
 
+import exudyn_lie as exl
 from exudyn_lie.bridge import BridgeError
 from exudyn_lie.errors import StepSizeError
 

@@ -84,13 +84,13 @@ def _finish(name, SC, mbs, T, h, hScript, sensors, foreign):
 # --------------------------------------------------------------------------- 1. ANCF cable 2D
 def cable2d_pendulum(h=None, T=0.3):
     """A box (RotVecLG) hanging by a spherical joint from the lower end of a vertical
-    ObjectANCFCable2D (4 elements, 1 m), the cable's upper node pinned; the box spins
-    about a tilted axis and swings.  The cable's axial modes limit the explicit step
-    (script step 1e-2 is beyond it)."""
+    ObjectANCFCable2D (4 elements, 1 m, light axial damping), the cable's upper node pinned; the box
+    spins about a tilted axis and swings.  The cable's axial modes (omega ~ 800 rad/s) limit
+    the explicit step: the script step 1e-2 s is beyond it."""
     SC, mbs = _new()
     L, ne, g = 1.0, 4, [0, -9.81, 0]
     cable = ObjectANCFCable2D(massPerLength=0.5, bendingStiffness=0.5, axialStiffness=500,
-                              bendingDamping=0.01, axialDamping=2.0)
+                              bendingDamping=0.0, axialDamping=0.2)
     beam = GenerateBeamElementsAlongLine(mbs, [0, 0, 0], [0, -L, 0], ne, cable, gravity=g,
                                          groundConstraintsStart=[1, 1, 0, 0])
     mTip = mbs.AddMarker(MarkerBodyPosition(bodyNumber=beam["elements"][-1], localPosition=[L / ne, 0, 0]))
@@ -106,12 +106,14 @@ def cable2d_pendulum(h=None, T=0.3):
 
 # --------------------------------------------------------------------------- 2. ANCF cable 3D
 def cable3d_pendulum(h=None, T=0.3):
-    """As :func:`cable2d_pendulum` with the 3D ObjectANCFCable (NodePointSlope1), the box
-    swinging out of plane."""
+    """As :func:`cable2d_pendulum` with the 3D ObjectANCFCable (NodePointSlope1) and with
+    bending damping: it puts a real eigenvalue of about -1.3e3 1/s
+    (Exudyn's ComputeODE2Eigenvalues) into the model, which limits the explicit step far
+    below the oscillating modes' limit."""
     SC, mbs = _new()
     L, ne, g = 1.0, 4, [0, -9.81, 0]
     cable = ObjectANCFCable(massPerLength=0.5, bendingStiffness=0.5, axialStiffness=500,
-                            bendingDamping=0.01, axialDamping=2.0)
+                            bendingDamping=1e-3, axialDamping=0.2)
     beam = GenerateBeamElementsAlongLine(mbs, [0, 0, 0], [0, -L, 0], ne, cable, gravity=g,
                                          groundConstraintsStart=[1, 1, 1, 0, 0, 0])
     mTip = mbs.AddMarker(MarkerBodyPosition(bodyNumber=beam["elements"][-1], localPosition=[L / ne, 0, 0]))

@@ -896,7 +896,7 @@ class LieGroupSolver:
 def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialValues=False, storeSolver=True,
                  showHints=False, showCausingItems=True, autoAssemble=True, *, method=None, liegroup="auto",
                  stabilization=None, projectInitial=True, verbose=False, showProgress=True, substeps=None,
-                 accelerations=None):
+                 accelerations=None, evaluation="auto"):
     """Drop-in for ``exudyn.SolveDynamic``: integrate ``mbs`` with an explicit Munthe-Kaas
     Lie group method inside Exudyn's time loop; returns True.
 
@@ -915,7 +915,9 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
     (print the group per body, the plan and the time spent), ``showProgress`` (a progress line every 2 s on runs longer than 2 s),
     ``substeps`` (internal steps per Exudyn step; default: one Exudyn step per output
     period), ``accelerations`` (write q_tt / multipliers; default: when something reads
-    them).
+    them), ``evaluation`` ('auto': the compiled kernel when it has every item of the model,
+    else Exudyn evaluates the whole model, :mod:`.evaluated_solve`, with one warning naming
+    the items; 'compiled' / 'exudyn' force a path).
 
     Honours ``timeIntegration.startTime / endTime / numberOfSteps``, sensors (stored and
     files), the solution and restart files, pre/post-step user functions,
@@ -934,6 +936,19 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
     method, typeName, replaced = resolve_solver_type(solverType, settings.timeIntegration.solverType, method,
                                                      _check_method)
     assemble = not mbs.systemIsConsistent and autoAssemble
+    if evaluation not in ("auto", "compiled", "exudyn"):
+        raise BridgeError(f"evaluation must be 'auto', 'compiled' or 'exudyn', got {evaluation!r}")
+    if evaluation != "compiled":
+        from .evaluated_dispatch import evaluated_path
+        path = evaluated_path(mbs, evaluation, assemble, method=method, liegroup=liegroup,
+                              stabilization=stabilization, projectInitial=projectInitial, verbose=verbose,
+                              settings=settings, substeps=substeps, check_liegroup=_group_name)
+        if path is not None:
+            if assemble:
+                warn_user("exudyn_lie.SolveDynamic: mbs is not assembled; calling mbs.Assemble()")
+                mbs.Assemble()
+            return path.Solve(simulationSettings, updateInitialValues=updateInitialValues, storeSolver=storeSolver,
+                              showProgress=showProgress, substeps=substeps, accelerations=accelerations)
     solver = LieGroupSolver(mbs, method=method, liegroup=liegroup, stabilization=stabilization,
                             projectInitial=projectInitial, verbose=verbose,
                             _configuration="items" if assemble else "initial")

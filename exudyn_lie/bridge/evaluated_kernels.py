@@ -1,0 +1,284 @@
+"""Compiled pieces of the Exudyn-evaluated path (:mod:`.evaluated`, :mod:`.evaluated_stepper`):
+one numba call per stage before Exudyn evaluates the model, one after.
+
+The Lie group nodes (``NodeRigidBodyRotVecLG``) are "bodies" with a group id of the
+registry (SE3 / SO3xR3) and go through the *same* stage functions as the compiled kernel
+(:func:`~exudyn_lie.mbs.stepper.stage_state`, :func:`~exudyn_lie.mbs.stepper.stage_k`,
+:func:`~exudyn_lie.mbs.stepper.finish`: eq. MK1, ``g_j = g exp(Psi_j)``,
+``k_j = dexp^-1_{-Psi_j} V_j``), so both paths integrate the same ODE with the same
+arithmetic.  Their state velocity is the kernel's: SE3 the body twist ``(omega, U)``,
+``U = R^T rdot``; SO3xR3 ``(omega, rdot)``.  Exudyn's velocity coordinates of such a node are
+``[rdot (global), omega (local)]`` (DESIGN.md, facts).
+
+Every other ODE2 coordinate is a vector-space coordinate with ``qdot = v`` (mass points,
+2D bodies, EP / Rxyz nodes, ANCF, GenericODE2, ...), integrated with the same tableau.
+"""
+import math
+
+import numpy as np
+from numba import njit
+
+from ..groups import so3
+from ..mbs.codes import uses_body_twist
+from ..mbs.stepper import finish, stage_k, stage_state
+from .nodes import rotvec_row
+
+
+@njit(cache=True)
+def _rotvec_continuous(R, prev, p):
+    """Rotation vector of R on the branch nearest to ``prev`` (bridge/nodes.rotvec_row,
+    whose continuity rule the compiled path uses for the same node type)."""
+    z = np.zeros(3)
+    pp = prev.copy()
+    rotvec_row(R, z, z, pp, False, p, z.copy(), z.copy())
+
+
+@njit(cache=True)
+def write_exudyn_state(gid, R, r, V, lgIdx, lgRef, prev, q, qt, vecIdx, qv, vv, rv):
+    """Exudyn's ODE2 coordinates ``q`` and velocities ``qt`` (mbs' Current views) of the
+    state: a Lie group node writes ``log(R)`` minus the reference rotation vector (Exudyn:
+    total = reference + current, componentwise), ``r`` minus the reference position,
+    ``rdot = R U`` (SE3) or ``rdot`` (SO3xR3) and the local ``omega``; the vector-space
+    coordinates are copied.  ``rv`` (nl, 3) scratch for the rotation vectors."""
+    for i in range(gid.shape[0]):
+        _rotvec_continuous(R[i], prev[i], rv[i])
+        Vi = V[i]
+        body = uses_body_twist(gid[i])
+        for k in range(3):
+            q[lgIdx[i, k]] = r[i, k] - lgRef[i, k]
+            q[lgIdx[i, 3 + k]] = rv[i, k] - lgRef[i, 3 + k]
+            if body:
+                qt[lgIdx[i, k]] = R[i, k, 0] * Vi[3] + R[i, k, 1] * Vi[4] + R[i, k, 2] * Vi[5]
+            else:
+                qt[lgIdx[i, k]] = Vi[3 + k]
+            qt[lgIdx[i, 3 + k]] = Vi[k]
+    for k in range(vecIdx.shape[0]):
+        q[vecIdx[k]] = qv[k]
+        qt[vecIdx[k]] = vv[k]
+
+
+@njit(cache=True)
+def write_moved_positions(R, r, lgIdx, lgRef, prev, q, qt, vecIdx, qv, eps, ER, rv):
+    """Exudyn's ODE2 coordinates of the configuration moved along the motion by ``eps``
+    seconds at fixed velocities ``qt`` (for the acceleration term eta, :mod:`.evaluated`):
+    a Lie group node ``R exp(eps omega)``, ``r + eps rdot`` (omega local, rdot global, read
+    from ``qt``); vector coordinates ``q + eps v``."""
+    w = np.empty(3)
+    for i in range(R.shape[0]):
+        for k in range(3):
+            w[k] = eps * qt[lgIdx[i, 3 + k]]
+        so3.exp_into(w, ER)
+        Rm = R[i] @ ER
+        _rotvec_continuous(Rm, prev[i], rv[i])
+        for k in range(3):
+            q[lgIdx[i, k]] = r[i, k] + eps * qt[lgIdx[i, k]] - lgRef[i, k]
+            q[lgIdx[i, 3 + k]] = rv[i, k] - lgRef[i, 3 + k]
+    for k in range(vecIdx.shape[0]):
+        q[vecIdx[k]] = qv[k] + eps * qt[vecIdx[k]]
+
+
+@njit(cache=True)
+def lg_stage(gid, A, j, h, R, r, V, K, Vd, Psi, Rs, rs, Vs, ER, Er, vq, vv, QK, VK, qs, vs):
+    """Stage state of eq. MK1: the Lie group nodes through the compiled kernel's
+    ``stage_state``; the vector coordinates ``q_j = q + h sum a_jl qdot_l``,
+    ``v_j = v + h sum a_jl vdot_l``.  Returns -1 or the node whose stage argument left the
+    domain of dexp^-1 (as the compiled kernel)."""
+    bad = stage_state(gid, A, j, h, R, r, V, K, Vd, Psi, Rs, rs, Vs, ER, Er)
+    for k in range(vq.shape[0]):
+        a = vq[k]
+        b = vv[k]
+        for l in range(j):
+            a += h * A[j, l] * QK[l, k]
+            b += h * A[j, l] * VK[l, k]
+        qs[k] = a
+        vs[k] = b
+    return bad
+
+
+@njit(cache=True)
+def lg_stage_rates(gid, j, Rs, Vs, acc, lgIdx, Psi, K, Vd, tmp6, vecIdx, vs, QK, VK):
+    """After Exudyn's accelerations ``acc`` (nODE2) of stage j: the group velocity rates
+    ``Vdot_j`` per Lie group node (SO3xR3: ``(omegadot, rddot)``; SE3:
+    ``(omegadot, R^T rddot - omega x U)``, from ``rdot = R U``), the MK stage map
+    ``k_j = dexp^-1_{-Psi_j} V_j`` (compiled kernel's ``stage_k``), and the vector
+    coordinates' rates ``qdot_j = v_j``, ``vdot_j = acc``."""
+    for i in range(gid.shape[0]):
+        Vdi = Vd[j, i]
+        for k in range(3):
+            Vdi[k] = acc[lgIdx[i, 3 + k]]
+        if uses_body_twist(gid[i]):
+            w = Vs[i]
+            R = Rs[i]
+            for k in range(3):
+                Vdi[3 + k] = (R[0, k] * acc[lgIdx[i, 0]] + R[1, k] * acc[lgIdx[i, 1]] + R[2, k] * acc[lgIdx[i, 2]])
+            Vdi[3] -= w[1] * w[5] - w[2] * w[4]
+            Vdi[4] -= w[2] * w[3] - w[0] * w[5]
+            Vdi[5] -= w[0] * w[4] - w[1] * w[3]
+        else:
+            for k in range(3):
+                Vdi[3 + k] = acc[lgIdx[i, k]]
+    stage_k(gid, j, Psi, Vs, K, tmp6)
+    for k in range(vecIdx.shape[0]):
+        QK[j, k] = vs[k]
+        VK[j, k] = acc[vecIdx[k]]
+
+
+@njit(cache=True)
+def lg_finish(gid, stages, b, h, R, r, V, K, Vd, Psi, Rn, C, rn, Er, vq, vv, QK, VK):
+    """``g <- g exp(h sum b_j k_j)`` (compiled kernel's ``finish``, with its
+    re-orthonormalisation), ``V <- V + h sum b_j Vdot_j``; vector coordinates likewise.
+    Returns False if the new state is not finite."""
+    finish(gid, stages, b, h, R, r, V, K, Vd, Psi, Rn, C, rn, Er)
+    for k in range(vq.shape[0]):
+        a = 0.0
+        c = 0.0
+        for jj in range(stages.shape[0]):
+            j = stages[jj]
+            a += b[j] * QK[j, k]
+            c += b[j] * VK[j, k]
+        vq[k] += h * a
+        vv[k] += h * c
+    ok = True
+    for i in range(gid.shape[0]):
+        for k in range(6):
+            if not math.isfinite(V[i, k]):
+                ok = False
+        for k in range(3):
+            if not math.isfinite(r[i, k]):
+                ok = False
+    for k in range(vq.shape[0]):
+        if not (math.isfinite(vq[k]) and math.isfinite(vv[k])):
+            ok = False
+    return ok
+
+
+@njit(cache=True)
+def block_kkt_solve(M, f, Cq, eta, blk, blkPtr, Minv, X, S, lam, a, nzIdx, nzCnt):
+    """Index-1 accelerations ``[M Cq^T; Cq 0][a; lam] = [f; eta]`` (eq. index1) with M
+    block diagonal: blocks ``blk[blkPtr[b]:blkPtr[b+1]]`` (coordinate indices).  Each block
+    is inverted (Gauss-Jordan with partial pivoting, stored in ``Minv``, dense n x n but only
+    the blocks are touched); ``X = M^-1 Cq^T`` only on the blocks a row touches;
+    ``S = Cq X`` over the nonzero columns of each row (``nzIdx``, ``nzCnt``: scratch); ``S lam = Cq M^-1 f - eta``; ``a = M^-1 (f - Cq^T lam)``.
+    Returns 0, or 1 if a block of M is singular, 2 if S is singular."""
+    n = f.shape[0]
+    m = eta.shape[0]
+    nb = blkPtr.shape[0] - 1
+    # invert every block
+    for bI in range(nb):
+        p0 = blkPtr[bI]
+        s = blkPtr[bI + 1] - p0
+        W = np.empty((s, 2 * s))
+        for i in range(s):
+            for k in range(s):
+                W[i, k] = M[blk[p0 + i], blk[p0 + k]]
+                W[i, s + k] = 1.0 if i == k else 0.0
+        scale = 0.0
+        for i in range(s):
+            scale = max(scale, abs(W[i, i]))
+        for c in range(s):
+            piv = c
+            for i in range(c + 1, s):
+                if abs(W[i, c]) > abs(W[piv, c]):
+                    piv = i
+            if abs(W[piv, c]) <= 1e-14 * scale or scale == 0.0:
+                return 1
+            if piv != c:
+                for k in range(2 * s):
+                    tmp = W[c, k]
+                    W[c, k] = W[piv, k]
+                    W[piv, k] = tmp
+            d = 1.0 / W[c, c]
+            for k in range(2 * s):
+                W[c, k] *= d
+            for i in range(s):
+                if i != c:
+                    g = W[i, c]
+                    if g != 0.0:
+                        for k in range(2 * s):
+                            W[i, k] -= g * W[c, k]
+        for i in range(s):
+            for k in range(s):
+                Minv[blk[p0 + i], blk[p0 + k]] = W[i, s + k]
+    # a0 = M^-1 f (blockwise)
+    for bI in range(nb):
+        p0 = blkPtr[bI]
+        p1 = blkPtr[bI + 1]
+        for i in range(p0, p1):
+            acc = 0.0
+            for k in range(p0, p1):
+                acc += Minv[blk[i], blk[k]] * f[blk[k]]
+            a[blk[i]] = acc
+    if m == 0:
+        return 0
+    # X = M^-1 Cq^T (n x m), blockwise; S = Cq X; rhs = Cq a0 - eta
+    for c in range(m):
+        for i in range(n):
+            X[i, c] = 0.0
+        for bI in range(nb):
+            p0 = blkPtr[bI]
+            p1 = blkPtr[bI + 1]
+            touched = False
+            for k in range(p0, p1):
+                if Cq[c, blk[k]] != 0.0:
+                    touched = True
+                    break
+            if not touched:
+                continue
+            for i in range(p0, p1):
+                acc = 0.0
+                for k in range(p0, p1):
+                    acc += Minv[blk[i], blk[k]] * Cq[c, blk[k]]
+                X[blk[i], c] = acc
+    for r_ in range(m):
+        cnt = 0
+        acc = 0.0
+        for k in range(n):
+            ck = Cq[r_, k]
+            if ck != 0.0:
+                nzIdx[r_, cnt] = k
+                cnt += 1
+                acc += ck * a[k]
+        nzCnt[r_] = cnt
+        lam[r_] = acc - eta[r_]
+    for r_ in range(m):
+        for c in range(r_, m):
+            acc = 0.0
+            for kk in range(nzCnt[r_]):
+                k = nzIdx[r_, kk]
+                acc += Cq[r_, k] * X[k, c]
+            S[r_, c] = acc
+            S[c, r_] = acc
+    # Cholesky S = L L^T in place (S symmetric positive definite for independent rows)
+    dmax = 0.0
+    for i in range(m):
+        dmax = max(dmax, S[i, i])
+    for c in range(m):
+        d = S[c, c]
+        for k in range(c):
+            d -= S[c, k] * S[c, k]
+        if d <= 1e-10 * dmax:
+            return 2
+        d = math.sqrt(d)
+        S[c, c] = d
+        for i in range(c + 1, m):
+            v = S[i, c]
+            for k in range(c):
+                v -= S[i, k] * S[c, k]
+            S[i, c] = v / d
+    for i in range(m):
+        v = lam[i]
+        for k in range(i):
+            v -= S[i, k] * lam[k]
+        lam[i] = v / S[i, i]
+    for i in range(m - 1, -1, -1):
+        v = lam[i]
+        for k in range(i + 1, m):
+            v -= S[k, i] * lam[k]
+        lam[i] = v / S[i, i]
+    # a = a0 - X lam
+    for i in range(n):
+        acc = 0.0
+        for c in range(m):
+            acc += X[i, c] * lam[c]
+        a[i] -= acc
+    return 0

@@ -105,15 +105,15 @@ def cable2d_pendulum(h=None, T=0.3):
 
 
 # --------------------------------------------------------------------------- 2. ANCF cable 3D
-def cable3d_pendulum(h=None, T=0.3):
+def cable3d_pendulum(h=None, T=0.3, bendingDamping=1e-3):
     """As :func:`cable2d_pendulum` with the 3D ObjectANCFCable (NodePointSlope1) and with
     bending damping: it puts a real eigenvalue of about -1.3e3 1/s
     (Exudyn's ComputeODE2Eigenvalues) into the model, which limits the explicit step far
-    below the oscillating modes' limit."""
+    below the oscillating modes' limit (``bendingDamping=1e-2``: -1.3e4 1/s)."""
     SC, mbs = _new()
     L, ne, g = 1.0, 4, [0, -9.81, 0]
     cable = ObjectANCFCable(massPerLength=0.5, bendingStiffness=0.5, axialStiffness=500,
-                            bendingDamping=1e-3, axialDamping=0.2)
+                            bendingDamping=bendingDamping, axialDamping=0.2)
     beam = GenerateBeamElementsAlongLine(mbs, [0, 0, 0], [0, -L, 0], ne, cable, gravity=g,
                                          groundConstraintsStart=[1, 1, 1, 0, 0, 0])
     mTip = mbs.AddMarker(MarkerBodyPosition(bodyNumber=beam["elements"][-1], localPosition=[L / ne, 0, 0]))

@@ -203,3 +203,4 @@ def test_invalid_foreign_setup_is_refused_before_mbs_is_touched(case):
         with pytest.raises(BridgeError, match=match):
             exl.SolveDynamic(m.mbs, m.simulationSettings, showProgress=False, **kw)
     assert_unchanged(m.mbs, snap)
+

@@ -92,6 +92,6 @@ def evaluated_path(mbs, evaluation, assemble, *, method, liegroup, stabilization
     else:
         raise BridgeError(f"liegroup must be 'SE3', 'SO3xR3', 'auto' or a mapping {{object index: group}}, "
                           f"got {type(liegroup).__name__}")
-    solver = EvaluatedSolver(mbs, tab, lg, verbose=verbose, reasons=reasons)
+    solver = EvaluatedSolver(mbs, tab, lg, verbose=verbose, reasons=reasons, projectInitial=projectInitial)
     solver.check_run(settings, substeps)
     return solver

@@ -20,6 +20,7 @@ from numba import njit
 
 from ..groups import so3
 from ..mbs.codes import uses_body_twist
+from ..mbs.linalg import REL_PIVOT_TOL, pivoted_cholesky_solve
 from ..mbs.stepper import finish, stage_k, stage_state
 from .nodes import rotvec_row
 
@@ -153,13 +154,16 @@ def lg_finish(gid, stages, b, h, R, r, V, K, Vd, Psi, Rn, C, rn, Er, vq, vv, QK,
 
 
 @njit(cache=True)
-def block_kkt_solve(M, f, Cq, eta, blk, blkPtr, Minv, X, S, lam, a, nzIdx, nzCnt):
+def block_kkt_solve(M, f, Cq, eta, blk, blkPtr, Minv, X, S, lam, a, nzIdx, nzCnt, pivoted, perm, yw):
     """Index-1 accelerations ``[M Cq^T; Cq 0][a; lam] = [f; eta]`` (eq. index1) with M
     block diagonal: blocks ``blk[blkPtr[b]:blkPtr[b+1]]`` (coordinate indices).  Each block
     is inverted (Gauss-Jordan with partial pivoting, stored in ``Minv``, dense n x n but only
     the blocks are touched); ``X = M^-1 Cq^T`` only on the blocks a row touches;
     ``S = Cq X`` over the nonzero columns of each row (``nzIdx``, ``nzCnt``: scratch); ``S lam = Cq M^-1 f - eta``; ``a = M^-1 (f - Cq^T lam)``.
-    Returns 0, or 1 if a block of M is singular, 2 if S is singular."""
+    ``pivoted``: redundant constraints (S only semi-definite): the rank-revealing Cholesky
+    of the compiled kernel (:func:`~exudyn_lie.mbs.linalg.pivoted_cholesky_solve`; multipliers
+    of dependent rows 0), with the workspaces ``perm``, ``yw``.
+    Returns 0, or 1 if a block of M is singular, 2 if S is singular (not pivoted)."""
     n = f.shape[0]
     m = eta.shape[0]
     nb = blkPtr.shape[0] - 1
@@ -248,7 +252,23 @@ def block_kkt_solve(M, f, Cq, eta, blk, blkPtr, Minv, X, S, lam, a, nzIdx, nzCnt
                 acc += Cq[r_, k] * X[k, c]
             S[r_, c] = acc
             S[c, r_] = acc
-    # Cholesky S = L L^T in place (S symmetric positive definite for independent rows)
+    if pivoted:
+        pivoted_cholesky_solve(S, m, lam, perm, yw, REL_PIVOT_TOL)
+    elif not cholesky_solve_inplace(S, m, lam):
+        return 2
+    # a = a0 - X lam
+    for i in range(n):
+        acc = 0.0
+        for c in range(m):
+            acc += X[i, c] * lam[c]
+        a[i] -= acc
+    return 0
+
+
+@njit(cache=True)
+def cholesky_solve_inplace(S, m, x):
+    """``S x = rhs`` (x holds rhs on entry) by Cholesky in place; False if a pivot is
+    ``<= REL_PIVOT_TOL max(diag S)`` (the kernel's rank rule, mbs/linalg.py)."""
     dmax = 0.0
     for i in range(m):
         dmax = max(dmax, S[i, i])
@@ -256,8 +276,8 @@ def block_kkt_solve(M, f, Cq, eta, blk, blkPtr, Minv, X, S, lam, a, nzIdx, nzCnt
         d = S[c, c]
         for k in range(c):
             d -= S[c, k] * S[c, k]
-        if d <= 1e-10 * dmax:
-            return 2
+        if d <= REL_PIVOT_TOL * dmax:
+            return False
         d = math.sqrt(d)
         S[c, c] = d
         for i in range(c + 1, m):
@@ -266,19 +286,13 @@ def block_kkt_solve(M, f, Cq, eta, blk, blkPtr, Minv, X, S, lam, a, nzIdx, nzCnt
                 v -= S[i, k] * S[c, k]
             S[i, c] = v / d
     for i in range(m):
-        v = lam[i]
+        v = x[i]
         for k in range(i):
-            v -= S[i, k] * lam[k]
-        lam[i] = v / S[i, i]
+            v -= S[i, k] * x[k]
+        x[i] = v / S[i, i]
     for i in range(m - 1, -1, -1):
-        v = lam[i]
+        v = x[i]
         for k in range(i + 1, m):
-            v -= S[k, i] * lam[k]
-        lam[i] = v / S[i, i]
-    # a = a0 - X lam
-    for i in range(n):
-        acc = 0.0
-        for c in range(m):
-            acc += X[i, c] * lam[c]
-        a[i] -= acc
-    return 0
+            v -= S[k, i] * x[k]
+        x[i] = v / S[i, i]
+    return True

@@ -29,6 +29,7 @@ import numpy as np
 from ..userwarn import warn_user
 from .evaluated import EvaluatedModel, Layout, check_model
 from .evaluated_stepper import EvaluatedStepper
+from .evaluated_initial import project_initial
 from .evaluated_stiffness import check_step
 from .reader import BridgeError, RIGID_NODE_TYPES, UNHONOURED_MBS_FUNCTIONS
 from .settings import check_settings
@@ -117,8 +118,9 @@ class EvaluatedSolver:
     :class:`~.solver.LieGroupSolver`; ``reasons``: the items that force this path (for the
     one warning; None when the user chose the path)."""
 
-    def __init__(self, mbs, tableau, liegroup="auto", verbose=False, reasons=None):
+    def __init__(self, mbs, tableau, liegroup="auto", verbose=False, reasons=None, projectInitial=True):
         self.mbs = mbs
+        self.projectInitial = bool(projectInitial)
         self.tableau = tableau
         self.liegroup = liegroup
         self.verbose = bool(verbose)
@@ -250,6 +252,11 @@ class EvaluatedSolver:
             stepper = EvaluatedStepper(model, tab)
             self.stepper = stepper
             stepper.read_state(q, qt, y, t0)
+            fixed = project_initial(model, stepper, t0, self.projectInitial)
+            if fixed:
+                warn_user(f"exudyn_lie: the initial state does not satisfy the constraints; projected onto them: "
+                          f"{fixed} (Exudyn's own solvers start from it unchanged; pass projectInitial=False to "
+                          f"raise instead)")
             stepper.write()
             # stability of the step at the initial state (stiff items at the script's step)
             omega, stable = check_step(model, tab, h)

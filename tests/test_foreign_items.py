@@ -47,7 +47,7 @@ CASES = {
     "kinematic_tree": ("ga", 1e-4, 4e-3, False),
     "ffrf_pendulum": ("ga", 1e-4, 1e-3, True),
 }
-SLOW = {"beam3d_pendulum", "ffrf_pendulum", "kinematic_tree", "cable3d_pendulum"}
+SLOW = {"beam3d_pendulum", "ffrf_pendulum", "kinematic_tree", "cable3d_pendulum", "cable2d_pendulum"}
 ORDER_BAND = (3.4, 4.8)
 
 

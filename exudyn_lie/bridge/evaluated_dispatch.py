@@ -17,27 +17,37 @@ from .reader import (BODY_OBJECTS, BridgeError, SUPPORTED_LOADS, SUPPORTED_MARKE
 DATA_NODES = ("PointGround", "GenericData")
 
 
+def _listing(kind, idx):
+    shown = ", ".join(str(i) for i in idx[:4]) + (f", ... ({len(idx)} in all)" if len(idx) > 4 else "")
+    return f"{kind}{'s' if len(idx) > 1 else ''} {shown}"
+
+
 def foreign_items(mbs):
-    """Descriptions of the items whose type the compiled kernel does not have."""
+    """Descriptions of the items whose type the compiled kernel does not have, one per
+    type (``ObjectANCFCable2D (objects 1, 2, 3, 4)``)."""
     sd = mbs.systemData
-    out = []
+    found = {}
+
+    def add(typeName, kind, i):
+        found.setdefault(typeName, (kind, []))[1].append(i)
+
     for n in range(sd.NumberOfNodes()):
-        d = mbs.GetNode(n)
-        t = d["nodeType"]
+        t = mbs.GetNode(n)["nodeType"]
         if t not in NODE_KINDS and t not in DATA_NODES:
-            out.append(f"node {n} ('{d.get('name', '')}') Node{t}")
+            add("Node" + t, "node", n)
     for o in range(sd.NumberOfObjects()):
-        d = mbs.GetObject(o)
-        if "Object" + d["objectType"] not in SUPPORTED_OBJECTS:
-            out.append(f"object {o} ('{d.get('name', '')}') Object{d['objectType']}")
+        t = "Object" + mbs.GetObject(o)["objectType"]
+        if t not in SUPPORTED_OBJECTS:
+            add(t, "object", o)
     for m in range(sd.NumberOfMarkers()):
-        d = mbs.GetMarker(m)
-        if "Marker" + d["markerType"] not in SUPPORTED_MARKERS:
-            out.append(f"marker {m} ('{d.get('name', '')}') Marker{d['markerType']}")
+        t = "Marker" + mbs.GetMarker(m)["markerType"]
+        if t not in SUPPORTED_MARKERS:
+            add(t, "marker", m)
     for k in range(sd.NumberOfLoads()):
-        d = mbs.GetLoad(k)
-        if "Load" + d["loadType"] not in SUPPORTED_LOADS:
-            out.append(f"load {k} ('{d.get('name', '')}') Load{d['loadType']}")
+        t = "Load" + mbs.GetLoad(k)["loadType"]
+        if t not in SUPPORTED_LOADS:
+            add(t, "load", k)
+    out = [f"{t} ({_listing(kind, idx)})" for t, (kind, idx) in found.items()]
     n = int(mbs.NumberOfGeneralContacts())
     if n:
         out.append(f"{n} GeneralContact(s)")

@@ -167,6 +167,20 @@ class EvaluatedSolver:
                               f"model; set timeIntegration.adaptiveStep = False for fixed steps, or use a method "
                               f"without a pair (e.g. RK4)")
 
+    def _post_newton_items(self):
+        """What needs Exudyn's PostNewton after every MK step (one MK step per Exudyn step):
+        data coordinates (contact, friction, hysteresis states) or an mbs-level
+        PostNewtonUserFunction; '' if nothing."""
+        mbs = self.mbs
+        what = []
+        if mbs.systemData.DataSize() > 0:
+            what.append(f"{mbs.systemData.DataSize()} data coordinates")
+        fn = getattr(mbs, "GetPostNewtonUserFunction", None)
+        uf = fn() if fn is not None else 0
+        if not (isinstance(uf, (int, float)) and uf == 0) and uf is not None:
+            what.append("the PostNewtonUserFunction")
+        return " and ".join(what)
+
     # ------------------------------------------------------------------ plan
     def describe_plan(self, layout, groups, why, h, k, nsteps):
         L = layout
@@ -196,6 +210,12 @@ class EvaluatedSolver:
         self.check_run(ss, substeps)
         nsteps, t0, tEnd, h = self._time_settings(ss)
         k, userStep = self._plan(ss, nsteps, h, substeps)
+        postNewton = self._post_newton_items()
+        if postNewton and k > 1:
+            if substeps is not None:
+                raise BridgeError(f"substeps={substeps}: {postNewton} need Exudyn's PostNewton after every step "
+                                  f"(their data coordinates change between steps); use substeps=None or 1")
+            k = 1
         needAcc = self._needs_accelerations(ss, userStep) if accelerations is None else bool(accelerations)
         groups, why = node_groups(mbs, self.liegroup)
         tab = self.tableau
@@ -211,6 +231,9 @@ class EvaluatedSolver:
         ga.useIndex2Constraints = False
         ti2.adaptiveStep = False
         ti2.automaticStepSize = False
+        # contact items recommend a smaller step after an impact (PostNewton); the fixed
+        # steps do not follow it (Exudyn would reduce its step below the planned outputs)
+        ti2.discontinuous.useRecommendedStepSize = False
         ti2.verboseMode = 0
         userInfo = ss2.solution.file.information
         ss2.solution.file.information = f"{userInfo}; {info}" if userInfo else info
@@ -259,7 +282,7 @@ class EvaluatedSolver:
                           f"raise instead)")
             stepper.write()
             # stability of the step at the initial state (stiff items at the script's step)
-            omega, stable = check_step(model, tab, h)
+            rate, stable = check_step(model, tab, h)
             # the initial accelerations (and a measured estimate of the cost per step)
             stepper.write()
             model.accelerations(t0, stepper.R, stepper.r, stepper.prev, stepper.qv)    # first call: set-up
@@ -280,7 +303,7 @@ class EvaluatedSolver:
                           f"{1e-6 * perStep * nsteps * 1e6:.3g} s for {nsteps} steps)")
             if self.verbose or ss.timeIntegration.verboseMode >= 1:
                 print(self.describe_plan(layout, groups, why, h, k, nsteps))
-                print(f"exudyn_lie: stiffest mode omega = {omega:.4g} rad/s: stable up to h = {stable:.3g} s; "
+                print(f"exudyn_lie: fastest linearised mode |lambda| = {rate:.4g} 1/s: stable up to h = {stable:.3g} s; "
                       f"one stage costs {1e6 * perStage:.1f} us (Exudyn's evaluation, its dense copies of M "
                       f"and the Jacobian, the solve)")
             written = [q.copy(), qt.copy()]

@@ -204,3 +204,38 @@ def test_invalid_foreign_setup_is_refused_before_mbs_is_touched(case):
             exl.SolveDynamic(m.mbs, m.simulationSettings, showProgress=False, **kw)
     assert_unchanged(m.mbs, snap)
 
+
+
+@pytest.mark.slow
+def test_strongly_damped_cable_gets_a_stable_step_from_the_damping():
+    """The 3D cable with bending damping 1e-2: its fastest mode is a real eigenvalue
+    (Exudyn's ComputeODE2Eigenvalues, damping included), far beyond the oscillating modes
+    (820 rad/s); RK4 is stable on the negative real axis up to h |lambda| = 2.785.  At the
+    script's step the StepSizeError must name a step within that limit, and the run at the
+    named step works and agrees with the native reference (RK4 at ~2e-4 s: ~1e-6; 1e-4
+    asserted)."""
+    T = 0.3
+
+    def build(h=1e-2, T=T):
+        return FM.cable3d_pendulum(h=h, T=T, bendingDamping=1e-2)
+
+    m = build()
+    ev, _ = m.mbs.ComputeODE2Eigenvalues(computeComplexEigenvalues=True, useAbsoluteValues=False,
+                                        constrainedCoordinates=[], convert2Frequencies=False, useSparseSolver=False)
+    lam = float(np.abs(np.asarray(ev)).max())
+    assert lam > 1e4                                     # the damped mode, not the 820 rad/s oscillation
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        with pytest.raises(StepSizeError) as info:
+            exl.SolveDynamic(m.mbs, m.simulationSettings, showProgress=False)
+    found = re.search(r"step size of ([0-9.eE+-]+) s", str(info.value))
+    assert found, str(info.value)
+    hs = float(found.group(1))
+    print(f"|lambda| = {lam:.4g} 1/s, RK4 limit {2.785 / lam:.3g} s; suggested {hs:.3g} s")
+    assert hs * lam <= 2.785
+    y, naming = solve_lie(build(h=T / math.ceil(T / hs)))
+    assert len(naming) == 1 and np.all(np.isfinite(y))
+    ref, refErr, _ = FM.native_reference(build, 5e-5, T)
+    err = FM.state_error(y, ref)
+    print(f"run at {hs:.3g} s: error {err:.2e} (reference error {refErr:.1e})")
+    assert err < 1e-4

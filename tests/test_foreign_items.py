@@ -9,8 +9,9 @@ either
   h and h/2 fall by 2^4 = 16; asserted: observed order log2(e(h)/e(h/2)) in [3.4, 4.8],
   with both errors at least 10x the reference's own error estimate, so that the order is
   the method's and not the reference's), or
-* stop with a StepSizeError that names a stable step (the flexible bodies at the script's
-  step 1e-2 s), after which a run at that step works.
+* stop with a StepSizeError that names a stable step (the ANCF cables and the
+  geometrically exact beam at the script's step 1e-2 s; the FFRF truss runs there), after
+  which a run at that step works.
 
 The references are computed here, never stored: Exudyn's generalized-alpha (spectral
 radius 0.9, order 2) at h0 ... h0/8, Richardson-extrapolated (``native_reference``; its own

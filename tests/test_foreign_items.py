@@ -105,6 +105,10 @@ def test_lie_group_run_agrees_with_fine_native_reference_to_order_4(name):
         assert len(naming) == 1, f"{name}: expected one warning naming {m.foreign}, got {naming}"
         assert np.all(np.isfinite(y))
         errs.append(FM.state_error(y, ref))
+        # the script's sensors: one row per step, the last at T with the final state
+        data = m.mbs.GetSensorStoredData(m.sensors["position"])
+        assert data.shape[0] == round(T / hh) + 1 and data[-1, 0] == pytest.approx(T)
+        np.testing.assert_allclose(data[-1, 1:], m.mbs.GetSensorValues(m.sensors["position"]), rtol=0, atol=1e-12)
     order = math.log2(errs[0] / errs[1])
     print(f"{name}: MK-RK4 h = {h:g}: error {errs[0]:.3e}; h/2: {errs[1]:.3e}; observed order {order:.2f}; "
           f"reference error {refErr:.1e}")

@@ -329,12 +329,14 @@ class EvaluatedModel:
         terms = np.abs(np.asarray(Cq)) @ np.abs(self.qt) + np.abs(gv)
         return e1, np.abs(e2 - e1) / 3.0 + 4.0 * np.finfo(float).eps * terms / eps
 
-    def accelerations(self, t, R, r, prev, qv):
+    def accelerations(self, t, R, r, prev, qv, restore=False):
         """Exudyn's accelerations ``a`` (nODE2), multipliers ``lam`` and ODE1 rates ``ydot`` at
-        the state last written (:meth:`write_state`) and time t (eq. index1)."""
+        the state last written (:meth:`write_state`) and time t (eq. index1).  Without
+        ``restore`` (the stage loop) mbs is left at a configuration moved by eta's
+        differentiation step; with it, at the state and time t."""
         self.evaluations += 1
         M, f, Cq = self.mass_force_jacobian(t)
-        eta = self.eta(t, R, r, prev, qv, None, False) if self.m else self._eta0
+        eta = self.eta(t, R, r, prev, qv, None, restore) if self.m else self._eta0
         self.solve(M, f, Cq, eta)
         return self.a
 

@@ -10,7 +10,7 @@ position-level constraints, then of the velocity-level ones, either raises
   which does not depend on the velocity coordinates (the compiled path's projection in its
   group velocities gives the same velocities).
 
-Both solves are :func:`~.evaluated_kernels.block_kkt_solve` with ``f = 0``.
+Both solves are the model's index-1 solve (:meth:`~.evaluated.EvaluatedModel.solve`) with ``f = 0``.
 """
 from __future__ import annotations
 
@@ -52,11 +52,7 @@ def _position_residual(model, t):
 def _correction(model, t, rhs):
     """``Delta`` with ``C_q Delta = rhs`` of least M-norm (the KKT solve with f = 0)."""
     M, f, Cq = model.mass_force_jacobian(t)
-    eta = np.asarray(rhs, float)
-    active = model._active_rows(Cq)
-    if active is not None:
-        Cq, eta = Cq[active], eta[active]
-    model._solve(np.array(M), np.zeros(model.n), np.array(Cq), eta, active)
+    model.solve(M, np.zeros(model.n), Cq, np.asarray(rhs, float))
     return model.a.copy()
 
 

@@ -20,7 +20,7 @@ from numba import njit
 
 from ..groups import so3
 from ..mbs.codes import uses_body_twist
-from ..mbs.linalg import REL_PIVOT_TOL, pivoted_cholesky_solve
+from ..mbs.linalg import REL_PIVOT_TOL, band_cholesky_inplace, band_cholesky_solve_inplace, pivoted_cholesky_solve
 from ..mbs.stepper import finish, stage_k, stage_state
 from .nodes import rotvec_row
 
@@ -40,7 +40,8 @@ def write_exudyn_state(gid, R, r, V, lgIdx, lgRef, prev, q, qt, vecIdx, qv, vv, 
     state: a Lie group node writes ``log(R)`` minus the reference rotation vector (Exudyn:
     total = reference + current, componentwise), ``r`` minus the reference position,
     ``rdot = R U`` (SE3) or ``rdot`` (SO3xR3) and the local ``omega``; the vector-space
-    coordinates are copied.  ``rv`` (nl, 3) scratch for the rotation vectors."""
+    coordinates are copied.  ``rv`` (nl, 3) scratch for the rotation vectors.  Returns
+    ``max |qt|`` (the velocity scale of eta's differentiation step)."""
     for i in range(gid.shape[0]):
         _rotvec_continuous(R[i], prev[i], rv[i])
         Vi = V[i]
@@ -56,6 +57,10 @@ def write_exudyn_state(gid, R, r, V, lgIdx, lgRef, prev, q, qt, vecIdx, qv, vv, 
     for k in range(vecIdx.shape[0]):
         q[vecIdx[k]] = qv[k]
         qt[vecIdx[k]] = vv[k]
+    vmax = 0.0
+    for k in range(qt.shape[0]):
+        vmax = max(vmax, abs(qt[k]))
+    return vmax
 
 
 @njit(cache=True)
@@ -125,10 +130,11 @@ def lg_stage_rates(gid, j, Rs, Vs, acc, lgIdx, Psi, K, Vd, tmp6, vecIdx, vs, QK,
 
 
 @njit(cache=True)
-def lg_finish(gid, stages, b, h, R, r, V, K, Vd, Psi, Rn, C, rn, Er, vq, vv, QK, VK):
+def lg_finish(gid, stages, b, h, R, r, V, K, Vd, Psi, Rn, C, rn, Er, vq, vv, QK, VK, vlimit):
     """``g <- g exp(h sum b_j k_j)`` (compiled kernel's ``finish``, with its
     re-orthonormalisation), ``V <- V + h sum b_j Vdot_j``; vector coordinates likewise.
-    Returns False if the new state is not finite."""
+    Returns 0, 1 if the new state is not finite, 2 if a velocity exceeds ``vlimit``
+    (a blow-up)."""
     finish(gid, stages, b, h, R, r, V, K, Vd, Psi, Rn, C, rn, Er)
     for k in range(vq.shape[0]):
         a = 0.0
@@ -139,18 +145,22 @@ def lg_finish(gid, stages, b, h, R, r, V, K, Vd, Psi, Rn, C, rn, Er, vq, vv, QK,
             c += b[j] * VK[j, k]
         vq[k] += h * a
         vv[k] += h * c
-    ok = True
+    big = False
     for i in range(gid.shape[0]):
         for k in range(6):
             if not math.isfinite(V[i, k]):
-                ok = False
+                return 1
+            if abs(V[i, k]) > vlimit:
+                big = True
         for k in range(3):
             if not math.isfinite(r[i, k]):
-                ok = False
+                return 1
     for k in range(vq.shape[0]):
         if not (math.isfinite(vq[k]) and math.isfinite(vv[k])):
-            ok = False
-    return ok
+            return 1
+        if abs(vv[k]) > vlimit:
+            big = True
+    return 2 if big else 0
 
 
 @njit(cache=True)
@@ -296,3 +306,188 @@ def cholesky_solve_inplace(S, m, x):
             v -= S[k, i] * x[k]
         x[i] = v / S[i, i]
     return True
+
+
+@njit(cache=True)
+def invert_blocks(M, blk, blkPtr, blkOff, MinvB, W):
+    """The inverse of every diagonal block of M (Gauss-Jordan, partial pivoting) into the
+    flat storage ``MinvB[blkOff[b]:]`` (row-major s x s); ``W`` (smax, 2 smax) scratch.
+    Returns False if a block is singular."""
+    for bI in range(blkPtr.shape[0] - 1):
+        p0 = blkPtr[bI]
+        s = blkPtr[bI + 1] - p0
+        for i in range(s):
+            for k in range(s):
+                W[i, k] = M[blk[p0 + i], blk[p0 + k]]
+                W[i, s + k] = 1.0 if i == k else 0.0
+        scale = 0.0
+        for i in range(s):
+            scale = max(scale, abs(W[i, i]))
+        for c in range(s):
+            piv = c
+            for i in range(c + 1, s):
+                if abs(W[i, c]) > abs(W[piv, c]):
+                    piv = i
+            if scale == 0.0 or abs(W[piv, c]) <= 1e-14 * scale:
+                return False
+            if piv != c:
+                for k in range(2 * s):
+                    tmp = W[c, k]
+                    W[c, k] = W[piv, k]
+                    W[piv, k] = tmp
+            d = 1.0 / W[c, c]
+            for k in range(2 * s):
+                W[c, k] *= d
+            for i in range(s):
+                if i != c:
+                    g = W[i, c]
+                    if g != 0.0:
+                        for k in range(2 * s):
+                            W[i, k] -= g * W[c, k]
+        o = blkOff[bI]
+        for i in range(s):
+            for k in range(s):
+                MinvB[o + i * s + k] = W[i, s + k]
+    return True
+
+
+@njit(cache=True)
+def schur_band_solve(M, f, Cq, eta, blk, blkPtr, blkOff, blockOf, pos, bw, MinvB, W, a, lam, nzIdx, nzCnt,
+                     rowBlk, rowBlkCnt, bRowPtr, bRows, cnt, Y, Band, x, T):
+    """Index-1 accelerations ``[M Cq^T; Cq 0][a; lam] = [f; eta]`` (eq. index1) in time
+    linear in the number of bodies for tree-like mechanisms, with Exudyn's dense M and C_q:
+
+    * M block diagonal (``blk``, ``blkPtr``; ``blockOf`` coordinate -> block): each block
+      inverted once per call;
+    * the Schur complement ``S = C_q M^-1 C_q^T`` assembled block by block, only between
+      rows that share a block, straight into band storage in the reverse Cuthill-McKee order
+      ``pos`` (row -> position, bandwidth ``bw``, fixed at set-up: :meth:`~.evaluated.
+      EvaluatedModel._order_rows`), and factored by the compiled kernel's band Cholesky
+      (:mod:`exudyn_lie.mbs.linalg`, its rank rule);
+    * ``a = M^-1 (f - C_q^T lam)`` block by block.
+
+    A row without any coordinate (an inactive connector: its equation is ``lam = 0``) gets
+    ``lam = 0`` (then the return value is 4; ``nzCnt`` tells which).  Returns 0; 1 if a block of M is singular;
+    2 if S is singular (redundant constraints: the caller switches to the rank-revealing
+    path); 3 if two rows sharing a block lie beyond the band (the pattern changed: the
+    caller orders the rows again)."""
+    n = f.shape[0]
+    m = eta.shape[0]
+    nb = blkPtr.shape[0] - 1
+    if not invert_blocks(M, blk, blkPtr, blkOff, MinvB, W):
+        return 1
+    # a0 = M^-1 f
+    for bI in range(nb):
+        p0 = blkPtr[bI]
+        s = blkPtr[bI + 1] - p0
+        o = blkOff[bI]
+        for i in range(s):
+            acc = 0.0
+            for k in range(s):
+                acc += MinvB[o + i * s + k] * f[blk[p0 + k]]
+            a[blk[p0 + i]] = acc
+    if m == 0:
+        return 0
+    # nonzero columns and blocks of every row; rhs = Cq a0 - eta (in band order)
+    for bI in range(nb):
+        cnt[bI] = 0
+    for r in range(m):
+        c_ = 0
+        nbk = 0
+        acc = 0.0
+        for k in range(n):
+            ck = Cq[r, k]
+            if ck != 0.0:
+                nzIdx[r, c_] = k
+                c_ += 1
+                acc += ck * a[k]
+                bk = blockOf[k]
+                new = True
+                for q in range(nbk):
+                    if rowBlk[r, q] == bk:
+                        new = False
+                        break
+                if new:
+                    rowBlk[r, nbk] = bk
+                    nbk += 1
+                    cnt[bk] += 1
+        nzCnt[r] = c_
+        rowBlkCnt[r] = nbk
+        x[pos[r]] = acc - eta[r]
+    # rows of every block (CSR)
+    bRowPtr[0] = 0
+    for bI in range(nb):
+        bRowPtr[bI + 1] = bRowPtr[bI] + cnt[bI]
+        cnt[bI] = 0
+    for r in range(m):
+        for q in range(rowBlkCnt[r]):
+            bk = rowBlk[r, q]
+            bRows[bRowPtr[bk] + cnt[bk]] = r
+            cnt[bk] += 1
+    # S in band storage: Band[i, i - j] = S[perm i, perm j]
+    for i in range(m):
+        for k in range(bw + 1):
+            Band[i, k] = 0.0
+    for bI in range(nb):
+        r0 = bRowPtr[bI]
+        nr = bRowPtr[bI + 1] - r0
+        if nr == 0:
+            continue
+        p0 = blkPtr[bI]
+        s = blkPtr[bI + 1] - p0
+        o = blkOff[bI]
+        for q in range(nr):              # Y[q] = M_B^-1 Cq[row q, B]^T
+            c = bRows[r0 + q]
+            for i in range(s):
+                acc = 0.0
+                for k in range(s):
+                    acc += MinvB[o + i * s + k] * Cq[c, blk[p0 + k]]
+                Y[q, i] = acc
+        for q1 in range(nr):
+            r = bRows[r0 + q1]
+            pr = pos[r]
+            for q2 in range(nr):
+                c = bRows[r0 + q2]
+                pc = pos[c]
+                if pc > pr:
+                    continue
+                if pr - pc > bw:
+                    return 3
+                acc = 0.0
+                for i in range(s):
+                    acc += Cq[r, blk[p0 + i]] * Y[q2, i]
+                Band[pr, pr - pc] += acc
+    dmax = 0.0
+    empty = False
+    for r in range(m):
+        if nzCnt[r] == 0:                # lam = 0 for a row without coordinates
+            Band[pos[r], 0] = 1.0
+            x[pos[r]] = 0.0
+            empty = True
+        dmax = max(dmax, Band[pos[r], 0])
+    if band_cholesky_inplace(Band, m, bw, REL_PIVOT_TOL * dmax) >= 0:
+        return 2
+    band_cholesky_solve_inplace(Band, m, bw, x)
+    for r in range(m):
+        lam[r] = x[pos[r]]
+    # a = a0 - M^-1 Cq^T lam, block by block
+    for bI in range(nb):
+        r0 = bRowPtr[bI]
+        nr = bRowPtr[bI + 1] - r0
+        if nr == 0:
+            continue
+        p0 = blkPtr[bI]
+        s = blkPtr[bI + 1] - p0
+        o = blkOff[bI]
+        for i in range(s):
+            acc = 0.0
+            for q in range(nr):
+                r = bRows[r0 + q]
+                acc += Cq[r, blk[p0 + i]] * lam[r]
+            T[i] = acc
+        for i in range(s):
+            acc = 0.0
+            for k in range(s):
+                acc += MinvB[o + i * s + k] * T[k]
+            a[blk[p0 + i]] -= acc
+    return 4 if empty else 0

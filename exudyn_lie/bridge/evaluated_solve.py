@@ -285,10 +285,10 @@ class EvaluatedSolver:
             rate, stable = check_step(model, tab, h)
             # the initial accelerations (and a measured estimate of the cost per step)
             stepper.write()
-            model.accelerations(t0, stepper.R, stepper.r, stepper.prev, stepper.qv)    # first call: set-up
+            model.accelerations(t0, stepper.R, stepper.r, stepper.prev, stepper.qv, True)    # first call: set-up
             tic = time.perf_counter()
             for _ in range(ESTIMATE_EVALUATIONS):
-                model.accelerations(t0, stepper.R, stepper.r, stepper.prev, stepper.qv)
+                model.accelerations(t0, stepper.R, stepper.r, stepper.prev, stepper.qv, True)
             perStage = (time.perf_counter() - tic) / ESTIMATE_EVALUATIONS
             perStep = perStage * len(stepper.stages)
             model.evaluations = 0
@@ -306,6 +306,8 @@ class EvaluatedSolver:
                 print(f"exudyn_lie: fastest linearised mode |lambda| = {rate:.4g} 1/s: stable up to h = {stable:.3g} s; "
                       f"one stage costs {1e6 * perStage:.1f} us (Exudyn's evaluation, its dense copies of M "
                       f"and the Jacobian, the solve)")
+            stepper.write()                      # the initial state and time, for Exudyn's initial outputs
+            sd.SetTime(t0)
             written = [q.copy(), qt.copy()]
             steps = [t0, t0]
             snap = [stepper.snapshot()]
@@ -337,7 +339,7 @@ class EvaluatedSolver:
                     stepper.t = t1
                     stepper.write()
                     if needAcc:
-                        model.accelerations(t1, stepper.R, stepper.r, stepper.prev, stepper.qv)
+                        model.accelerations(t1, stepper.R, stepper.r, stepper.prev, stepper.qv, True)
                         qtt[:] = model.a
                         if nAE:
                             ae[:] = model.lam

@@ -65,6 +65,11 @@ class EvaluatedStepper:
         self.tmp6 = np.zeros(6)
         self.vscale = 1.0
         self.t = 0.0
+        # what a step uses, unpacked once (the stage loop is Python)
+        self._stageList = [(int(j), float(self.c[j])) for j in self.stages]
+        self._hot = (self.gid, self.A, self.R, self.r, self.V, self.K, self.Vd, self.Psi, self.Rs, self.rs, self.Vs,
+                     self.m3[0], self.v3[0], self.qv, self.vv, self.QK, self.VK, self.qs, self.vs, L.lgIdx, L.vecIdx,
+                     self.tmp6)
 
     # ------------------------------------------------------------------ state
     def read_state(self, q, qt, y=None, t=None):
@@ -112,38 +117,33 @@ class EvaluatedStepper:
     # ------------------------------------------------------------------ one step
     def step(self, h):
         """One MK step of size h (eq. MK1) from ``self.t``; raises StepSizeError for a stage
-        argument out of dexp^-1's domain or a non-finite / exploding state."""
+        argument out of dexp^-1's domain or a non-finite / exploding state.  (Kept lean:
+        per stage two compiled calls around Exudyn's evaluation.)"""
         model = self.model
-        L = model.L
-        A, c, t = self.A, self.c, self.t
-        gid, R, r, V, K, Vd, Psi = self.gid, self.R, self.r, self.V, self.K, self.Vd, self.Psi
-        Rs, rs, Vs, qs, vs, QK, VK = self.Rs, self.rs, self.Vs, self.qs, self.vs, self.QK, self.VK
-        ER, Er = self.m3[0], self.v3[0]
-        lgIdx, vecIdx = L.lgIdx, L.vecIdx
+        gid, A, R, r, V, K, Vd, Psi, Rs, rs, Vs, ER, Er, qv, vv, QK, VK, qs, vs, lgIdx, vecIdx, tmp6 = self._hot
+        t = self.t
         n1 = len(self.y)
-        for j in self.stages:
-            bad = lg_stage(gid, A, j, h, R, r, V, K, Vd, Psi, Rs, rs, Vs, ER, Er, self.qv, self.vv, QK, VK, qs, vs)
+        write, accelerations, prev = model.write_state, model.accelerations, self.prev
+        for j, cj in self._stageList:
+            bad = lg_stage(gid, A, j, h, R, r, V, K, Vd, Psi, Rs, rs, Vs, ER, Er, qv, vv, QK, VK, qs, vs)
             if bad >= 0:
                 self._raise_stage_arg(bad, h)
-            model.write_state(Rs, rs, Vs, self.prev, qs, vs)
+            write(Rs, rs, Vs, prev, qs, vs)
             if n1:
-                ys = self.y + h * (A[j, :j] @ self.YK[:j])
-                model.write_ode1(ys)
-            acc = model.accelerations(t + c[j] * h, Rs, rs, self.prev, qs)
-            lg_stage_rates(gid, j, Rs, Vs, acc, lgIdx, Psi, K, Vd, self.tmp6, vecIdx, vs, QK, VK)
+                model.write_ode1(self.y + h * (A[j, :j] @ self.YK[:j]))
+            acc = accelerations(t + cj * h, Rs, rs, prev, qs)
+            lg_stage_rates(gid, j, Rs, Vs, acc, lgIdx, Psi, K, Vd, tmp6, vecIdx, vs, QK, VK)
             if n1:
                 self.YK[j] = model.ydot
-        ok = lg_finish(gid, self.stages, self.b, h, R, r, V, K, Vd, Psi, self.m3[1], self.m3[0], self.v3[1],
-                       self.v3[0], self.qv, self.vv, QK, VK)
+        st = lg_finish(gid, self.stages, self.b, h, R, r, V, K, Vd, Psi, self.m3[1], self.m3[0], self.v3[1],
+                       self.v3[0], qv, vv, QK, VK, BLOWUP * self.vscale)
         if n1:
             self.y += h * (self.b[self.stages] @ self.YK[self.stages])
-            ok = ok and bool(np.all(np.isfinite(self.y)))
+            if not np.all(np.isfinite(self.y)):
+                st = 1
         self.t = t + h
-        if not ok:
-            self._raise_blowup(h, "non-finite (NaN/inf)")
-        vmax = max(float(np.max(np.abs(V))) if V.size else 0.0, float(np.max(np.abs(self.vv))) if self.vv.size else 0.0)
-        if vmax > BLOWUP * self.vscale:
-            self._raise_blowup(h, "unbounded (blow-up)")
+        if st:
+            self._raise_blowup(h, "non-finite (NaN/inf)" if st == 1 else "unbounded (blow-up)")
 
     def _raise_stage_arg(self, i, h):
         psi = float(np.linalg.norm(self.Psi[i, :3]))

@@ -82,8 +82,10 @@ def expect_error(mbs, exc, match, **kw):
      r"offsetUserFunction .*not supported"),
 ])
 def test_unsupported_items_raise_clear_errors(extra, match):
+    """The compiled path's refusals (evaluation='auto' takes such models to the
+    Exudyn-evaluated path instead: tests/test_evaluated.py)."""
     mbs = model(extra)
-    expect_error(mbs, BridgeError, match)
+    expect_error(mbs, BridgeError, match, evaluation="compiled")
 
 
 def test_unsupported_marker_is_named():
@@ -282,6 +284,7 @@ def test_autoassemble_validates_before_assembling(case):
             NodeGenericODE2(referenceCoordinates=[0], initialCoordinates=[0], initialCoordinates_t=[0],
                             numberOfODE2Coordinates=1))], massMatrix=np.eye(1)))), BridgeError, \
             r"ObjectGenericODE2 is not supported"
+        kw = dict(evaluation="compiled")
     elif case == "joint violated":
         extra, err, match = (lambda mbs, g, b: mbs.AddObject(ObjectJointSpherical(markerNumbers=[
             mbs.AddMarker(MarkerBodyPosition(bodyNumber=g, localPosition=[1.5, 0, 0])),

@@ -29,6 +29,9 @@ Sections (``--sections``, default all):
   torque, overhead per call against the compiled step (:mod:`.bench_userfunctions`).
 * ``topology``  chain, star, binary tree and ladder of N bodies: cost per step against N,
   fitted exponents (:mod:`.bench_topology`).
+* ``evaluated``  the path on which Exudyn evaluates the model (items the kernel does not read):
+  chains of 1, 10, 50 bodies with one foreign item, per step and per stage, against the
+  compiled path and generalized-alpha (:mod:`.bench_evaluated`).
 
 Every sweep runs through Exudyn's ``exudyn.processing.ParameterVariation`` with
 multiprocessing (:func:`exudyn_lie.apps.bench_runs.sweep`); every time is the
@@ -59,7 +62,7 @@ NATIVE_CONSTRAINED = ("GeneralizedAlpha", "GeneralizedAlpha-mN", "TrapezoidalInd
 NATIVE_FREE = ("RK44", "RK67", "DOPRI5")
 EPS_LEVELS = (1e-4, 1e-5, 1e-6, 1e-7, 1e-8)
 SECTIONS = ("wp", "perstep", "scaling", "startup", "overhead", "groups", "mujoco", "params", "items",
-            "userfunctions", "topology", "adaptive", "planar")
+            "userfunctions", "topology", "adaptive", "planar", "evaluated")
 TARGET_RATIO = 10.0
 # absolute per-step targets (MK-RK4, SE3, median step, this 2-core machine)
 KERNEL_STEP_TARGETS_US = {"heavytop": 3.0, "doublependulum": 6.0}
@@ -653,6 +656,8 @@ def targets_lines(cfg, out):
     L += uf_target_lines(out.get("userfunctions"))
     from .bench_topology import target_lines as topo_target_lines
     L += topo_target_lines(out.get("topology"))
+    from .bench_evaluated import target_lines as evaluated_target_lines
+    L += evaluated_target_lines(out.get("evaluated"))
     A(f"| parallel sweeps through exudyn.processing.ParameterVariation | "
       f"`exudyn_lie.apps.bench_runs.sweep`, {cfg.jobs} processes | yes |")
     return L
@@ -947,6 +952,9 @@ def write_report(cfg, out, cmdline):
     if out.get("topology"):
         from .bench_topology import report_lines as topo_report_lines
         L += topo_report_lines(out["topology"])
+    if out.get("evaluated"):
+        from .bench_evaluated import report_lines as evaluated_report_lines
+        L += evaluated_report_lines(out["evaluated"])
     if out.get("mujoco"):
         from .bench_mujoco import report_lines as mujoco_report_lines
         L += mujoco_report_lines(out["mujoco"], out["mujoco"].get("figure"))
@@ -1069,6 +1077,9 @@ def main(argv=None):
     if "topology" in cfg.sections:
         from . import bench_topology
         out["topology"] = bench_topology.run_section(cfg, log)
+    if "evaluated" in cfg.sections:
+        from . import bench_evaluated
+        out["evaluated"] = bench_evaluated.run_section(cfg, log)
     if "adaptive" in cfg.sections:
         from . import bench_adaptive
         out["adaptive"] = bench_adaptive.run_section(cfg, log)

@@ -925,7 +925,7 @@ class LieGroupSolver:
 def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialValues=False, storeSolver=True,
                  showHints=False, showCausingItems=True, autoAssemble=True, *, method=None, liegroup="auto",
                  stabilization=None, projectInitial=True, verbose=False, showProgress=True, substeps=None,
-                 accelerations=None, constraintTolerance=None):
+                 accelerations=None, constraintTolerance=None, evaluation="auto"):
     """Drop-in for ``exudyn.SolveDynamic``: integrate ``mbs`` with an explicit Munthe-Kaas
     Lie group method inside Exudyn's time loop; returns True.
 
@@ -946,7 +946,10 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
     period), ``accelerations`` (write q_tt / multipliers; default: when something reads
     them), ``constraintTolerance`` (adaptive steps only; default None: off): project on the
     group when the constraint drift exceeds it, the error estimate projected onto the
-    constraint manifold's tangent space (Simbody's scheme; docs/ADAPTIVE.md).
+    constraint manifold's tangent space (Simbody's scheme; docs/ADAPTIVE.md),
+    ``evaluation`` ('auto': the compiled kernel when it has every item of the model,
+    else Exudyn evaluates the whole model, :mod:`.evaluated_solve`, with one warning naming
+    the items; 'compiled' / 'exudyn' force a path).
 
     Honours ``timeIntegration.startTime / endTime / numberOfSteps``, sensors (stored and
     files), the solution and restart files, pre/post-step user functions,
@@ -965,6 +968,22 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
     method, typeName, replaced = resolve_solver_type(solverType, settings.timeIntegration.solverType, method,
                                                      _check_method)
     assemble = not mbs.systemIsConsistent and autoAssemble
+    if evaluation not in ("auto", "compiled", "exudyn"):
+        raise BridgeError(f"evaluation must be 'auto', 'compiled' or 'exudyn', got {evaluation!r}")
+    if evaluation != "compiled":
+        from .evaluated_dispatch import evaluated_path
+        path = evaluated_path(mbs, evaluation, assemble, method=method, liegroup=liegroup,
+                              stabilization=stabilization, projectInitial=projectInitial, verbose=verbose,
+                              settings=settings, substeps=substeps, check_liegroup=_group_name)
+        if path is not None:
+            if constraintTolerance is not None:
+                raise BridgeError("exudyn_lie.SolveDynamic: constraintTolerance is available on the compiled path only "
+                                  "(adaptive steps); this model is evaluated by Exudyn: leave constraintTolerance=None")
+            if assemble:
+                warn_user("exudyn_lie.SolveDynamic: mbs is not assembled; calling mbs.Assemble()")
+                mbs.Assemble()
+            return path.Solve(simulationSettings, updateInitialValues=updateInitialValues, storeSolver=storeSolver,
+                              showProgress=showProgress, substeps=substeps, accelerations=accelerations)
     solver = LieGroupSolver(mbs, method=method, liegroup=liegroup, stabilization=stabilization,
                             projectInitial=projectInitial, verbose=verbose, constraintTolerance=constraintTolerance,
                             _configuration="items" if assemble else "initial")

@@ -1,0 +1,495 @@
+"""The Exudyn-evaluated model: Exudyn computes the whole right-hand side of the index-1
+equations (M, f, C_q and the velocity-level constraints) through the
+``MainSolverImplicitSecondOrder`` interface, for any item Exudyn can evaluate.
+
+Why the *whole* model (issue 17's design question): an item the kernel does not compile
+(an ANCF cable, a contact, a GenericODE2 system) couples to the rigid bodies through
+markers whose kinematics, Jacobians and reaction forces Exudyn computes in its own
+coordinates.  Evaluating everything in Exudyn couples every item with every other exactly
+as Exudyn does, and keeps one bookkeeping of coordinates, markers and parameters (no
+splitting of M, f, C_q between two evaluators, no translation of Exudyn's velocity
+coordinates into the kernel's for half of the model).  The price is Exudyn's interface:
+dense copies of M and of the system Jacobian per stage (measured in the README's section
+"Which path a model takes and what it costs").
+
+Coordinate layout (:class:`Layout`): Exudyn's ODE2 coordinates ``q``, velocities ``v``, ODE1
+coordinates ``y``; data coordinates are frozen during a step (updated by Exudyn's
+PostNewton after it).  ``NodeRigidBodyRotVecLG`` nodes are Lie group elements ``(R, r)`` on
+SE3 or SO3xR3 (:mod:`.evaluated_kernels`); every other ODE2 coordinate lives in vector
+space (``qdot = v``).
+
+One evaluation at a stage state (:meth:`EvaluatedModel.accelerations`):
+
+1. the state is written into mbs' Current coordinates (zero-copy views) and the time into
+   ``mbs.systemData`` (``SetTime``: what Exudyn's own explicit solvers set per stage, so
+   user functions and time-dependent items see the stage time);
+2. ``ComputeMassMatrix``, ``ComputeODE2RHS`` (f with ``M a = f``), ``ComputeJacobianAE`` into a
+   zeroed system Jacobian (it *adds*), ``ComputeODE1RHS``;
+3. ``eta = -d/dt g_v(q(t), v, t)`` at fixed velocities (:meth:`EvaluatedModel.eta`): Exudyn has
+   no access to ``Cdot_q v``, so it is the central difference of the velocity-level
+   constraints ``ComputeAlgebraicEquations(velocityLevel=True)`` (= ``C_q v + C_t``) along the
+   motion, ``(g_v(q exp(+eps V), t + eps) - g_v(q exp(-eps V), t - eps)) / (2 eps)``;
+4. ``[M C_q^T; C_q 0][a; lam] = [f; eta]`` with M block diagonal (blocks found once from
+   the pattern of M and the nodes' coordinates) and the Schur complement
+   (:func:`~.evaluated_kernels.block_kkt_solve`); a singular block of M falls back to a
+   dense KKT solve.
+
+The step of the central difference (the rule): ``eps = cbrt(eps_mach) * tau`` with the time
+scale ``tau = 1 / max(1 1/s, max|v|)`` (v: Exudyn's velocity coordinates in SI units per
+second), so that the configuration moves by at most ``cbrt(eps_mach) ~ 6e-6`` (m or rad) and
+the truncation error ``eps^2 |g_v'''| / 6`` balances the rounding error
+``eps_mach |g_v| / eps``: about ``eps_mach^(2/3) ~ 4e-11`` relative.  :meth:`eta_error`
+estimates it: Richardson's comparison of ``eps`` and ``2 eps`` for the truncation (error of
+the eps-result ~ |eta(2 eps) - eta(eps)| / 3) plus the rounding bound.  Measured against the
+compiled kernel's exact eta at random states of random mechanisms (tests/test_evaluated.py):
+below 2e-10 relative; the trajectories of the paper's models differ by at most 1.4e-10.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..errors import ConstraintError, SimulationError
+from .evaluated_kernels import block_kkt_solve, schur_band_solve, write_exudyn_state, write_moved_positions
+from .reader import BridgeError
+
+EPS_CBRT = float(np.finfo(float).eps) ** (1.0 / 3.0)
+
+#: node types whose coordinates are Lie group elements (velocities are not the coordinates' rates)
+LIE_GROUP_NODES = ("RigidBodyRotVecLG",)
+#: node types this path cannot integrate, with what to do
+REFUSED_NODES = {
+    "GenericAE": "its algebraic coordinates are not Lagrange multipliers of an index-1 solve",
+}
+#: object types whose constraints are at velocity level (the index-1 solve needs position-level rows)
+VELOCITY_LEVEL_OBJECTS = ("JointRollingDisc", "JointRollingDisc2D")
+
+
+def _describe_object(mbs, o, d=None):
+    d = mbs.GetObject(o) if d is None else d
+    return f"object {o} ('{d.get('name', '')}') Object{d['objectType']}"
+
+
+def check_model(mbs):
+    """Refuse what this path cannot integrate, naming the item (reads only)."""
+    sd = mbs.systemData
+    for n in range(sd.NumberOfNodes()):
+        d = mbs.GetNode(n)
+        t = d["nodeType"]
+        if t in REFUSED_NODES:
+            raise BridgeError(f"node {n} ('{d.get('name', '')}') Node{t}: {REFUSED_NODES[t]}; exudyn_lie cannot "
+                              f"integrate it; solve this model with exudyn.SolveDynamic")
+        if "LG" in t and t not in LIE_GROUP_NODES:
+            raise BridgeError(f"node {n} ('{d.get('name', '')}') Node{t}: a Lie group node whose velocities are not "
+                              f"the rates of its coordinates; exudyn_lie updates only NodeRigidBodyRotVecLG on a group; "
+                              f"use NodeRigidBodyRotVecLG or solve with exudyn.SolveDynamic")
+    for n in range(sd.NumberOfNodes()):
+        d = mbs.GetNode(n)
+        for key in ("referenceCoordinates", "initialCoordinates", "initialVelocities", "initialCoordinates_t"):
+            if key in d and not np.all(np.isfinite(np.asarray(d[key], float))):
+                raise BridgeError(f"node {n} ('{d.get('name', '')}') Node{d['nodeType']}: {key} are not finite: "
+                                  f"{d[key]}")
+    for k in range(sd.NumberOfLoads()):
+        d = mbs.GetLoad(k)
+        for key in ("loadVector", "load"):
+            if key in d and not callable(d[key]) and not np.all(np.isfinite(np.asarray(d[key], float))):
+                raise BridgeError(f"load {k} ('{d.get('name', '')}') Load{d['loadType']}: {key} is not finite: "
+                                  f"{d[key]}")
+    for o in range(sd.NumberOfObjects()):
+        d = mbs.GetObject(o)
+        t = d["objectType"]
+        if t in VELOCITY_LEVEL_OBJECTS:
+            raise BridgeError(f"object {o} ('{d.get('name', '')}') of type Object{t} is not supported by exudyn_lie: "
+                              f"its constraints are at velocity level (nonholonomic), and exudyn_lie's index-1 solve "
+                              f"needs position-level constraints; solve this model with exudyn.SolveDynamic")
+        if d.get("velocityLevel", False) is True and d.get("activeConnector", True):
+            raise BridgeError(f"{_describe_object(mbs, o, d)}: velocityLevel=True is not supported by exudyn_lie (its "
+                              f"index-1 solve needs position-level constraints); use velocityLevel=False or solve "
+                              f"with exudyn.SolveDynamic")
+
+
+class Layout:
+    """Where every coordinate goes: Lie group nodes (index arrays into Exudyn's ODE2
+    vector, reference coordinates, group), vector-space ODE2 coordinates, ODE1 and AE
+    sizes; the block structure of M."""
+
+    def __init__(self, mbs, nodeGroups):
+        from ..mbs.codes import GROUP_NAMES
+        sd = mbs.systemData
+        self.nODE2 = int(sd.ODE2Size())
+        self.nODE1 = int(sd.ODE1Size())
+        self.nAE = int(sd.AEsize())
+        self.nData = int(sd.DataSize())
+        lgNodes, lgIdx, lgRef, gid = [], [], [], []
+        inLG = np.zeros(self.nODE2, bool)
+        for n in range(sd.NumberOfNodes()):
+            d = mbs.GetNode(n)
+            if d["nodeType"] in LIE_GROUP_NODES:
+                idx = np.asarray(sd.GetNodeLTGODE2(n), np.int64)
+                lgNodes.append(n)
+                lgIdx.append(idx)
+                lgRef.append(np.asarray(d["referenceCoordinates"], float).reshape(6))
+                gid.append(GROUP_NAMES.index(nodeGroups.get(n, "SE3")))
+                inLG[idx] = True
+        self.lgNodes = lgNodes
+        self.lgIdx = np.array(lgIdx, np.int64).reshape(-1, 6)
+        self.lgRef = np.array(lgRef, float).reshape(-1, 6)
+        self.gid = np.array(gid, np.int64)
+        self.vecIdx = np.nonzero(~inLG)[0].astype(np.int64)
+        self.nodeIdx = [np.asarray(sd.GetNodeLTGODE2(n), np.int64) for n in range(sd.NumberOfNodes())
+                        if len(sd.GetNodeLTGODE2(n))]
+
+    def blocks(self, M):
+        """Connected components of the pattern of M joined with each node's coordinates:
+        (blk, blkPtr) for :func:`block_kkt_solve`."""
+        n = self.nODE2
+        parent = np.arange(n)
+
+        def find(i):
+            while parent[i] != i:
+                parent[i] = parent[parent[i]]
+                i = parent[i]
+            return i
+
+        def union(i, k):
+            a, b = find(i), find(k)
+            if a != b:
+                parent[max(a, b)] = min(a, b)
+
+        for idx in self.nodeIdx:
+            for k in idx[1:]:
+                union(idx[0], k)
+        rows, cols = np.nonzero(M)
+        for i, k in zip(rows, cols):
+            if i != k:
+                union(int(i), int(k))
+        roots = np.array([find(i) for i in range(n)])
+        order = np.argsort(roots, kind="stable")
+        _, starts = np.unique(roots[order], return_index=True)
+        ptr = np.append(starts, n).astype(np.int64)
+        return order.astype(np.int64), ptr
+
+
+class EvaluatedModel:
+    """Exudyn's M, f, C_q and eta at a state of the Lie group / vector-space layout.
+
+    ``solver`` is the initialised ``exudyn.MainSolverImplicitSecondOrder`` of the run;
+    ``q``, ``qt`` are writable views of mbs' Current ODE2 coordinates and velocities."""
+
+    def __init__(self, mbs, solver, layout: Layout, q, qt, verbose=False):
+        self.mbs, self.solver, self.L = mbs, solver, layout
+        self.q, self.qt = q, qt
+        self.sd = mbs.systemData
+        self.verbose = verbose
+        n, m, n1 = layout.nODE2, layout.nAE, layout.nODE1
+        self.n, self.m, self.n1 = n, m, n1
+        self.nsys = n + n1 + m
+        self._Z = np.zeros((self.nsys, self.nsys))
+        self.a = np.zeros(n)
+        self.lam = np.zeros(m)
+        self.ydot = np.zeros(n1)
+        self._Minv = np.zeros((n, n))
+        self._X = np.zeros((n, m))
+        self._S = np.zeros((m, m))
+        self._nzIdx = np.zeros((m, n), np.int64)
+        self._nzCnt = np.zeros(m, np.int64)
+        self._ER = np.zeros((3, 3))
+        self._rv = np.zeros((len(layout.lgNodes), 3))
+        self._qsave = np.zeros(n)
+        self.dense = False
+        self.pivoted = False
+        self._eta0 = np.zeros(0)
+        self._etaBuf = np.zeros(m)
+        self._vmax = 0.0
+        self._perm = np.zeros(m, np.int64)
+        self._yw = np.zeros(m)
+        self.blk = self.blkPtr = None
+        self.evaluations = 0
+        # bound methods, looked up once (the stage loop is Python)
+        s = solver
+        self._massMatrix, self._getM = s.ComputeMassMatrix, s.GetSystemMassMatrix
+        self._ode2rhs, self._residual = s.ComputeODE2RHS, s.GetSystemResidual
+        self._ode1rhs = s.ComputeODE1RHS
+        self._setJ, self._jacAE, self._getJ = s.SetSystemJacobian, s.ComputeJacobianAE, s.GetSystemJacobian
+        self._zeroJ = self._fastest_zeroing() if layout.nAE else None
+        self._ae = s.ComputeAlgebraicEquations
+        self._setTime = self.sd.SetTime
+        import exudyn as exu
+        self._cur = exu.ConfigurationType.Current
+
+    # ------------------------------------------------------------------ state
+    def write_state(self, R, r, V, prev, qv, vv):
+        """Exudyn's Current q, v of the state (Lie group nodes and vector coordinates)."""
+        L = self.L
+        self._vmax = write_exudyn_state(L.gid, R, r, V, L.lgIdx, L.lgRef, prev, self.q, self.qt, L.vecIdx, qv, vv,
+                                        self._rv)
+
+    def _fastest_zeroing(self):
+        """How the system Jacobian is zeroed before ``ComputeJacobianAE`` (which adds into it):
+        ``SetSystemJacobian(zeros)`` copies (n+m)^2 doubles in; ``ComputeJacobianODE2RHS`` with
+        all factors 0 zeroes it in C++ (and adds zero times the bodies' own Jacobians to the
+        ODE2 rows, which are not read: only the AE rows are).  The faster of the two, timed
+        here once (for 50 rigid bodies: 112 us against 19 us)."""
+        import time
+        s, mbs, Z = self.solver, self.mbs, self._Z
+
+        def by_copy():
+            s.SetSystemJacobian(Z)
+
+        def by_rhs_jacobian():
+            s.ComputeJacobianODE2RHS(mbs, scalarFactor_ODE2=0.0, scalarFactor_ODE2_t=0.0, scalarFactor_ODE1=0.0)
+
+        best = {}
+        for f in (by_copy, by_rhs_jacobian):
+            ts = []
+            for _ in range(3):
+                t0 = time.perf_counter()
+                f()
+                ts.append(time.perf_counter() - t0)
+            best[f] = min(ts)
+        return min(best, key=best.get)
+
+    def write_ode1(self, y):
+        """Exudyn's Current ODE1 coordinates."""
+        self.sd.SetODE1Coordinates(y, configuration=self._cur)
+
+    # ------------------------------------------------------------------ evaluations
+    def mass_force_jacobian(self, t):
+        """(M, f, C_q) at the state in mbs (C_q rows of the AE equations; None without)."""
+        self._setTime(t)
+        mbs = self.mbs
+        self._massMatrix(mbs)
+        M = self._getM()
+        self._ode2rhs(mbs)
+        f = self._residual()[:self.n]
+        if self.n1:
+            self._ode1rhs(mbs)
+            self.ydot[:] = self._residual()[self.n:self.n + self.n1]
+        Cq = None
+        if self.m:
+            self._zeroJ()
+            self._jacAE(mbs)
+            J = self._getJ()
+            Cq = J[self.n + self.n1:, :self.n]
+            if self.n1 and np.any(J[self.n + self.n1:, self.n:self.n + self.n1]):
+                raise BridgeError("a constraint acts on ODE1 coordinates; exudyn_lie's index-1 solve handles "
+                                  "constraints on ODE2 coordinates only; solve with exudyn.SolveDynamic")
+            self._lamlam = J[self.n + self.n1:, self.n + self.n1:]
+        return M, f, Cq
+
+    def velocity_constraints(self, t):
+        """``g_v(q, v, t)`` (Exudyn's velocity-level AE residual) at the state in mbs."""
+        self._setTime(t)
+        self._ae(self.mbs, True)
+        return self._residual()[self.n + self.n1:].copy()
+
+    def eta_step(self):
+        """The central-difference step (module docstring): ``cbrt(eps) / max(1, max|v|)``."""
+        return EPS_CBRT / max(1.0, self._vmax)
+
+    def eta(self, t, R, r, prev, qv, eps=None, restore=True):
+        """``eta = -d/dt g_v`` along the motion at fixed velocities (module docstring),
+        at the state last written (``R, r``: its Lie group part, ``qv`` its vector part).
+        ``restore=False`` (the stage loop) leaves mbs at the last moved configuration and
+        time: nothing reads them before the next stage writes its state."""
+        if eps is None:
+            eps = EPS_CBRT / max(1.0, self._vmax)
+        L, q, mbs, ae, res, setTime = self.L, self.q, self.mbs, self._ae, self._residual, self._setTime
+        if restore:
+            self._qsave[:] = q
+        write_moved_positions(R, r, L.lgIdx, L.lgRef, prev, q, self.qt, L.vecIdx, qv, eps, self._ER, self._rv)
+        setTime(t + eps)
+        ae(mbs, True)
+        gp = res()
+        write_moved_positions(R, r, L.lgIdx, L.lgRef, prev, q, self.qt, L.vecIdx, qv, -eps, self._ER, self._rv)
+        setTime(t - eps)
+        ae(mbs, True)
+        gm = res()
+        o = self.n + self.n1
+        out = self._etaBuf
+        np.subtract(gm[o:], gp[o:], out=out)
+        out *= 0.5 / eps
+        if restore:
+            q[:] = self._qsave
+            setTime(t)
+            return out.copy()
+        return out
+
+    def eta_error(self, t, R, r, prev, qv):
+        """Error estimate of :meth:`eta` (a diagnostic): ``(eta(eps), estimate)`` with the
+        truncation part by Richardson's comparison of eps and 2 eps (``|eta(2 eps) - eta(eps)|
+        / 3``) plus the rounding part ``4 eps_mach (|C_q| |v| + |g_v|) / eps`` (the rounding
+        error of the two evaluations of g_v, whose terms are of size |C_q| |v|, divided by
+        the step)."""
+        self._vmax = float(np.max(np.abs(self.qt))) if self.n else 0.0
+        eps = self.eta_step()
+        e1 = self.eta(t, R, r, prev, qv)
+        e2 = self.eta(t, R, r, prev, qv, 2.0 * eps)
+        gv = self.velocity_constraints(t)
+        _, _, Cq = self.mass_force_jacobian(t)
+        terms = np.abs(np.asarray(Cq)) @ np.abs(self.qt) + np.abs(gv)
+        return e1, np.abs(e2 - e1) / 3.0 + 4.0 * np.finfo(float).eps * terms / eps
+
+    def accelerations(self, t, R, r, prev, qv, restore=False):
+        """Exudyn's accelerations ``a`` (nODE2), multipliers ``lam`` and ODE1 rates ``ydot`` at
+        the state last written (:meth:`write_state`) and time t (eq. index1).  Without
+        ``restore`` (the stage loop) mbs is left at a configuration moved by eta's
+        differentiation step; with it, at the state and time t."""
+        self.evaluations += 1
+        M, f, Cq = self.mass_force_jacobian(t)
+        eta = self.eta(t, R, r, prev, qv, None, restore) if self.m else self._eta0
+        self.solve(M, f, Cq, eta)
+        return self.a
+
+    def _check_rows(self, Cq, empty=None):
+        """Refuse AE rows the index-1 solve cannot take: a row without ODE2 coordinates must
+        be an equation in its multiplier alone (an inactive connector: lam = 0); a row with
+        both (a compliant constraint) is refused."""
+        LL = self._lamlam
+        if empty is None:
+            empty = ~np.any(np.asarray(Cq) != 0.0, axis=1)
+        for i in np.nonzero(empty)[0]:
+            if not np.any(LL[i] != 0.0):
+                raise ConstraintError(f"AE row {i} constrains neither ODE2 coordinates nor its multiplier at this "
+                                      f"state; exudyn_lie cannot solve it (a constraint on data or ODE1 "
+                                      f"coordinates?); solve with exudyn.SolveDynamic")
+        rows = np.nonzero(~empty)[0]
+        mixed = rows[np.any(LL[rows] != 0.0, axis=1)]
+        if len(mixed):
+            raise ConstraintError(f"AE rows {mixed.tolist()} depend on both coordinates and multipliers (e.g. a "
+                                  f"constraint with a compliance); exudyn_lie's index-1 solve needs rigid "
+                                  f"constraints; solve with exudyn.SolveDynamic")
+
+    def _active_rows(self, Cq):
+        """None if every AE row constrains ODE2 coordinates; else the active rows (inactive
+        connectors give ``lam = 0`` by an equation in lam alone: dropped)."""
+        empty = ~np.any(np.asarray(Cq) != 0.0, axis=1)
+        self._check_rows(Cq, empty)
+        return None if not empty.any() else np.nonzero(~empty)[0]
+
+    # ------------------------------------------------------------------ linear algebra
+    def _set_up_blocks(self, M):
+        n = self.n
+        self.blk, self.blkPtr = self.L.blocks(M)
+        sizes = np.diff(self.blkPtr)
+        nb = len(sizes)
+        self.blockOf = np.zeros(n, np.int64)
+        for b in range(nb):
+            self.blockOf[self.blk[self.blkPtr[b]:self.blkPtr[b + 1]]] = b
+        self.blkOff = np.concatenate([[0], np.cumsum(sizes * sizes)]).astype(np.int64)
+        smax = int(sizes.max()) if nb else 1
+        self._MinvB = np.zeros(int(self.blkOff[-1]))
+        self._W = np.zeros((smax, 2 * smax))
+        self._T = np.zeros(smax)
+        m = self.m
+        self._rowBlk = np.zeros((m, max(nb, 1)), np.int64)
+        self._rowBlkCnt = np.zeros(m, np.int64)
+        self._bRowPtr = np.zeros(nb + 1, np.int64)
+        self._bRows = np.zeros(max(m * nb, 1), np.int64)
+        self._cnt = np.zeros(max(nb, 1), np.int64)
+        self._Y = np.zeros((max(m, 1), smax))
+        self._x = np.zeros(m)
+
+    def _order_rows(self, Cq):
+        """Reverse Cuthill-McKee order of the constraint rows (rows adjacent when they act
+        on the same block of M) and the bandwidth of S in it: for a chain or tree of bodies
+        the band is narrow and the Schur solve linear in the number of bodies."""
+        from ..mbs.linalg import rcm_order
+        Cq = np.asarray(Cq)
+        m = self.m
+        rowsOf = {}
+        for r in range(m):
+            for b in np.unique(self.blockOf[np.nonzero(Cq[r])[0]]):
+                rowsOf.setdefault(int(b), []).append(r)
+        edges = [(r, c) for rows in rowsOf.values() for r in rows for c in rows if r < c]
+        order = rcm_order(m, edges)
+        self._pos = np.zeros(m, np.int64)
+        self._pos[np.asarray(order, np.int64)] = np.arange(m)
+        self._bw = int(max((abs(self._pos[r] - self._pos[c]) for r, c in edges), default=0))
+        self._band = np.zeros((m, self._bw + 1))
+
+    def solve(self, M, f, Cq, eta):
+        """``a``, ``lam`` of ``[M Cq^T; Cq 0][a; lam] = [f; eta]`` (Exudyn's matrices)."""
+        if self.blk is None:
+            self._set_up_blocks(M)
+            if self.m:
+                self._check_rows(Cq)
+                self._order_rows(Cq)
+        if self.m == 0 or self.dense or self.pivoted:
+            if self.m:
+                active = self._active_rows(Cq)
+                if active is not None:
+                    Cq, eta = Cq[active], eta[active]
+            else:
+                active = None
+                Cq = np.zeros((0, self.n))
+            self._solve(M, f, Cq, eta, active)
+            return
+        for _ in range(2):
+            st = schur_band_solve(M, f, Cq, eta, self.blk, self.blkPtr, self.blkOff, self.blockOf, self._pos,
+                                  self._bw, self._MinvB, self._W, self.a, self.lam, self._nzIdx, self._nzCnt,
+                                  self._rowBlk, self._rowBlkCnt, self._bRowPtr, self._bRows, self._cnt, self._Y,
+                                  self._band, self._x, self._T)
+            if st != 3:
+                break
+            self._order_rows(Cq)          # rows act on other blocks now: a new order
+        if st == 0:
+            return
+        if st == 4:                       # rows without coordinates (inactive connectors): lam = 0
+            self._check_rows(Cq, self._nzCnt == 0)
+            return
+        if st == 1 or st == 2:
+            # a singular block of M (dense KKT) or redundant constraints (rank-revealing
+            # Cholesky): the general path, from now on
+            active = self._active_rows(Cq)
+            if active is not None:
+                Cq, eta = Cq[active], eta[active]
+            self._solve(M, f, Cq, eta, active)
+            return
+        raise SimulationError(f"internal: Schur solve status {st}")
+
+    def _solve(self, M, f, Cq, eta, active):
+        if self.blk is None:
+            self.blk, self.blkPtr = self.L.blocks(M)
+        m = Cq.shape[0]
+        lam = self.lam if active is None else np.zeros(m)
+        if not self.dense:
+            full = m == self.m
+            X = self._X if full else np.zeros((self.n, m))
+            S = self._S if full else np.zeros((m, m))
+            nzI = self._nzIdx if full else np.zeros((m, self.n), np.int64)
+            Cq = np.ascontiguousarray(Cq)
+            args = (self.blk, self.blkPtr, self._Minv, X, S, lam, self.a, nzI, self._nzCnt)
+            st = block_kkt_solve(M, f, Cq, eta, *args, self.pivoted, self._perm, self._yw)
+            if st == 2 and self.evaluations <= 1:
+                # redundant constraints at the initial state (e.g. a closed planar loop): the
+                # rank-revealing path of the compiled kernel from now on (mbs/linalg.py)
+                self.pivoted = True
+                if self.verbose:
+                    print("exudyn_lie: the constraints are redundant (J M^-1 J^T is singular at the initial state); "
+                          "rank-revealing Cholesky from now on (multipliers of dependent rows 0)")
+                st = block_kkt_solve(M, f, Cq, eta, *args, True, self._perm, self._yw)
+            if st == 2:
+                raise ConstraintError("singular constraint Jacobian: the constraints became linearly dependent "
+                                      "(a singular configuration; a Cholesky pivot of J M^-1 J^T fell to 1e-10 x "
+                                      "its largest diagonal or below); check the joint frames")
+            if st == 1:
+                self.dense = True
+                if self.verbose:
+                    print("exudyn_lie: the mass matrix has a singular block; solving the dense KKT system from now on")
+        if self.dense:
+            n = self.n
+            K = np.zeros((n + m, n + m))
+            K[:n, :n] = M
+            K[:n, n:] = Cq.T
+            K[n:, :n] = Cq
+            try:
+                x = np.linalg.lstsq(K, np.concatenate([f, eta]), rcond=1e-12)[0] if self.pivoted else \
+                    np.linalg.solve(K, np.concatenate([f, eta]))
+            except np.linalg.LinAlgError:
+                raise SimulationError("the KKT matrix [M Cq^T; Cq 0] is singular (a coordinate without mass "
+                                      "that no constraint fixes?); exudyn_lie cannot compute accelerations") from None
+            self.a[:] = x[:n]
+            lam[:] = x[n:]
+        if active is not None:
+            self.lam[:] = 0.0
+            self.lam[active] = lam

@@ -1,0 +1,107 @@
+"""Which path ``SolveDynamic`` takes: the compiled kernel when it has every item of the
+model, else the Exudyn-evaluated path (:mod:`.evaluated_solve`), which the user can also
+force with ``evaluation='exudyn'``.
+
+The decision reads only: item types the compiled reader does not know
+(:func:`foreign_items`), else the reader's own check of the model
+(:func:`~.reader.SceneFromExudyn`), whose "not supported" errors (an option of a known item,
+a GeneralContact) also select the evaluated path; any other error of the reader (bad
+input) is raised as it is.
+"""
+from __future__ import annotations
+
+from .nodes import NODE_KINDS
+from .reader import (BODY_OBJECTS, BridgeError, SUPPORTED_LOADS, SUPPORTED_MARKERS, SUPPORTED_OBJECTS,
+                     SceneFromExudyn)
+
+DATA_NODES = ("PointGround", "GenericData")
+
+
+def _listing(kind, idx):
+    shown = ", ".join(str(i) for i in idx[:4]) + (f", ... ({len(idx)} in all)" if len(idx) > 4 else "")
+    return f"{kind}{'s' if len(idx) > 1 else ''} {shown}"
+
+
+def foreign_items(mbs):
+    """Descriptions of the items whose type the compiled kernel does not have, one per
+    type (``ObjectANCFCable2D (objects 1, 2, 3, 4)``)."""
+    sd = mbs.systemData
+    found = {}
+
+    def add(typeName, kind, i):
+        found.setdefault(typeName, (kind, []))[1].append(i)
+
+    for n in range(sd.NumberOfNodes()):
+        t = mbs.GetNode(n)["nodeType"]
+        if t not in NODE_KINDS and t not in DATA_NODES:
+            add("Node" + t, "node", n)
+    for o in range(sd.NumberOfObjects()):
+        t = "Object" + mbs.GetObject(o)["objectType"]
+        if t not in SUPPORTED_OBJECTS:
+            add(t, "object", o)
+    for m in range(sd.NumberOfMarkers()):
+        t = "Marker" + mbs.GetMarker(m)["markerType"]
+        if t not in SUPPORTED_MARKERS:
+            add(t, "marker", m)
+    for k in range(sd.NumberOfLoads()):
+        t = "Load" + mbs.GetLoad(k)["loadType"]
+        if t not in SUPPORTED_LOADS:
+            add(t, "load", k)
+    out = [f"{t} ({_listing(kind, idx)})" for t, (kind, idx) in found.items()]
+    n = int(mbs.NumberOfGeneralContacts())
+    if n:
+        out.append(f"{n} GeneralContact(s)")
+    return out
+
+
+def _compiled_refusal(mbs, assemble):
+    """None if the compiled reader takes the model, else its "not supported" message;
+    other errors (bad input) are raised."""
+    try:
+        SceneFromExudyn(mbs, "items" if assemble else "initial")
+    except BridgeError as e:
+        msg = str(e)
+        if "not supported" in msg or "does not integrate" in msg or "has no ObjectRigidBody" in msg:
+            return msg
+        raise
+    return None
+
+
+def evaluated_path(mbs, evaluation, assemble, *, method, liegroup, stabilization, projectInitial, verbose, settings,
+                   substeps, check_liegroup):
+    """The :class:`~.evaluated_solve.EvaluatedSolver` of the run, or None for the compiled
+    path.  Raises before mbs is touched for input neither path takes."""
+    from .evaluated_solve import EvaluatedSolver
+    from .solver import _check_method
+    if evaluation == "auto":
+        reasons = foreign_items(mbs)
+        if not reasons:
+            why = _compiled_refusal(mbs, assemble)
+            if why is None:
+                return None
+            reasons = [why.rstrip(".")]
+    else:
+        reasons = None
+    if stabilization not in (None, "none"):
+        raise BridgeError(f"stabilization={stabilization!r} is not available when Exudyn evaluates the model "
+                          f"(the model has items the compiled kernel does not have, or evaluation='exudyn'); use "
+                          f"stabilization=None")
+    tab = _check_method(method)
+    if isinstance(liegroup, str):
+        lg = check_liegroup(liegroup, "liegroup")
+    elif isinstance(liegroup, dict):
+        lg = {}
+        for k, v in liegroup.items():
+            try:
+                key = int(k)
+            except (TypeError, ValueError):
+                raise BridgeError(f"liegroup mapping key {k!r} is not an Exudyn object index") from None
+            g = check_liegroup(v, f"liegroup[{key}]")
+            if g != "auto":
+                lg[key] = g
+    else:
+        raise BridgeError(f"liegroup must be 'SE3', 'SO3xR3', 'auto' or a mapping {{object index: group}}, "
+                          f"got {type(liegroup).__name__}")
+    solver = EvaluatedSolver(mbs, tab, lg, verbose=verbose, reasons=reasons, projectInitial=projectInitial)
+    solver.check_run(settings, substeps)
+    return solver

@@ -1,0 +1,385 @@
+"""``SolveDynamic`` on the Exudyn-evaluated path: Exudyn evaluates the whole model
+(:mod:`.evaluated`), exudyn_lie integrates it with the Munthe-Kaas method
+(:mod:`.evaluated_stepper`), inside Exudyn's own time loop (as the compiled path,
+:mod:`.solver`): sensors, solution and restart files, pre/post-step user functions and the
+renderer work as in a native solve.
+
+Per Exudyn step the hook (``SetUserFunctionNewton``) advances ``k`` MK steps and writes
+the end state (and, if something reads them, the accelerations and multipliers) into mbs'
+Current configuration.  Between the stages of a step only the ODE2 / ODE1 coordinates and
+the time change; data coordinates (contact states, friction, switching) keep their values
+from the start of the step, as in Exudyn's own explicit solvers.  After the hook Exudyn runs
+``PostNewton`` (its discontinuous iteration): it updates the data coordinates from the end
+state and, if their error exceeds ``timeIntegration.discontinuous.iterationTolerance``, resets
+the coordinates to the start of the step and calls the hook again; the hook then restarts
+the step from its saved start state, now with the updated data coordinates (docs/EVALUATED.md).
+
+Parameters changed by user functions need nothing here: Exudyn reads them itself at the
+next evaluation.  A pre-step user function that changes the coordinates is seen (the hook
+compares mbs' coordinates with those it wrote) and the run continues from them.
+"""
+from __future__ import annotations
+
+import copy
+import math
+import time
+
+import numpy as np
+
+from ..userwarn import warn_user
+from .evaluated import EvaluatedModel, Layout, check_model
+from .evaluated_stepper import EvaluatedStepper
+from .evaluated_initial import project_initial
+from .evaluated_stiffness import check_step
+from .reader import BridgeError, RIGID_NODE_TYPES, UNHONOURED_MBS_FUNCTIONS
+from .settings import check_settings
+
+#: mbs-level user functions this path cannot honour (Exudyn calls the PostNewton one itself)
+UNHONOURED_HERE = {k: v for k, v in UNHONOURED_MBS_FUNCTIONS.items() if k != "PostNewtonUserFunction"}
+#: time of a stage measured at the start, per coordinate row (for the announced estimate)
+ESTIMATE_EVALUATIONS = 5
+
+
+def node_groups(mbs, liegroup):
+    """Group of every NodeRigidBodyRotVecLG node: ``liegroup`` 'SE3' / 'SO3xR3' for all; a
+    mapping {ObjectRigidBody index: group} for those bodies' nodes; 'auto' (and nodes not in
+    the mapping): SO3xR3 for the node of an ObjectRigidBody whose frame is at its COM and
+    that no connector or constraint acts on (only loads), SE3 for every other node (as the
+    compiled path's ``auto_groups``).  Returns ({node: group}, {node: reason})."""
+    sd = mbs.systemData
+    lg = [n for n in range(sd.NumberOfNodes()) if mbs.GetNode(n)["nodeType"] == "RigidBodyRotVecLG"]
+    bodyOfNode, comAtNode = {}, {}
+    for o in range(sd.NumberOfObjects()):
+        d = mbs.GetObject(o)
+        if d["objectType"] == "RigidBody":
+            n = int(d["nodeNumber"])
+            bodyOfNode[n] = o
+            comAtNode[n] = not np.any(np.asarray(d.get("physicsCenterOfMass", [0, 0, 0]), float))
+    # nodes / bodies some marker of a connector or constraint refers to
+    tied = set()
+    markerTarget = {}
+    for m in range(sd.NumberOfMarkers()):
+        d = mbs.GetMarker(m)
+        markerTarget[m] = (("node", int(d["nodeNumber"])) if "nodeNumber" in d else
+                           ("object", int(d["bodyNumber"])) if "bodyNumber" in d else None)
+    for o in range(sd.NumberOfObjects()):
+        d = mbs.GetObject(o)
+        if "markerNumbers" in d:
+            for m in d["markerNumbers"]:
+                tgt = markerTarget.get(int(m))
+                if tgt is not None:
+                    tied.add(tgt)
+        for key in ("nodeNumbers",):
+            if key in d and d["objectType"] != "RigidBody":
+                for n in d[key]:
+                    tied.add(("node", int(n)))
+    groups, why = {}, {}
+    for n in lg:
+        o = bodyOfNode.get(n)
+        free = o is not None and comAtNode[n] and ("node", n) not in tied and ("object", o) not in tied
+        groups[n] = "SO3xR3" if free else "SE3"
+        why[n] = "auto: unconstrained, frame at COM" if free else (
+            "auto: not an ObjectRigidBody's node" if o is None else
+            "auto: " + ("constrained by joints/connectors" if not free and comAtNode[n] else "frame off the COM"))
+    if isinstance(liegroup, str) and liegroup != "auto":
+        for n in lg:
+            groups[n], why[n] = liegroup, "all nodes"
+    elif isinstance(liegroup, dict):
+        nodeOfBody = {o: n for n, o in bodyOfNode.items()}
+        for o, g in liegroup.items():
+            if o not in nodeOfBody:
+                raise BridgeError(f"liegroup mapping: object {o} is not an ObjectRigidBody on a NodeRigidBodyRotVecLG "
+                                  f"of this mbs (such bodies: objects {sorted(nodeOfBody)})")
+            groups[nodeOfBody[o]], why[nodeOfBody[o]] = g, "given"
+    return groups, why
+
+
+def check_system(mbs):
+    n = int(mbs.NumberOfGeneralContacts())
+    if n > 0:
+        raise BridgeError(f"mbs has {n} GeneralContact(s) (mbs.AddGeneralContact): exudyn_lie does not integrate "
+                          f"GeneralContact (not verified against Exudyn's own solver yet); solve this model with "
+                          f"exudyn.SolveDynamic, or remove the contact (mbs.DeleteGeneralContact)")
+    for name, why in UNHONOURED_HERE.items():
+        fn = getattr(mbs, "Get" + name, None)
+        if fn is None:
+            continue
+        uf = fn()
+        if not (isinstance(uf, (int, float)) and uf == 0) and uf is not None:
+            raise BridgeError(f"mbs has a {name} (mbs.Set{name}): exudyn_lie does not call it ({why}); "
+                              f"solve with exudyn.SolveDynamic, or remove it with mbs.Set{name}(0)")
+
+
+class EvaluatedSolver:
+    """Integrate any Exudyn model that Exudyn can evaluate with explicit Munthe-Kaas
+    methods: Exudyn computes M, f, C_q and the velocity-level constraints at every stage.
+
+    ``liegroup``, ``method`` (a ButcherTableau), ``verbose`` as for
+    :class:`~.solver.LieGroupSolver`; ``reasons``: the items that force this path (for the
+    one warning; None when the user chose the path)."""
+
+    def __init__(self, mbs, tableau, liegroup="auto", verbose=False, reasons=None, projectInitial=True):
+        self.mbs = mbs
+        self.projectInitial = bool(projectInitial)
+        self.tableau = tableau
+        self.liegroup = liegroup
+        self.verbose = bool(verbose)
+        self.reasons = reasons
+        check_system(mbs)
+        check_model(mbs)
+        self.timing = {}
+
+    # the planning rules of the compiled path (output periods -> internal steps per Exudyn step)
+    from .solver import LieGroupSolver as _L
+    _plan = _L._plan
+    _period_steps = staticmethod(_L._period_steps)
+    _time_settings = staticmethod(_L._time_settings)
+    _needs_accelerations_compiled = _L._needs_accelerations
+    del _L
+
+    def _needs_accelerations(self, ss, userStep):
+        """As the compiled path: only if a sensor, file or user function can read them."""
+        if userStep:
+            return True
+        exp = ss.solution.file.export
+        if ss.solution.file.write and (exp.accelerations or exp.algebraicCoordinates):
+            return True
+        if ss.solution.restart.write:
+            return True
+        mbs = self.mbs
+        if ss.solution.sensors.active:
+            for s in range(mbs.systemData.NumberOfSensors()):
+                d = mbs.GetSensor(s)
+                if d.get("sensorType", "") == "UserFunction" or "Acceleration" in str(d.get("outputVariableType", "")):
+                    return True
+                if d.get("sensorType", "") == "Object":
+                    return True          # object outputs may read the multipliers
+        return False
+
+    def check_run(self, ss, substeps):
+        """Raise for settings this path refuses (changes nothing)."""
+        nsteps, t0, tEnd, h = self._time_settings(ss)
+        check_settings(ss)
+        self._plan(ss, nsteps, h, substeps)
+        if self.tableau.b_hat is not None and ss.timeIntegration.adaptiveStep:
+            raise BridgeError(f"adaptive steps (method {self.tableau.name} with an embedded pair, "
+                              f"timeIntegration.adaptiveStep = True) are not available when Exudyn evaluates the "
+                              f"model; set timeIntegration.adaptiveStep = False for fixed steps, or use a method "
+                              f"without a pair (e.g. RK4)")
+
+    def _post_newton_items(self):
+        """What needs Exudyn's PostNewton after every MK step (one MK step per Exudyn step):
+        data coordinates (contact, friction, hysteresis states) or an mbs-level
+        PostNewtonUserFunction; '' if nothing."""
+        mbs = self.mbs
+        what = []
+        if mbs.systemData.DataSize() > 0:
+            what.append(f"{mbs.systemData.DataSize()} data coordinates")
+        fn = getattr(mbs, "GetPostNewtonUserFunction", None)
+        uf = fn() if fn is not None else 0
+        if not (isinstance(uf, (int, float)) and uf == 0) and uf is not None:
+            what.append("the PostNewtonUserFunction")
+        return " and ".join(what)
+
+    # ------------------------------------------------------------------ plan
+    def describe_plan(self, layout, groups, why, h, k, nsteps):
+        L = layout
+        lines = [f"exudyn_lie: Exudyn evaluates the whole model (M, f, C_q, velocity-level constraints) at every "
+                 f"stage; {self.tableau.name} ({len(self.stepper.stages)} evaluated stages) with h = {h:.6g} s, "
+                 f"{nsteps} steps, {k} per Exudyn step"]
+        for i, n in enumerate(L.lgNodes):
+            lines.append(f"exudyn_lie: node {n} (NodeRigidBodyRotVecLG): {groups[n]} ({why[n]})")
+        lines.append(f"exudyn_lie: {len(L.vecIdx)} ODE2 coordinates in vector space (qdot = v), {L.nODE1} ODE1 "
+                     f"coordinates, {L.nAE} algebraic equations (index-1: eta by central differences of the "
+                     f"velocity-level constraints), {L.nData} data coordinates (updated by Exudyn's PostNewton "
+                     f"after each step)")
+        nb = len(self.model.blkPtr) - 1 if self.model.blkPtr is not None else 0
+        lines.append(f"exudyn_lie: linear solve: "
+                     + ("dense KKT (the mass matrix has a singular block)" if self.model.dense else
+                        f"block-diagonal M ({nb} blocks, largest {int(np.max(np.diff(self.model.blkPtr))) if nb else 0}"
+                        f") and the Schur complement C_q M^-1 C_q^T ({L.nAE} x {L.nAE})"))
+        return "\n".join(lines)
+
+    # ------------------------------------------------------------------ solve
+    def Solve(self, simulationSettings=None, updateInitialValues=False, storeSolver=True, showProgress=True,
+              substeps=None, accelerations=None):
+        import exudyn as exu
+        mbs = self.mbs
+        ticTotal = time.perf_counter()
+        ss = exu.SimulationSettings() if simulationSettings is None else simulationSettings
+        self.check_run(ss, substeps)
+        nsteps, t0, tEnd, h = self._time_settings(ss)
+        k, userStep = self._plan(ss, nsteps, h, substeps)
+        postNewton = self._post_newton_items()
+        if postNewton and k > 1:
+            if substeps is not None:
+                raise BridgeError(f"substeps={substeps}: {postNewton} need Exudyn's PostNewton after every step "
+                                  f"(their data coordinates change between steps); use substeps=None or 1")
+            k = 1
+        needAcc = self._needs_accelerations(ss, userStep) if accelerations is None else bool(accelerations)
+        groups, why = node_groups(mbs, self.liegroup)
+        tab = self.tableau
+        info = (f"exudyn_lie: explicit Munthe-Kaas {tab.name} (order {tab.order}) on the Exudyn-evaluated model, "
+                f"step size h = {h:.6g} s, {nsteps} steps from t = {t0:g} to {tEnd:g} s")
+        ss2 = copy.deepcopy(ss)
+        ti2 = ss2.timeIntegration
+        ga = ti2.generalizedAlpha
+        ti2.numberOfSteps = nsteps // k
+        ti2.solverType = exu.DynamicSolverType.GeneralizedAlpha
+        ga.computeInitialAccelerations = False
+        ga.useNewmark = False
+        ga.useIndex2Constraints = False
+        ti2.adaptiveStep = False
+        ti2.automaticStepSize = False
+        # contact items recommend a smaller step after an impact (PostNewton); the fixed
+        # steps do not follow it (Exudyn would reduce its step below the planned outputs)
+        ti2.discontinuous.useRecommendedStepSize = False
+        ti2.verboseMode = 0
+        userInfo = ss2.solution.file.information
+        ss2.solution.file.information = f"{userInfo}; {info}" if userInfo else info
+
+        solver = exu.MainSolverImplicitSecondOrder()
+        self.solver = solver
+        stored = {}
+        if storeSolver:
+            sysd = mbs.sys
+            stored = {key: (key in sysd, sysd.get(key)) for key in ("dynamicSolver", "simulationSettings",
+                                                                     "lieGroupSolver")}
+            sysd["dynamicSolver"] = solver
+            sysd["simulationSettings"] = ss
+            sysd["lieGroupSolver"] = self
+        try:
+            ok = solver.InitializeSolver(mbs, ss2)
+            if ok is False:
+                raise BridgeError(f"Exudyn's InitializeSolver failed: {solver.GetErrorString()}")
+        except BaseException:
+            for key, (had, value) in stored.items():
+                if had:
+                    mbs.sys[key] = value
+                else:
+                    mbs.sys.pop(key, None)
+            raise
+        finalized = False
+        self._hookError = None
+        try:
+            sd = mbs.systemData
+            cur = exu.ConfigurationType.Current
+            q = sd.GetODE2Coordinates(configuration=cur, copy=False)
+            qt = sd.GetODE2Coordinates_t(configuration=cur, copy=False)
+            qtt = sd.GetODE2Coordinates_tt(configuration=cur, copy=False)
+            layout = Layout(mbs, groups)
+            ae = sd.GetAECoordinates(configuration=cur, copy=False) if layout.nAE else np.zeros(0)
+            y = (np.array(sd.GetODE1Coordinates(configuration=cur), float) if layout.nODE1 else np.zeros(0))
+            model = EvaluatedModel(mbs, solver, layout, q, qt, verbose=self.verbose)
+            self.model = model
+            stepper = EvaluatedStepper(model, tab)
+            self.stepper = stepper
+            stepper.read_state(q, qt, y, t0)
+            fixed = project_initial(model, stepper, t0, self.projectInitial)
+            if fixed:
+                warn_user(f"exudyn_lie: the initial state does not satisfy the constraints; projected onto them: "
+                          f"{fixed} (Exudyn's own solvers start from it unchanged; pass projectInitial=False to "
+                          f"raise instead)")
+            stepper.write()
+            # stability of the step at the initial state (stiff items at the script's step)
+            rate, stable = check_step(model, tab, h)
+            # the initial accelerations (and a measured estimate of the cost per step)
+            stepper.write()
+            model.accelerations(t0, stepper.R, stepper.r, stepper.prev, stepper.qv, True)    # first call: set-up
+            tic = time.perf_counter()
+            for _ in range(ESTIMATE_EVALUATIONS):
+                model.accelerations(t0, stepper.R, stepper.r, stepper.prev, stepper.qv, True)
+            perStage = (time.perf_counter() - tic) / ESTIMATE_EVALUATIONS
+            perStep = perStage * len(stepper.stages)
+            model.evaluations = 0
+            if needAcc:
+                qtt[:] = model.a
+                ae[:] = model.lam
+            if self.reasons:
+                warn_user(f"exudyn_lie.SolveDynamic: {'; '.join(self.reasons)}: the compiled kernel does not have "
+                          f"{'this item' if len(self.reasons) == 1 else 'these items'}, so Exudyn evaluates the "
+                          f"whole model (M, f, C_q) at every stage; expected cost {1e6 * perStep:.0f} us per step "
+                          f"({len(stepper.stages)} stages of {1e6 * perStage:.0f} us, measured at the initial state; "
+                          f"{1e-6 * perStep * nsteps * 1e6:.3g} s for {nsteps} steps)")
+            if self.verbose or ss.timeIntegration.verboseMode >= 1:
+                print(self.describe_plan(layout, groups, why, h, k, nsteps))
+                print(f"exudyn_lie: fastest linearised mode |lambda| = {rate:.4g} 1/s: stable up to h = {stable:.3g} s; "
+                      f"one stage costs {1e6 * perStage:.1f} us (Exudyn's evaluation, its dense copies of M "
+                      f"and the Jacobian, the solve)")
+            stepper.write()                      # the initial state and time, for Exudyn's initial outputs
+            sd.SetTime(t0)
+            written = [q.copy(), qt.copy()]
+            steps = [t0, t0]
+            snap = [stepper.snapshot()]
+            it = solver.it
+            integ = [0.0]
+            nAE = layout.nAE
+
+            def hook(mainSolver, mbs_, settings):
+                try:
+                    t1 = it.currentTime
+                    if t1 == steps[1] and t1 != t0:
+                        stepper.restore(snap[0])           # discontinuous iteration: the step again
+                    else:
+                        if not (np.array_equal(q, written[0]) and np.array_equal(qt, written[1])):
+                            stepper.read_state(q, qt, None, steps[1])     # a user function set the state
+                        snap[0] = stepper.snapshot()
+                        steps[0], steps[1] = steps[1], t1
+                    stepper.start = snap[0]
+                    tic = time.perf_counter()
+                    hh = (t1 - steps[0]) / k
+                    if abs(hh - h) > 1e-9 * h:
+                        raise BridgeError(f"Exudyn's time loop asks for a step to t = {t1!r} s, exudyn_lie "
+                                          f"planned steps of {h:g} s: Exudyn changed its step size (after a failed "
+                                          f"discontinuous iteration or a step reduction); check "
+                                          f"timeIntegration.discontinuous and the step settings")
+                    stepper.t = steps[0]
+                    for _ in range(k):
+                        stepper.step(h)
+                    stepper.t = t1
+                    stepper.write()
+                    if needAcc:
+                        model.accelerations(t1, stepper.R, stepper.r, stepper.prev, stepper.qv, True)
+                        qtt[:] = model.a
+                        if nAE:
+                            ae[:] = model.lam
+                    sd.SetTime(t1)
+                    written[0][:] = q
+                    written[1][:] = qt
+                    integ[0] += time.perf_counter() - tic
+                    return True
+                except BaseException as e:      # noqa: BLE001 - re-raised after Exudyn unwinds
+                    self._hookError = e
+                    raise
+
+            solver.SetUserFunctionNewton(mbs, hook)
+            ticLoop = time.perf_counter()
+            ok = solver.SolveSteps(mbs, ss2)
+            loop = time.perf_counter() - ticLoop
+            finalized = True
+            solver.FinalizeSolver(mbs, ss2)
+        except BaseException:
+            if not finalized:
+                try:
+                    solver.FinalizeSolver(mbs, ss2)
+                except Exception:
+                    pass
+            err = self._hookError
+            if err is not None:
+                raise err from None
+            raise
+        if not ok:
+            raise exu.SolverError(f"exudyn_lie: Exudyn's time loop terminated: {solver.GetErrorString()}")
+        if updateInitialValues:
+            sd = mbs.systemData
+            sd.SetSystemState(systemStateList=sd.GetSystemState(), configuration=exu.ConfigurationType.Initial)
+            sd.SetODE2Coordinates_tt(coordinates=sd.GetODE2Coordinates_tt(),
+                                     configuration=exu.ConfigurationType.Initial)
+        nev = model.evaluations
+        self.timing = dict(total=time.perf_counter() - ticTotal, loop=loop, integration=integ[0], steps=nsteps,
+                           evaluations=nev, perStage=integ[0] / max(nev, 1), perStep=integ[0] / max(nsteps, 1))
+        if self.verbose or ss.timeIntegration.verboseMode >= 1:
+            print(f"exudyn_lie: {nsteps} steps in {self.timing['total']:.3g} s (integration {integ[0]:.3g} s = "
+                  f"{1e6 * self.timing['perStep']:.3g} us/step, {nev} evaluations of {1e6 * self.timing['perStage']:.3g}"
+                  f" us)")
+        return True

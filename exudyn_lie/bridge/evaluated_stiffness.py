@@ -1,0 +1,129 @@
+"""Stability of an explicit step on the Exudyn-evaluated path (stiff items such as ANCF
+cables at the script's step).
+
+The equations linearised at a state, on the constraint manifold, are
+``M_r x'' + D_r x' + K_r x = 0`` with ``K = -df/dq`` and ``D = -df/dv`` (Exudyn's
+``ComputeJacobianODE2RHS``, loads included) reduced by ``N``, a basis of the null space of
+``C_q`` (the motions the constraints allow): ``M_r = N^T M N`` etc.  Their eigenvalues
+``lambda`` (of the first-order matrix ``[[0, I], [-M_r^-1 K_r, -M_r^-1 D_r]]``) must satisfy
+``|R(h lambda)| <= 1`` with the method's stability polynomial ``R``
+(:func:`~exudyn_lie.integrators.stability.stability_coefficients`, from the tableau's
+coefficients).  :func:`stable_step` finds the largest such ``h`` by bisection;
+:func:`check_step` raises :class:`~exudyn_lie.errors.StepSizeError` with ``0.9`` of it
+before a run whose step is beyond it; :func:`suggest_step` gives it for the error of a
+blow-up during the run.  A mode whose stiffness appears only later (a contact that closes,
+a regularised friction zone that is entered) is not seen at the initial state: that is
+what the blow-up check of the stepper is for; a regularised friction that only chatters
+(bounded) is not detected (docs/EVALUATED.md).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..errors import StepSizeError
+from ..integrators.stability import stability_coefficients
+
+SAFETY = 0.9
+GROWTH_TOL = 1e-9          # |R(z)| <= 1 + GROWTH_TOL counts as stable (R(0) = 1 exactly)
+
+
+def linear_eigenvalues(model):
+    """Eigenvalues of the linearised, constrained equations at the state in mbs."""
+    s, mbs, n = model.solver, model.mbs, model.n
+    M, f, Cq = model.mass_force_jacobian(model.sd.GetTime())
+    M = np.array(M)
+    Cq = None if Cq is None else np.array(Cq)
+    s.ComputeJacobianODE2RHS(mbs, scalarFactor_ODE2=-1.0, scalarFactor_ODE2_t=0.0, scalarFactor_ODE1=0.0,
+                             computeLoadsJacobian=1)
+    K = np.array(s.GetSystemJacobian()[:n, :n])
+    s.ComputeJacobianODE2RHS(mbs, scalarFactor_ODE2=0.0, scalarFactor_ODE2_t=-1.0, scalarFactor_ODE1=0.0,
+                             computeLoadsJacobian=2)
+    D = np.array(s.GetSystemJacobian()[:n, :n])
+    if Cq is not None and Cq.shape[0]:
+        Cq = Cq[np.any(Cq != 0.0, axis=1)]
+    if Cq is not None and Cq.shape[0]:
+        _, sv, vt = np.linalg.svd(Cq)
+        rank = int(np.sum(sv > 1e-10 * max(sv.max(), 1e-300)))
+        N = vt[rank:].T
+    else:
+        N = np.eye(n)
+    k = N.shape[1]
+    if k == 0 or not (np.any(K) or np.any(D)):
+        return np.zeros(0, complex)
+    Mr = N.T @ M @ N
+    try:
+        MK = np.linalg.solve(Mr, N.T @ K @ N)
+        MD = np.linalg.solve(Mr, N.T @ D @ N)
+    except np.linalg.LinAlgError:
+        return np.zeros(0, complex)
+    A = np.zeros((2 * k, 2 * k))
+    A[:k, k:] = np.eye(k)
+    A[k:, :k] = -MK
+    A[k:, k:] = -MD
+    ev = np.linalg.eigvals(A)
+    return ev[np.isfinite(ev)]
+
+
+def _grows(coeffs, z):
+    return np.abs(np.polyval(coeffs[::-1], z)) > 1.0 + GROWTH_TOL
+
+
+def largest_stable_step(tableau, ev):
+    """The largest h with ``|R(h lambda)| <= 1`` for every eigenvalue (inf if every mode is
+    stable for all h, e.g. no stiffness); bisection between stable and unstable h.  Modes
+    that grow physically count with their imaginary part only."""
+    # a mode that grows physically (Re lambda > 0: an inverted pendulum, gyroscopic
+    # coupling) grows for every h; only its oscillation must be resolved: Re lambda -> 0
+    ev = np.minimum(ev.real, 0.0) + 1j * ev.imag
+    ev = ev[np.abs(ev) > 0]
+    if ev.size == 0:
+        return float("inf")
+    c = np.array([float(x) for x in stability_coefficients(tableau)])
+    rho = float(np.max(np.abs(ev)))
+    hi = 1.0 / rho
+    while not np.any(_grows(c, hi * ev)):
+        hi *= 2.0
+        if hi * rho > 1e6:
+            return float("inf")
+    lo = 0.0
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        if np.any(_grows(c, mid * ev)):
+            hi = mid
+        else:
+            lo = mid
+    return lo
+
+
+def stable_step(tableau, model):
+    """(largest stable step, fastest rate |lambda|) at the state in mbs."""
+    ev = linear_eigenvalues(model)
+    return largest_stable_step(tableau, ev), float(np.max(np.abs(ev))) if ev.size else 0.0
+
+
+def check_step(model, tableau, h):
+    """Raise StepSizeError if ``h`` is beyond the linear stability limit at the state in
+    mbs; returns (fastest rate, largest stable step)."""
+    hmax, rate = stable_step(tableau, model)
+    if h > hmax:
+        raise StepSizeError(f"the step size {h:.3g} s is beyond the stability limit of {tableau.name} for this "
+                            f"model: its fastest mode has |lambda| = {rate:.4g} 1/s (Exudyn's stiffness, damping "
+                            f"and mass matrices on the constraint manifold at the initial state), stable up to "
+                            f"h = {hmax:.3g} s; use timeIntegration.numberOfSteps for a step size of "
+                            f"{SAFETY * hmax:.3g} s or smaller")
+    return rate, hmax
+
+
+def suggest_step(stepper, h):
+    """A stable step for the error of a blow-up: from the linearisation at the state the
+    run last started a step from (``stepper.start``), at most ``h / 2``; else ``h / 10``."""
+    start = getattr(stepper, "start", None)
+    if start is None:
+        return h / 10
+    try:
+        stepper.restore(start)
+        stepper.write()
+        hmax, _ = stable_step(stepper.tableau, stepper.model)
+        return min(SAFETY * hmax, h / 2)
+    except Exception:           # noqa: BLE001 - the suggestion must not hide the error
+        return h / 10

@@ -3,7 +3,7 @@
 
 Three small scripts in the style of Exudyn's TestModels (``exudynTestGlobals`` from
 ``modelUnitTests``, ``useGraphics``, ``testResult``): a rigid pendulum on a revolute joint
-(supported; written at three step sizes), a rolling disc (a velocity-level joint, refused by both paths) and a
+(supported; written at three step sizes), a slider with a velocity-level coordinate constraint (refused by both paths) and a
 script with an error of its own (a name Exudyn 1.13.6 no longer exports)."""
 import json
 import math
@@ -55,20 +55,22 @@ exudynTestGlobals.testResult = p[0] + p[1]
 '''
 
 DISC = HEADER + '''
-r = 0.2
+# a block on a slider whose velocity is prescribed by a velocity-level coordinate constraint
 oGround = mbs.CreateGround(referencePosition=[0, 0, 0])
-oDisc = mbs.CreateRigidBody(inertia=InertiaCylinder(1000, 0.05, r, axis=0), referencePosition=[0, 0, r],
-                            initialAngularVelocity=[-5, 0, 0], initialVelocity=[0, -5 * r, 0], gravity=[0, 0, -9.81])
-mG = mbs.AddMarker(MarkerBodyRigid(bodyNumber=oGround))
-mD = mbs.AddMarker(MarkerBodyRigid(bodyNumber=oDisc))
-mbs.AddObject(ObjectJointRollingDisc(markerNumbers=[mG, mD], discRadius=r))
+oBlock = mbs.CreateRigidBody(inertia=InertiaCuboid(1000, [0.1, 0.1, 0.1]), referencePosition=[0, 0, 0],
+                             initialVelocity=[1, 0, 0], gravity=[0, -9.81, 0])
+nBlock = mbs.GetObject(oBlock)['nodeNumber']
+nG = mbs.AddNode(NodePointGround())
+mG = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=nG, coordinate=0))
+mX = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=nBlock, coordinate=0))
+mbs.AddObject(ObjectConnectorCoordinate(markerNumbers=[mG, mX], offset=1, velocityLevel=True))
 mbs.Assemble()
 simulationSettings = exu.SimulationSettings()
 simulationSettings.timeIntegration.endTime = 0.1
 simulationSettings.timeIntegration.numberOfSteps = 10
 exu.SolveDynamic(mbs, simulationSettings)
-exudynTestGlobals.testResult = mbs.GetObjectOutputBody(oDisc, exu.OutputVariableType.Position,
-                                                       localPosition=[0, 0, 0])[1]
+exudynTestGlobals.testResult = mbs.GetObjectOutputBody(oBlock, exu.OutputVariableType.Position,
+                                                       localPosition=[0, 0, 0])[0]
 '''
 
 BROKEN = HEADER + '''
@@ -84,7 +86,7 @@ def corpus_run(tmp_path_factory):
     src = tmp_path_factory.mktemp("scripts")
     for n in STEPS:
         (src / f"pendulumRevolute{n}.py").write_text(PENDULUM.format(steps=n))
-    (src / "rollingDisc.py").write_text(DISC)
+    (src / "velocityLevelSlider.py").write_text(DISC)
     (src / "brokenScript.py").write_text(BROKEN)
     out = src / "results"
     lines = []
@@ -109,15 +111,15 @@ def test_script_error_is_a_native_failure_and_no_exl_run(corpus_run):
 
 
 def test_unsupported_item_is_refused_and_named(corpus_run):
-    r = corpus_run[0]["rollingDisc.py"]
+    r = corpus_run[0]["velocityLevelSlider.py"]
     assert r["native"]["status"] == "ok" and r["dynamic"] == "yes"
     assert isinstance(r["testResult"][0], float)            # the native run set it
     assert r["exlStatus"] == "refused"
     assert r["exl"]["solves"][0]["exl"] == "refusal"
     assert r["exlReason"].startswith("BridgeError: ")
-    assert r["firstRefusal"] == "ObjectJointRollingDisc"
+    assert r["firstRefusal"] == "ObjectConnectorCoordinate: velocityLevel=True"
     assert r["testResult"][1] is None                        # the script stopped at the solve
-    assert "ObjectJointRollingDisc" in r["inventory"] and "ObjectRigidBody" in r["inventory"]
+    assert "ObjectConnectorCoordinate" in r["inventory"] and "ObjectRigidBody" in r["inventory"]
 
 
 def test_supported_pendulum_agrees_with_native_to_the_native_step_error(corpus_run):
@@ -161,7 +163,7 @@ def test_fine_native_reference_has_k_times_the_steps(corpus_run):
     for k in STEPS:
         r = records[f"pendulumRevolute{k}.py"]
         assert r["relDiffFine"] < r["relDiffNativeFine"]
-    assert records["rollingDisc.py"]["fine"] is None and records["brokenScript.py"]["fine"] is None
+    assert records["velocityLevelSlider.py"]["fine"] is None and records["brokenScript.py"]["fine"] is None
 
 
 def test_report_files(corpus_run):
@@ -172,10 +174,10 @@ def test_report_files(corpus_run):
     s = corpus.summarize(list(records.values()))
     assert s["scripts"] == len(STEPS) + 2 and s["base"] == len(STEPS) + 1
     assert s["exl"]["ok"] == len(STEPS) and s["exl"]["refused"] == 1 and s["exl"]["crashed"] == 0
-    assert s["firstRefusal"] == {"ObjectJointRollingDisc": 1}
+    assert s["firstRefusal"] == {"ObjectConnectorCoordinate: velocityLevel=True": 1}
     assert s["fineReferences"] == len(STEPS) and s["exlCloserToFine"] == len(STEPS)
     text = corpus.render(list(records.values()), s, "test", 0.0, 120)
-    assert "| `ObjectJointRollingDisc` | 1 |" in text
+    assert "| `ObjectConnectorCoordinate: velocityLevel=True` | 1 |" in text
     assert "`brokenScript.py`" in (out / "corpus.md").read_text()
 
 

@@ -288,12 +288,15 @@ def relative_difference(a, b):
 
 
 def refusal_key(reason):
-    """The first unsupported thing named in a refusal: an item type ('ObjectMassPoint2D'),
-    'solverType=...', else the message up to its first ';' with numbers as '#'."""
+    """The first unsupported thing named in a refusal: an item type ('ObjectMassPoint2D'), an
+    item type with its option ('ObjectConnectorCoordinate: velocityLevel=True'), 'solverType=...', else the message up to its first ';' with numbers as '#'."""
     msg = reason.split(": ", 1)[1] if ": " in reason else reason
     m = re.search(r"of type (\w+) is not supported", msg)
     if m:
         return m.group(1)
+    m = re.match(r"(?:object|load|marker|node|sensor) \d+ \('[^']*'\) (\w+): (.+?)(?: is | are |;|$)", msg)
+    if m:                                   # an option of an item: 'ObjectConnectorCoordinate: velocityLevel=True'
+        return f"{m.group(1)}: {m.group(2)}"[:100]
     m = re.match(r"solverType=(\S+)", msg)
     if m:
         return f"solverType={m.group(1)}"

@@ -373,3 +373,30 @@ def test_stiffness_that_appears_during_the_run_raises_step_size_error():
     sugg = float(str(e.value).rsplit("step size of ", 1)[1].split(" s")[0])
     assert 1e-6 < sugg < 1e-5
     assert float(str(e.value).split("at t = ")[1].split(" s")[0]) > 0.01      # raised at the impact, not at the start
+
+
+def _generic_ode1(A):
+    from exudyn.utilities import NodeGenericODE1, ObjectGenericODE1
+    mbs = new_mbs()
+    n = mbs.AddNode(NodeGenericODE1(referenceCoordinates=[0, 0], initialCoordinates=[1, 0],
+                                    numberOfODE1Coordinates=2))
+    mbs.AddObject(ObjectGenericODE1(nodeNumbers=[n], systemMatrix=np.asarray(A, float), rhsVector=[0, 0]))
+    mbs.Assemble()
+    return mbs
+
+
+def test_ode1_coordinates_integrate_with_the_same_tableau():
+    """ObjectGenericODE1 y' = A y: RK4 at h = 1e-3 against expm(A) (measured 2.7e-13); a
+    stiff A beyond RK4's limit stops with StepSizeError before the run."""
+    from scipy.linalg import expm
+    A = np.array([[0, 1.0], [-4.0, -0.1]])
+    mbs = _generic_ode1(A)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        exl.SolveDynamic(mbs, quiet_settings(1.0, 1000), showProgress=False)
+    y = np.array(mbs.systemData.GetODE1Coordinates())
+    assert np.max(np.abs(y - expm(A) @ [1.0, 0.0])) < 1e-11
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        with pytest.raises(StepSizeError, match="stable up to h = 0.000283 s"):
+            exl.SolveDynamic(_generic_ode1([[0, 1.0], [-1e8, 0.0]]), quiet_settings(1.0, 1000), showProgress=False)

@@ -400,3 +400,21 @@ def test_ode1_coordinates_integrate_with_the_same_tableau():
         warnings.simplefilter("ignore")
         with pytest.raises(StepSizeError, match="stable up to h = 0.000283 s"):
             exl.SolveDynamic(_generic_ode1([[0, 1.0], [-1e8, 0.0]]), quiet_settings(1.0, 1000), showProgress=False)
+
+
+@pytest.mark.parametrize("node", ["EP", "Rxyz"])
+def test_other_rigid_nodes_in_vector_space_converge_to_the_compiled_path(node):
+    """Euler-parameter (with its unit-norm algebraic equation) and Rxyz nodes are vector-space
+    coordinates on this path (q_t = the parameters' rates), while the compiled path integrates
+    the same bodies on the group: two discretisations of the same ODE, so they differ by RK4's
+    truncation error, O(h^4) (measured at h = 1e-3 after 0.1 s: 1e-9 in q, 2e-8 in q_t); halving
+    h divides the difference by about 16."""
+    from test_bridge_common import NODE_TYPES
+    build = lambda: models.build("heavy_top", mbs=new_mbs(), nodeType=NODE_TYPES[node])[0]
+    d = []
+    for h in (1e-3, 5e-4):
+        out = _both_paths(build, 0.1, h)
+        (q0, v0), (q1, v1) = out["compiled"], out["exudyn"]
+        d.append(max(_rel(q1, q0), _rel(v1, v0)))
+    assert d[0] < 1e-7
+    assert d[1] < d[0] / 10, d

@@ -179,7 +179,8 @@ class EvaluatedStepper:
 
     def _raise_blowup(self, h, what):
         from .evaluated_stiffness import suggest_step
-        sugg = suggest_step(self, h)
-        raise StepSizeError(f"the state became {what} at t = {self.t:.6g} s with step size {h:.3g} s (method "
+        t = self.t
+        sugg = suggest_step(self, h)           # (restores the state the Exudyn step started from)
+        raise StepSizeError(f"the state became {what} at t = {t:.6g} s with step size {h:.3g} s (method "
                             f"{self.tableau.name}, Exudyn-evaluated model); the step is beyond the stability "
                             f"limit: try a step size of {sugg:.3g} s or smaller")

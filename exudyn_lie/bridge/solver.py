@@ -979,6 +979,10 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
             if constraintTolerance is not None:
                 raise BridgeError("exudyn_lie.SolveDynamic: constraintTolerance is available on the compiled path only "
                                   "(adaptive steps); this model is evaluated by Exudyn: leave constraintTolerance=None")
+            if replaced:
+                warn_user(f"exudyn_lie.SolveDynamic: DynamicSolverType.{typeName} (Exudyn's implicit solver) is "
+                          f"replaced, like GeneralizedAlpha, by the explicit Munthe-Kaas method {path.tableau.name}; "
+                          f"method= or an explicit solverType chooses the method, liegroup= the groups")
             if assemble:
                 warn_user("exudyn_lie.SolveDynamic: mbs is not assembled; calling mbs.Assemble()")
                 mbs.Assemble()

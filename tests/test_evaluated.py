@@ -357,3 +357,46 @@ def test_sensors_record_the_same_as_on_the_compiled_path():
         assert a.shape == c.shape == (11, 4)
         np.testing.assert_array_equal(a[:, 0], c[:, 0])
         assert np.max(np.abs(a - c)) <= 1e-10 * np.max(np.abs(c))
+
+
+def test_stiffness_that_appears_during_the_run_raises_step_size_error():
+    """A contact 10^7 times stiffer than in the test above closes during the run: no stiffness
+    at the start (the ball flies freely), then omega = sqrt(k/m) = 7.9e5 rad/s at h = 1e-4
+    (h omega = 79).  The estimate from the stages stops the run instead of letting the ball
+    leave at 5e6 m/s, with a step near the stability limit 2.8 / 7.9e5 = 3.5e-6 s."""
+    mbs, b = _ball_on_sphere()
+    mbs.SetObjectParameter(1, "contactStiffness", 1e12)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        with pytest.raises(StepSizeError, match="beyond the stability limit") as e:
+            exl.SolveDynamic(mbs, quiet_settings(0.2, 2000), showProgress=False)
+    sugg = float(str(e.value).rsplit("step size of ", 1)[1].split(" s")[0])
+    assert 1e-6 < sugg < 1e-5
+    assert float(str(e.value).split("at t = ")[1].split(" s")[0]) > 0.01      # raised at the impact, not at the start
+
+
+def _generic_ode1(A):
+    from exudyn.utilities import NodeGenericODE1, ObjectGenericODE1
+    mbs = new_mbs()
+    n = mbs.AddNode(NodeGenericODE1(referenceCoordinates=[0, 0], initialCoordinates=[1, 0],
+                                    numberOfODE1Coordinates=2))
+    mbs.AddObject(ObjectGenericODE1(nodeNumbers=[n], systemMatrix=np.asarray(A, float), rhsVector=[0, 0]))
+    mbs.Assemble()
+    return mbs
+
+
+def test_ode1_coordinates_integrate_with_the_same_tableau():
+    """ObjectGenericODE1 y' = A y: RK4 at h = 1e-3 against expm(A) (measured 2.7e-13); a
+    stiff A beyond RK4's limit stops with StepSizeError before the run."""
+    from scipy.linalg import expm
+    A = np.array([[0, 1.0], [-4.0, -0.1]])
+    mbs = _generic_ode1(A)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        exl.SolveDynamic(mbs, quiet_settings(1.0, 1000), showProgress=False)
+    y = np.array(mbs.systemData.GetODE1Coordinates())
+    assert np.max(np.abs(y - expm(A) @ [1.0, 0.0])) < 1e-11
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        with pytest.raises(StepSizeError, match="stable up to h = 0.000283 s"):
+            exl.SolveDynamic(_generic_ode1([[0, 1.0], [-1e8, 0.0]]), quiet_settings(1.0, 1000), showProgress=False)

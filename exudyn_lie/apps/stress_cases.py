@@ -1410,9 +1410,19 @@ def bridge_probes():
     add("unknown method 'RK5x'", lambda mbs, H: H["kw"].__setitem__("method", "RK5x"), "unknown method")
     add("unknown liegroup 'SE2'", lambda mbs, H: H["kw"].__setitem__("liegroup", "SE2"), "unknown Lie group")
     add("joint with both markers on the same body", _same_body_joint, "same")
-    add("unsupported item: ObjectMass1D", _mass_1d, "not supported")
-    add("unsupported item: revolute joint with offsetUserFunction", _offset_uf_joint, "not supported")
+    # the compiled path's refusals (evaluation='auto' takes such models to the Exudyn-evaluated path)
+    add("unsupported item (evaluation='compiled'): ObjectMass1D", _compiled_only(_mass_1d), "not supported")
+    add("unsupported item (evaluation='compiled'): revolute joint with offsetUserFunction",
+        _compiled_only(_offset_uf_joint), "not supported")
     return P
+
+
+def _compiled_only(prep):
+    """``prep`` with ``evaluation='compiled'`` for exl.SolveDynamic."""
+    def run(mbs, H):
+        prep(mbs, H)
+        H["kw"]["evaluation"] = "compiled"
+    return run
 
 
 def _range_checks_off(prep):

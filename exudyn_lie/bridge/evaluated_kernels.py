@@ -491,3 +491,32 @@ def schur_band_solve(M, f, Cq, eta, blk, blkPtr, blkOff, blockOf, pos, bw, MinvB
                 acc += MinvB[o + i * s + k] * T[k]
             a[blk[p0 + i]] -= acc
     return 4 if empty else 0
+
+
+@njit(cache=True)
+def stiffness_estimate(A, h, jl, K, Vd, QK, VK):
+    """An estimate of the fastest rate |lambda| the last step met (Shampine's idea, for
+    second-order equations): between the first and the last evaluated stage ``jl`` the
+    configuration moved by ``dq = h sum_l a_jl qdot_l`` (Lie group nodes in the algebra,
+    ``k_l``) and the acceleration changed by ``da``; ``rho = sqrt(|da| / |dq|)``.  For
+    ``a = -K q - D v`` it gives omega for a stiffness-dominated mode (``da = -K dq``) and c for a
+    damping-dominated one (``da = -c dv``, ``dv = c dq``); ``h rho`` beyond the method's
+    stability radius means the step amplifies that mode."""
+    num = 0.0
+    den = 0.0
+    for i in range(K.shape[1]):
+        for k in range(6):
+            dq = 0.0
+            for l in range(jl):
+                dq += A[jl, l] * K[l, i, k]
+            den += (h * dq) ** 2
+            num += (Vd[jl, i, k] - Vd[0, i, k]) ** 2
+    for k in range(QK.shape[1]):
+        dq = 0.0
+        for l in range(jl):
+            dq += A[jl, l] * QK[l, k]
+        den += (h * dq) ** 2
+        num += (VK[jl, k] - VK[0, k]) ** 2
+    if den == 0.0 or num == 0.0:
+        return 0.0
+    return math.sqrt(math.sqrt(num / den))

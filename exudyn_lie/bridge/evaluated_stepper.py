@@ -24,9 +24,11 @@ import numpy as np
 from ..errors import StepSizeError
 from ..mbs.codes import STAGE_ARG_MAX
 from ..mbs.stepper import method_arrays
-from .evaluated_kernels import lg_finish, lg_stage, lg_stage_rates
+from .evaluated_kernels import lg_finish, lg_stage, lg_stage_rates, stiffness_estimate
 
 BLOWUP = 1e12        # a velocity beyond BLOWUP x max(1, initial velocity scale) is a blow-up
+STIFF_STEPS = 3      # h rho beyond the stability radius in this many consecutive steps: StepSizeError
+STIFF_FACTOR = 10.0  # ... or beyond this multiple of it in one step (a stiff contact lasts a step or two)
 
 
 class EvaluatedStepper:
@@ -65,6 +67,10 @@ class EvaluatedStepper:
         self.tmp6 = np.zeros(6)
         self.vscale = 1.0
         self.t = 0.0
+        from ..integrators.stability import stability_radius
+        self._radius = stability_radius(tableau)
+        self._lastStage = int(self.stages[-1])
+        self._stiffCount = 0
         # what a step uses, unpacked once (the stage loop is Python)
         self._stageList = [(int(j), float(self.c[j])) for j in self.stages]
         self._hot = (self.gid, self.A, self.R, self.r, self.V, self.K, self.Vd, self.Psi, self.Rs, self.rs, self.Vs,
@@ -144,6 +150,15 @@ class EvaluatedStepper:
         self.t = t + h
         if st:
             self._raise_blowup(h, "non-finite (NaN/inf)" if st == 1 else "unbounded (blow-up)")
+        # a mode that became stiff during the run (a contact that closed, a friction zone):
+        # Shampine's estimate from the stages, the tableau's stability radius
+        rho = stiffness_estimate(A, h, self._lastStage, K, Vd, QK, VK)
+        if h * rho > self._radius:
+            self._stiffCount += 1
+            if self._stiffCount >= STIFF_STEPS or h * rho > STIFF_FACTOR * self._radius:
+                self._raise_stiff(h, rho)
+        else:
+            self._stiffCount = 0
 
     def _raise_stage_arg(self, i, h):
         psi = float(np.linalg.norm(self.Psi[i, :3]))
@@ -154,9 +169,18 @@ class EvaluatedStepper:
                             f"at t = {self.t:.6g} s with step size {h:.3g} s (method {self.tableau.name}); try a "
                             f"step size of {sugg:.3g} s or smaller")
 
+    def _raise_stiff(self, h, rho):
+        raise StepSizeError(f"the step size {h:.3g} s is beyond the stability limit of {self.tableau.name} at t = "
+                            f"{self.t:.6g} s: the stages of the last step(s) show a mode of rate "
+                            f"|lambda| ~ {rho:.4g} 1/s (Shampine's estimate from the stages; e.g. a contact or a "
+                            f"friction zone that became active), h |lambda| = {h * rho:.3g} > {self._radius:.3g} "
+                            f"(the method's stability radius); the state is not reliable: try a step size of "
+                            f"{0.9 * self._radius / rho:.3g} s or smaller")
+
     def _raise_blowup(self, h, what):
         from .evaluated_stiffness import suggest_step
-        sugg = suggest_step(self, h)
-        raise StepSizeError(f"the state became {what} at t = {self.t:.6g} s with step size {h:.3g} s (method "
+        t = self.t
+        sugg = suggest_step(self, h)           # (restores the state the Exudyn step started from)
+        raise StepSizeError(f"the state became {what} at t = {t:.6g} s with step size {h:.3g} s (method "
                             f"{self.tableau.name}, Exudyn-evaluated model); the step is beyond the stability "
                             f"limit: try a step size of {sugg:.3g} s or smaller")

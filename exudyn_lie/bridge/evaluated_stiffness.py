@@ -39,6 +39,14 @@ def linear_eigenvalues(model):
     s.ComputeJacobianODE2RHS(mbs, scalarFactor_ODE2=0.0, scalarFactor_ODE2_t=-1.0, scalarFactor_ODE1=0.0,
                              computeLoadsJacobian=2)
     D = np.array(s.GetSystemJacobian()[:n, :n])
+    ev1 = np.zeros(0, complex)
+    n1 = model.n1
+    if n1:
+        # ODE1 coordinates: the eigenvalues of d(ydot)/dy by central differences of
+        # ComputeODE1RHS (its analytic Jacobian is zero for ObjectGenericODE1 in Exudyn
+        # 1.13.6); their coupling to the ODE2 coordinates is neglected here
+        ev1 = np.linalg.eigvals(_ode1_jacobian(model))
+        ev1 = ev1[np.isfinite(ev1)]
     if Cq is not None and Cq.shape[0]:
         Cq = Cq[np.any(Cq != 0.0, axis=1)]
     if Cq is not None and Cq.shape[0]:
@@ -49,19 +57,39 @@ def linear_eigenvalues(model):
         N = np.eye(n)
     k = N.shape[1]
     if k == 0 or not (np.any(K) or np.any(D)):
-        return np.zeros(0, complex)
+        return ev1
     Mr = N.T @ M @ N
     try:
         MK = np.linalg.solve(Mr, N.T @ K @ N)
         MD = np.linalg.solve(Mr, N.T @ D @ N)
     except np.linalg.LinAlgError:
-        return np.zeros(0, complex)
+        return ev1
     A = np.zeros((2 * k, 2 * k))
     A[:k, k:] = np.eye(k)
     A[k:, :k] = -MK
     A[k:, k:] = -MD
     ev = np.linalg.eigvals(A)
-    return ev[np.isfinite(ev)]
+    return np.concatenate([ev[np.isfinite(ev)], ev1])
+
+
+def _ode1_jacobian(model):
+    import exudyn as exu
+    s, mbs, sd, n, n1 = model.solver, model.mbs, model.sd, model.n, model.n1
+    cur = exu.ConfigurationType.Current
+    y0 = np.array(sd.GetODE1Coordinates(configuration=cur), float)
+    J = np.zeros((n1, n1))
+    for k in range(n1):
+        d = 1e-6 * max(1.0, abs(y0[k]))
+        out = []
+        for sgn in (1.0, -1.0):
+            y = y0.copy()
+            y[k] += sgn * d
+            sd.SetODE1Coordinates(y, configuration=cur)
+            s.ComputeODE1RHS(mbs)
+            out.append(np.array(s.GetSystemResidual()[n:n + n1]))
+        J[:, k] = (out[0] - out[1]) / (2 * d)
+    sd.SetODE1Coordinates(y0, configuration=cur)
+    return J
 
 
 def _grows(coeffs, z):

@@ -187,9 +187,7 @@ class EvaluatedModel:
         self.a = np.zeros(n)
         self.lam = np.zeros(m)
         self.ydot = np.zeros(n1)
-        self._Minv = np.zeros((n, n))
-        self._X = np.zeros((n, m))
-        self._S = np.zeros((m, m))
+        self._Minv = self._X = self._S = None       # the general (dense-S) path's arrays, when it is used
         self._nzIdx = np.zeros((m, n), np.int64)
         self._nzCnt = np.zeros(m, np.int64)
         self._ER = np.zeros((3, 3))
@@ -452,6 +450,10 @@ class EvaluatedModel:
             self.blk, self.blkPtr = self.L.blocks(M)
         m = Cq.shape[0]
         lam = self.lam if active is None else np.zeros(m)
+        if self._Minv is None:
+            self._Minv = np.zeros((self.n, self.n))
+            self._X = np.zeros((self.n, self.m))
+            self._S = np.zeros((self.m, self.m))
         if not self.dense:
             full = m == self.m
             X = self._X if full else np.zeros((self.n, m))

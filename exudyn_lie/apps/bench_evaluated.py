@@ -123,16 +123,17 @@ def _run(variant, N, n):
     per = float(np.median(d[len(d) // 4:])) if len(d) else float("nan")
     parts = None
     if Timed is not None:
-        stages = Timed.count.get("ComputeMassMatrix", 0)
-        parts = {k: v / stages for k, v in Timed.acc.items()} if stages else {}
-        parts["total"] = sum(parts.values()) if stages else float("nan")
+        # per method: the median duration of one call times its calls per stage (a stage is one
+        # ComputeMassMatrix call): robust against the rare call that the machine interrupts
+        stages = len(Timed.acc.get("ComputeMassMatrix", ()))
+        parts = {k: float(np.median(v)) * len(v) / stages for k, v in Timed.acc.items()} if stages else {}
     return per, parts
 
 
 def _timing_solver_class():
     """A subclass of ``exu.MainSolverImplicitSecondOrder`` whose methods add their wall time
-    (``time.perf_counter`` around the call, ~0.1 us) to ``cls.acc[name]`` and count calls in
-    ``cls.count[name]``; results pass through unchanged."""
+    (``time.perf_counter`` around the call, ~0.1 us) to the list ``cls.acc[name]``; results
+    pass through unchanged."""
     import exudyn as exu
     base = exu.MainSolverImplicitSecondOrder
     names = [k for k in dir(base) if k[:1].isupper() and callable(getattr(base, k))
@@ -145,13 +146,12 @@ def _timing_solver_class():
             out = fn(self, *a, **kw)
             cls = type(self)
             if cls.on:
-                cls.acc[name] = cls.acc.get(name, 0.0) + clock() - t0
-                cls.count[name] = cls.count.get(name, 0) + 1
+                cls.acc.setdefault(name, []).append(clock() - t0)
             return out
         return timed
 
     attrs = {k: wrap(k, getattr(base, k)) for k in names}
-    attrs.update(acc={}, count={}, on=False)
+    attrs.update(acc={}, on=False)
     return type("TimedMainSolver", (base,), attrs)
 
 
@@ -183,8 +183,9 @@ def measure(Ns=NS, n=40, repeat=3, log=None):
                     times[v].append(_run(v, N, nn)[0])
             if "evaluated" not in errors:
                 parts.append(_run("calls", N, nn)[1])
-        keys = set().union(*parts) if parts else {"total"}
-        callParts = {k: float(np.median([p.get(k, 0.0) for p in parts])) if parts else float("nan") for k in keys}
+        keys = set().union(*parts) if parts else set()
+        callParts = {k: float(np.median([p.get(k, 0.0) for p in parts])) for k in keys}
+        callParts["total"] = sum(callParts.values()) if parts else float("nan")
         row = {v: (float(np.median(times[v])) if times[v] else float("nan")) for v in variants}
         row["callParts"] = callParts
         row["calls"] = callParts["total"]

@@ -461,8 +461,11 @@ def test_unhonoured_system_features_are_refused_with_mbs_unchanged(what, assembl
     if assemble:
         mbs.Assemble()
     before = _state(mbs)
+    # a PostNewtonUserFunction is honoured on the Exudyn-evaluated path (tests/test_evaluated.py):
+    # the compiled path refuses it
+    kw = dict(evaluation="compiled") if what == "PostNewtonUserFunction" else {}
     with pytest.raises(BridgeError) as e:
-        exl.SolveDynamic(mbs, settings(0.01, 1e-3), showProgress=False)
+        exl.SolveDynamic(mbs, settings(0.01, 1e-3), showProgress=False, **kw)
     assert what in str(e.value) and "exudyn.SolveDynamic" in str(e.value)
     assert _state(mbs) == before
 

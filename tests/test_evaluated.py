@@ -400,3 +400,68 @@ def test_ode1_coordinates_integrate_with_the_same_tableau():
         warnings.simplefilter("ignore")
         with pytest.raises(StepSizeError, match="stable up to h = 0.000283 s"):
             exl.SolveDynamic(_generic_ode1([[0, 1.0], [-1e8, 0.0]]), quiet_settings(1.0, 1000), showProgress=False)
+
+
+@pytest.mark.parametrize("node", ["EP", "Rxyz"])
+def test_other_rigid_nodes_in_vector_space_converge_to_the_compiled_path(node):
+    """Euler-parameter (with its unit-norm algebraic equation) and Rxyz nodes are vector-space
+    coordinates on this path (q_t = the parameters' rates), while the compiled path integrates
+    the same bodies on the group: two discretisations of the same ODE, so they differ by RK4's
+    truncation error, O(h^4) (measured at h = 1e-3 after 0.1 s: 1e-9 in q, 2e-8 in q_t); halving
+    h divides the difference by about 16."""
+    from test_bridge_common import NODE_TYPES
+    build = lambda: models.build("heavy_top", mbs=new_mbs(), nodeType=NODE_TYPES[node])[0]
+    d = []
+    for h in (1e-3, 5e-4):
+        out = _both_paths(build, 0.1, h)
+        (q0, v0), (q1, v1) = out["compiled"], out["exudyn"]
+        d.append(max(_rel(q1, q0), _rel(v1, v0)))
+    assert d[0] < 1e-7
+    assert d[1] < d[0] / 10, d
+
+
+def test_post_newton_user_function_is_called_by_exudyn_after_every_step():
+    """An mbs-level PostNewtonUserFunction (refused by the compiled path) takes the
+    Exudyn-evaluated path, where Exudyn's PostNewton calls it after every MK step with the end
+    state; here it switches a load on once the pendulum's tip passes below y = -0.05 (a
+    discontinuity it reports, so that Exudyn repeats the step with the load on), against native
+    generalized-alpha at h = 1e-5 (first order in h at the switch: both runs switch within one
+    step of the crossing)."""
+    O = exu.OutputVariableType
+
+    def build():
+        mbs = _pendulum_with_load_user_function()
+        mbs.SetLoadParameter(0, "loadVectorUserFunction", 0)
+        calls = []
+
+        def post_newton(mbs, t):
+            calls.append(t)
+            y = mbs.GetObjectOutputBody(1, O.Position, localPosition=[0.1, 0, 0])[1]
+            if y < -0.05 and mbs.GetLoadParameter(0, "loadVector")[2] == 0:
+                mbs.SetLoadParameter(0, "loadVector", [0, 0, 20.0])
+                return [1e3, -1]                # the state switched: repeat the step
+            return [0, -1]
+        mbs.SetPostNewtonUserFunction(post_newton)
+        return mbs, calls
+
+    mbs, calls = build()
+    with warnings.catch_warnings(record=True) as w:
+        warnings.simplefilter("always")
+        exl.SolveDynamic(mbs, quiet_settings(0.3, 3000), showProgress=False)
+    assert any("PostNewtonUserFunction" in str(x.message) for x in w)
+    assert len(calls) >= 3000
+    ref, _ = build()
+    ss = quiet_settings(0.3, 30000)
+    ss.timeIntegration.generalizedAlpha.spectralRadius = 1.0
+    ss.timeIntegration.generalizedAlpha.computeInitialAccelerations = True
+    ss.timeIntegration.generalizedAlpha.lieGroupSimplifiedKinematicRelations = True
+    ss.timeIntegration.newton.useModifiedNewton = False
+    ss.timeIntegration.newton.relativeTolerance = 1e-9
+    ss.timeIntegration.newton.absoluteTolerance = 1e-9
+    ref.SolveDynamic(ss)
+    p = np.array(mbs.GetObjectOutputBody(1, O.Position, localPosition=[0.1, 0, 0]))
+    pr = np.array(ref.GetObjectOutputBody(1, O.Position, localPosition=[0.1, 0, 0]))
+    assert mbs.GetLoadParameter(0, "loadVector")[2] == 20.0 and abs(pr[2]) > 0.05     # the load acted: 6 cm in z
+    # the switch is found at the end of the step that crosses: time error <= h = 1e-4, so the
+    # position error is about h * (20 N / 1 kg) * 0.25 s = 5e-4 (measured 3.6e-4)
+    assert np.max(np.abs(p - pr)) < 1e-3

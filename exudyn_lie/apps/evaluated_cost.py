@@ -124,12 +124,17 @@ def measure(n, steps=200, h=1e-3, repeats=5):
 
 
 def main(sizes=(1, 10, 50)):
+    rows = [(n, measure(n)) for n in sizes]
     print("bodies | ODE2 | AE | us/stage total | in Exudyn's calls | of it dense copies (Get*, zeroing) | "
           "overhead (Python, group maps, eta, Schur solve)")
-    for n in sizes:
-        r = measure(n)
+    for n, r in rows:
         print(f"{n:6d} | {r['nODE2']:4d} | {r['nAE']:3d} | {r['total']:14.1f} | {r['exudyn']:17.1f} | "
               f"{r['copies']:18.1f} | {r['overhead']:8.1f}")
+    print("\nExudyn's calls per stage, us (each timed alone, times the number of calls per stage):")
+    names = list(rows[0][1]["calls"])
+    print("call | " + " | ".join(f"{n} bodies" for n, _ in rows))
+    for k in names:
+        print(f"{k} | " + " | ".join(f"{r['calls'].get(k, 0.0):.1f}" for _, r in rows))
 
 
 if __name__ == "__main__":

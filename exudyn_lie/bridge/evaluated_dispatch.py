@@ -61,7 +61,8 @@ def _compiled_refusal(mbs, assemble):
         SceneFromExudyn(mbs, "items" if assemble else "initial")
     except BridgeError as e:
         msg = str(e)
-        if "not supported" in msg or "does not integrate" in msg or "has no ObjectRigidBody" in msg:
+        if ("not supported" in msg or "does not integrate" in msg or "has no ObjectRigidBody" in msg
+                or "PostNewtonUserFunction" in msg):      # Exudyn's PostNewton calls it on the evaluated path
             return msg
         raise
     return None

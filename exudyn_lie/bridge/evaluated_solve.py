@@ -4,7 +4,8 @@
 :mod:`.solver`): sensors, solution and restart files, pre/post-step user functions and the
 renderer work as in a native solve.
 
-Per Exudyn step the hook (``SetUserFunctionNewton``) advances ``k`` MK steps and writes
+Per Exudyn step the hook (``SetUserFunctionNewton``) advances one MK step (``substeps=k``:
+``k``, for models without data coordinates) and writes
 the end state (and, if something reads them, the accelerations and multipliers) into mbs'
 Current configuration.  Between the stages of a step only the ODE2 / ODE1 coordinates and
 the time change; data coordinates (contact states, friction, switching) keep their values
@@ -210,12 +211,17 @@ class EvaluatedSolver:
         self.check_run(ss, substeps)
         nsteps, t0, tEnd, h = self._time_settings(ss)
         k, userStep = self._plan(ss, nsteps, h, substeps)
+        # one MK step per Exudyn step by default: Exudyn's per-step work (InitializeStep,
+        # PostNewton with the data coordinates of contacts, search trees) then runs after
+        # every step as in its own solvers; it costs a few us against the stages' tens.
+        # (With several MK steps per Exudyn step, GeneralContact's results did not depend on h:
+        # its state is updated per Exudyn step.)  substeps=k > 1 only without post-Newton items.
         postNewton = self._post_newton_items()
-        if postNewton and k > 1:
-            if substeps is not None:
-                raise BridgeError(f"substeps={substeps}: {postNewton} need Exudyn's PostNewton after every step "
-                                  f"(their data coordinates change between steps); use substeps=None or 1")
+        if substeps is None:
             k = 1
+        elif postNewton and k > 1:
+            raise BridgeError(f"substeps={substeps}: {postNewton} need Exudyn's PostNewton after every step "
+                              f"(their data coordinates change between steps); use substeps=None or 1")
         needAcc = self._needs_accelerations(ss, userStep) if accelerations is None else bool(accelerations)
         groups, why = node_groups(mbs, self.liegroup)
         tab = self.tableau

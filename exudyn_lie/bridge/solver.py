@@ -944,6 +944,10 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
                               stabilization=stabilization, projectInitial=projectInitial, verbose=verbose,
                               settings=settings, substeps=substeps, check_liegroup=_group_name)
         if path is not None:
+            if replaced:
+                warn_user(f"exudyn_lie.SolveDynamic: DynamicSolverType.{typeName} (Exudyn's implicit solver) is "
+                          f"replaced, like GeneralizedAlpha, by the explicit Munthe-Kaas method {path.tableau.name}; "
+                          f"method= or an explicit solverType chooses the method, liegroup= the groups")
             if assemble:
                 warn_user("exudyn_lie.SolveDynamic: mbs is not assembled; calling mbs.Assemble()")
                 mbs.Assemble()

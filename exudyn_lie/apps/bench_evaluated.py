@@ -17,9 +17,10 @@ interleaved repetitions:
   kernel; the oscillator is the only item it does not read);
 * ``native``: Exudyn's generalized-alpha on the chain with the oscillator (Newton, default
   tolerances, spectral radius 0.9);
-* ``calls``: Exudyn's own evaluation calls of one stage, timed directly on the same model
-  (:func:`exudyn_calls`: M, f, C_q with their dense copies, and the velocity-level
-  constraints twice for the central difference that gives eta), reported per call.
+* ``calls``: Exudyn's own calls of one stage (M, f, C_q with their dense copies, the
+  velocity-level constraints twice for the central difference that gives eta, ...), each
+  timed inside runs of the evaluated path interleaved with the timed runs
+  (:func:`_timing_solver_class`), per method.
 
 Per stage = per step / 4 (RK4).  ``overhead`` = evaluated per stage - calls: what the path
 adds around Exudyn's calls (Python, the index-1 solve, the Lie group update).  Targets
@@ -83,76 +84,75 @@ def settings(n, h=H):
 
 
 def _run(variant, N, n):
-    """Seconds per step of one solve of n steps: the median interval between Exudyn's
-    pre-step user function calls (a function that only records the time, ~1 us, in every
-    variant), so that the set-up of the solve does not enter."""
+    """One solve of n steps: seconds per step, the median interval between Exudyn's pre-step
+    user function calls (a function that only records the time, ~1 us, in every variant), so
+    that the set-up of the solve does not enter.  ``variant`` 'calls': the evaluated path
+    with Exudyn's calls timed one by one (:func:`_timing_solver_class`), returned per stage
+    as the second value (else None); its time per step includes the timing wrappers (a
+    Python call each) and is not reported."""
+    import exudyn as exu
     import exudyn_lie as exl
     mbs = chain(N, foreign=(variant != "compiled"))
     ss = settings(n)
     stamps = []
     clock = time.perf_counter
+    Timed = _timing_solver_class() if variant == "calls" else None
 
     def stamp(mbs, t):
         stamps.append(clock())
+        if Timed is not None:
+            Timed.on = len(stamps) > n // 4            # the steps whose intervals are used
         return True
 
     mbs.SetPreStepUserFunction(stamp)
+    original = exu.MainSolverImplicitSecondOrder
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         if variant == "native":
             mbs.SolveDynamic(ss)
         else:
-            # accelerations=False: a pre-step function would otherwise ask for q_tt at every step
-            # (one more evaluation per step); the four stages of RK4 are what is measured
-            exl.SolveDynamic(mbs, ss, showProgress=False, substeps=1, accelerations=False)
+            if Timed is not None:
+                exu.MainSolverImplicitSecondOrder = Timed   # the path creates its solver from exudyn
+            try:
+                # accelerations=False: a pre-step function would otherwise ask for q_tt at every
+                # step (one more evaluation per step); the four stages of RK4 are what is measured
+                exl.SolveDynamic(mbs, ss, showProgress=False, substeps=1, accelerations=False)
+            finally:
+                exu.MainSolverImplicitSecondOrder = original
     d = np.diff(stamps)
-    return float(np.median(d[len(d) // 4:])) if len(d) else float("nan")
+    per = float(np.median(d[len(d) // 4:])) if len(d) else float("nan")
+    parts = None
+    if Timed is not None:
+        # per method: the median duration of one call times its calls per stage (a stage is one
+        # ComputeMassMatrix call): robust against the rare call that the machine interrupts
+        stages = len(Timed.acc.get("ComputeMassMatrix", ()))
+        parts = {k: float(np.median(v)) * len(v) / stages for k, v in Timed.acc.items()} if stages else {}
+    return per, parts
 
 
-CALLS = ("M", "copy of M", "f", "zero C_q", "C_q", "copy of C_q", "2 x J v")
-
-
-def exudyn_calls(N, repeat=100):
-    """Seconds of Exudyn's own calls of one stage of the evaluated path, on the chain with the
-    oscillator at its initial state, median over ``repeat``, per call (:data:`CALLS`) and in
-    total: ComputeMassMatrix, its dense copy (GetSystemMassMatrix), ComputeODE2RHS with the
-    residual, the system Jacobian zeroed (SetSystemJacobian), ComputeJacobianAE, its dense
-    copy (GetSystemJacobian), and twice the time set, ComputeAlgebraicEquations(velocityLevel
-    =True) and the residual (the central difference that gives eta).  Writing the state is
-    not counted (the path writes it into Exudyn's arrays in place)."""
+def _timing_solver_class():
+    """A subclass of ``exu.MainSolverImplicitSecondOrder`` whose methods add their wall time
+    (``time.perf_counter`` around the call, ~0.1 us) to the list ``cls.acc[name]``; results
+    pass through unchanged."""
     import exudyn as exu
-    mbs = chain(N, foreign=True)
-    solver = exu.MainSolverImplicitSecondOrder()
-    ss = settings(1)
-    solver.InitializeSolver(mbs, ss)
-    sd = mbs.systemData
-    nsys = len(sd.GetODE2Coordinates()) + len(sd.GetODE1Coordinates()) + len(sd.GetAECoordinates())
-    Z = np.zeros((nsys, nsys))
-
-    def jv():
-        for _k in range(2):
-            sd.SetTime(0.0)
-            solver.ComputeAlgebraicEquations(mbs, True)
-            solver.GetSystemResidual()
-
-    def f():
-        solver.ComputeODE2RHS(mbs)
-        solver.GetSystemResidual()
-
-    fns = dict(zip(CALLS, (lambda: solver.ComputeMassMatrix(mbs), solver.GetSystemMassMatrix, f,
-                           lambda: solver.SetSystemJacobian(Z), lambda: solver.ComputeJacobianAE(mbs),
-                           solver.GetSystemJacobian, jv)))
-    out = {k: [] for k in CALLS}
+    base = exu.MainSolverImplicitSecondOrder
+    names = [k for k in dir(base) if k[:1].isupper() and callable(getattr(base, k))
+             and not k.startswith(("Initialize", "Finalize", "SolveSystem", "SolveSteps"))]
     clock = time.perf_counter
-    for _ in range(repeat):
-        for k, fn in fns.items():
-            tic = clock()
-            fn()
-            out[k].append(clock() - tic)
-    solver.FinalizeSolver(mbs, ss)
-    res = {k: float(np.median(v)) for k, v in out.items()}
-    res["total"] = sum(res.values())
-    return res
+
+    def wrap(name, fn):
+        def timed(self, *a, **kw):
+            t0 = clock()
+            out = fn(self, *a, **kw)
+            cls = type(self)
+            if cls.on:
+                cls.acc.setdefault(name, []).append(clock() - t0)
+            return out
+        return timed
+
+    attrs = {k: wrap(k, getattr(base, k)) for k in names}
+    attrs.update(acc={}, on=False)
+    return type("TimedMainSolver", (base,), attrs)
 
 
 def fit_exponent(Ns, t):
@@ -176,13 +176,19 @@ def measure(Ns=NS, n=40, repeat=3, log=None):
                 _run(v, N, 3)
             except Exception as e:                      # a path that cannot run this model: say why
                 errors[v] = f"{type(e).__name__}: {e}"
+        parts = []
         for _ in range(repeat):
             for v in variants:                          # interleaved: the machine's speed drifts
                 if v not in errors:
-                    times[v].append(_run(v, N, nn))
+                    times[v].append(_run(v, N, nn)[0])
+            if "evaluated" not in errors:
+                parts.append(_run("calls", N, nn)[1])
+        keys = set().union(*parts) if parts else set()
+        callParts = {k: float(np.median([p.get(k, 0.0) for p in parts])) for k in keys}
+        callParts["total"] = sum(callParts.values()) if parts else float("nan")
         row = {v: (float(np.median(times[v])) if times[v] else float("nan")) for v in variants}
-        row["callParts"] = exudyn_calls(N, repeat=30 if N >= 50 else 100)
-        row["calls"] = row["callParts"]["total"]
+        row["callParts"] = callParts
+        row["calls"] = callParts["total"]
         row["errors"] = errors
         row["steps"] = nn
         row["evaluatedPerStage"] = row["evaluated"] / STAGES
@@ -246,12 +252,14 @@ def report_lines(res):
             L.append(f"| {N} | {v} failed: {msg[:200]} | | | | | | | |")
     L += ["", f"Growth exponents over N = 10 ... 50: evaluated {res['exponent']:.2f}, Exudyn's calls "
               f"{res['exponentCalls']:.2f}, generalized-alpha {res['exponentNative']:.2f}.", "",
-          "Exudyn's calls of one stage, us (median of repeated calls at the initial state):", "",
-          "| N | " + " | ".join(CALLS) + " |", "|---|" + "---|" * len(CALLS)]
+          "Exudyn's calls per stage inside a run, us (calls below 0.5 us per stage left out):", "",
+          "| N | calls |", "|---|---|"]
     for N, r in sorted(res["rows"].items()):
-        L.append(f"| {N} | " + " | ".join(f"{1e6 * r['callParts'][k]:.3g}" for k in CALLS) + " |")
-    L += ["", "The dense copies (GetSystemMassMatrix, GetSystemJacobian) and the zeroing of the system Jacobian "
-              "(SetSystemJacobian) handle matrices of (ODE2 + AE coordinates)^2 entries: they grow with N^2.", ""]
+        parts = sorted(((k, v) for k, v in r["callParts"].items() if k not in ("total", "stages") and v >= 5e-7),
+                       key=lambda kv: -kv[1])
+        L.append(f"| {N} | " + ", ".join(f"{k} {1e6 * v:.3g}" for k, v in parts) + " |")
+    L += ["", "GetSystemMassMatrix and GetSystemJacobian are dense copies of (ODE2 + AE coordinates)^2 entries: "
+              "they grow with N^2.", ""]
     return L
 
 

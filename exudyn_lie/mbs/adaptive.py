@@ -44,6 +44,7 @@ from .bodies import exp_compose
 from .codes import STAB_NONE, STATUS_OK, STATUS_STEP_MIN
 from .forces import update_torsion_tracking
 from .projection import project_state
+from .rotation_parameters import tracked_at
 from .stepper import (copy_state, mk_finish, mk_stage_k, mk_stage_state, needed_stages, stage_rhs, state_is_finite,
                       watch_rotation_entries)
 
@@ -123,9 +124,11 @@ def extra_stages(sd, wk, am, t, h, R0, r0, V0, S):
 
 
 @njit(cache=True, _nrt=False)
-def serve_outputs(sd, wk, am, fs, ist, R0, r0, V0, R, r, V, S, tout, k, Ro, ro, Vo, w):
+def serve_outputs(sd, wk, am, fs, ist, R0, r0, V0, R, r, V, S, tout, k, Ro, ro, Vo, Po, w):
     """Outputs ``tout[k:]`` inside the last accepted step ``(tprev, t]``: the end state at
-    ``t`` itself, dense output inside.  Returns (status, next k)."""
+    ``t`` itself, dense output inside; if ``Po`` has rows, the tracked angles and node rotation
+    parameters at each (rotation_parameters: inside the step, nearest those at its end).
+    Returns (status, next k)."""
     t, tp, hp = fs[FS_T], fs[FS_TPREV], fs[FS_HPREV]
     while k < tout.shape[0] and tout[k] <= t:
         if tout[k] == t or ist[IS_VALID] == 0:
@@ -138,20 +141,22 @@ def serve_outputs(sd, wk, am, fs, ist, R0, r0, V0, R, r, V, S, tout, k, Ro, ro, 
                         return st, k
                 ist[IS_EXTRA] = 1
             dense_state(sd, wk, am, (tout[k] - tp) / hp, hp, R0, r0, V0, Ro[k], ro[k], Vo[k], w)
+        if Po.shape[0] > k:
+            tracked_at(sd.btrack, sd.bframe, sd.bangle, sd.bparam, Ro[k], Po[k])
         k += 1
     return STATUS_OK, k
 
 
 @njit(cache=True, _nrt=False)
 def mk_adaptive_steps(sd, wk, am, par, S, tol, fs, ist, tEnd, R, r, V, R0, r0, V0, dPhi, dV, w, vmax,
-                      tout, Ro, ro, Vo):
+                      tout, Ro, ro, Vo, Po):
     """Adaptive MK steps from ``fs[FS_T]`` with the next step ``fs[FS_H]`` until ``tEnd``, or
     until every output time ``tout`` (sorted, at most tEnd) is written to ``Ro, ro, Vo``.
     Returns (status, outputs written).  On a failure (R, r, V) hold the last accepted step."""
     A, c, stages, s = am.A, am.c, am.stages, am.s
     ns = stages.shape[0]
     nt = tout.shape[0]
-    st, k = serve_outputs(sd, wk, am, fs, ist, R0, r0, V0, R, r, V, S, tout, 0, Ro, ro, Vo, w)
+    st, k = serve_outputs(sd, wk, am, fs, ist, R0, r0, V0, R, r, V, S, tout, 0, Ro, ro, Vo, Po, w)
     if st != STATUS_OK:
         return st, k
     eps4 = 4.0 * 2.220446049250313e-16 * abs(tEnd)
@@ -211,7 +216,7 @@ def mk_adaptive_steps(sd, wk, am, par, S, tol, fs, ist, tEnd, R, r, V, R0, r0, V
         ist[IS_EXTRA] = 0
         # FSAL: the last stage was evaluated at the step's end (not after a projection)
         ist[IS_HAVE0] = HAVE0_FSAL if (am.fsal and sd.stabilization == STAB_NONE) else HAVE0_NONE
-        st, k = serve_outputs(sd, wk, am, fs, ist, R0, r0, V0, R, r, V, S, tout, k, Ro, ro, Vo, w)
+        st, k = serve_outputs(sd, wk, am, fs, ist, R0, r0, V0, R, r, V, S, tout, k, Ro, ro, Vo, Po, w)
         if st != STATUS_OK:
             return st, k
     return STATUS_OK, k

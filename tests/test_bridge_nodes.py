@@ -181,8 +181,11 @@ def test_rotvec_continuous_past_pi_and_bounded_below_2pi():
     wrapped = ang - 4 * np.pi * np.round(ang / (4 * np.pi))
     inside = np.abs(np.abs(wrapped) - 2 * np.pi) > 1e-6
     np.testing.assert_allclose(p[inside], wrapped[inside, None] * axis, atol=1e-9)
+    # at exactly 2 pi (sample 2000) the short vector ~0 is written (Exudyn 1.13.6 evaluates
+    # |theta| > 2 pi wrongly, even by a rounding error; nodes.ROTVEC_TURNOVER)
+    assert np.linalg.norm(p[2000]) < 1e-8
     jumps = np.nonzero(np.linalg.norm(np.diff(p, axis=0), axis=1) > 0.01)[0]
-    assert len(jumps) == 1 and abs(ang[jumps[0]] - 2 * np.pi) < 0.01
+    assert jumps.tolist() == [1999, 2000]
 
 
 def test_rotvec_reference_plus_current():

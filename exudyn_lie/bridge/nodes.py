@@ -40,6 +40,7 @@ CODE_1D = 6             # Node1D of an ObjectMass1D: one coordinate x = axis . (
 CODE_1D_ROT = 7         # Node1D of an ObjectRotationalMass1D: the angle of R = F Rz(x)
 NCOORD_MAX = 7          # position (3) + at most 4 rotation parameters
 TWO_PI = 2.0 * math.pi
+ROTVEC_TURNOVER = 1e-8  # RotVecLG: within this of |theta| = 2 pi the short vector is written (rotvec_row)
 RXYZ_WARN_COS = math.cos(math.radians(85.0))
 
 
@@ -59,6 +60,13 @@ def rotvec_row(R, omega, omegad, prev, first, p, p_t, p_tt):
     else:
         nearest_quat(R, prev, qv)
     quat_rotvec(qv, p)
+    t = math.sqrt(p[0] ** 2 + p[1] ** 2 + p[2] ** 2)
+    if t > TWO_PI - ROTVEC_TURNOVER:
+        # at the turnover (R ~ I): Exudyn 1.13.6 evaluates |theta| > 2 pi wrongly (even by one
+        # rounding error of the norm), so write the same rotation's short vector (theta - 2 pi) n
+        g = (t - TWO_PI) / t
+        for k in range(3):
+            p[k] *= g
     for k in range(4):
         prev[k] = qv[k]
     for k in range(3):
@@ -454,7 +462,9 @@ class RotVecLGNode(NodeKind):
     (``CompositionRotationVector``) composes the quaternions of the total vector and of the
     increment and returns ``2 acos(q0) qv / |qv|``, so the vector passes |theta| = pi
     continuously and turns over at |theta| = 2 pi (|theta| <= 2 pi); the write-back takes the
-    quaternion the kernel tracked step by step (mbs.rotation_parameters, TRACK_QUAT)."""
+    quaternion the kernel tracked step by step (mbs.rotation_parameters, TRACK_QUAT).  Within
+    ROTVEC_TURNOVER of 2 pi the short vector is written instead (Exudyn 1.13.6 evaluates
+    |theta| > 2 pi wrongly, even by a rounding error of the norm)."""
     typeName = "RigidBodyRotVecLG"
     code = CODE_ROTVEC
     nrot = 3

@@ -10,11 +10,11 @@ accepted step (one step turns a body by far less than pi):
   and returns ``2 acos(q0) qv / |qv|`` (|theta| <= 2 pi, turning over at 2 pi, not at pi);
 * ``TRACK_RXYZ``: Tait-Bryan angles ``R = Rx(a0) Ry(a1) Rz(a2)`` of a NodeRigidBodyRxyz, the
   solution of the two (each modulo 2 pi) nearest the previous angles;
-* ``TRACK_ANGLE``: the angle of a 2D body / rotor (coordinate_angles.update_planar_angles,
-  kept in ``SceneData.bangle``).
+* ``TRACK_ANGLE``: the angle of a 2D body / rotor (coordinate_angles.frame_angle, kept in
+  ``SceneData.bangle``).
 
-The tracked values live in ``SceneData.bparam`` (``btrack`` the code per body) and are
-recorded with every output row (stepper.mk_steps, adaptive.serve_outputs) by
+:func:`update_tracked_bodies` moves them on after every accepted step; the node parameters
+live in ``SceneData.bparam`` (``btrack`` the code per body), and all are recorded with every output row (stepper.mk_steps, adaptive.serve_outputs) by
 :func:`record_tracked`.
 """
 import math
@@ -31,40 +31,32 @@ TRACK_RXYZ = 3
 TWO_PI = 2.0 * math.pi
 
 
-@njit(cache=True, _nrt=False)
-def quat_of(R, out):
-    """Unit quaternion (scalar first, >= 0) of R, Shepperd's method."""
+@njit(cache=True, inline="always", _nrt=False)
+def quat_scalars(R):
+    """Unit quaternion (scalar first, >= 0) of R, Shepperd's method, as four scalars."""
     tr = R[0, 0] + R[1, 1] + R[2, 2]
     if tr >= R[0, 0] and tr >= R[1, 1] and tr >= R[2, 2]:
         s = 2.0 * math.sqrt(max(1.0 + tr, 0.0))
-        out[0] = 0.25 * s
-        out[1] = (R[2, 1] - R[1, 2]) / s
-        out[2] = (R[0, 2] - R[2, 0]) / s
-        out[3] = (R[1, 0] - R[0, 1]) / s
+        a, b, c, d = 0.25 * s, (R[2, 1] - R[1, 2]) / s, (R[0, 2] - R[2, 0]) / s, (R[1, 0] - R[0, 1]) / s
     elif R[0, 0] >= R[1, 1] and R[0, 0] >= R[2, 2]:
         s = 2.0 * math.sqrt(max(1.0 + R[0, 0] - R[1, 1] - R[2, 2], 0.0))
-        out[0] = (R[2, 1] - R[1, 2]) / s
-        out[1] = 0.25 * s
-        out[2] = (R[0, 1] + R[1, 0]) / s
-        out[3] = (R[0, 2] + R[2, 0]) / s
+        a, b, c, d = (R[2, 1] - R[1, 2]) / s, 0.25 * s, (R[0, 1] + R[1, 0]) / s, (R[0, 2] + R[2, 0]) / s
     elif R[1, 1] >= R[2, 2]:
         s = 2.0 * math.sqrt(max(1.0 - R[0, 0] + R[1, 1] - R[2, 2], 0.0))
-        out[0] = (R[0, 2] - R[2, 0]) / s
-        out[1] = (R[0, 1] + R[1, 0]) / s
-        out[2] = 0.25 * s
-        out[3] = (R[1, 2] + R[2, 1]) / s
+        a, b, c, d = (R[0, 2] - R[2, 0]) / s, (R[0, 1] + R[1, 0]) / s, 0.25 * s, (R[1, 2] + R[2, 1]) / s
     else:
         s = 2.0 * math.sqrt(max(1.0 - R[0, 0] - R[1, 1] + R[2, 2], 0.0))
-        out[0] = (R[1, 0] - R[0, 1]) / s
-        out[1] = (R[0, 2] + R[2, 0]) / s
-        out[2] = (R[1, 2] + R[2, 1]) / s
-        out[3] = 0.25 * s
-    if out[0] < 0.0:
-        for k in range(4):
-            out[k] = -out[k]
-    n = math.sqrt(out[0] ** 2 + out[1] ** 2 + out[2] ** 2 + out[3] ** 2)
-    for k in range(4):
-        out[k] /= n
+        a, b, c, d = (R[1, 0] - R[0, 1]) / s, (R[0, 2] + R[2, 0]) / s, (R[1, 2] + R[2, 1]) / s, 0.25 * s
+    n = math.sqrt(a * a + b * b + c * c + d * d)
+    if a < 0.0:
+        n = -n
+    return a / n, b / n, c / n, d / n
+
+
+@njit(cache=True, _nrt=False)
+def quat_of(R, out):
+    """Unit quaternion (scalar first, >= 0) of R, Shepperd's method."""
+    out[0], out[1], out[2], out[3] = quat_scalars(R)
 
 
 @njit(cache=True, _nrt=False)
@@ -142,12 +134,22 @@ def nearest_parameters(code, R, ref, out):
 
 
 @njit(cache=True, _nrt=False)
-def update_node_parameters(btrack, bparam, R):
-    """Move the tracked node parameters of every body to its rotation after an accepted step."""
+def update_tracked_bodies(btrack, bframe, bangle, bparam, R):
+    """Move what is tracked of every body to its rotation after an accepted step: the angle of
+    a 2D body / rotor (continued over turns, coordinate_angles.frame_angle) and the node
+    rotation parameters (the quaternion case, every rigid body of an EP / RotVecLG model, with
+    scalars only: it runs every step).  One call, not inlined into the stepper."""
     for i in range(btrack.shape[0]):
         c = btrack[i]
-        if c == TRACK_QUAT or c == TRACK_RXYZ:
-            nearest_parameters(c, R[i], bparam[i], bparam[i])
+        if c == TRACK_ANGLE:
+            bangle[i] = frame_angle(bframe[i], R[i], bangle[i])
+        elif c == TRACK_QUAT:
+            q0, q1, q2, q3 = quat_scalars(R[i])
+            if q0 * bparam[i, 0] + q1 * bparam[i, 1] + q2 * bparam[i, 2] + q3 * bparam[i, 3] < 0.0:
+                q0, q1, q2, q3 = -q0, -q1, -q2, -q3
+            bparam[i, 0], bparam[i, 1], bparam[i, 2], bparam[i, 3] = q0, q1, q2, q3
+        elif c == TRACK_RXYZ:
+            nearest_rxyz(R[i], bparam[i], bparam[i])
 
 
 @njit(cache=True, _nrt=False)

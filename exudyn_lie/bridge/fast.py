@@ -15,6 +15,7 @@ import numpy as np
 
 from ..mbs import kernel, stepper
 from ..mbs.entry import entry_point
+from ..mbs.rotation_parameters import record_tracked
 from .nodes import CODE_1D_ROT, CODE_2D, NCOORD_MAX, write_rows
 
 CHUNK_SECONDS = 0.05        # aimed wall time of one chunk (progress, responsiveness)
@@ -51,6 +52,7 @@ class OutputChunks:
         M = self.maxRows
         self.Ro, self.ro = np.zeros((M, nb, 3, 3)), np.zeros((M, nb, 3))
         self.Vo, self.Vdo, self.lamo = np.zeros((M, nb, 6)), np.zeros((M, nb, 6)), np.zeros((M, m))
+        self.Po = np.zeros((M, nb, 4))          # tracked angles / node rotation parameters per row
         # rows start as the current coordinates: entries the write-back does not touch
         # (AE coordinates of no joint row) keep their values
         self.Q, self.Qt, self.Qtt = np.tile(q, (M, 1)), np.tile(qt, (M, 1)), np.tile(qtt, (M, 1))
@@ -72,7 +74,7 @@ class OutputChunks:
         t0 = sim.t
         acc = n if self.doacc else 0
         a1 = (sim.sd, sim.wk, sim.method, sim.control, float(t0), h, n * nsub, sim.R, sim.r, sim.V, self.vmax, nsub,
-              self.Ro[:n], self.ro[:n], self.Vo[:n], self.Vdo[:acc], self.lamo[:acc])
+              self.Ro[:n], self.ro[:n], self.Vo[:n], self.Po[:n], self.Vdo[:acc], self.lamo[:acc])
         st, done = _call(self._ep, "mk", stepper.mk_steps, a1)
         rows = done // nsub
         if st != kernel.STATUS_OK and self.doacc and rows > 0 and np.isnan(self.Vdo[rows - 1, 0, 0]):
@@ -83,7 +85,7 @@ class OutputChunks:
         To = t0 + ((np.arange(self.maxRows) + 1) * nsub) * h        # the rows' times (the last: t0 + done h)
         a2 = (rows, sim.sd.gid, self.Ro, self.ro, self.Vo, self.Vdo, self.lamo, self.doacc, nt.code, nt.body,
               nt.idx, nt.nq, nt.qref, nt.prev, self.Q, self.Qt, self.Qtt, nt.flags, jrow, jae, self.AE, To,
-              sim.sd.bangle, t0 + done * h)
+              self.Po)
         nflag = _call(self._ep, "write", write_rows, a2)
         sim.t = t0 + done * h           # on a failure: the last accepted step
         self.tStart, self.rows, self.next = t0, rows, 0
@@ -146,7 +148,7 @@ class AdaptiveOutputChunks(OutputChunks):
         n = max(1, min(int(nout), self.size, self.total - self.done))
         tout = self._output_times(n)
         tPrev = self.t0 + self.done * self.nsub * self.h
-        st, rows = sim.AdvanceToInto(self.tEnd, tout, self.Ro[:n], self.ro[:n], self.Vo[:n])
+        st, rows = sim.AdvanceToInto(self.tEnd, tout, self.Ro[:n], self.ro[:n], self.Vo[:n], self.Po[:n])
         if self.doacc and rows > 0:
             wk = sim.wk
             keep0, keepLam = wk.Vd[0].copy(), wk.lam.copy()     # stage 1 / dense data of the step
@@ -164,7 +166,7 @@ class AdaptiveOutputChunks(OutputChunks):
         jrow, jae = self.jac
         a2 = (rows, sim.sd.gid, self.Ro, self.ro, self.Vo, self.Vdo, self.lamo, self.doacc, nt.code, nt.body,
               nt.idx, nt.nq, nt.qref, nt.prev, self.Q, self.Qt, self.Qtt, nt.flags, jrow, jae, self.AE,
-              np.ascontiguousarray(tout, dtype=float), sim.sd.bangle, float(sim.t))
+              np.ascontiguousarray(tout, dtype=float), self.Po)
         nflag = _call(self._ep, "write", write_rows, a2)
         self.tStart, self.rows, self.next = tPrev, rows, 0
         self.done += rows
@@ -186,6 +188,7 @@ class NodeTable:
         self.prev = np.zeros((rows, 4))
         self.flags = np.zeros(rows, np.int64)
         self.kindOfRow = []
+        self.tracked = None             # the kernel's tracked values of the state written (write)
         i = 0
         for kind, bodies in zip(kinds, kindBodies):
             n = len(kind)
@@ -207,9 +210,13 @@ class NodeTable:
         the joint multipliers ``(rows, AE slots, AE buffer)``); returns the number
         of nodes flagged (Rxyz near its singularity)."""
         jrow, jae, ae = multipliers
-        return write_rows(1, sim.sd.gid, sim.R[None], sim.r[None], sim.V[None], Vdot[None], lam[None], bool(doacc),
+        sd = sim.sd
+        if self.tracked is None or self.tracked.shape[1] != sd.nb:
+            self.tracked = np.zeros((1, sd.nb, 4))
+        record_tracked(sd.btrack, sd.bangle, sd.bparam, self.tracked[0])
+        return write_rows(1, sd.gid, sim.R[None], sim.r[None], sim.V[None], Vdot[None], lam[None], bool(doacc),
                           self.code, self.body, self.idx, self.nq, self.qref, self.prev, q[None], qt[None], qtt[None],
-                          self.flags, jrow, jae, ae[None], np.array([float(sim.t)]), sim.sd.bangle, float(sim.t))
+                          self.flags, jrow, jae, ae[None], np.array([float(sim.t)]), self.tracked)
 
     def warn_flags(self):
         for i in np.nonzero(self.flags)[0]:

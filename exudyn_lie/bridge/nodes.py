@@ -26,6 +26,7 @@ import numpy as np
 from numba import njit
 
 from ..mbs.codes import uses_body_twist
+from ..mbs.rotation_parameters import TRACK_QUAT, TRACK_RXYZ, nearest_quat, nearest_rxyz, quat_of, quat_rotvec
 from ..userwarn import warn_user
 from . import rotations as rot
 
@@ -39,7 +40,7 @@ CODE_1D = 6             # Node1D of an ObjectMass1D: one coordinate x = axis . (
 CODE_1D_ROT = 7         # Node1D of an ObjectRotationalMass1D: the angle of R = F Rz(x)
 NCOORD_MAX = 7          # position (3) + at most 4 rotation parameters
 TWO_PI = 2.0 * math.pi
-ROTVEC_LIMIT = 1.5 * math.pi
+ROTVEC_TURNOVER = 1e-8  # RotVecLG: within this of |theta| = 2 pi the short vector is written (rotvec_row)
 RXYZ_WARN_COS = math.cos(math.radians(85.0))
 
 
@@ -49,64 +50,26 @@ RXYZ_WARN_COS = math.cos(math.radians(85.0))
 # (continuity) and is updated.  Returns 1 if an Rxyz node is near its singularity.
 
 @njit(cache=True)
-def _quat(R, out):
-    """Unit quaternion (scalar first, >= 0) of R, Shepperd's method."""
-    tr = R[0, 0] + R[1, 1] + R[2, 2]
-    if tr >= R[0, 0] and tr >= R[1, 1] and tr >= R[2, 2]:
-        s = 2.0 * math.sqrt(max(1.0 + tr, 0.0))
-        out[0] = 0.25 * s
-        out[1] = (R[2, 1] - R[1, 2]) / s
-        out[2] = (R[0, 2] - R[2, 0]) / s
-        out[3] = (R[1, 0] - R[0, 1]) / s
-    elif R[0, 0] >= R[1, 1] and R[0, 0] >= R[2, 2]:
-        s = 2.0 * math.sqrt(max(1.0 + R[0, 0] - R[1, 1] - R[2, 2], 0.0))
-        out[0] = (R[2, 1] - R[1, 2]) / s
-        out[1] = 0.25 * s
-        out[2] = (R[0, 1] + R[1, 0]) / s
-        out[3] = (R[0, 2] + R[2, 0]) / s
-    elif R[1, 1] >= R[2, 2]:
-        s = 2.0 * math.sqrt(max(1.0 - R[0, 0] + R[1, 1] - R[2, 2], 0.0))
-        out[0] = (R[0, 2] - R[2, 0]) / s
-        out[1] = (R[0, 1] + R[1, 0]) / s
-        out[2] = 0.25 * s
-        out[3] = (R[1, 2] + R[2, 1]) / s
-    else:
-        s = 2.0 * math.sqrt(max(1.0 - R[0, 0] - R[1, 1] + R[2, 2], 0.0))
-        out[0] = (R[1, 0] - R[0, 1]) / s
-        out[1] = (R[0, 2] + R[2, 0]) / s
-        out[2] = (R[1, 2] + R[2, 1]) / s
-        out[3] = 0.25 * s
-    if out[0] < 0.0:
-        for k in range(4):
-            out[k] = -out[k]
-    n = math.sqrt(out[0] ** 2 + out[1] ** 2 + out[2] ** 2 + out[3] ** 2)
-    for k in range(4):
-        out[k] /= n
-
-
-@njit(cache=True)
 def rotvec_row(R, omega, omegad, prev, first, p, p_t, p_tt):
-    """NodeRigidBodyRotVecLG: continuous rotation vector with |p| <= 3 pi / 2."""
+    """NodeRigidBodyRotVecLG: Exudyn's total rotation vector ``2 acos(q0) qv / |qv|`` of the
+    sign-continuous quaternion q of R (kept in ``prev``; mbs.rotation_parameters: Exudyn's Lie
+    group update composes quaternions, so |theta| <= 2 pi and turns over at 2 pi)."""
     qv = np.empty(4)
-    _quat(R, qv)
-    s = math.sqrt(qv[1] ** 2 + qv[2] ** 2 + qv[3] ** 2)
-    t = 2.0 * math.atan2(s, qv[0])
-    fac = 2.0 / qv[0] if s < 1e-12 else t / s
-    for k in range(3):
-        p[k] = qv[1 + k] * fac
-    if not first and t > 0.0 and TWO_PI - t <= ROTVEC_LIMIT:
-        # the same rotation on the long branch: p (t - 2 pi)/t, |.| = 2 pi - t
+    if first:
+        quat_of(R, qv)
+    else:
+        nearest_quat(R, prev, qv)
+    quat_rotvec(qv, p)
+    t = math.sqrt(p[0] ** 2 + p[1] ** 2 + p[2] ** 2)
+    if t > TWO_PI - ROTVEC_TURNOVER:
+        # at the turnover (R ~ I): Exudyn 1.13.6 evaluates |theta| > 2 pi wrongly (even by one
+        # rounding error of the norm), so write the same rotation's short vector (theta - 2 pi) n
         g = (t - TWO_PI) / t
-        d0 = 0.0
-        d1 = 0.0
         for k in range(3):
-            d0 += (p[k] - prev[k]) ** 2
-            d1 += (p[k] * g - prev[k]) ** 2
-        if d1 < d0:
-            for k in range(3):
-                p[k] *= g
+            p[k] *= g
+    for k in range(4):
+        prev[k] = qv[k]
     for k in range(3):
-        prev[k] = p[k]
         p_t[k] = omega[k]
         p_tt[k] = omegad[k]
     return 0
@@ -126,12 +89,10 @@ def _ep_glocal_T_apply(e, w, out):
 def ep_row(R, omega, omegad, prev, first, p, p_t, p_tt):
     """NodeRigidBodyEP: sign-continuous Euler parameters, ep_t = GL^T omega / 4,
     ep_tt = (GL(ep_t)^T omega + GL(ep)^T omegadot) / 4."""
-    _quat(R, p)
-    if not first:
-        dot = p[0] * prev[0] + p[1] * prev[1] + p[2] * prev[2] + p[3] * prev[3]
-        if dot < 0.0:
-            for k in range(4):
-                p[k] = -p[k]
+    if first:
+        quat_of(R, p)
+    else:
+        nearest_quat(R, prev, p)
     tmp = np.empty(4)
     _ep_glocal_T_apply(p, omega, tmp)
     for k in range(4):
@@ -155,36 +116,17 @@ def _wrap_near(x, ref):
 def rxyz_row(R, omega, omegad, prev, first, p, p_t, p_tt):
     """NodeRigidBodyRxyz: the Tait-Bryan solution (of two, modulo 2 pi) nearest to the
     previous angles; rates a_t = GR^-1 omega, a_tt = GR^-1 (omegadot - GRdot a_t)."""
-    c1 = math.sqrt(R[1, 2] ** 2 + R[2, 2] ** 2)
-    a1 = math.atan2(R[0, 2], c1)
-    if c1 > 1e-14:
-        a0 = math.atan2(-R[1, 2], R[2, 2])
-        a2 = math.atan2(-R[0, 1], R[0, 0])
-    else:
-        a0 = 0.0
-        a2 = math.atan2(R[1, 0], R[1, 1])
     if first:
-        p[0], p[1], p[2] = a0, a1, a2
-    elif c1 < 1e-7:
-        # gimbal lock: only a0 + a2 (a1 = +pi/2) or a0 - a2 (a1 = -pi/2) is defined; keep a0
-        sg = 1.0 if a1 > 0 else -1.0
-        comb = a0 + sg * a2
-        p[0] = prev[0]
-        p[1] = _wrap_near(a1, prev[1])
-        p[2] = _wrap_near(sg * (comb - prev[0]), prev[2])
-    else:
-        b0 = _wrap_near(a0, prev[0])
-        b1 = _wrap_near(a1, prev[1])
-        b2 = _wrap_near(a2, prev[2])
-        e0 = _wrap_near(a0 + math.pi, prev[0])
-        e1 = _wrap_near(math.pi - a1, prev[1])
-        e2 = _wrap_near(a2 + math.pi, prev[2])
-        d0 = (b0 - prev[0]) ** 2 + (b1 - prev[1]) ** 2 + (b2 - prev[2]) ** 2
-        d1 = (e0 - prev[0]) ** 2 + (e1 - prev[1]) ** 2 + (e2 - prev[2]) ** 2
-        if d0 <= d1:
-            p[0], p[1], p[2] = b0, b1, b2
+        c1 = math.sqrt(R[1, 2] ** 2 + R[2, 2] ** 2)
+        p[1] = math.atan2(R[0, 2], c1)
+        if c1 > 1e-14:
+            p[0] = math.atan2(-R[1, 2], R[2, 2])
+            p[2] = math.atan2(-R[0, 1], R[0, 0])
         else:
-            p[0], p[1], p[2] = e0, e1, e2
+            p[0] = 0.0
+            p[2] = math.atan2(R[1, 0], R[1, 1])
+    else:
+        nearest_rxyz(R, prev, p)
     for k in range(3):
         prev[k] = p[k]
     cb, sb = math.cos(p[1]), math.sin(p[1])
@@ -253,9 +195,13 @@ def write_row(code, R, omega, omegad, prev, first, p, p_t, p_tt, t, tracked):
 # ---------------------------------------------------------------------------- all nodes at once
 # (kept in this file: numba's cache is invalidated only by changes of the defining file)
 @njit(cache=True)
-def write_nodes(gid, R, r, V, Vdot, doacc, code, body, idx, nq, qref, prev, first, q, qt, qtt, flags, t, bangle, exact):
+def write_nodes(gid, R, r, V, Vdot, doacc, code, body, idx, nq, qref, prev, first, q, qt, qtt, flags, t, tracked, exact):
     """Node coordinates from the body states (R, r, V) and accelerations Vdot (in each
-    body's group velocity coordinates: SE3 v body-fixed, SO3xR3 v = rdot)."""
+    body's group velocity coordinates: SE3 v body-fixed, SO3xR3 v = rdot).  With ``exact``,
+    ``tracked`` (nb, 4) holds what the kernel tracked at this state step by step
+    (mbs.rotation_parameters.record_tracked: angle of a 2D body / rotor, quaternion of EP and
+    RotVecLG nodes, Tait-Bryan angles of Rxyz nodes): the rotation parameters written are
+    those, i.e. Exudyn's continuous branch however far apart the outputs are."""
     om = np.zeros(3)
     vel = np.zeros(3)
     omd = np.zeros(3)
@@ -290,7 +236,10 @@ def write_nodes(gid, R, r, V, Vdot, doacc, code, body, idx, nq, qref, prev, firs
             else:
                 for k in range(3):
                     acc[k] = Vdot[b, 3 + k]
-        f = write_row(code[i], Rb, om, omd, prev[i], first, p, pt, ptt, t, bangle[b] if exact else math.nan)
+        if exact and (code[i] == CODE_EP or code[i] == CODE_ROTVEC or code[i] == CODE_RXYZ):
+            for k in range(4):
+                prev[i, k] = tracked[b, k]     # the row writer's nearest branch is then this one
+        f = write_row(code[i], Rb, om, omd, prev[i], first, p, pt, ptt, t, tracked[b, 0] if exact else math.nan)
         if f:
             flags[i] = 1                 # kept until the warning is given (warn_flags)
             nflag += 1
@@ -316,7 +265,7 @@ def write_nodes(gid, R, r, V, Vdot, doacc, code, body, idx, nq, qref, prev, firs
             s = -(qref[i, 1] * Rb[0, 1] + qref[i, 2] * Rb[1, 1] + qref[i, 3] * Rb[2, 1])
             j = idx[i, 0]
             q[j] = continued_angle(math.atan2(s, c), om[2], prev[i], first, t,
-                                   bangle[b] if exact else math.nan) - qref[i, 0]
+                                   tracked[b, 0] if exact else math.nan) - qref[i, 0]
             qt[j] = om[2]
             if doacc:
                 qtt[j] = omd[2]
@@ -344,28 +293,29 @@ def write_multipliers(lam, jrow, jae, ae):
 
 @njit(cache=True)
 def write_all(gid, R, r, V, Vdot, lam, doacc, code, body, idx, nq, qref, prev, q, qt, qtt, flags, jrow, jae, ae, t,
-              bangle, exact):
-    """write_nodes + write_multipliers of one state (at time ``t``; ``exact``: it is the
-    simulator's current state, whose tracked 2D angles are ``bangle``)."""
+              tracked, exact):
+    """write_nodes + write_multipliers of one state (at time ``t``; ``exact``: ``tracked`` holds
+    the kernel's tracked values at it, write_nodes)."""
     if doacc:
         write_multipliers(lam, jrow, jae, ae)
     return write_nodes(gid, R, r, V, Vdot, doacc, code, body, idx, nq, qref, prev, False, q, qt, qtt, flags, t,
-                       bangle, exact)
+                       tracked, exact)
 
 
 @njit(cache=True)
 def write_rows(nrows, gid, Rs, rs, Vs, Vdots, lams, doacc, code, body, idx, nq, qref, prev, Q, Qt, Qtt, flags, jrow,
-               jae, AE, To, bangle, tSim):
+               jae, AE, To, Po):
     """:func:`write_all` of the states ``Rs[o], rs[o], Vs[o]`` at times ``To[o]`` (accelerations
-    ``Vdots[o]``, multipliers ``lams[o]``) into rows ``o < nrows`` of ``Q, Qt, Qtt, AE``, in order
-    (the rotation parameters stay continuous from row to row; a row at the simulator's time
-    ``tSim`` takes the 2D angles ``bangle`` the kernel tracked, SceneData.bangle).  The single compiled entry of
+    ``Vdots[o]``, multipliers ``lams[o]``) into rows ``o < nrows`` of ``Q, Qt, Qtt, AE``, in order,
+    with the angles and rotation parameters the kernel tracked at each state in ``Po[o]``
+    (mbs.rotation_parameters; rows beyond ``Po``'s: continuous from the previous row).  The single compiled entry of
     the write-back: every path uses it, one state being one row.  Returns the number of
     flagged (node, row) pairs."""
     nflag = 0
     for o in range(nrows):
         nflag += write_all(gid, Rs[o], rs[o], Vs[o], Vdots[o], lams[o], doacc, code, body, idx, nq, qref, prev,
-                           Q[o], Qt[o], Qtt[o], flags, jrow, jae, AE[o], To[o], bangle, To[o] == tSim)
+                           Q[o], Qt[o], Qtt[o], flags, jrow, jae, AE[o], To[o], Po[min(o, Po.shape[0] - 1)],
+                           o < Po.shape[0])
     return nflag
 
 
@@ -473,6 +423,14 @@ class NodeKind:
     def singular_warning(self, i):
         pass
 
+    #: what the kernel tracks of the node's body step by step (mbs.rotation_parameters), None: nothing
+    trackCode = None
+
+    def tracked(self, k):
+        """``(track code, parameters (4))`` of node k in the configuration read (Body.track:
+        the kernel continues them after every accepted step), or None."""
+        return None if self.trackCode is None else (self.trackCode, self.prev[k].copy())
+
     def velocity_map(self, q):
         """T (n, 3+nrot, 6): node velocity coordinates = T (omega_local, vel_world)."""
         p = self.check_params(self.qref[:, 3:] + q[self.idx[:, 3:]], quiet=True)
@@ -500,14 +458,29 @@ class NodeKind:
 class RotVecLGNode(NodeKind):
     """``NodeRigidBodyRotVecLG``: rotation vector, velocities ``[v world, omega local]``.
 
-    Writing keeps the rotation vector continuous past |theta| = pi (no flip when the
-    rotation angle oscillates about pi) and returns to the principal branch when
-    |theta| would exceed 3 pi / 2: Exudyn 1.13.6 evaluates rotation vectors with
-    |theta| > 2 pi incorrectly, so the total must stay inside |theta| < 2 pi."""
+    Written as Exudyn's own solvers write it: Exudyn's Lie group update
+    (``CompositionRotationVector``) composes the quaternions of the total vector and of the
+    increment and returns ``2 acos(q0) qv / |qv|``, so the vector passes |theta| = pi
+    continuously and turns over at |theta| = 2 pi (|theta| <= 2 pi); the write-back takes the
+    quaternion the kernel tracked step by step (mbs.rotation_parameters, TRACK_QUAT).  Within
+    ROTVEC_TURNOVER of 2 pi the short vector is written instead (Exudyn 1.13.6 evaluates
+    |theta| > 2 pi wrongly, even by a rounding error of the norm)."""
     typeName = "RigidBodyRotVecLG"
     code = CODE_ROTVEC
     nrot = 3
     positionCoordinates = 3
+    trackCode = TRACK_QUAT
+
+    def read(self, q, q_t):
+        out = super().read(q, q_t)
+        # continuity is kept on the quaternion of the total vector v (rotvec_row):
+        # (cos(|v|/2), sin(|v|/2) v/|v|), of either sign as Exudyn's composition keeps it
+        v = self.prev[:, :3].copy()
+        t = np.linalg.norm(v, axis=1)
+        half = np.where(t > 0, np.sin(0.5 * t) / np.where(t > 0, t, 1.0), 0.5)
+        self.prev[:, 0] = np.cos(0.5 * t)
+        self.prev[:, 1:] = v * half[:, None]
+        return out
 
     def check_params(self, p, quiet=False):
         big = np.linalg.norm(p, axis=1) > rot.TWO_PI
@@ -537,6 +510,7 @@ class EPNode(NodeKind):
     code = CODE_EP
     nrot = 4
     positionCoordinates = 3
+    trackCode = TRACK_QUAT
     TOL = 1e-6
 
     def check_params(self, p, quiet=False):
@@ -575,6 +549,7 @@ class RxyzNode(NodeKind):
     code = CODE_RXYZ
     nrot = 3
     positionCoordinates = 3
+    trackCode = TRACK_RXYZ
     singularity = ((0, 2), math.sqrt(1.0 - RXYZ_WARN_COS ** 2))     # R[0, 2] = sin(beta)
 
     def singular_warning(self, i):

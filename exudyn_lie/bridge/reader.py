@@ -385,6 +385,7 @@ class _Reader:
         # node kinds, in node order; states of all nodes of a kind at once
         states = {}
         angles = {}         # NodeRigidBody2D: total angle
+        tracks = {}         # nodes' rotation parameters tracked step by step (NodeKind.tracked)
         for t, nodes in self.byKind.items():
             nodes = [n for n in nodes if n in bodyOfNode]
             if not nodes:
@@ -411,6 +412,7 @@ class _Reader:
                     angles[n] = float(kind.prev[k, 0])          # the total angle, turns included
                 elif hasattr(kind, "total_angle") and kind.total_angle(k) is not None:
                     angles[n] = kind.total_angle(k)
+                tracks[n] = kind.tracked(k)
             sc.nodeKinds.append(kind)
         # bodies in object order
         for o, d in enumerate(self.objects):
@@ -444,6 +446,7 @@ class _Reader:
                                    r0=r, omega0=om, vel0=vel, name=label)
             except SceneError as e:
                 raise BridgeError(f"object {o} Object{d['objectType']}: {e}") from None
+            sc.bodies[b].track = tracks.get(n)      # node rotation parameters tracked per step
             sc.bodyObject.append(o)
             sc.bodyNode.append(n)
             self.rigidNodeBody[n] = b

@@ -433,6 +433,11 @@ class LieGroupSolver:
             R[bodies], r[bodies], om[bodies], ve[bodies] = kind.read(q, qt)
         U, _, Vt = np.linalg.svd(R)
         self.sim.SetInitialState(U @ Vt, r, om, ve, t0=t)
+        for kind, bodies in zip(self.scene.nodeKinds, self.scene.kindBodies):
+            for k, b in enumerate(bodies):          # the rotation parameters in mbs go on from here
+                tr = kind.tracked(k)
+                if tr is not None:
+                    self.sim.sd.bparam[b] = tr[1]
         self._seed_torsion()
         self._nodes.prev[:] = NodeTable(self.scene.nodeKinds, self.scene.kindBodies, t).prev
 

@@ -44,6 +44,7 @@ from .bodies import exp_compose
 from .codes import STAB_NONE, STATUS_OK, STATUS_STEP_MIN
 from .forces import update_torsion_tracking
 from .projection import CT_N_PROJ, CT_POS, enforce_constraint_tolerance, project_error_estimate, project_state
+from .rotation_parameters import tracked_at
 from .stepper import (copy_state, mk_finish, mk_stage_k, mk_stage_state, needed_stages, stage_rhs, state_is_finite,
                       watch_rotation_entries)
 
@@ -123,10 +124,12 @@ def extra_stages(sd, wk, am, t, h, R0, r0, V0, S):
 
 
 @njit(cache=True, _nrt=False)
-def serve_outputs(sd, wk, am, ctol, fs, ist, R0, r0, V0, R, r, V, S, tout, k, Ro, ro, Vo, w):
+def serve_outputs(sd, wk, am, ctol, fs, ist, R0, r0, V0, R, r, V, S, tout, k, Ro, ro, Vo, Po, w):
     """Outputs ``tout[k:]`` inside the last accepted step ``(tprev, t]``: the end state at
     ``t`` itself, dense output inside (projected on the group when its constraint drift
-    exceeds the constraint tolerance ``ctol``, as Simbody projects interpolated states).
+    exceeds the constraint tolerance ``ctol``, as Simbody projects interpolated states); if ``Po``
+    has rows, the tracked angles and node rotation parameters at each (rotation_parameters:
+    inside the step, nearest those at its end).
     Returns (status, next k)."""
     t, tp, hp = fs[FS_T], fs[FS_TPREV], fs[FS_HPREV]
     while k < tout.shape[0] and tout[k] <= t:
@@ -144,13 +147,15 @@ def serve_outputs(sd, wk, am, ctol, fs, ist, R0, r0, V0, R, r, V, S, tout, k, Ro
                 st, _ = enforce_constraint_tolerance(sd, wk, ctol, Ro[k], ro[k], Vo[k])
                 if st != STATUS_OK:
                     return st, k
+        if Po.shape[0] > k:
+            tracked_at(sd.btrack, sd.bframe, sd.bangle, sd.bparam, Ro[k], Po[k])
         k += 1
     return STATUS_OK, k
 
 
 @njit(cache=True, _nrt=False)
 def mk_adaptive_steps(sd, wk, am, par, S, tol, ctol, fs, ist, tEnd, R, r, V, R0, r0, V0, dPhi, dV, w, vmax,
-                      tout, Ro, ro, Vo):
+                      tout, Ro, ro, Vo, Po):
     """Adaptive MK steps from ``fs[FS_T]`` with the next step ``fs[FS_H]`` until ``tEnd``, or
     until every output time ``tout`` (sorted, at most tEnd) is written to ``Ro, ro, Vo``.
     ``ctol`` (:mod:`.projection`, ``CT_*``): with a constraint tolerance (``ctol[CT_POS] > 0``)
@@ -160,7 +165,7 @@ def mk_adaptive_steps(sd, wk, am, par, S, tol, ctol, fs, ist, tEnd, R, r, V, R0,
     A, c, stages, s = am.A, am.c, am.stages, am.s
     ns = stages.shape[0]
     nt = tout.shape[0]
-    st, k = serve_outputs(sd, wk, am, ctol, fs, ist, R0, r0, V0, R, r, V, S, tout, 0, Ro, ro, Vo, w)
+    st, k = serve_outputs(sd, wk, am, ctol, fs, ist, R0, r0, V0, R, r, V, S, tout, 0, Ro, ro, Vo, Po, w)
     if st != STATUS_OK:
         return st, k
     eps4 = 4.0 * 2.220446049250313e-16 * abs(tEnd)
@@ -235,7 +240,7 @@ def mk_adaptive_steps(sd, wk, am, par, S, tol, ctol, fs, ist, tEnd, R, r, V, R0,
         ist[IS_EXTRA] = 0
         # FSAL: the last stage was evaluated at the step's end (not after a projection)
         ist[IS_HAVE0] = HAVE0_FSAL if (am.fsal and not projected) else HAVE0_NONE
-        st, k = serve_outputs(sd, wk, am, ctol, fs, ist, R0, r0, V0, R, r, V, S, tout, k, Ro, ro, Vo, w)
+        st, k = serve_outputs(sd, wk, am, ctol, fs, ist, R0, r0, V0, R, r, V, S, tout, k, Ro, ro, Vo, Po, w)
         if st != STATUS_OK:
             return st, k
     return STATUS_OK, k

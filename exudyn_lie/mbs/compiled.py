@@ -10,6 +10,7 @@ from collections import namedtuple
 import numpy as np
 
 from .codes import GROUP_NAMES, ROW_COORD, ROW_DIST, ROW_ROLL, ROW_ROT, ROW_TRANS_LOCAL, ROW_TRANS_WORLD
+from .rotation_parameters import TRACK_ANGLE, TRACK_NONE
 from .linalg import REL_PIVOT_TOL, rcm_order
 from .scene import GROUND, Scene, SceneError
 from .tree_solve import tree_plan, work_size
@@ -31,7 +32,9 @@ SceneData = namedtuple("SceneData", [
     "nangles",                        # rotation coordinates of coordinate items (tracked: coordinate_angles)
     "bangle", "bframe", "btrack",     # angle of each 2D body / rotor about bframe e_z, turns included (tracked
                                       #   after every accepted step; their node write-back reads it); 1: tracked
-    "nplanar",                        # number of tracked bodies
+    "bparam",                         # node rotation parameters of each body tracked after every accepted step
+                                      #   (rotation_parameters; btrack: 1 angle, 2 quaternion, 3 Tait-Bryan)
+    "nplanar",                        # number of tracked bodies (bangle or bparam)
     "xint", "xpos", "xaxis", "xpar",  # linear springs: [A, B]; [posA, posB]; axis on A; [k, d, offset, force]
     "bint", "bpos", "brot", "bpar",   # rigid-body springs: [A, B, intrinsic]; [posA, posB]; [rotA, rotB];
                                       #   rows K (6), D (6), offset
@@ -89,6 +92,14 @@ def point_minv(body):
 N_JPAR = 10     # float parameters per joint (ROW_COORD: factor, constant, directions d_A, d_B, tracked angles of
                 # rotation coordinates A, B (coordinate_angles); ROW_DIST: distance;
                 # ROW_ROLL: disc radius, plane normal (3), disc axis (3))
+
+
+def body_track(body):
+    """What is tracked of a body after every accepted step (rotation_parameters.TRACK_*): the
+    angle of a 2D body / rotor, else its node's rotation parameters (``Body.track``)."""
+    if body.planar or body.angleFrame is not None:
+        return TRACK_ANGLE
+    return TRACK_NONE if body.track is None else int(body.track[0])
 
 
 def joint_rows_of(joint):
@@ -307,8 +318,9 @@ def compile_scene(scene: Scene, groups):
         krot=arr([[s.angleA[1], s.angleB[1]] for s in scene.coordinateSprings], (-1, 2, 3, 3)),
         bangle=np.array([b.angle0 if (b.planar or b.angleFrame is not None) else 0.0 for b in scene.bodies], float),
         bframe=arr([np.eye(3) if b.angleFrame is None else b.angleFrame for b in scene.bodies], (-1, 3, 3)),
-        btrack=arr([int(b.planar or b.angleFrame is not None) for b in scene.bodies], (-1,), np.int64),
-        nplanar=int(sum(b.planar or b.angleFrame is not None for b in scene.bodies)),
+        btrack=arr([body_track(b) for b in scene.bodies], (-1,), np.int64),
+        bparam=arr([np.zeros(4) if b.track is None else b.track[1] for b in scene.bodies], (-1, 4)),
+        nplanar=int(sum(body_track(b) > 0 for b in scene.bodies)),
         nangles=int(sum(s.angleA[0] + s.angleB[0] for s in scene.coordinateSprings)
                     + sum(j.coordinate[4] + j.coordinate[5] for j in J if j.coordinate is not None)),
         xint=arr([[s.bodyA, s.bodyB] for s in scene.linearSprings], (-1, 2), np.int64),

@@ -55,13 +55,3 @@ def update_coordinate_angles(jint, jrot, jpar, rint, kint, krot, kpar, R):
             kpar[s, 9] = frame_angle(krot[s, 0], R[kint[s, 0]], kpar[s, 9])
         if kint[s, 3] == 1:
             kpar[s, 10] = frame_angle(krot[s, 1], R[kint[s, 1]], kpar[s, 10])
-
-
-@njit(cache=True, _nrt=False)
-def update_planar_angles(btrack, bframe, bangle, R):
-    """The angle of every 2D body (``R = Rz(phi)``) and rotor (``R = F Rz(phi)``), continued
-    over turns from its value at the last accepted step (so their node coordinate keeps its
-    turns however far apart the outputs are; bridge.nodes)."""
-    for i in range(btrack.shape[0]):
-        if btrack[i] == 1:
-            bangle[i] = frame_angle(bframe[i], R[i], bangle[i])

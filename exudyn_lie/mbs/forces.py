@@ -8,7 +8,8 @@ from ..groups import so3
 from .bodies import (_matvec, _side, add_pair_force, add_point_force, add_world_torque, body_inertial_forces,
                      body_point, connector_ends)
 from .codes import L_BODY, L_FIXED, L_KIND
-from .coordinate_angles import update_coordinate_angles, update_planar_angles
+from .coordinate_angles import update_coordinate_angles
+from .rotation_parameters import update_tracked_bodies
 from .coordinate_forces import coordinate_spring_forces
 from .linear_spring_forces import linear_spring_forces
 
@@ -301,4 +302,4 @@ def update_torsion_tracking(sd, wk, R, r, V):
     if sd.nangles > 0:
         update_coordinate_angles(sd.jint, sd.jrot, sd.jpar, sd.rint, sd.kint, sd.krot, sd.kpar, R)
     if sd.nplanar > 0:
-        update_planar_angles(sd.btrack, sd.bframe, sd.bangle, R)
+        update_tracked_bodies(sd.btrack, sd.bframe, sd.bangle, sd.bparam, R)

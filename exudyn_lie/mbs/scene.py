@@ -79,6 +79,9 @@ class Body:
     # (velocity axes ``freeAxes`` of (omega body, v)); None: all axes
     freeAxes: tuple = None
     angleFrame: np.ndarray = None
+    # rotation parameters of the body's node tracked step by step for the write-back
+    # (rotation_parameters: TRACK_QUAT / TRACK_RXYZ, initial parameters (4)); None: not tracked
+    track: tuple = None
 
     @property
     def isPoint(self):

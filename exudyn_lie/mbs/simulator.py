@@ -412,12 +412,12 @@ class Simulator:
 
     def NoOutputs(self):
         """The output arguments of ``stepper.mk_steps`` for a call that records nothing:
-        ``(0, Ro, ro, Vo, Vdo, lamo)`` with no rows (of the one compiled signature)."""
+        ``(0, Ro, ro, Vo, Po, Vdo, lamo)`` with no rows (of the one compiled signature)."""
         out = getattr(self, "_noOutputs", None)
         if out is None:
             nb, m = self.sd.nb, self.sd.nrows
             out = self._noOutputs = (0, np.zeros((0, nb, 3, 3)), np.zeros((0, nb, 3)), np.zeros((0, nb, 6)),
-                                     np.zeros((0, nb, 6)), np.zeros((0, m)))
+                                     np.zeros((0, nb, 4)), np.zeros((0, nb, 6)), np.zeros((0, m)))
         return out
 
     def _mk_steps(self, n, h, t=None, R=None, r=None, V=None):
@@ -781,8 +781,9 @@ class Simulator:
             self._raise_status(st, float(self._ad["fs"][_adaptive.FS_H]))
         return Ro[:k], ro[:k], Vo[:k]
 
-    def AdvanceToInto(self, endTime, tout, Ro, ro, Vo):
-        """:meth:`AdvanceTo` writing into the given output rows; returns ``(kernel status,
+    def AdvanceToInto(self, endTime, tout, Ro, ro, Vo, Po=None):
+        """:meth:`AdvanceTo` writing into the given output rows (``Po``: also the tracked
+        angles / node rotation parameters, mbs.rotation_parameters); returns ``(kernel status,
         outputs written)`` without raising for a failure (:meth:`RaiseStatus` does)."""
         ad = getattr(self, "_ad", None)
         if ad is None:
@@ -800,7 +801,7 @@ class Simulator:
             self._vmaxValue = self._vmax()
         args = (self.sd, self.wk, ad["am"], ad["par"], ad["S"], ad["tol"], ad["ctol"], ad["fs"], ad["ist"], tEnd,
                 self.R, self.r, self.V, ad["R0"], ad["r0"], ad["V0"], ad["dPhi"], ad["dV"], ad["w"],
-                float(self._vmaxValue), tout, Ro, ro, Vo)
+                float(self._vmaxValue), tout, Ro, ro, Vo, np.zeros((0, self.sd.nb, 4)) if Po is None else Po)
         ep = ad.get("entry")
         if ep is None:                  # resolved once per argument structure (mbs/entry.py)
             ep = entry_point(_adaptive.mk_adaptive_steps, args)

@@ -44,6 +44,7 @@ from .bodies import body_dexpinv_stage, body_world_velocity, exp_compose, add_po
 from .codes import (STAB_NONE, STAGE_ARG_MAX2, STATUS_BLOWUP, STATUS_EXTERNAL, STATUS_NONFINITE, STATUS_OK,
                     STATUS_STAGE_ARG)
 from .forces import update_torsion_tracking
+from .rotation_parameters import record_tracked
 from .index1 import rhs
 from .projection import project_state
 
@@ -284,7 +285,7 @@ def watch_rotation_entries(watchBody, watchEntry, watchMax, R):
 
 # --------------------------------------------------------------------------- the loop
 @njit(cache=True, _nrt=False)
-def mk_steps(sd, wk, tab, ctl, t0, h, nsteps, R, r, V, vmax, every, Ro, ro, Vo, Vdo, lamo):
+def mk_steps(sd, wk, tab, ctl, t0, h, nsteps, R, r, V, vmax, every, Ro, ro, Vo, Po, Vdo, lamo):
     """Advance ``nsteps`` MK steps in place.  Returns (status, steps done); on a failure
     (R, r, V) hold the last accepted step (the rejected one is undone from wk.Rb...).
 
@@ -294,7 +295,8 @@ def mk_steps(sd, wk, tab, ctl, t0, h, nsteps, R, r, V, vmax, every, Ro, ro, Vo, 
     double the compile time.)
 
     Outputs: with ``every > 0`` the state after every ``every``-th step goes to row
-    ``o = (n + 1) / every - 1`` of ``Ro, ro, Vo``; if ``Vdo`` has rows, the accelerations
+    ``o = (n + 1) / every - 1`` of ``Ro, ro, Vo`` and, if ``Po`` has rows, the tracked angles and
+    node rotation parameters (rotation_parameters.record_tracked) to ``Po[o]``; if ``Vdo`` has rows, the accelerations
     and multipliers at that state go to ``Vdo[o], lamo[o]``.  They are the first stage of
     the following step (explicit RK: stage 1 is evaluated at the step's initial state),
     so recording them costs one extra evaluation per call, after the last step.  A failure
@@ -356,5 +358,7 @@ def mk_steps(sd, wk, tab, ctl, t0, h, nsteps, R, r, V, vmax, every, Ro, ro, Vo, 
         if every > 0 and n % every == 0:
             o = n // every - 1
             copy_state(R, r, V, Ro[o], ro[o], Vo[o])
+            if Po.shape[0] > 0:
+                record_tracked(sd.btrack, sd.bangle, sd.bparam, Po[o])
             if acc:
                 pending = o

@@ -10,15 +10,15 @@ import exudyn_lie as exl
 _KEEP = []
 
 
-def Build():
+def Build(spin=-2.5):
     SC = exu.SystemContainer()
     mbs = SC.AddSystem()
     _KEEP.append(SC)       # the container must outlive mbs
     r, m, phi0 = 0.2, 2.0, 0.15
     A0 = RotationMatrixY(phi0)
-    omega0 = np.array([-2.5, 0, 1.0])          # rolling about the disc axis + turning (< pi in 1 s: the
-    # written Euler parameters then take the sign of Exudyn's continuous path, which only the final
-    # output of this test cannot tell apart)
+    omega0 = np.array([spin, 0, 1.0])          # rolling about the disc axis + turning (spin = -7: the
+    # disc turns more than 2 pi in 1 s; tests/test_node_parameter_tracking checks the sign of the
+    # Euler parameters written then)
     pC = np.zeros(3)
     p0 = pC + A0 @ [0, 0, r]                   # centre above the contact point
     v0 = np.cross(omega0, p0 - pC)             # contact point at rest

@@ -165,7 +165,7 @@ def test_spinning_angle_spring_tracks_turns_as_exudyn():
     """phi reaches 10.7 rad (more than 1.5 turns; Exudyn's coordinate is the total angle, and
     only the final state is written back): exl RK4 at h = 1e-3 agrees with native
     generalized-alpha at 1e-5 (difference to 2e-5: 6.7e-10) to 2.2e-10 (measured), turns
-    included (the angle spring sees the total angle, and the write-back keeps it: SceneData.bangle)."""
+    included (the angle spring sees the total angle, and the write-back keeps it: Work.bangle)."""
     T = 1.0
     qa, _ = _final(spinner(), 2e-5, T, False)
     qn, vn = _final(spinner(), 1e-5, T, False)

@@ -213,7 +213,7 @@ class NodeTable:
         sd = sim.sd
         if self.tracked is None or self.tracked.shape[1] != sd.nb:
             self.tracked = np.zeros((1, sd.nb, 4))
-        record_tracked(sd.btrack, sd.bangle, sd.bparam, self.tracked[0])
+        record_tracked(sim.wk.btrack, sim.wk.bangle, sim.wk.bparam, self.tracked[0])
         return write_rows(1, sd.gid, sim.R[None], sim.r[None], sim.V[None], Vdot[None], lam[None], bool(doacc),
                           self.code, self.body, self.idx, self.nq, self.qref, self.prev, q[None], qt[None], qtt[None],
                           self.flags, jrow, jae, ae[None], np.array([float(sim.t)]), self.tracked)

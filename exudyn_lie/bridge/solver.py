@@ -437,7 +437,7 @@ class LieGroupSolver:
             for k, b in enumerate(bodies):          # the rotation parameters in mbs go on from here
                 tr = kind.tracked(k)
                 if tr is not None:
-                    self.sim.sd.bparam[b] = tr[1]
+                    self.sim.wk.bparam[b] = tr[1]
         self._seed_torsion()
         self._nodes.prev[:] = NodeTable(self.scene.nodeKinds, self.scene.kindBodies, t).prev
 

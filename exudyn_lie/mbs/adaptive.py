@@ -148,7 +148,7 @@ def serve_outputs(sd, wk, am, ctol, fs, ist, R0, r0, V0, R, r, V, S, tout, k, Ro
                 if st != STATUS_OK:
                     return st, k
         if Po.shape[0] > k:
-            tracked_at(sd.btrack, sd.bframe, sd.bangle, sd.bparam, Ro[k], Po[k])
+            tracked_at(wk.btrack, wk.bframe, wk.bangle, wk.bparam, Ro[k], Po[k])
         k += 1
     return STATUS_OK, k
 

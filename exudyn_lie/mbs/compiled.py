@@ -30,11 +30,6 @@ SceneData = namedtuple("SceneData", [
     "kint", "kpar", "krot",           # coordinate springs: [A, B, rotation A, rotation B]; [k, d, offset,
                                       #   direction A (3), direction B (3), angle A, angle B]; [frame A, frame B]
     "nangles",                        # rotation coordinates of coordinate items (tracked: coordinate_angles)
-    "bangle", "bframe", "btrack",     # angle of each 2D body / rotor about bframe e_z, turns included (tracked
-                                      #   after every accepted step; their node write-back reads it); 1: tracked
-    "bparam",                         # node rotation parameters of each body tracked after every accepted step
-                                      #   (rotation_parameters; btrack: 1 angle, 2 quaternion, 3 Tait-Bryan)
-    "nplanar",                        # number of tracked bodies (bangle or bparam)
     "xint", "xpos", "xaxis", "xpar",  # linear springs: [A, B]; [posA, posB]; axis on A; [k, d, offset, force]
     "bint", "bpos", "brot", "bpar",   # rigid-body springs: [A, B, intrinsic]; [posA, posB]; [rotA, rotB];
                                       #   rows K (6), D (6), offset
@@ -57,7 +52,17 @@ Work = namedtuple("Work", [
                                       # In Work, not SceneData: one more SceneData field made the heavy
                                       # top's step 0.5 us slower (2.85 -> 3.35 us, measured), one more
                                       # Work field did not
+    "bangle", "bframe", "btrack",     # angle of each 2D body / rotor about bframe e_z, turns included (tracked
+                                      #   after every accepted step; their node write-back reads it)
+    "bparam",                         # node rotation parameters of each body tracked after every accepted step
+                                      #   (rotation_parameters; btrack: 1 angle, 2 quaternion, 3 Tait-Bryan)
+    "nplanar",                        # number of tracked bodies (bangle or bparam).  In Work, not SceneData,
+                                      #   for the reason above: in SceneData these fields made the heavy top's
+                                      #   step 0.6 us slower although it tracks nothing (measured interleaved)
 ])
+
+# the per-body tracking of a scene (compile_tracking), carried into every Work of its simulator
+Tracking = namedtuple("Tracking", ["bangle", "bframe", "btrack", "bparam", "nplanar"])
 N_SCRATCH3 = 20
 
 
@@ -316,11 +321,6 @@ def compile_scene(scene: Scene, groups):
         kpar=arr([[s.stiffness, s.damping, s.offset, *s.axisA, *s.axisB, s.angleA[2], s.angleB[2]]
                   for s in scene.coordinateSprings], (-1, 11)),
         krot=arr([[s.angleA[1], s.angleB[1]] for s in scene.coordinateSprings], (-1, 2, 3, 3)),
-        bangle=np.array([b.angle0 if (b.planar or b.angleFrame is not None) else 0.0 for b in scene.bodies], float),
-        bframe=arr([np.eye(3) if b.angleFrame is None else b.angleFrame for b in scene.bodies], (-1, 3, 3)),
-        btrack=arr([body_track(b) for b in scene.bodies], (-1,), np.int64),
-        bparam=arr([np.zeros(4) if b.track is None else b.track[1] for b in scene.bodies], (-1, 4)),
-        nplanar=int(sum(body_track(b) > 0 for b in scene.bodies)),
         nangles=int(sum(s.angleA[0] + s.angleB[0] for s in scene.coordinateSprings)
                     + sum(j.coordinate[4] + j.coordinate[5] for j in J if j.coordinate is not None)),
         xint=arr([[s.bodyA, s.bodyB] for s in scene.linearSprings], (-1, 2), np.int64),
@@ -434,12 +434,35 @@ def solve_plan(sd, solve="auto"):
     return plan if sd.bandwidth >= TREE_MIN_BANDWIDTH else None
 
 
+def compile_tracking(scene: Scene):
+    """What :func:`make_work` carries per body and updates after every accepted step: the
+    angles of 2D bodies / rotors over turns and the nodes' rotation parameters."""
+    def arr(rows, shape, dtype=float):
+        a = np.array(rows, dtype)
+        return a.reshape(shape) if a.size else np.zeros(tuple(0 if d == -1 else d for d in shape), dtype)
+    return Tracking(
+        bangle=np.array([b.angle0 if (b.planar or b.angleFrame is not None) else 0.0 for b in scene.bodies], float),
+        bframe=arr([np.eye(3) if b.angleFrame is None else b.angleFrame for b in scene.bodies], (-1, 3, 3)),
+        btrack=arr([body_track(b) for b in scene.bodies], (-1,), np.int64),
+        bparam=arr([np.zeros(4) if b.track is None else b.track[1] for b in scene.bodies], (-1, 4)),
+        nplanar=int(sum(body_track(b) > 0 for b in scene.bodies)))
+
+
+def no_tracking(nb):
+    """Nothing tracked (bodies whose scene did not go through :func:`compile_tracking`)."""
+    return Tracking(bangle=np.zeros(nb), bframe=np.zeros((nb, 3, 3)), btrack=np.zeros(nb, np.int64),
+                    bparam=np.zeros((nb, 4)), nplanar=0)
+
+
 def with_redundant(sd, flag):
     return sd._replace(redundant=bool(flag), bandwidth=(sd.nrows - 1 if flag else sd.bandwidth))
 
 
-def make_work(sd, nstages, solve="auto"):
+def make_work(sd, nstages, solve="auto", track=None):
+    """Scratch and per-step state of a simulator; ``track`` (:func:`compile_tracking`): the
+    tracked per-body arrays, shared (not copied) so that a new Work keeps their state."""
     nb = sd.nb
+    track = no_tracking(nb) if track is None else track
     m = sd.nrows
     plan = solve_plan(sd, solve)
     tree = plan is not None
@@ -456,4 +479,5 @@ def make_work(sd, nstages, solve="auto"):
         watchBody=np.zeros(0, np.int64), watchEntry=np.zeros((0, 2), np.int64), watchMax=np.zeros(0),
         ext=np.zeros(2, np.int64), Vw=np.zeros((nb, 6) if sd.hasQext else (0, 6)),
         tplan=plan, Tw=np.zeros(work_size(nb, m, plan)) if tree else None,
+        bangle=track.bangle, bframe=track.bframe, btrack=track.btrack, bparam=track.bparam, nplanar=track.nplanar,
     )

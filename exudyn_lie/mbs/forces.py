@@ -301,5 +301,5 @@ def update_torsion_tracking(sd, wk, R, r, V):
         torsion_angles(sd.gid, sd.tint, sd.trot, wk.tphi, R, r, V, wk.m3, wk.ident, wk.zero3, wk.zero6)
     if sd.nangles > 0:
         update_coordinate_angles(sd.jint, sd.jrot, sd.jpar, sd.rint, sd.kint, sd.krot, sd.kpar, R)
-    if sd.nplanar > 0:
-        update_tracked_bodies(sd.btrack, sd.bframe, sd.bangle, sd.bparam, R)
+    if wk.nplanar > 0:
+        update_tracked_bodies(wk.btrack, wk.bframe, wk.bangle, wk.bparam, R)

@@ -11,10 +11,10 @@ accepted step (one step turns a body by far less than pi):
 * ``TRACK_RXYZ``: Tait-Bryan angles ``R = Rx(a0) Ry(a1) Rz(a2)`` of a NodeRigidBodyRxyz, the
   solution of the two (each modulo 2 pi) nearest the previous angles;
 * ``TRACK_ANGLE``: the angle of a 2D body / rotor (coordinate_angles.frame_angle, kept in
-  ``SceneData.bangle``).
+  ``Work.bangle``).
 
 :func:`update_tracked_bodies` moves them on after every accepted step; the node parameters
-live in ``SceneData.bparam`` (``btrack`` the code per body), and all are recorded with every output row (stepper.mk_steps, adaptive.serve_outputs) by
+live in ``Work.bparam`` (``btrack`` the code per body), and all are recorded with every output row (stepper.mk_steps, adaptive.serve_outputs) by
 :func:`record_tracked`.
 """
 import math

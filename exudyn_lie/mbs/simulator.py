@@ -23,7 +23,7 @@ from ..userwarn import warn_user
 from . import external, kernel
 from .codes import BODY_TWIST
 from .bodies import body_dexpinv_stage, exp_compose
-from .compiled import compile_scene, make_work, resolve_groups, with_redundant
+from .compiled import compile_scene, compile_tracking, make_work, resolve_groups, with_redundant
 from .linalg import REL_PIVOT_TOL, rows_in_null_space, schur_rank_and_null
 from .scene import Scene, SceneError
 from .state import BodyStates, twist_to_world_velocity, world_velocity_to_twist
@@ -145,6 +145,7 @@ class Simulator:
         self.stabilization = None if stabilization == "none" else stabilization
         self.verbose = verbose
         self.sd, self.rowJoint = compile_scene(scene, self.groups)
+        self._track = compile_tracking(scene)
         self.sd = self.sd._replace(stabilization={None: kernel.STAB_NONE, "velocity": kernel.STAB_VELOCITY,
                                                   "position": kernel.STAB_POSITION}[self.stabilization])
         self.method = method_arrays(self.tableau)
@@ -168,7 +169,7 @@ class Simulator:
         dense = self.tableau.dense
         # room for the dense-output extra stages of an embedded pair (adaptive steps)
         extra = dense.extra_stages if (dense is not None and self.tableau.b_hat is not None) else 0
-        wk = make_work(self.sd, len(self.method.b) + extra, solve)
+        wk = make_work(self.sd, len(self.method.b) + extra, solve, self._track)
         wk.ext[0] = self._extToken
         self._mkEntry = None
         if getattr(self, "_ad", None) is not None:

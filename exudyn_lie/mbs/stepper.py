@@ -359,6 +359,6 @@ def mk_steps(sd, wk, tab, ctl, t0, h, nsteps, R, r, V, vmax, every, Ro, ro, Vo, 
             o = n // every - 1
             copy_state(R, r, V, Ro[o], ro[o], Vo[o])
             if Po.shape[0] > 0:
-                record_tracked(sd.btrack, sd.bangle, sd.bparam, Po[o])
+                record_tracked(wk.btrack, wk.bangle, wk.bparam, Po[o])
             if acc:
                 pending = o

@@ -163,6 +163,42 @@ def lg_finish(gid, stages, b, h, R, r, V, K, Vd, Psi, Rn, C, rn, Er, vq, vv, QK,
     return 2 if big else 0
 
 
+@njit(cache=True, inline="always")
+def invert_block(M, blk, p0, s, W):
+    """``W[:s, s:2s]`` <- the inverse of the block ``M[blk[p0:p0+s], blk[p0:p0+s]]``
+    (Gauss-Jordan with partial pivoting in ``W``, (>= s, >= 2s) scratch).  Returns False if
+    a pivot is at most 1e-14 x the block's largest diagonal entry (singular block)."""
+    for i in range(s):
+        for k in range(s):
+            W[i, k] = M[blk[p0 + i], blk[p0 + k]]
+            W[i, s + k] = 1.0 if i == k else 0.0
+    scale = 0.0
+    for i in range(s):
+        scale = max(scale, abs(W[i, i]))
+    for c in range(s):
+        piv = c
+        for i in range(c + 1, s):
+            if abs(W[i, c]) > abs(W[piv, c]):
+                piv = i
+        if scale == 0.0 or abs(W[piv, c]) <= 1e-14 * scale:
+            return False
+        if piv != c:
+            for k in range(2 * s):
+                tmp = W[c, k]
+                W[c, k] = W[piv, k]
+                W[piv, k] = tmp
+        d = 1.0 / W[c, c]
+        for k in range(2 * s):
+            W[c, k] *= d
+        for i in range(s):
+            if i != c:
+                g = W[i, c]
+                if g != 0.0:
+                    for k in range(2 * s):
+                        W[i, k] -= g * W[c, k]
+    return True
+
+
 @njit(cache=True)
 def block_kkt_solve(M, f, Cq, eta, blk, blkPtr, Minv, X, S, lam, a, nzIdx, nzCnt, pivoted, perm, yw):
     """Index-1 accelerations ``[M Cq^T; Cq 0][a; lam] = [f; eta]`` (eq. index1) with M
@@ -182,34 +218,8 @@ def block_kkt_solve(M, f, Cq, eta, blk, blkPtr, Minv, X, S, lam, a, nzIdx, nzCnt
         p0 = blkPtr[bI]
         s = blkPtr[bI + 1] - p0
         W = np.empty((s, 2 * s))
-        for i in range(s):
-            for k in range(s):
-                W[i, k] = M[blk[p0 + i], blk[p0 + k]]
-                W[i, s + k] = 1.0 if i == k else 0.0
-        scale = 0.0
-        for i in range(s):
-            scale = max(scale, abs(W[i, i]))
-        for c in range(s):
-            piv = c
-            for i in range(c + 1, s):
-                if abs(W[i, c]) > abs(W[piv, c]):
-                    piv = i
-            if abs(W[piv, c]) <= 1e-14 * scale or scale == 0.0:
-                return 1
-            if piv != c:
-                for k in range(2 * s):
-                    tmp = W[c, k]
-                    W[c, k] = W[piv, k]
-                    W[piv, k] = tmp
-            d = 1.0 / W[c, c]
-            for k in range(2 * s):
-                W[c, k] *= d
-            for i in range(s):
-                if i != c:
-                    g = W[i, c]
-                    if g != 0.0:
-                        for k in range(2 * s):
-                            W[i, k] -= g * W[c, k]
+        if not invert_block(M, blk, p0, s, W):
+            return 1
         for i in range(s):
             for k in range(s):
                 Minv[blk[p0 + i], blk[p0 + k]] = W[i, s + k]
@@ -316,34 +326,8 @@ def invert_blocks(M, blk, blkPtr, blkOff, MinvB, W):
     for bI in range(blkPtr.shape[0] - 1):
         p0 = blkPtr[bI]
         s = blkPtr[bI + 1] - p0
-        for i in range(s):
-            for k in range(s):
-                W[i, k] = M[blk[p0 + i], blk[p0 + k]]
-                W[i, s + k] = 1.0 if i == k else 0.0
-        scale = 0.0
-        for i in range(s):
-            scale = max(scale, abs(W[i, i]))
-        for c in range(s):
-            piv = c
-            for i in range(c + 1, s):
-                if abs(W[i, c]) > abs(W[piv, c]):
-                    piv = i
-            if scale == 0.0 or abs(W[piv, c]) <= 1e-14 * scale:
-                return False
-            if piv != c:
-                for k in range(2 * s):
-                    tmp = W[c, k]
-                    W[c, k] = W[piv, k]
-                    W[piv, k] = tmp
-            d = 1.0 / W[c, c]
-            for k in range(2 * s):
-                W[c, k] *= d
-            for i in range(s):
-                if i != c:
-                    g = W[i, c]
-                    if g != 0.0:
-                        for k in range(2 * s):
-                            W[i, k] -= g * W[c, k]
+        if not invert_block(M, blk, p0, s, W):
+            return False
         o = blkOff[bI]
         for i in range(s):
             for k in range(s):

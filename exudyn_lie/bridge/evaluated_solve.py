@@ -32,7 +32,7 @@ from .evaluated import EvaluatedModel, Layout, check_model
 from .evaluated_stepper import EvaluatedStepper
 from .evaluated_initial import project_initial
 from .evaluated_stiffness import check_step
-from .reader import BridgeError, RIGID_NODE_TYPES, UNHONOURED_MBS_FUNCTIONS
+from .reader import BridgeError, RIGID_NODE_TYPES, UNHONOURED_MBS_FUNCTIONS, check_system_level
 from .settings import check_settings
 
 #: mbs-level user functions this path cannot honour (Exudyn calls the PostNewton one itself)
@@ -96,19 +96,9 @@ def node_groups(mbs, liegroup):
 
 
 def check_system(mbs):
-    n = int(mbs.NumberOfGeneralContacts())
-    if n > 0:
-        raise BridgeError(f"mbs has {n} GeneralContact(s) (mbs.AddGeneralContact): exudyn_lie does not integrate "
-                          f"GeneralContact (not verified against Exudyn's own solver yet); solve this model with "
-                          f"exudyn.SolveDynamic, or remove the contact (mbs.DeleteGeneralContact)")
-    for name, why in UNHONOURED_HERE.items():
-        fn = getattr(mbs, "Get" + name, None)
-        if fn is None:
-            continue
-        uf = fn()
-        if not (isinstance(uf, (int, float)) and uf == 0) and uf is not None:
-            raise BridgeError(f"mbs has a {name} (mbs.Set{name}): exudyn_lie does not call it ({why}); "
-                              f"solve with exudyn.SolveDynamic, or remove it with mbs.Set{name}(0)")
+    """:func:`.reader.check_system_level` with what this path honours itself (a
+    PostNewtonUserFunction: Exudyn calls it after every step)."""
+    check_system_level(mbs, UNHONOURED_HERE, " (not verified against Exudyn's own solver yet)")
 
 
 class EvaluatedSolver:

@@ -203,15 +203,16 @@ UNHONOURED_MBS_FUNCTIONS = {
 }
 
 
-def check_system_level(mbs):
+def check_system_level(mbs, unhonoured=None, contactReason=""):
     """Refuse what is not an item but changes the model: GeneralContact and mbs-level user
-    functions that exudyn_lie does not honour (reads only; raises BridgeError)."""
+    functions that exudyn_lie does not honour (``unhonoured``: name -> why; default
+    ``UNHONOURED_MBS_FUNCTIONS``) (reads only; raises BridgeError)."""
     n = int(mbs.NumberOfGeneralContacts())
     if n > 0:
         raise BridgeError(f"mbs has {n} GeneralContact(s) (mbs.AddGeneralContact): exudyn_lie does not "
-                          f"integrate GeneralContact; solve this model with exudyn.SolveDynamic, or remove the "
-                          f"contact (mbs.DeleteGeneralContact)")
-    for name, why in UNHONOURED_MBS_FUNCTIONS.items():
+                          f"integrate GeneralContact{contactReason}; solve this model with exudyn.SolveDynamic, "
+                          f"or remove the contact (mbs.DeleteGeneralContact)")
+    for name, why in (UNHONOURED_MBS_FUNCTIONS if unhonoured is None else unhonoured).items():
         fn = getattr(mbs, "Get" + name, None)
         if fn is None:
             continue

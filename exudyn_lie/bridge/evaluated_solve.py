@@ -21,7 +21,6 @@ compares mbs' coordinates with those it wrote) and the run continues from them.
 """
 from __future__ import annotations
 
-import copy
 import math
 import time
 
@@ -34,6 +33,7 @@ from .evaluated_initial import project_initial
 from .evaluated_stiffness import check_step
 from .reader import BridgeError, RIGID_NODE_TYPES, UNHONOURED_MBS_FUNCTIONS, check_system_level
 from .settings import check_settings
+from .solver import loop_settings
 
 #: mbs-level user functions this path cannot honour (Exudyn calls the PostNewton one itself)
 UNHONOURED_HERE = {k: v for k, v in UNHONOURED_MBS_FUNCTIONS.items() if k != "PostNewtonUserFunction"}
@@ -217,22 +217,7 @@ class EvaluatedSolver:
         tab = self.tableau
         info = (f"exudyn_lie: explicit Munthe-Kaas {tab.name} (order {tab.order}) on the Exudyn-evaluated model, "
                 f"step size h = {h:.6g} s, {nsteps} steps from t = {t0:g} to {tEnd:g} s")
-        ss2 = copy.deepcopy(ss)
-        ti2 = ss2.timeIntegration
-        ga = ti2.generalizedAlpha
-        ti2.numberOfSteps = nsteps // k
-        ti2.solverType = exu.DynamicSolverType.GeneralizedAlpha
-        ga.computeInitialAccelerations = False
-        ga.useNewmark = False
-        ga.useIndex2Constraints = False
-        ti2.adaptiveStep = False
-        ti2.automaticStepSize = False
-        # contact items recommend a smaller step after an impact (PostNewton); the fixed
-        # steps do not follow it (Exudyn would reduce its step below the planned outputs)
-        ti2.discontinuous.useRecommendedStepSize = False
-        ti2.verboseMode = 0
-        userInfo = ss2.solution.file.information
-        ss2.solution.file.information = f"{userInfo}; {info}" if userInfo else info
+        ss2 = loop_settings(ss, nsteps // k, info)
 
         solver = exu.MainSolverImplicitSecondOrder()
         self.solver = solver

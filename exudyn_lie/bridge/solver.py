@@ -82,6 +82,34 @@ def _check_method(method):
                       f"exudyn_lie.integrators.ButcherTableau")
 
 
+def loop_settings(ss, exudynSteps, info):
+    """The settings of Exudyn's own time loop around the hook: a deep copy of ``ss`` (the
+    user's object stays as it is) with ``exudynSteps`` fixed steps of its implicit solver,
+    whose Newton iteration is the hook, and ``info`` appended to the solution file's header."""
+    import copy
+
+    import exudyn as exu
+    ss2 = copy.deepcopy(ss)
+    ti2 = ss2.timeIntegration
+    ga = ti2.generalizedAlpha
+    ti2.numberOfSteps = exudynSteps
+    ti2.solverType = exu.DynamicSolverType.GeneralizedAlpha
+    ga.computeInitialAccelerations = False
+    ga.useNewmark = False
+    ga.useIndex2Constraints = False
+    ti2.adaptiveStep = False
+    ti2.automaticStepSize = False
+    # contact items recommend a smaller step after an impact (PostNewton); the fixed steps
+    # do not follow it (Exudyn would reduce its step below the planned outputs)
+    ti2.discontinuous.useRecommendedStepSize = False
+    # Exudyn's log would count its own (output) steps and Newton iterations (none): the
+    # bridge logs the integration instead; the solution file's header says what ran
+    ti2.verboseMode = 0
+    userInfo = ss2.solution.file.information
+    ss2.solution.file.information = f"{userInfo}; {info}" if userInfo else info
+    return ss2
+
+
 class LieGroupSolver:
     """Integrate an Exudyn ``mbs`` with explicit Munthe-Kaas Lie group methods.
 
@@ -614,8 +642,6 @@ class LieGroupSolver:
 
     def _solve(self, simulationSettings, updateInitialValues, storeSolver, showProgress, substeps,
                accelerations, refresh, ct):
-        import copy
-
         import exudyn as exu
         self._exu = exu
         ticTotal = time.perf_counter()
@@ -640,21 +666,7 @@ class LieGroupSolver:
             print(f"{info}; accelerations {'written' if needAcc else 'not needed'}")
         # Exudyn runs nsteps / k steps of its implicit solver, whose Newton iteration is the
         # hook, with these settings: on a deep copy (the user's object stays as it is)
-        ss2 = copy.deepcopy(ss)
-        ti2 = ss2.timeIntegration
-        ga = ti2.generalizedAlpha
-        ti2.numberOfSteps = nsteps // k
-        ti2.solverType = exu.DynamicSolverType.GeneralizedAlpha
-        ga.computeInitialAccelerations = False
-        ga.useNewmark = False
-        ga.useIndex2Constraints = False
-        ti2.adaptiveStep = False
-        ti2.automaticStepSize = False
-        # Exudyn's log would count its own (output) steps and Newton iterations (none): the
-        # bridge logs the integration instead; the solution file's header says what ran
-        ti2.verboseMode = 0
-        userInfo = ss2.solution.file.information
-        ss2.solution.file.information = f"{userInfo}; {info}" if userInfo else info
+        ss2 = loop_settings(ss, nsteps // k, info)
 
         solver = exu.MainSolverImplicitSecondOrder()
         self.solver = solver

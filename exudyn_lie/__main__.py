@@ -1,13 +1,14 @@
-"""Command line: ``python -m exudyn_lie {paper,bench,stress,corpus} [options]``.
+"""Command line: ``python -m exudyn_lie {paper,bench,stress,corpus,items} [options]``.
 
 * ``paper``  - reproduce the paper's comparison (SE3 vs SO3xR3 constraint satisfaction);
 * ``bench``  - work-precision and per-step benchmarks against Exudyn's native solvers;
 * ``stress`` - numerical stability stress suite;
-* ``corpus`` - run Exudyn scripts natively and through ``exudyn_lie.SolveDynamic``, unedited.
+* ``corpus`` - run Exudyn scripts natively and through ``exudyn_lie.SolveDynamic``, unedited;
+* ``items``  - the Exudyn item types the bridge reads (from their registrations).
 
 ``--version`` prints the versions of exudyn_lie, exudyn, numpy and numba.
 
-Each command lives in its own module (``exudyn_lie.apps.paper``, ``.bench``, ``.stress``, ``.corpus``)
+Each command lives in its own module (``exudyn_lie.apps.paper``, ``.bench``, ``.stress``, ``.corpus``, ``.items``)
 with a ``main(argv)`` function; ``--help`` after a command lists its options.
 """
 import importlib
@@ -17,6 +18,7 @@ COMMANDS = {
     "paper": ("exudyn_lie.apps.paper", "reproduce the paper's comparison, write REPRODUCTION.md and figures"),
     "bench": ("exudyn_lie.apps.bench", "work-precision / per-step benchmarks, write BENCHMARKS.md"),
     "stress": ("exudyn_lie.apps.stress", "numerical stability stress suite, write STRESS.md"),
+    "items": ("exudyn_lie.apps.items", "list the Exudyn item types the bridge reads (--readme: the README block)"),
     "corpus": ("exudyn_lie.apps.corpus", "run Exudyn scripts natively and through exudyn_lie.SolveDynamic, "
                                          "write corpus.md"),
 }

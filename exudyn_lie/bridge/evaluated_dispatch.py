@@ -3,18 +3,15 @@ model, else the Exudyn-evaluated path (:mod:`.evaluated_solve`), which the user 
 force with ``evaluation='exudyn'``.
 
 The decision reads only: item types the compiled reader does not know
-(:func:`foreign_items`), else the reader's own check of the model
+(:func:`foreign_items`: types without a registration in :mod:`.items`), else the reader's own check of the model
 (:func:`~.reader.SceneFromExudyn`), whose "not supported" errors (an option of a known item,
 a GeneralContact) also select the evaluated path; any other error of the reader (bad
 input) is raised as it is.
 """
 from __future__ import annotations
 
-from .nodes import NODE_KINDS
-from .reader import (BODY_OBJECTS, BridgeError, SUPPORTED_LOADS, SUPPORTED_MARKERS, SUPPORTED_OBJECTS,
-                     SceneFromExudyn)
-
-DATA_NODES = ("PointGround", "GenericData")
+from . import items
+from .reader import BridgeError, SceneFromExudyn
 
 
 def _listing(kind, idx):
@@ -31,22 +28,14 @@ def foreign_items(mbs):
     def add(typeName, kind, i):
         found.setdefault(typeName, (kind, []))[1].append(i)
 
-    for n in range(sd.NumberOfNodes()):
-        t = mbs.GetNode(n)["nodeType"]
-        if t not in NODE_KINDS and t not in DATA_NODES:
-            add("Node" + t, "node", n)
-    for o in range(sd.NumberOfObjects()):
-        t = "Object" + mbs.GetObject(o)["objectType"]
-        if t not in SUPPORTED_OBJECTS:
-            add(t, "object", o)
-    for m in range(sd.NumberOfMarkers()):
-        t = "Marker" + mbs.GetMarker(m)["markerType"]
-        if t not in SUPPORTED_MARKERS:
-            add(t, "marker", m)
-    for k in range(sd.NumberOfLoads()):
-        t = "Load" + mbs.GetLoad(k)["loadType"]
-        if t not in SUPPORTED_LOADS:
-            add(t, "load", k)
+    for kind, count, getter, key in (("node", sd.NumberOfNodes(), mbs.GetNode, "nodeType"),
+                                     ("object", sd.NumberOfObjects(), mbs.GetObject, "objectType"),
+                                     ("marker", sd.NumberOfMarkers(), mbs.GetMarker, "markerType"),
+                                     ("load", sd.NumberOfLoads(), mbs.GetLoad, "loadType")):
+        for i in range(count):
+            t = getter(i)[key]
+            if (kind, t) not in items.ITEMS:        # registered in bridge/items.py: the compiled reader's
+                add(items.PREFIX[kind] + t, kind, i)
     out = [f"{t} ({_listing(kind, idx)})" for t, (kind, idx) in found.items()]
     n = int(mbs.NumberOfGeneralContacts())
     if n:

@@ -18,7 +18,8 @@ the *current* part, ``qref`` the reference part.
 The per-output write-back is compiled: one row writer per node type (``*_row``), selected
 by the class's ``code`` in :func:`write_row`; :func:`write_nodes` / :func:`write_all` do all
 nodes (and the joint multipliers) in one call.  Adding a node type = one subclass, its
-row writer + a branch in :func:`write_row`, one line in :data:`NODE_KINDS`.
+row writer + a branch in :func:`write_row`, and its registration in ``bridge/items.py``
+(``register('node', typeName, 'body', ..., reader='<class name>')``).
 """
 import math
 
@@ -28,6 +29,7 @@ from numba import njit
 from ..mbs.codes import uses_body_twist
 from ..mbs.rotation_parameters import TRACK_QUAT, TRACK_RXYZ, nearest_quat, nearest_rxyz, quat_of, quat_rotvec
 from ..userwarn import warn_user
+from . import items
 from . import rotations as rot
 
 CODE_ROTVEC = 0
@@ -790,6 +792,7 @@ class Node1DNode(PointNode):
         return np.zeros((len(self), 1))
 
 
-#: the registry: Exudyn ``nodeType`` string -> class
-NODE_KINDS = {cls.typeName: cls for cls in (RotVecLGNode, EPNode, RxyzNode, PointNode, Point2DNode, Rigid2DNode,
-                                            Node1DNode)}
+#: the registry: Exudyn ``nodeType`` string -> class, from the body nodes' registrations in
+#: bridge/items.py (each names its class here as ``reader``)
+NODE_KINDS = {it.typeName: globals()[it.reader] for it in items.of("node", "body")}
+assert all(cls.typeName == t for t, cls in NODE_KINDS.items()), "bridge/items.py: node registered with a wrong class"

@@ -38,144 +38,14 @@ import math
 
 import numpy as np
 
+from . import items
+from .items import FIXED, IGNORED, INITIAL, LIVE, REFUSED  # noqa: F401 (the statuses)
 from .reader import BridgeError, ExudynScene, _orthonormal, _userfunction
 
-LIVE, FIXED, REFUSED, INITIAL, IGNORED = "live", "fixed", "refused", "initial", "ignored"
+# the status of every field of every supported item type comes from its registration
+# (bridge/items.py); FIELDS: (kind, type) -> {field: (status, reason)}
+FIELDS = items.FIELDS
 
-_MARKER_MOVES = "moves the marker: connectors and loads follow it; a joint using the marker stops the solve"
-_RIGID_NODE = {
-    "referenceCoordinates": (FIXED, "the node's reference frame; change the state with "
-                                    "mbs.systemData.SetODE2Coordinates(..., configuration=Current) instead"),
-    "initialCoordinates": (INITIAL, "set by Assemble (the initial state)"),
-    "initialVelocities": (INITIAL, "set by Assemble (the initial state)"),
-}
-_JOINT = {
-    "markerNumbers": (FIXED, "the joint's bodies"),
-    "activeConnector": (FIXED, "the joint's constraint rows are compiled (an inactive joint has none)"),
-    "constrainedAxes": (FIXED, "the joint's constraint rows"),
-    "rotationMarker0": (FIXED, "the joint frame on marker 0 (a moving joint frame needs its velocity and "
-                               "acceleration in the index-1 formulation)"),
-    "rotationMarker1": (FIXED, "the joint frame on marker 1"),
-}
-_COMPILED_ROW = (FIXED, "compiled into a constraint row or force element of issue 16's items; a change during "
-                        "a run is not re-read yet")
-_UF_LIVE = (LIVE, "another Python function: live; switching between no function and a function stops the solve "
-                  "(compiled item vs Python item)")
-
-#: status and reason of every field of every supported Exudyn item type, keyed by
-#: ``(kind, type)`` with the type as in the item dictionary (``GetObject(i)['objectType']``)
-FIELDS = {
-    ("node", "RigidBodyRotVecLG"): dict(_RIGID_NODE),
-    ("node", "RigidBodyEP"): dict(_RIGID_NODE, addConstraintEquation=(
-        REFUSED, "False is refused: exudyn_lie keeps the Euler parameters on the unit sphere, Exudyn would "
-                 "need a user constraint")),
-    ("node", "RigidBodyRxyz"): dict(_RIGID_NODE),
-    ("node", "PointGround"): {"referenceCoordinates": (LIVE, "moves the markers on the ground node")},
-    ("node", "Point"): dict(_RIGID_NODE),
-    ("node", "Point2D"): dict(_RIGID_NODE),
-    ("object", "MassPoint"): {"mass": (FIXED, "compiled mass matrix"), "nodeNumber": (FIXED, "the body's node")},
-    ("object", "MassPoint2D"): {"mass": (FIXED, "compiled mass matrix"), "nodeNumber": (FIXED, "the body's node")},
-    ("object", "ConnectorCoordinate"): {
-        "markerNumbers": (FIXED, "the constrained coordinates"), "offset": _COMPILED_ROW, "factor1": _COMPILED_ROW,
-        "activeConnector": (FIXED, "the constraint row is compiled (an inactive one has none)"),
-        "velocityLevel": (REFUSED, "True is refused"),
-        "offsetUserFunction": (REFUSED, "a moving offset is refused"),
-        "offsetUserFunction_t": (REFUSED, "a moving offset is refused")},
-    ("object", "ConnectorDistance"): {
-        "markerNumbers": (FIXED, "the constrained points"), "distance": _COMPILED_ROW,
-        "activeConnector": (FIXED, "the constraint row is compiled (an inactive one has none)")},
-    ("object", "ConnectorCoordinateSpringDamper"): {
-        **{k: _COMPILED_ROW for k in ("stiffness", "damping", "offset", "activeConnector")},
-        "springForceUserFunction": (FIXED, "compiled item or Python item, chosen at the start"),
-        "markerNumbers": (FIXED, "the connected coordinates")},
-    ("object", "ConnectorLinearSpringDamper"): {
-        **{k: _COMPILED_ROW for k in ("stiffness", "damping", "axisMarker0", "offset", "velocityOffset", "force",
-                                      "activeConnector")},
-        "springForceUserFunction": (REFUSED, "a user function is refused"),
-        "markerNumbers": (FIXED, "the connected bodies")},
-    ("object", "JointRollingDisc"): {
-        **{k: _JOINT[k] for k in ("markerNumbers", "activeConnector", "constrainedAxes")},
-        **{k: _COMPILED_ROW for k in ("discRadius", "discAxis", "planeNormal")}},
-    ("node", "1D"): dict(_RIGID_NODE),
-    ("object", "Mass1D"): {
-        "mass": (FIXED, "compiled mass matrix"), "nodeNumber": (FIXED, "the body's node"),
-        "referencePosition": (FIXED, "the line the mass moves on (compiled point mass)"),
-        "referenceRotation": (FIXED, "the line the mass moves on (compiled point mass)")},
-    ("object", "RotationalMass1D"): {
-        "inertia": (FIXED, "compiled mass matrix"), "nodeNumber": (FIXED, "the body's node"),
-        "referencePosition": (FIXED, "the rotor's axis (compiled rotor)"),
-        "referenceRotation": (FIXED, "the rotor's axis (compiled rotor)")},
-    ("marker", "NodeCoordinate"): {"nodeNumber": (FIXED, "the marker's node"),
-                                   "coordinate": (FIXED, "the marker's coordinate")},
-    ("load", "Coordinate"): {
-        "load": (LIVE, "the generalised force on the coordinate"), "loadUserFunction": _UF_LIVE,
-        "markerNumber": (FIXED, "the loaded coordinate")},
-    ("node", "GenericData"): {
-        "initialCoordinates": (INITIAL, "a torsional spring's continuous angle at the start"),
-        "numberOfDataCoordinates": (FIXED, "set by Assemble")},
-    ("object", "Ground"): {k: (LIVE, "moves the markers on the ground: " + _MARKER_MOVES)
-                           for k in ("referencePosition", "referenceRotation", "referenceHT")},
-    ("object", "RigidBody"): {
-        "mass": (FIXED, "compiled mass matrix"), "inertia": (FIXED, "compiled mass matrix"),
-        "centerOfMass": (FIXED, "compiled mass matrix"), "nodeNumber": (FIXED, "the body's node")},
-    ("node", "RigidBody2D"): dict(_RIGID_NODE),
-    ("object", "RigidBody2D"): {
-        "mass": (FIXED, "compiled mass matrix"), "inertia": (FIXED, "compiled mass matrix"),
-        "centerOfMass": (FIXED, "compiled mass matrix"), "nodeNumber": (FIXED, "the body's node")},
-    ("object", "JointRevolute2D"): {k: _JOINT[k] for k in ("markerNumbers", "activeConnector")},
-    ("object", "JointPrismatic2D"): {
-        **{k: _JOINT[k] for k in ("markerNumbers", "activeConnector")},
-        "axisMarker0": (FIXED, "the joint's constraint rows (its axis on marker 0)"),
-        "normalMarker1": (FIXED, "the joint's constraint rows (its normal on marker 1)"),
-        "constrainRotation": (REFUSED, "False is refused (the rotation row is compiled)")},
-    ("object", "JointSpherical"): {k: v for k, v in _JOINT.items() if not k.startswith("rotationMarker")},
-    ("object", "JointRevoluteZ"): {k: v for k, v in _JOINT.items() if k != "constrainedAxes"},
-    ("object", "JointPrismaticX"): {k: v for k, v in _JOINT.items() if k != "constrainedAxes"},
-    ("object", "JointGeneric"): dict(_JOINT, **{
-        "alternativeConstraints": (REFUSED, "True is refused (default rotation constraints only)"),
-        "offsetUserFunction": (REFUSED, "a moving joint offset is refused"),
-        "offsetUserFunction_t": (REFUSED, "a moving joint offset is refused"),
-        "offsetUserFunctionParameters": (IGNORED, "read only by offsetUserFunction, which is refused")}),
-    ("object", "ConnectorSpringDamper"): {
-        **{k: (LIVE, "force law") for k in ("stiffness", "damping", "referenceLength", "force", "velocityOffset")},
-        "activeConnector": (LIVE, "switches the force off and on"),
-        "springForceUserFunction": _UF_LIVE, "markerNumbers": (FIXED, "the connected bodies")},
-    ("object", "ConnectorCartesianSpringDamper"): {
-        **{k: (LIVE, "force law") for k in ("stiffness", "damping", "offset")},
-        "activeConnector": (LIVE, "switches the force off and on"),
-        "springForceUserFunction": _UF_LIVE, "markerNumbers": (FIXED, "the connected bodies")},
-    ("object", "ConnectorTorsionalSpringDamper"): {
-        **{k: (LIVE, "torque law") for k in ("stiffness", "damping", "offset", "torque", "velocityOffset",
-                                              "rotationMarker0", "rotationMarker1")},
-        "activeConnector": (LIVE, "switches the torque off and on"),
-        "springTorqueUserFunction": _UF_LIVE, "markerNumbers": (FIXED, "the connected bodies"),
-        "nodeNumber": (FIXED, "the data node of the continuous angle")},
-    ("object", "ConnectorRigidBodySpringDamper"): {
-        **{k: (LIVE, "force law") for k in ("stiffness", "damping", "offset", "rotationMarker0",
-                                                            "rotationMarker1", "useIntrinsicFormulation",
-                                                            "springForceTorqueUserFunction")},
-        "activeConnector": (LIVE, "switches the force off and on"),
-        "markerNumbers": (FIXED, "the connected bodies"),
-        "postNewtonStepUserFunction": (REFUSED, "acts in Exudyn's discontinuous iteration, which exudyn_lie "
-                                                "replaces"),
-        "nodeNumber": (IGNORED, "data coordinates read only by postNewtonStepUserFunction, which is refused")},
-    ("marker", "BodyRigid"): {"localHT": (LIVE, _MARKER_MOVES), "localPosition": (LIVE, _MARKER_MOVES),
-                              "bodyNumber": (FIXED, "the marker's body")},
-    ("marker", "BodyPosition"): {"localPosition": (LIVE, _MARKER_MOVES), "bodyNumber": (FIXED, "the marker's body")},
-    ("marker", "NodeRigid"): {"localHT": (LIVE, _MARKER_MOVES), "nodeNumber": (FIXED, "the marker's node")},
-    ("marker", "NodePosition"): {"nodeNumber": (FIXED, "the marker's node")},
-    ("marker", "BodyMass"): {"bodyNumber": (FIXED, "the marker's body")},
-    ("load", "ForceVector"): {
-        "loadVector": (LIVE, "the force"), "bodyFixed": (LIVE, "the force's frame"),
-        "loadVectorUserFunction": _UF_LIVE, "markerNumber": (FIXED, "the loaded body")},
-    ("load", "TorqueVector"): {
-        "loadVector": (LIVE, "the torque"), "bodyFixed": (LIVE, "the torque's frame"),
-        "loadVectorUserFunction": _UF_LIVE, "markerNumber": (FIXED, "the loaded body")},
-    ("load", "MassProportional"): {
-        "loadVector": (LIVE, "with a loadVectorUserFunction (a Python item); a constant one is compiled as "
-                             "gravity, and a change stops the solve"),
-        "loadVectorUserFunction": _UF_LIVE, "markerNumber": (FIXED, "the loaded body")},
-}
 _COMMON = {"name": (IGNORED, "a label"), "objectType": (IGNORED, "the item type"),
            "nodeType": (IGNORED, "the item type"), "markerType": (IGNORED, "the item type"),
            "loadType": (IGNORED, "the item type")}
@@ -192,10 +62,9 @@ _WRAPPED = {  # MainSystem method -> kind (the item index is the first argument)
     "SetLoadParameter": "load", "ModifyObject": "object", "ModifyNode": "node", "ModifyMarker": "marker",
     "ModifyLoad": "load",
 }
-_UF_KEY = {"ConnectorSpringDamper": "springForceUserFunction",
-           "ConnectorCartesianSpringDamper": "springForceUserFunction",
-           "ConnectorTorsionalSpringDamper": "springTorqueUserFunction",
-           "ConnectorRigidBodySpringDamper": "springForceTorqueUserFunction"}
+# connectors whose user function is live (a Python item re-read during the solve)
+_UF_KEY = {it.typeName: it.userFunction for it in items.of("object", "connector")
+           if it.userFunction and it.fields.get(it.userFunction, (None,))[0] == LIVE}
 
 
 def is_visualization(key):
@@ -500,7 +369,7 @@ class ParameterWatch:
             self._python_connector(o, d, k, active, t)
             return
         m0, m1 = (int(m) for m in d["markerNumbers"])
-        rigid = t_ in ("ConnectorTorsionalSpringDamper", "ConnectorRigidBodySpringDamper")
+        rigid = items.ITEMS[("object", t_)].markers is True
         A = rd.marker(m0, what, need_rotation=rigid)
         B = rd.marker(m1, what, need_rotation=rigid)
         sd = self.solver.sim.sd

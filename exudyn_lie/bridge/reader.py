@@ -53,40 +53,28 @@ import numpy as np
 from ..mbs.compiled import joint_row_descriptors
 from ..mbs.kernel import ROW_ROT
 from ..mbs.scene import GROUND, AngleCoordinate, Scene, SceneError, frame_with_axis
-from . import pyforces
+from . import items, pyforces
 from .nodes import NODE_KINDS
 
-SUPPORTED_NODES = ("NodeRigidBodyRotVecLG", "NodeRigidBodyEP", "NodeRigidBodyRxyz", "NodeRigidBody2D", "NodePoint",
-                   "NodePoint2D", "Node1D", "NodePointGround", "NodeGenericData (data only)")
+# the lists below derive from the one registration per item type (bridge/items.py)
+SUPPORTED_NODES = tuple(it.name + (" (data only)" if it.role == "data" else "") for it in items.of("node"))
 # objects that are bodies of the scene: Exudyn object type -> the node types it accepts
-RIGID_NODE_TYPES = ("RigidBodyRotVecLG", "RigidBodyEP", "RigidBodyRxyz")
-BODY_OBJECTS = {"RigidBody": RIGID_NODE_TYPES, "RigidBody2D": ("RigidBody2D",), "MassPoint": ("Point",),
-                "MassPoint2D": ("Point2D",), "Mass1D": ("1D",), "RotationalMass1D": ("1D",)}
+BODY_OBJECTS = {it.typeName: it.nodes for it in items.of("object", "body")}
+RIGID_NODE_TYPES = BODY_OBJECTS["RigidBody"]
 # bodies whose body markers must sit on their axis (CObjectRotationalMass1D: Exudyn throws
 # for a marker or load at localPosition x, y != 0, and has no mass integral for MarkerBodyMass)
 ROTOR_BODIES = ("RotationalMass1D",)
-SUPPORTED_MARKERS = ("MarkerBodyRigid", "MarkerBodyPosition", "MarkerNodeRigid", "MarkerNodePosition",
-                     "MarkerBodyMass", "MarkerNodeCoordinate")
-POSITION_MARKERS = SUPPORTED_MARKERS[:5]        # the markers with a position (and orientation)
-SUPPORTED_LOADS = ("LoadForceVector", "LoadTorqueVector", "LoadMassProportional", "LoadCoordinate")
+SUPPORTED_MARKERS = items.supported_names("marker")
+POSITION_MARKERS = tuple(it.name for it in items.of("marker", "position"))   # markers with a position
+SUPPORTED_LOADS = items.supported_names("load")
 
-JOINT_TYPES = ("JointSpherical", "JointRevoluteZ", "JointPrismaticX", "JointGeneric", "JointRevolute2D",
-               "JointPrismatic2D", "ConnectorCoordinate", "ConnectorDistance", "JointRollingDisc")
+JOINT_TYPES = tuple(it.typeName for it in items.of("object", "joint"))
 # joints with a reader of their own (the others: read_joint): Exudyn object type -> reader method
-JOINT_READERS = {"ConnectorCoordinate": "read_coordinate_constraint", "ConnectorDistance": "read_distance_constraint",
-                 "JointRollingDisc": "read_rolling_disc"}
-# connectors: Exudyn object type -> (reader method of _Reader, markers need an orientation);
-# the one list of the connectors the bridge reads
-CONNECTOR_READERS = {
-    "ConnectorSpringDamper": ("read_spring_damper", False),
-    "ConnectorCartesianSpringDamper": ("read_cartesian_spring_damper", False),
-    "ConnectorRigidBodySpringDamper": ("read_rigid_body_spring_damper", True),
-    "ConnectorTorsionalSpringDamper": ("read_torsional_spring_damper", True),
-    "ConnectorCoordinateSpringDamper": ("read_coordinate_spring_damper", "coordinate"),
-    "ConnectorLinearSpringDamper": ("read_linear_spring_damper", True),
-}
+JOINT_READERS = {it.typeName: it.reader for it in items.of("object", "joint") if it.reader}
+# connectors: Exudyn object type -> (reader method of _Reader, markers need an orientation)
+CONNECTOR_READERS = {it.typeName: (it.reader, it.markers) for it in items.of("object", "connector")}
 CONNECTOR_TYPES = tuple(CONNECTOR_READERS)
-SUPPORTED_OBJECTS = ("ObjectGround",) + tuple("Object" + t for t in BODY_OBJECTS) + tuple("Object" + t for t in JOINT_TYPES + CONNECTOR_TYPES)
+SUPPORTED_OBJECTS = items.supported_names("object")
 
 
 @dataclass
@@ -347,7 +335,7 @@ class _Reader:
                                       f"is not supported by exudyn_lie (it keeps the Euler parameters on the unit "
                                       f"sphere itself); use the default addConstraintEquation=True")
                 byKind.setdefault(t, []).append(n)
-            elif t in ("PointGround", "GenericData"):
+            elif ("node", t) in items.ITEMS:        # ground and data nodes: no body
                 continue
             else:
                 self.badNodes.append((n, d.get("name", ""), t))

@@ -76,7 +76,9 @@ def from_matrix(C):
 @njit(cache=True)
 def exp_into(X, R, r):
     """R[:], r[:] = exp(X) (eq. expSO3xR3), no allocation."""
-    so3.exp_into(X, R)      # reads X[0:3] only
+    # the rotation part as a slice: the kernel's exp_compose (mbs/bodies.py) runs this
+    # specialisation of so3.exp_into, whose fused multiply-adds fix the bits of every SO3xR3 run
+    so3.exp_into(X[0:3], R)
     r[0] = X[3]
     r[1] = X[4]
     r[2] = X[5]
@@ -118,7 +120,7 @@ def dexp_apply_into(X, Y, out):
 @njit(cache=True)
 def dexpinv_apply_into(X, Y, out):
     """out[:] = dexpinv_X @ Y; out may alias Y."""
-    so3.dexpinv_apply_into(X, Y, out)
+    so3.dexpinv_apply_into(X[0:3], Y[0:3], out[0:3])      # (slices: as exp_into)
     out[3] = Y[3]
     out[4] = Y[4]
     out[5] = Y[5]

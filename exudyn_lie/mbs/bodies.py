@@ -20,12 +20,14 @@ velocity-product ("bias") term is ``beta = R (omega x (omega x s)) (+ R (omega x
 Every group-dependent operation of the kernel is a function here with one dispatch on
 ``gid``: the body point map, the generalised force of a point force, ``M^-1`` in the
 body's velocity coordinates, the configuration update ``g exp(X)`` and the MK stage map
-``dexp^-1``.
+``dexp^-1``.  The last two are generated from the registry ``groups.GROUPS`` (below): a new
+group needs no branch here; the velocity-representation maps branch on its ``TWIST``.
 """
 from numba import njit
 
-from ..groups import se2, se3, so2xr2, so3
-from .codes import uses_body_twist, GID_R3, GID_SE2, GID_SE3, GID_SO3xR3
+from ..groups import GROUPS
+from ..groups.interface import algebra_axes
+from .codes import uses_body_twist, GID_R3, GID_SE3
 
 
 # --------------------------------------------------------------------------- small vector helpers
@@ -201,56 +203,88 @@ def apply_minv(gid, Minv, R, x, out, tmp):
 
 
 
-@njit(cache=True, _nrt=False)
-def exp_compose(gid, R, r, X, Rout, rout, ER, Er):
-    """``(Rout, rout) = (R, r) exp(X)`` in the body's group (eqs. expX / expSO3xR3, and
-    their planar restrictions)."""
-    if gid == GID_R3:
-        # the abelian R^3 (groups/rn.py): r + X_trans; R = I is kept
-        for i in range(3):
-            rout[i] = r[i] + X[3 + i]
-            for j in range(3):
-                Rout[i, j] = R[i, j]
-        return
-    if uses_body_twist(gid):
-        if gid == GID_SE3:
-            se3.exp_into(X, ER, Er)
-        else:
-            se2.exp_into(X, ER, Er)
-        for i in range(3):
-            rout[i] = r[i] + R[i, 0] * Er[0] + R[i, 1] * Er[1] + R[i, 2] * Er[2]
-    else:
-        if gid == GID_SO3xR3:
-            so3.exp_into(X[0:3], ER)
-        else:
-            so2xr2.exp_into(X, ER, Er)
-        for i in range(3):
-            rout[i] = r[i] + X[3 + i]
+# --------------------------------------------------------------------------- group maps
+# ``exp_compose`` and ``body_dexpinv_stage`` dispatch on the group id with one branch per
+# entry of the registry exudyn_lie.groups.GROUPS, generated below when this module is
+# imported: numba needs static calls, and a new group then needs its module and its registry
+# line only.  Each branch calls the group's own ``exp_into`` / ``dexpinv_apply_into`` (the
+# interface of groups/interface.py) and composes by the group's declared constants: ``TWIST``
+# (body: ``r + R Er``, mixed: ``r + Er``) and ``ALGEBRA_AXES`` (no rotation axis, as R3:
+# ``R`` is kept, exactly).  The generated source is compiled with this file's name, so numba
+# caches it like the rest of the module; its cache key (exudyn_lie._numba_cache) hashes every
+# solver module, groups/__init__.py (the registry) and this template included.
+
+@njit(cache=True, inline="always", _nrt=False)
+def compose_body_twist(R, r, ER, Er, Rout, rout):
+    """``(Rout, rout) = (R, r)(ER, Er) = (R ER, r + R Er)`` (eq. MultSE3: body twists)."""
+    for i in range(3):
+        rout[i] = r[i] + R[i, 0] * Er[0] + R[i, 1] * Er[1] + R[i, 2] * Er[2]
     for i in range(3):
         for j in range(3):
             Rout[i, j] = R[i, 0] * ER[0, j] + R[i, 1] * ER[1, j] + R[i, 2] * ER[2, j]
 
 
 @njit(cache=True, inline="always", _nrt=False)
-def body_dexpinv_stage(gid, X, Y, out):
-    """``out = dexp^-1_X Y`` in the body's group (the MK stage map, eq. MK1, with
-    ``X = -Psi_j``): SE3 the full 6x6 map; SO3xR3 SO3's on the rotation part, the
-    identity on the translation (the R3 factor is abelian); SE2 the planar closed form;
-    SO2xR2 the identity (abelian)."""
-    if gid == GID_SE3:
-        se3.dexpinv_apply_into(X, Y, out)
-    elif gid == GID_R3:
-        for k in range(6):          # abelian: dexpinv = identity
-            out[k] = Y[k]
-    elif gid == GID_SO3xR3:
-        so3.dexpinv_apply_into(X[0:3], Y[0:3], out[0:3])
-        for k in range(3):
-            out[3 + k] = Y[3 + k]
-    elif gid == GID_SE2:
-        se2.dexpinv_apply_into(X, Y, out)
-    else:
-        for k in range(6):          # SO(2) x R^2 is abelian: dexpinv = I
-            out[k] = Y[k]
+def compose_mixed(R, r, ER, Er, Rout, rout):
+    """``(Rout, rout) = (R ER, r + Er)`` (eq. MultDirectProduct: mixed velocities)."""
+    for i in range(3):
+        rout[i] = r[i] + Er[i]
+    for i in range(3):
+        for j in range(3):
+            Rout[i, j] = R[i, 0] * ER[0, j] + R[i, 1] * ER[1, j] + R[i, 2] * ER[2, j]
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def compose_translation(R, r, ER, Er, Rout, rout):
+    """``(Rout, rout) = (R, r + Er)``: a group without rotation axes (R3) keeps ``R``."""
+    for i in range(3):
+        rout[i] = r[i] + Er[i]
+        for j in range(3):
+            Rout[i, j] = R[i, j]
+
+
+def composition_of(module):
+    """The composition of ``(R, r)`` with an element of the group ``module``, by its
+    declared constants (see above)."""
+    if not any(a < 3 for a in algebra_axes(module)):
+        return "compose_translation"
+    return "compose_body_twist" if module.TWIST == "body" else "compose_mixed"
+
+
+def _generated_dispatch(name, params, branch, doc):
+    """An njit function ``name(gid, params)`` with one ``if gid == k:`` branch per registered
+    group (``branch(k, module)``: its source lines), compiled as part of this file."""
+    lines = [f"def {name}(gid, {params}):"]
+    env = {"compose_body_twist": compose_body_twist, "compose_mixed": compose_mixed,
+           "compose_translation": compose_translation}
+    for k, module in enumerate(GROUPS.values()):
+        env[f"group{k}_exp_into"] = module.exp_into
+        env[f"group{k}_dexpinv_apply_into"] = module.dexpinv_apply_into
+        lines.append(f"    if gid == {k}:")
+        lines += ["        " + x for x in branch(k, module)]
+        lines.append("        return")
+    exec(compile("\n".join(lines) + "\n", __file__, "exec"), env)
+    fn = env[name]
+    fn.__doc__ = doc
+    fn.__module__ = __name__
+    return fn
+
+
+_EXP_COMPOSE_DOC = """``(Rout, rout) = (R, r) exp(X)`` in the body's group (eqs. expX / expSO3xR3, and
+their planar restrictions); ``ER, Er`` are scratch for ``exp(X)``."""
+_DEXPINV_DOC = """``out = dexp^-1_X Y`` in the body's group (the MK stage map, eq. MK1, with
+``X = -Psi_j``): the group's ``dexpinv_apply_into`` (SE3 the full 6x6 map; SO3xR3 SO3's on
+the rotation part, the identity on the translation; SE2 the planar closed form; the abelian
+R3 and SO2xR2 the identity)."""
+
+
+exp_compose = njit(cache=True, _nrt=False)(_generated_dispatch(
+    "exp_compose", "R, r, X, Rout, rout, ER, Er",
+    lambda k, G: [f"group{k}_exp_into(X, ER, Er)", f"{composition_of(G)}(R, r, ER, Er, Rout, rout)"],
+    _EXP_COMPOSE_DOC))
+
+body_dexpinv_stage = njit(cache=True, inline="always", _nrt=False)(_generated_dispatch(
+    "body_dexpinv_stage", "X, Y, out", lambda k, G: [f"group{k}_dexpinv_apply_into(X, Y, out)"], _DEXPINV_DOC))
 
 
 @njit(cache=True, inline="always", _nrt=False)

@@ -1,11 +1,14 @@
-"""Adaptive Munthe-Kaas steps with error control on the group, compiled (issue 18).
+"""The adaptive step controller of the one stepper, compiled (issue 18).
 
-The adaptive kind of the stepper's controller seam (:mod:`.stepper`): the same stage
-functions (``mk_stage_state``, ``stage_rhs``, ``mk_stage_k``, ``mk_finish``; eq. MK1),
-driven by the PI controller, HINIT and the Lie-algebra error norm of
-:mod:`~exudyn_lie.integrators.control`.  It is a loop of its own, so the fixed-step loop
-``stepper.mk_steps`` is untouched (not one instruction more per fixed step, and the
-paper's fixed-step runs stay bit-identical); ``integrators/mk_adaptive.py`` is its oracle.
+``AdaptiveControl`` is a controller of :func:`~.stepper.mk_steps`'s seam: this module registers
+its overloads of the seam functions (``stepper.step_begin``, ``control_step``, ...), so that
+``mk_steps(sd, wk, adaptive_method(tab), AdaptiveControl(...), ...)`` runs adaptive steps
+with the same stage loop (``mk_stage_state``, ``stage_rhs``, ``mk_stage_k``, ``mk_finish``;
+eq. MK1) as the fixed steps, driven by the PI controller, HINIT and the Lie-algebra error norm
+of :mod:`~exudyn_lie.integrators.control`.  The fixed steps' specialisation of ``mk_steps``
+holds none of this code (the overloads are chosen by the controller's type at compile time),
+so the paper's fixed-step runs stay bit-identical; ``integrators/mk_adaptive.py`` is its
+oracle.
 
 One attempt from ``(t, g, V)`` with step ``h`` (eq. MK1 per body)::
 
@@ -29,7 +32,8 @@ One attempt from ``(t, g, V)`` with step ``h`` (eq. MK1 per body)::
   are evaluated only in steps with an output inside them.
 
 State kept between calls (so a caller may take outputs a chunk at a time): the float array
-``fs`` (``FS_T`` time, ``FS_H`` next step, ``FS_TPREV``/``FS_HPREV`` the last accepted step)
+``fs`` (``FS_T`` time, ``FS_H`` next step, ``FS_TPREV``/``FS_HPREV`` the last accepted step,
+``FS_TEND`` the end time of the call)
 and the int array ``ist`` (``IS_HAVE0``: stage 1 available, ``IS_EXTRA``: extra stages of the
 last step evaluated, ``IS_VALID``: the last step's dense data valid).  The last accepted
 step's start state stays in ``R0, r0, V0`` and its stages in ``wk.K, wk.Vd``.
@@ -38,22 +42,31 @@ from collections import namedtuple
 
 import numpy as np
 from numba import njit
+from numba.extending import overload
 
 from ..integrators import control as C
 from .bodies import exp_compose
 from .codes import STAB_NONE, STATUS_OK, STATUS_STEP_MIN
-from .forces import update_torsion_tracking
 from .projection import CT_N_PROJ, CT_POS, enforce_constraint_tolerance, project_error_estimate, project_state
 from .rotation_parameters import tracked_at
-from .stepper import (copy_state, mk_finish, mk_stage_k, mk_stage_state, needed_stages, stage_rhs, state_is_finite,
-                      watch_rotation_entries)
+from . import stepper
+from .stepper import (ACT_ACCEPT, ACT_RETRY, ACT_STOP, controller_is, copy_state, mk_stage_k, mk_stage_state,
+                      needed_stages, stage_rhs)
 
 # A tableau as the adaptive loop uses it: the stage matrix and nodes extended by the dense
 # extra stages, b (s), the stages of a step (b or bhat needs them), e = b - bhat, the dense
 # polynomial coefficients (s + m, degree), the number s of stages of a step, FSAL flag.
 AdaptiveMethod = namedtuple("AdaptiveMethod", ["A", "b", "c", "stages", "e", "P", "s", "fsal"])
 
-FS_T, FS_H, FS_TPREV, FS_HPREV = range(4)
+# The controller's state (one tuple: its type selects the adaptive code of stepper.mk_steps):
+# the controller's parameters and counters (integrators/control.py ``par``, ``S``), the
+# tolerances, the constraint tolerance (projection.CT_*), ``fs`` / ``ist`` (below), the
+# start of the last step ``R0, r0, V0``, scratch ``dPhi, dV, w``, the output times ``tout``.
+AdaptiveControl = namedtuple("AdaptiveControl", ["par", "S", "tol", "ctol", "fs", "ist", "R0", "r0", "V0", "dPhi",
+                                                 "dV", "w", "tout"])
+
+FS_T, FS_H, FS_TPREV, FS_HPREV, FS_TEND = range(5)
+FS_SIZE = 5
 IS_HAVE0, IS_EXTRA, IS_VALID = range(3)
 HAVE0_NONE, HAVE0_STAGE1, HAVE0_FSAL = 0, 1, 2
 
@@ -153,94 +166,155 @@ def serve_outputs(sd, wk, am, ctol, fs, ist, R0, r0, V0, R, r, V, S, tout, k, Ro
     return STATUS_OK, k
 
 
-@njit(cache=True, _nrt=False)
-def mk_adaptive_steps(sd, wk, am, par, S, tol, ctol, fs, ist, tEnd, R, r, V, R0, r0, V0, dPhi, dV, w, vmax,
-                      tout, Ro, ro, Vo, Po):
-    """Adaptive MK steps from ``fs[FS_T]`` with the next step ``fs[FS_H]`` until ``tEnd``, or
-    until every output time ``tout`` (sorted, at most tEnd) is written to ``Ro, ro, Vo``.
-    ``ctol`` (:mod:`.projection`, ``CT_*``): with a constraint tolerance (``ctol[CT_POS] > 0``)
-    the error estimate is projected onto the constraint manifold's tangent space and an
-    accepted state whose drift exceeds the tolerance is projected on the group.
-    Returns (status, outputs written).  On a failure (R, r, V) hold the last accepted step."""
-    A, c, stages, s = am.A, am.c, am.stages, am.s
-    ns = stages.shape[0]
-    nt = tout.shape[0]
-    st, k = serve_outputs(sd, wk, am, ctol, fs, ist, R0, r0, V0, R, r, V, S, tout, 0, Ro, ro, Vo, Po, w)
-    if st != STATUS_OK:
-        return st, k
-    eps4 = 4.0 * 2.220446049250313e-16 * abs(tEnd)
-    while fs[FS_T] < tEnd and not (nt > 0 and k >= nt):
-        t = fs[FS_T]
-        h = fs[FS_H]
-        last = t + h >= tEnd - eps4                 # no sliver step before the end time
-        htry = tEnd - t if last else h
-        if ist[IS_HAVE0] == HAVE0_FSAL:             # the previous step's last stage is stage 1
-            for i in range(V.shape[0]):
-                for q in range(6):
-                    wk.Vd[0, i, q] = wk.Vd[s - 1, i, q]
-            ist[IS_HAVE0] = HAVE0_STAGE1
-        copy_state(R, r, V, R0, r0, V0)
-        ist[IS_VALID] = 0                           # K, Vd and R0 now belong to this attempt
-        ok = True
-        for jj in range(ns):
-            j = stages[jj]
-            st = mk_stage_state(sd, wk, A, j, htry, R, r, V)
-            if st != STATUS_OK:                     # stage argument beyond STAGE_ARG_MAX
-                ok = False
-                break
-            if not (j == 0 and ist[IS_HAVE0] == HAVE0_STAGE1):
-                st = stage_rhs(sd, wk, t + c[j] * htry, wk.Vd[j])
-                S[C.S_N_RHS] += 1.0
-                if st != STATUS_OK:
-                    return st, k
-                if j == 0:
-                    ist[IS_HAVE0] = HAVE0_STAGE1
-            mk_stage_k(sd, wk, j)
-        err = np.inf
-        if ok:
-            mk_finish(sd, wk, am, htry, R, r, V)
-            if state_is_finite(sd.gid, R, r, V, vmax) == STATUS_OK:
-                if ctol[CT_POS] > 0.0:              # drift is the constraint tolerance's business
-                    C.increment_difference(am.e, htry, wk.K[:s], wk.Vd[:s], dPhi, dV)
-                    st = project_error_estimate(sd, wk, R, r, V, dPhi, dV)
-                    if st != STATUS_OK:
-                        copy_state(R0, r0, V0, R, r, V)
-                        return st, k
-                    err = C.weighted_rms(dPhi, dV, r0, r, V0, V, tol)
-                else:
-                    err = C.embedded_error_norm(am.e, htry, wk.K[:s], wk.Vd[:s], r0, r, V0, V, tol, dPhi, dV)
-        status = C.control_step(par, S, htry, err)
-        if status != C.STATUS_ACCEPT:
-            copy_state(R0, r0, V0, R, r, V)         # stage 1 stays valid (same state and time)
-            if status == C.STATUS_H_MIN or S[C.S_H] <= 1e-14 * max(1.0, abs(t)):
-                fs[FS_H] = S[C.S_H]
-                return STATUS_STEP_MIN, k
-            fs[FS_H] = S[C.S_H]
-            continue
-        projected = False
-        st = STATUS_OK
-        if sd.stabilization != STAB_NONE:
-            st = project_state(sd, wk, sd.stabilization, R, r, V)
-            projected = True
-        elif ctol[CT_POS] > 0.0:
-            st, projected = enforce_constraint_tolerance(sd, wk, ctol, R, r, V)
-            if projected:
-                ctol[CT_N_PROJ] += 1.0
-        if st != STATUS_OK:
-            copy_state(R0, r0, V0, R, r, V)
-            return st, k
-        update_torsion_tracking(sd, wk, R, r, V)
-        if wk.watchBody.shape[0] > 0:
-            watch_rotation_entries(wk.watchBody, wk.watchEntry, wk.watchMax, R)
-        fs[FS_TPREV] = t
-        fs[FS_HPREV] = htry
-        fs[FS_T] = tEnd if last else t + htry
+# --------------------------------------------------------------------------- the controller
+# (inlined into mk_steps' adaptive specialisation: a compiled function of its own that receives
+# the SceneData / Work tuples costs compile time steeply, measured 77 -> 102 s cold)
+@njit(cache=True, inline="always", _nrt=False)
+def _last_step(t, h, tEnd):
+    """The step from ``t`` is the last one (no sliver step before the end time)."""
+    return t + h >= tEnd - 4.0 * 2.220446049250313e-16 * abs(tEnd)
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def adaptive_start(sd, wk, am, ctl, R, r, V, Ro, ro, Vo, Po):
+    """The outputs at or before the current time (a chunk served by the previous call's step)."""
+    return serve_outputs(sd, wk, am, ctl.ctol, ctl.fs, ctl.ist, ctl.R0, ctl.r0, ctl.V0, R, r, V, ctl.S, ctl.tout, 0,
+                         Ro, ro, Vo, Po, ctl.w)
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def adaptive_step_begin(wk, am, ctl, R, r, V, k):
+    """``(go on, t, h)``: stop at the end time or when every output is written; else the
+    FSAL stage becomes stage 1, the start state is kept in ``R0, r0, V0`` (for a rejection
+    and the dense output) and the last step is clipped to the end time."""
+    fs, ist = ctl.fs, ctl.ist
+    tEnd = fs[FS_TEND]
+    nt = ctl.tout.shape[0]
+    if not (fs[FS_T] < tEnd and not (nt > 0 and k >= nt)):
+        return False, 0.0, 0.0
+    t = fs[FS_T]
+    h = fs[FS_H]
+    htry = tEnd - t if _last_step(t, h, tEnd) else h
+    if ist[IS_HAVE0] == HAVE0_FSAL:             # the previous step's last stage is stage 1
+        s = am.s
+        for i in range(V.shape[0]):
+            for q in range(6):
+                wk.Vd[0, i, q] = wk.Vd[s - 1, i, q]
+        ist[IS_HAVE0] = HAVE0_STAGE1
+    copy_state(R, r, V, ctl.R0, ctl.r0, ctl.V0)
+    ist[IS_VALID] = 0                           # K, Vd and R0 now belong to this attempt
+    return True, t, htry
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def adaptive_control(sd, wk, am, ctl, R, r, V, htry, ok, st, t):
+    """Error estimate (module docstring; projected with a constraint tolerance), the PI
+    controller's verdict, a rejection undone from ``R0, r0, V0`` (``STATUS_STEP_MIN`` below
+    the minimum step), and for an accepted step the projection (stabilisation, or the
+    constraint tolerance) and whether its last stage serves the next step (FSAL)."""
+    s = am.s
+    par, S, tol, ctol, fs, ist = ctl.par, ctl.S, ctl.tol, ctl.ctol, ctl.fs, ctl.ist
+    R0, r0, V0, dPhi, dV = ctl.R0, ctl.r0, ctl.V0, ctl.dPhi, ctl.dV
+    err = np.inf                                # a stage argument or a state out of bounds: reject
+    if ok and st == STATUS_OK:
+        if ctol[CT_POS] > 0.0:                  # drift is the constraint tolerance's business
+            C.increment_difference(am.e, htry, wk.K[:s], wk.Vd[:s], dPhi, dV)
+            st = project_error_estimate(sd, wk, R, r, V, dPhi, dV)
+            if st != STATUS_OK:
+                copy_state(R0, r0, V0, R, r, V)
+                return ACT_STOP, st
+            err = C.weighted_rms(dPhi, dV, r0, r, V0, V, tol)
+        else:
+            err = C.embedded_error_norm(am.e, htry, wk.K[:s], wk.Vd[:s], r0, r, V0, V, tol, dPhi, dV)
+    status = C.control_step(par, S, htry, err)
+    if status != C.STATUS_ACCEPT:
+        copy_state(R0, r0, V0, R, r, V)         # stage 1 stays valid (same state and time)
         fs[FS_H] = S[C.S_H]
-        ist[IS_VALID] = 1
-        ist[IS_EXTRA] = 0
-        # FSAL: the last stage was evaluated at the step's end (not after a projection)
-        ist[IS_HAVE0] = HAVE0_FSAL if (am.fsal and not projected) else HAVE0_NONE
-        st, k = serve_outputs(sd, wk, am, ctol, fs, ist, R0, r0, V0, R, r, V, S, tout, k, Ro, ro, Vo, Po, w)
-        if st != STATUS_OK:
-            return st, k
-    return STATUS_OK, k
+        if status == C.STATUS_H_MIN or S[C.S_H] <= 1e-14 * max(1.0, abs(t)):
+            return ACT_STOP, STATUS_STEP_MIN
+        return ACT_RETRY, STATUS_OK
+    projected = False
+    st = STATUS_OK
+    if sd.stabilization != STAB_NONE:
+        st = project_state(sd, wk, sd.stabilization, R, r, V)
+        projected = True
+    elif ctol[CT_POS] > 0.0:
+        st, projected = enforce_constraint_tolerance(sd, wk, ctol, R, r, V)
+        if projected:
+            ctol[CT_N_PROJ] += 1.0
+    if st != STATUS_OK:
+        copy_state(R0, r0, V0, R, r, V)
+        return ACT_STOP, st
+    # FSAL: the last stage was evaluated at the step's end (not after a projection)
+    ist[IS_HAVE0] = HAVE0_FSAL if (am.fsal and not projected) else HAVE0_NONE
+    return ACT_ACCEPT, STATUS_OK
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def adaptive_step_accepted(sd, wk, am, ctl, R, r, V, t, htry, Ro, ro, Vo, Po, k):
+    """The accepted step ``(t, t + htry]`` becomes the last step (its dense data valid) and
+    serves the outputs inside it."""
+    fs, ist = ctl.fs, ctl.ist
+    tEnd = fs[FS_TEND]
+    last = _last_step(t, fs[FS_H], tEnd)
+    fs[FS_TPREV] = t
+    fs[FS_HPREV] = htry
+    fs[FS_T] = tEnd if last else t + htry
+    fs[FS_H] = ctl.S[C.S_H]
+    ist[IS_VALID] = 1
+    ist[IS_EXTRA] = 0
+    return serve_outputs(sd, wk, am, ctl.ctol, fs, ist, ctl.R0, ctl.r0, ctl.V0, R, r, V, ctl.S, ctl.tout, k, Ro, ro,
+                         Vo, Po, ctl.w)
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def adaptive_stage_evaluated(ctl, j, st):
+    ctl.S[C.S_N_RHS] += 1.0
+    if j == 0 and st == STATUS_OK:
+        ctl.ist[IS_HAVE0] = HAVE0_STAGE1
+
+
+# the seam functions of stepper.mk_steps for this controller
+@overload(stepper.is_adaptive, inline="always")
+def _is_adaptive(ctl):
+    if controller_is(ctl, AdaptiveControl):
+        return lambda ctl: True
+
+
+@overload(stepper.controller_start, inline="always")
+def _controller_start(sd, wk, tab, ctl, R, r, V, Ro, ro, Vo, Po):
+    if controller_is(ctl, AdaptiveControl):
+        return lambda sd, wk, tab, ctl, R, r, V, Ro, ro, Vo, Po: adaptive_start(sd, wk, tab, ctl, R, r, V, Ro, ro,
+                                                                                 Vo, Po)
+
+
+@overload(stepper.step_begin, inline="always")
+def _step_begin(wk, tab, ctl, R, r, V, n):
+    if controller_is(ctl, AdaptiveControl):
+        return lambda wk, tab, ctl, R, r, V, n: adaptive_step_begin(wk, tab, ctl, R, r, V, n)
+
+
+@overload(stepper.stage_needed, inline="always")
+def _stage_needed(ctl, j):
+    if controller_is(ctl, AdaptiveControl):
+        return lambda ctl, j: not (j == 0 and ctl.ist[IS_HAVE0] == HAVE0_STAGE1)
+
+
+@overload(stepper.stage_evaluated, inline="always")
+def _stage_evaluated(ctl, j, st):
+    if controller_is(ctl, AdaptiveControl):
+        return lambda ctl, j, st: adaptive_stage_evaluated(ctl, j, st)
+
+
+@overload(stepper.control_step, inline="always")
+def _control_step(sd, wk, tab, ctl, R, r, V, h, ok, st, t):
+    if controller_is(ctl, AdaptiveControl):
+        return lambda sd, wk, tab, ctl, R, r, V, h, ok, st, t: adaptive_control(sd, wk, tab, ctl, R, r, V, h, ok, st,
+                                                                                 t)
+
+
+@overload(stepper.step_accepted, inline="always")
+def _step_accepted(sd, wk, tab, ctl, R, r, V, t, h, Ro, ro, Vo, Po, n):
+    if controller_is(ctl, AdaptiveControl):
+        return lambda sd, wk, tab, ctl, R, r, V, t, h, Ro, ro, Vo, Po, n: adaptive_step_accepted(
+            sd, wk, tab, ctl, R, r, V, t, h, Ro, ro, Vo, Po, n)

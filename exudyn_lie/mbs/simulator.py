@@ -712,7 +712,7 @@ class Simulator:
             am=am, tol=_control.tolerances(atol, rtol, lengthScale, timeScale),
             par=_control.controller_params(tab.order_hat, safety=safety, fac_max=maxIncrease, h_min=minStep,
                                            h_max=maxStep),
-            S=_control.controller_state(), fs=np.zeros(4), ist=np.zeros(3, np.int64),
+            S=_control.controller_state(), fs=np.zeros(_adaptive.FS_SIZE), ist=np.zeros(3, np.int64),
             R0=np.zeros((nb, 3, 3)), r0=np.zeros((nb, 3)), V0=np.zeros((nb, 6)),
             dPhi=np.zeros((nb, 6)), dV=np.zeros((nb, 6)), w=np.zeros(am.A.shape[0]),
             firstStep=firstStep, started=False, rtol=rtol, atol=atol, ctol=ctol)
@@ -800,15 +800,19 @@ class Simulator:
             self._adaptive_start(ad)
         if not hasattr(self, "_vmaxValue"):
             self._vmaxValue = self._vmax()
-        args = (self.sd, self.wk, ad["am"], ad["par"], ad["S"], ad["tol"], ad["ctol"], ad["fs"], ad["ist"], tEnd,
-                self.R, self.r, self.V, ad["R0"], ad["r0"], ad["V0"], ad["dPhi"], ad["dV"], ad["w"],
-                float(self._vmaxValue), tout, Ro, ro, Vo, np.zeros((0, self.sd.nb, 4)) if Po is None else Po)
+        ad["fs"][_adaptive.FS_TEND] = tEnd
+        ctl = _adaptive.AdaptiveControl(ad["par"], ad["S"], ad["tol"], ad["ctol"], ad["fs"], ad["ist"], ad["R0"],
+                                        ad["r0"], ad["V0"], ad["dPhi"], ad["dV"], ad["w"], tout)
+        noOut = self.NoOutputs()
+        # the one stepper with the adaptive controller (t0, h, nsteps, every unused; no accelerations)
+        args = (self.sd, self.wk, ad["am"], ctl, 0.0, 0.0, 0, self.R, self.r, self.V, float(self._vmaxValue), 0, Ro,
+                ro, Vo, np.zeros((0, self.sd.nb, 4)) if Po is None else Po, noOut[5], noOut[6])
         ep = ad.get("entry")
         if ep is None:                  # resolved once per argument structure (mbs/entry.py)
-            ep = entry_point(_adaptive.mk_adaptive_steps, args)
+            ep = entry_point(kernel.mk_steps, args)
             if ep is None:
-                st, k = _adaptive.mk_adaptive_steps(*args)
-                ad["entry"] = entry_point(_adaptive.mk_adaptive_steps, args) or _adaptive.mk_adaptive_steps
+                st, k = kernel.mk_steps(*args)
+                ad["entry"] = entry_point(kernel.mk_steps, args) or kernel.mk_steps
             else:
                 ad["entry"] = ep
                 st, k = ep(*args)

@@ -24,20 +24,23 @@ Two seams:
   ``sd.hasQext`` the stage calls the registered Python evaluator once (numba
   ``objmode``), which fills the extra generalised forces ``wk.Qext`` at the stage state;
   no Python stage loop.  An exception there ends the call with ``STATUS_EXTERNAL``.
-* the **step controller** (:class:`Control`): after each step ``control_step`` decides
-  to accept it and the next step size from an error estimate.  ``CONTROL_FIXED`` (the
-  only kind today) accepts every step with the same ``h`` and skips the estimate.  An
-  adaptive controller (issue 18) adds a kind: ``error_estimate`` from ``tab.bhat``
-  (the embedded increment ``h sum (b_j - bhat_j) k_j`` per body in the algebra, no
-  chart), its PI state in ``ctl.state``; a rejected step is undone from the backup
-  ``wk.Rb/rb/Vb`` that the loop keeps anyway, and FSAL / dense output use the stage
-  arrays ``wk.K``, ``wk.Vd``, which hold the accepted step's stages until the next
-  step starts (where ``record`` writes outputs).
+* the **step controller** (``ctl``): a namedtuple whose *type* is the controller.
+  ``Control`` with ``CONTROL_FIXED`` (:func:`fixed_step_control`): fixed steps, every step
+  accepted.  ``adaptive.AdaptiveControl``: adaptive steps (:mod:`.adaptive`, docs/ADAPTIVE.md):
+  error estimate from ``tab``'s embedded weights, PI control, rejections undone from the
+  step's start, FSAL, dense output at the output times.  ``mk_steps`` is compiled once per
+  controller type, and the seam functions below (:func:`is_adaptive`, :func:`controller_start`,
+  :func:`step_begin`, :func:`stage_needed`, :func:`stage_evaluated`, :func:`control_step`,
+  :func:`step_accepted`) are numba overloads chosen by that type at compile time: the
+  fixed-step specialisation holds none of the adaptive controller's code (same speed and
+  compile time as a loop of its own), and a controller is its tuple type plus its overloads
+  of these functions (the adaptive one registers them in :mod:`.adaptive`).
 """
 from collections import namedtuple
 
 import numpy as np
-from numba import njit, objmode
+from numba import njit, objmode, types
+from numba.extending import overload
 
 from . import external
 from .bodies import body_dexpinv_stage, body_world_velocity, exp_compose, add_point_force_origin, add_world_torque_row
@@ -231,18 +234,90 @@ def stage_rhs(sd, wk, t, Vdot):
     return rhs(sd, wk, t, wk.Rs, wk.rs, wk.Vs, wk.Qext, Vdot)
 
 
-# --------------------------------------------------------------------------- the step controller
-@njit(cache=True, inline="always", _nrt=False)
-def error_estimate(ctl, tab, wk, h):
-    """Error of the accepted candidate for an adaptive controller (none for fixed steps)."""
-    return 0.0
+# --------------------------------------------------------------------------- the step controller seam
+# Python stubs: the implementations are numba overloads, one per controller type (the
+# fixed steps' below, the adaptive controller's in mbs/adaptive.py).  The fixed ones are
+# never reached (mk_steps branches on the compile-time constant is_adaptive) but type the
+# dead branch.
+ACT_RETRY, ACT_ACCEPT, ACT_STOP = 0, 1, 2      # control_step's verdict on an attempted step
 
 
-@njit(cache=True, inline="always", _nrt=False)
-def control_step(ctl, err, h):
-    """``(accept, next h)`` after a step of size ``h`` with error estimate ``err``.
-    CONTROL_FIXED: every step accepted, the step size kept."""
-    return True, h
+def controller_is(ctl, cls):
+    """At compile time: ``ctl`` (a numba type) is the namedtuple type ``cls``."""
+    return isinstance(ctl, types.BaseNamedTuple) and ctl.instance_class is cls
+
+
+def is_adaptive(ctl):
+    """True if the controller varies the step (a compile-time constant)."""
+
+
+def controller_start(sd, wk, tab, ctl, R, r, V, Ro, ro, Vo, Po):
+    """Outputs due before the first step: ``(status, outputs written)``."""
+
+
+def step_begin(wk, tab, ctl, R, r, V, n):
+    """``(go on, t, h)`` of the next attempted step (``n``: outputs written so far)."""
+
+
+def stage_needed(ctl, j):
+    """False if stage ``j`` is already evaluated (stage 1 reused: FSAL, or after a rejection)."""
+
+
+def stage_evaluated(ctl, j, st):
+    """Bookkeeping after the evaluation of stage ``j`` with status ``st``."""
+
+
+def control_step(sd, wk, tab, ctl, R, r, V, h, ok, st, t):
+    """The verdict on the attempted step of size ``h`` from ``t`` (``ok``: every stage
+    evaluated; ``st``: the state check): ``(ACT_*, status)``; a retried or stopped step is
+    undone."""
+
+
+def step_accepted(sd, wk, tab, ctl, R, r, V, t, h, Ro, ro, Vo, Po, n):
+    """After an accepted step: the controller's state and the outputs it covers,
+    ``(status, outputs written)``."""
+
+
+@overload(is_adaptive, inline="always")
+def _fixed_is_adaptive(ctl):
+    if controller_is(ctl, Control):
+        return lambda ctl: False
+
+
+@overload(controller_start, inline="always")
+def _fixed_controller_start(sd, wk, tab, ctl, R, r, V, Ro, ro, Vo, Po):
+    if controller_is(ctl, Control):
+        return lambda sd, wk, tab, ctl, R, r, V, Ro, ro, Vo, Po: (STATUS_OK, 0)
+
+
+@overload(step_begin, inline="always")
+def _fixed_step_begin(wk, tab, ctl, R, r, V, n):
+    if controller_is(ctl, Control):
+        return lambda wk, tab, ctl, R, r, V, n: (False, 0.0, 0.0)
+
+
+@overload(stage_needed, inline="always")
+def _fixed_stage_needed(ctl, j):
+    if controller_is(ctl, Control):
+        return lambda ctl, j: True
+
+
+@overload(stage_evaluated, inline="always")
+def _fixed_stage_evaluated(ctl, j, st):
+    if controller_is(ctl, Control):
+        return lambda ctl, j, st: None
+
+
+@overload(control_step, inline="always")
+def _fixed_control_step(sd, wk, tab, ctl, R, r, V, h, ok, st, t):
+    if controller_is(ctl, Control):
+        return lambda sd, wk, tab, ctl, R, r, V, h, ok, st, t: (ACT_ACCEPT, st)
+
+
+@overload(step_accepted, inline="always")
+def _fixed_step_accepted(sd, wk, tab, ctl, R, r, V, t, h, Ro, ro, Vo, Po, n):
+    if controller_is(ctl, Control):
+        return lambda sd, wk, tab, ctl, R, r, V, t, h, Ro, ro, Vo, Po, n: (STATUS_OK, n)
 
 
 # --------------------------------------------------------------------------- state helpers
@@ -286,14 +361,14 @@ def watch_rotation_entries(watchBody, watchEntry, watchMax, R):
 # --------------------------------------------------------------------------- the loop
 @njit(cache=True, _nrt=False)
 def mk_steps(sd, wk, tab, ctl, t0, h, nsteps, R, r, V, vmax, every, Ro, ro, Vo, Po, Vdo, lamo):
-    """Advance ``nsteps`` MK steps in place.  Returns (status, steps done); on a failure
-    (R, r, V) hold the last accepted step (the rejected one is undone from wk.Rb...).
+    """Advance MK steps in place.  Returns (status, steps done / outputs written); on a
+    failure (R, r, V) hold the last accepted step (the rejected one is undone).
 
+    **Fixed steps** (``ctl`` a :class:`Control`): ``nsteps`` steps of size ``h`` from ``t0``.
     ``nsteps = 0`` evaluates the equations of motion once at the current state (the
     first stage of a step): accelerations in ``wk.Vd[0]``, multipliers in ``wk.lam``.
     (One call site of the inlined right-hand side serves both uses: a second one would
     double the compile time.)
-
     Outputs: with ``every > 0`` the state after every ``every``-th step goes to row
     ``o = (n + 1) / every - 1`` of ``Ro, ro, Vo`` and, if ``Po`` has rows, the tracked angles and
     node rotation parameters (rotation_parameters.record_tracked) to ``Po[o]``; if ``Vdo`` has rows, the accelerations
@@ -301,29 +376,54 @@ def mk_steps(sd, wk, tab, ctl, t0, h, nsteps, R, r, V, vmax, every, Ro, ro, Vo, 
     the following step (explicit RK: stage 1 is evaluated at the step's initial state),
     so recording them costs one extra evaluation per call, after the last step.  A failure
     in that evaluation leaves ``Vdo[o, 0, 0]`` NaN.  (A caller that needs several outputs
-    then enters the compiled code once instead of once per output.)"""
+    then enters the compiled code once instead of once per output.)
+
+    **Adaptive steps** (``ctl`` an ``adaptive.AdaptiveControl``, ``tab`` an
+    ``adaptive.AdaptiveMethod``): from ``ctl.fs[FS_T]`` with the next step ``ctl.fs[FS_H]``
+    until ``ctl.fs[FS_TEND]``, or until every output time ``ctl.tout`` is written to
+    ``Ro, ro, Vo, Po`` (dense output); ``t0, h, nsteps, every`` are not used and ``Vdo,
+    lamo`` have no rows.  Returns the number of outputs written (:mod:`.adaptive`)."""
     A = tab.A
     c = tab.c
     stages = tab.stages
     ns = stages.shape[0]
+    adaptive = is_adaptive(ctl)
     acc = Vdo.shape[0] > 0
     pending = -1                         # output row whose accelerations are still due
     n = 0
+    st = STATUS_OK
+    if adaptive:
+        st, n = controller_start(sd, wk, tab, ctl, R, r, V, Ro, ro, Vo, Po)
+        if st != STATUS_OK:
+            return st, n
     while True:
-        t = t0 + n * h
-        evalOnly = n >= nsteps
-        if evalOnly and nsteps > 0 and pending < 0:
-            return STATUS_OK, nsteps
+        if adaptive:
+            go, t, hs = step_begin(wk, tab, ctl, R, r, V, n)
+            if not go:
+                return STATUS_OK, n
+            evalOnly = False
+        else:
+            t = t0 + n * h
+            hs = h
+            evalOnly = n >= nsteps
+            if evalOnly and nsteps > 0 and pending < 0:
+                return STATUS_OK, nsteps
+        ok = True
         for jj in range(ns):
             j = stages[jj]
-            st = mk_stage_state(sd, wk, A, j, h, R, r, V)
+            st = mk_stage_state(sd, wk, A, j, hs, R, r, V)
             if st != STATUS_OK:          # only for j >= 1: any pending output is written
+                if adaptive:             # a rejection with the largest decrease
+                    ok = False
+                    break
                 return st, n
-            st = stage_rhs(sd, wk, t + c[j] * h, wk.Vd[j])
-            if st != STATUS_OK:
-                if pending >= 0:
-                    Vdo[pending, 0, 0] = np.nan
-                return st, n
+            if stage_needed(ctl, j):
+                st = stage_rhs(sd, wk, t + c[j] * hs, wk.Vd[j])
+                stage_evaluated(ctl, j, st)
+                if st != STATUS_OK:
+                    if pending >= 0:
+                        Vdo[pending, 0, 0] = np.nan
+                    return st, n
             if pending >= 0:
                 for i in range(Vdo.shape[1]):
                     for k in range(6):
@@ -334,26 +434,34 @@ def mk_steps(sd, wk, tab, ctl, t0, h, nsteps, R, r, V, vmax, every, Ro, ro, Vo, 
             if evalOnly:
                 return STATUS_OK, nsteps
             mk_stage_k(sd, wk, j)
-        copy_state(R, r, V, wk.Rb, wk.rb, wk.Vb)
-        mk_finish(sd, wk, tab, h, R, r, V)
-        st = state_is_finite(sd.gid, R, r, V, vmax)
-        if st != STATUS_OK:
-            copy_state(wk.Rb, wk.rb, wk.Vb, R, r, V)
-            return st, n
-        if ctl.kind != CONTROL_FIXED:
-            accept, hnext = control_step(ctl, error_estimate(ctl, tab, wk, h), h)
-            if not accept:
-                copy_state(wk.Rb, wk.rb, wk.Vb, R, r, V)
-                h = hnext
+        if not adaptive:                 # (the adaptive controller keeps the step's start itself)
+            copy_state(R, r, V, wk.Rb, wk.rb, wk.Vb)
+        if ok:
+            mk_finish(sd, wk, tab, hs, R, r, V)
+            st = state_is_finite(sd.gid, R, r, V, vmax)
+        if adaptive:
+            act, st = control_step(sd, wk, tab, ctl, R, r, V, hs, ok, st, t)
+            if act == ACT_RETRY:
                 continue
-        if sd.stabilization != STAB_NONE:
-            st = project_state(sd, wk, sd.stabilization, R, r, V)
+            if act == ACT_STOP:
+                return st, n
+        else:
             if st != STATUS_OK:
                 copy_state(wk.Rb, wk.rb, wk.Vb, R, r, V)
                 return st, n
+            if sd.stabilization != STAB_NONE:
+                st = project_state(sd, wk, sd.stabilization, R, r, V)
+                if st != STATUS_OK:
+                    copy_state(wk.Rb, wk.rb, wk.Vb, R, r, V)
+                    return st, n
         update_torsion_tracking(sd, wk, R, r, V)
         if wk.watchBody.shape[0] > 0:
             watch_rotation_entries(wk.watchBody, wk.watchEntry, wk.watchMax, R)
+        if adaptive:
+            st, n = step_accepted(sd, wk, tab, ctl, R, r, V, t, hs, Ro, ro, Vo, Po, n)
+            if st != STATUS_OK:
+                return st, n
+            continue
         n += 1
         if every > 0 and n % every == 0:
             o = n // every - 1

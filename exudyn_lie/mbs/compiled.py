@@ -9,6 +9,7 @@ from collections import namedtuple
 
 import numpy as np
 
+from .force_elements import compile_elements, scene_fields
 from .codes import GROUP_NAMES, ROW_COORD, ROW_DIST, ROW_ROLL, ROW_ROT, ROW_TRANS_LOCAL, ROW_TRANS_WORLD
 from .rotation_parameters import TRACK_ANGLE, TRACK_NONE
 from .linalg import REL_PIVOT_TOL, rcm_order
@@ -24,15 +25,15 @@ GROUP_NAMES = {v: k for k, v in GROUP_IDS.items()}
 SceneData = namedtuple("SceneData", [
     "nb", "gid", "mass", "com", "M", "Minv", "gravity", "hasGravity", "hasQext",
     "lint", "lvec",                   # loads: [body, 0 force / 1 torque, bodyFixed]; [vector, point]
-    "sint", "spos", "spar",           # springs: [A, B]; [posA, posB]; [k, d, L0, f0]
-    "cint", "cpos", "cpar",           # Cartesian springs: [A, B]; [posA, posB]; [k(3), d(3), offset(3)]
-    "tint", "trot", "tpar",           # torsional springs: [A, B]; [rotA, rotB]; [k, d, offset, torque]
-    "kint", "kpar", "krot",           # coordinate springs: [A, B, rotation A, rotation B]; [k, d, offset,
-                                      #   direction A (3), direction B (3), angle A, angle B]; [frame A, frame B]
-    "nangles",                        # rotation coordinates of coordinate items (tracked: coordinate_angles)
-    "xint", "xpos", "xaxis", "xpar",  # linear springs: [A, B]; [posA, posB]; axis on A; [k, d, offset, force]
-    "bint", "bpos", "brot", "bpar",   # rigid-body springs: [A, B, intrinsic]; [posA, posB]; [rotA, rotB];
-                                      #   rows K (6), D (6), offset
+    # the compiled force elements' fields, from their registrations (mbs/force_elements.py), in this
+    # order: springs sint [A, B], spos [posA, posB], spar [k, d, L0, f0]; Cartesian springs cint, cpos,
+    # cpar [k(3), d(3), offset(3)]; torsional springs tint, trot [rotA, rotB], tpar [k, d, offset, torque];
+    # coordinate springs kint [A, B, rotation A, rotation B], kpar [k, d, offset, direction A (3),
+    # direction B (3), angle A, angle B], krot [frame A, frame B], nangles (rotation coordinates of
+    # coordinate items, tracked: coordinate_angles); linear springs xint, xpos, xaxis (axis on A), xpar
+    # [k, d, offset, force]; rigid-body springs bint [A, B, intrinsic], bpos, brot, bpar (rows K (6),
+    # D (6), offset)
+    *scene_fields(),
     "jint", "jpos", "jrot", "jpar",   # joints: [A, B, first row, rows]; [posA, posB]; [rotA, rotB]; [row parameters]
     "rint",                           # constraint rows: [kind, axis of A, axis of B, body A, body B]
     "nrows", "bandwidth", "redundant", "pivotTol",
@@ -289,10 +290,6 @@ def compile_scene(scene: Scene, groups):
         return a.reshape(shape) if a.size else np.zeros(shape if shape[0] != -1 else (0,) + shape[1:], dtype)
 
     L = scene.loads
-    S = scene.springs
-    C = scene.cartesianSprings
-    T = scene.torsionalSprings
-    B = scene.rigidSprings
 
     # the constraint rows, joint by joint, in the order of the solve that serves the scene
     # (choose_solve): reverse Cuthill-McKee for the band Cholesky, as given for the tree solve
@@ -307,30 +304,7 @@ def compile_scene(scene: Scene, groups):
         hasQext=bool(scene.pythonForces),
         lint=arr([[l.body, 0 if l.kind == "force" else 1, int(l.bodyFixed)] for l in L], (-1, 3), np.int64),
         lvec=arr([[l.vector, l.pos] for l in L], (-1, 2, 3)),
-        sint=arr([[s.bodyA, s.bodyB] for s in S], (-1, 2), np.int64),
-        spos=arr([[s.posA, s.posB] for s in S], (-1, 2, 3)),
-        spar=arr([[s.stiffness, s.damping, s.referenceLength, s.force] for s in S], (-1, 4)),
-        cint=arr([[s.bodyA, s.bodyB] for s in C], (-1, 2), np.int64),
-        cpos=arr([[s.posA, s.posB] for s in C], (-1, 2, 3)),
-        cpar=arr([[s.stiffness, s.damping, s.offset] for s in C], (-1, 3, 3)),
-        tint=arr([[s.bodyA, s.bodyB] for s in T], (-1, 2), np.int64),
-        trot=arr([[s.rotA, s.rotB] for s in T], (-1, 2, 3, 3)),
-        tpar=arr([[s.stiffness, s.damping, s.offset, s.torque] for s in T], (-1, 4)),
-        kint=arr([[s.bodyA, s.bodyB, int(s.angleA[0]), int(s.angleB[0])] for s in scene.coordinateSprings], (-1, 4),
-                 np.int64),
-        kpar=arr([[s.stiffness, s.damping, s.offset, *s.axisA, *s.axisB, s.angleA[2], s.angleB[2]]
-                  for s in scene.coordinateSprings], (-1, 11)),
-        krot=arr([[s.angleA[1], s.angleB[1]] for s in scene.coordinateSprings], (-1, 2, 3, 3)),
-        nangles=int(sum(s.angleA[0] + s.angleB[0] for s in scene.coordinateSprings)
-                    + sum(j.coordinate[4] + j.coordinate[5] for j in J if j.coordinate is not None)),
-        xint=arr([[s.bodyA, s.bodyB] for s in scene.linearSprings], (-1, 2), np.int64),
-        xpos=arr([[s.posA, s.posB] for s in scene.linearSprings], (-1, 2, 3)),
-        xaxis=arr([s.axisA for s in scene.linearSprings], (-1, 3)),
-        xpar=arr([[s.stiffness, s.damping, s.offset, s.force] for s in scene.linearSprings], (-1, 4)),
-        bint=arr([[s.bodyA, s.bodyB, int(s.intrinsic)] for s in B], (-1, 3), np.int64),
-        bpos=arr([[s.posA, s.posB] for s in B], (-1, 2, 3)),
-        brot=arr([[s.rotA, s.rotB] for s in B], (-1, 2, 3, 3)),
-        bpar=arr([np.vstack([s.stiffness, s.damping, s.offset[None]]) for s in B], (-1, 13, 6)),
+        **compile_elements(scene),
         jint=arr([[j.bodyA, j.bodyB, jrow0[k], jnrow[k]] for k, j in enumerate(J)], (-1, 4), np.int64),
         jpos=arr([[j.posA, j.posB] for j in J], (-1, 2, 3)),
         jrot=arr([[j.rotA, j.rotB] for j in J], (-1, 2, 3, 3)),

@@ -87,3 +87,18 @@ def coordinate_spring_energy(gid, kint, kpar, krot, R, r, V, v3, ident, zero3, z
         u, _ = coordinate_spring_value(gid, kint, kpar, krot, s, R, r, V, v3, ident, zero3, zero6)
         e += 0.5 * kpar[s, 0] * u * u
     return e
+
+
+# the element's entries (registered in mbs/force_elements.py)
+@njit(cache=True, inline="always", _nrt=False)
+def coordinate_spring_element(sd, wk, R, r, V, Q):
+    coordinate_spring_forces(sd.gid, sd.kint, sd.kpar, sd.krot, R, r, V, Q, wk.v3, wk.ident, wk.zero3, wk.zero6)
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def coordinate_spring_element_energy(sd, wk, R, r, V, e):
+    """``e`` plus the coordinate springs' potential (summed on its own, then added)."""
+    if sd.kint.shape[0] > 0:
+        return e + coordinate_spring_energy(sd.gid, sd.kint, sd.kpar, sd.krot, R, r, V, wk.v3, wk.ident, wk.zero3,
+                                            wk.zero6)
+    return e

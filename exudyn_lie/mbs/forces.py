@@ -1,6 +1,7 @@
 """Applied and inertial generalised forces of the compiled kernel, one function per
-force element (gravity, loads, point-to-point, Cartesian and torsional spring-dampers)
-and ``compute_forces``, which adds those a scene has."""
+force element (gravity, loads, point-to-point, Cartesian, torsional and rigid-body
+spring-dampers) and the elements' entries on the scene tuples; ``compute_forces``, which adds
+those a scene has, is generated from their registrations in :mod:`.force_elements`."""
 import numpy as np
 from numba import njit
 
@@ -10,8 +11,6 @@ from .bodies import (_matvec, _side, add_pair_force, add_point_force, add_world_
 from .codes import L_BODY, L_FIXED, L_KIND
 from .coordinate_angles import update_coordinate_angles
 from .rotation_parameters import update_tracked_bodies
-from .coordinate_forces import coordinate_spring_forces
-from .linear_spring_forces import linear_spring_forces
 
 
 # --------------------------------------------------------------------------- forces
@@ -264,34 +263,87 @@ def inertial_forces(gid, M, mass, com, R, V, Q):
         body_inertial_forces(gid[i], M[i], mass[i], com[i], R[i], V[i], Q[i])
 
 
+# --------------------------------------------------------------------------- the elements' entries
+# Each compiled force element has two entries on the scene tuples, registered once in
+# mbs/force_elements.py (which generates compute_forces and the spring energy from them):
+# its forces ``(sd, wk, R, r, V, Q)`` and, if it has a potential, its energy added to ``e``.
 @njit(cache=True, inline="always", _nrt=False)
-def compute_forces(sd, wk, t, R, r, V, Q):
-    """Applied and inertial generalised forces ``Q`` (nb, 6) at the state (R, r, V);
-    every force type a scene lacks is skipped."""
-    for i in range(sd.nb):
-        for k in range(6):
-            Q[i, k] = 0.0
-    F = wk.v3[6]
-    if sd.hasGravity:
-        gravity_forces(sd.gid, sd.mass, sd.com, sd.gravity, R, Q, F)
-    if sd.lint.shape[0] > 0:
-        load_forces(sd.gid, sd.lint, sd.lvec, R, Q, F)
-    if sd.sint.shape[0] > 0:
-        spring_forces(sd.gid, sd.sint, sd.spos, sd.spar, R, r, V, Q, wk.v3, wk.ident, wk.zero3, wk.zero6)
-    if sd.cint.shape[0] > 0:
-        cartesian_forces(sd.gid, sd.cint, sd.cpos, sd.cpar, R, r, V, Q, wk.v3, wk.ident, wk.zero3, wk.zero6)
-    if sd.tint.shape[0] > 0:
-        torsional_forces(sd.gid, sd.tint, sd.trot, sd.tpar, wk.tphi, R, r, V, Q, F, wk.m3, wk.ident, wk.zero3,
-                         wk.zero6)
-    if sd.kint.shape[0] > 0:
-        coordinate_spring_forces(sd.gid, sd.kint, sd.kpar, sd.krot, R, r, V, Q, wk.v3, wk.ident, wk.zero3, wk.zero6)
-    if sd.xint.shape[0] > 0:
-        linear_spring_forces(sd.gid, sd.xint, sd.xpos, sd.xaxis, sd.xpar, R, r, V, Q, wk.v3, wk.ident, wk.zero3,
-                             wk.zero6)
-    if sd.bint.shape[0] > 0:
-        rigid_spring_forces(sd.gid, sd.bint, sd.bpos, sd.brot, sd.bpar, R, r, V, Q, wk.v3, wk.m3, wk.ident,
-                            wk.zero3, wk.zero6)
-    inertial_forces(sd.gid, sd.M, sd.mass, sd.com, R, V, Q)
+def spring_element(sd, wk, R, r, V, Q):
+    spring_forces(sd.gid, sd.sint, sd.spos, sd.spar, R, r, V, Q, wk.v3, wk.ident, wk.zero3, wk.zero6)
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def cartesian_element(sd, wk, R, r, V, Q):
+    cartesian_forces(sd.gid, sd.cint, sd.cpos, sd.cpar, R, r, V, Q, wk.v3, wk.ident, wk.zero3, wk.zero6)
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def torsional_element(sd, wk, R, r, V, Q):
+    torsional_forces(sd.gid, sd.tint, sd.trot, sd.tpar, wk.tphi, R, r, V, Q, wk.v3[6], wk.m3, wk.ident, wk.zero3,
+                     wk.zero6)
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def rigid_spring_element(sd, wk, R, r, V, Q):
+    rigid_spring_forces(sd.gid, sd.bint, sd.bpos, sd.brot, sd.bpar, R, r, V, Q, wk.v3, wk.m3, wk.ident, wk.zero3,
+                        wk.zero6)
+
+
+@njit(cache=True, _nrt=False)
+def spring_potential(gid, sint, spos, spar, R, r, V, v3, ident, zero3, zero6, e):
+    """``e`` plus the potential ``k (L - L0)^2 / 2 + f0 L`` of the point-to-point springs."""
+    pA, pB, vA, vB, bA, bB = v3[0], v3[1], v3[2], v3[3], v3[4], v3[5]
+    for s in range(sint.shape[0]):
+        gA, RA, rA, VA = _side(gid, sint[s, 0], R, r, V, ident, zero3, zero6)
+        gB, RB, rB, VB = _side(gid, sint[s, 1], R, r, V, ident, zero3, zero6)
+        body_point(gA, RA, rA, VA, spos[s, 0], pA, vA, bA)
+        body_point(gB, RB, rB, VB, spos[s, 1], pB, vB, bB)
+        L = np.sqrt((pB[0] - pA[0]) ** 2 + (pB[1] - pA[1]) ** 2 + (pB[2] - pA[2]) ** 2)
+        e += 0.5 * spar[s, 0] * (L - spar[s, 2]) ** 2 + spar[s, 3] * L
+    return e
+
+
+@njit(cache=True, _nrt=False)
+def cartesian_potential(gid, cint, cpos, cpar, R, r, V, v3, ident, zero3, zero6, e):
+    """``e`` plus the potential of the Cartesian springs."""
+    pA, pB, vA, vB, bA, bB = v3[0], v3[1], v3[2], v3[3], v3[4], v3[5]
+    for s in range(cint.shape[0]):
+        gA, RA, rA, VA = _side(gid, cint[s, 0], R, r, V, ident, zero3, zero6)
+        gB, RB, rB, VB = _side(gid, cint[s, 1], R, r, V, ident, zero3, zero6)
+        body_point(gA, RA, rA, VA, cpos[s, 0], pA, vA, bA)
+        body_point(gB, RB, rB, VB, cpos[s, 1], pB, vB, bB)
+        for k in range(3):
+            e += 0.5 * cpar[s, 0, k] * (pB[k] - pA[k] - cpar[s, 2, k]) ** 2
+    return e
+
+
+@njit(cache=True, _nrt=False)
+def torsional_potential(gid, tint, trot, tpar, tphi, R, r, V, m3, ident, zero3, zero6, e):
+    """``e`` plus the potential ``k (phi - offset)^2 / 2 + torque phi`` of the torsional springs."""
+    for s in range(tint.shape[0]):
+        gA, RA, rA, VA = _side(gid, tint[s, 0], R, r, V, ident, zero3, zero6)
+        gB, RB, rB, VB = _side(gid, tint[s, 1], R, r, V, ident, zero3, zero6)
+        phi, phid = torsion_angle(trot[s, 0], trot[s, 1], tphi[s], RA, VA, RB, VB, m3[0], m3[1])
+        e += 0.5 * tpar[s, 0] * (phi - tpar[s, 2]) ** 2 + tpar[s, 3] * phi
+    return e
+
+
+# (the energy entries are inlined: a compiled function that receives the SceneData / Work
+# tuples costs compile time steeply; the potentials above receive only their arrays)
+@njit(cache=True, inline="always", _nrt=False)
+def spring_element_energy(sd, wk, R, r, V, e):
+    return spring_potential(sd.gid, sd.sint, sd.spos, sd.spar, R, r, V, wk.v3, wk.ident, wk.zero3, wk.zero6, e)
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def cartesian_element_energy(sd, wk, R, r, V, e):
+    return cartesian_potential(sd.gid, sd.cint, sd.cpos, sd.cpar, R, r, V, wk.v3, wk.ident, wk.zero3, wk.zero6, e)
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def torsional_element_energy(sd, wk, R, r, V, e):
+    return torsional_potential(sd.gid, sd.tint, sd.trot, sd.tpar, wk.tphi, R, r, V, wk.m3, wk.ident, wk.zero3,
+                               wk.zero6, e)
 
 
 @njit(cache=True, inline="always", _nrt=False)

@@ -9,7 +9,7 @@ from numba.extending import overload
 from .bodies import apply_minv
 from .codes import ROW_BODY_A, ROW_BODY_B, STATUS_OK, STATUS_SINGULAR
 from .constraints import joints_rows
-from .forces import compute_forces
+from .force_elements import compute_forces
 from .linalg import band_cholesky_inplace, band_cholesky_solve_inplace, pivoted_cholesky_solve
 from .tree_solve import tree_correction, tree_solve
 

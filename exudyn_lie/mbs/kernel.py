@@ -4,13 +4,16 @@ Everything is numba-compiled and allocation-free; it works on the flat arrays of
 :class:`exudyn_lie.mbs.compiled.SceneData` and ``Work``.  One module per job:
 
 * :mod:`.codes` - group ids, row kinds, table columns, status codes, bounds;
-* :mod:`.bodies` - per-body kinematics in the body's group (the only group dispatch);
+* :mod:`.bodies` - per-body kinematics in the body's group (the only group dispatch, its
+  group maps generated from the registry ``groups.GROUPS``);
+* :mod:`.force_elements` - one registration per compiled force element, and
+  ``compute_forces`` / ``spring_energy`` generated from them;
 * :mod:`.forces` - applied and inertial generalised forces, one function per element;
 * :mod:`.constraints` - joint rows ``h``, ``J`` and ``eta = -Jdot V``;
 * :mod:`.index1` - the index-1 solve (Schur complement) and the stage right-hand side;
 * :mod:`.projection` - position / velocity projection on the group;
 * :mod:`.stepper` - the Munthe-Kaas stepper ``mk_steps`` with its two seams
-  (step controller, right-hand side evaluated in Python);
+  (step controller: fixed, or :mod:`.adaptive`; right-hand side evaluated in Python);
 * :mod:`.diagnostics` - energies and the rows of all joints at a state.
 
 State per body ``i``: ``R[i]`` (3x3, body->world), ``r[i]`` (frame origin, world) and the
@@ -35,8 +38,9 @@ and ``wk.m3`` (2, 3, 3).
 from .bodies import add_point_force, add_world_torque, apply_minv, body_axis, body_point, exp_compose  # noqa: F401
 from .codes import *  # noqa: F401,F403
 from .constraints import joint_rows, joints_rows  # noqa: F401
-from .diagnostics import all_rows, kinetic_and_gravity, spring_energy  # noqa: F401
-from .forces import compute_forces, update_torsion_tracking  # noqa: F401
+from .diagnostics import all_rows, kinetic_and_gravity  # noqa: F401
+from .force_elements import compute_forces, spring_energy  # noqa: F401
+from .forces import update_torsion_tracking  # noqa: F401
 from .index1 import rhs, schur_correct, schur_solve  # noqa: F401
 from .projection import project, project_state  # noqa: F401
 from .stepper import (copy_state, mk_finish, mk_stage_k, mk_stage_state, mk_steps, state_is_finite,  # noqa: F401

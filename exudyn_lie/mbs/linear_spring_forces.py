@@ -34,3 +34,10 @@ def linear_spring_forces(gid, xint, xpos, xaxis, xpar, R, r, V, Q, v3, ident, ze
         for k in range(3):
             F[k] = f * a[k]
         add_pair_force(gA, RA, xpos[s, 0], ia, gB, RB, xpos[s, 1], ib, F, Q)
+
+
+# the element's entry (registered in mbs/force_elements.py)
+@njit(cache=True, inline="always", _nrt=False)
+def linear_spring_element(sd, wk, R, r, V, Q):
+    linear_spring_forces(sd.gid, sd.xint, sd.xpos, sd.xaxis, sd.xpar, R, r, V, Q, wk.v3, wk.ident, wk.zero3,
+                         wk.zero6)

@@ -20,6 +20,8 @@ from typing import Callable, List, Sequence
 
 import numpy as np
 
+from .force_elements import ELEMENTS
+
 GROUND = -1
 
 # the six relative axes of a generic joint: translations x, y, z, rotations x, y, z
@@ -653,9 +655,8 @@ class Scene:
     def nBodies(self):
         return len(self.bodies)
 
-    # the two-body force elements (connectors), each a list attribute: the one enumeration
-    CONNECTOR_LISTS = ("springs", "torsionalSprings", "cartesianSprings", "rigidSprings", "coordinateSprings",
-                       "linearSprings")
+    # the two-body force elements (connectors), each a list attribute: from their registrations
+    CONNECTOR_LISTS = tuple(e.sceneList for e in ELEMENTS)
 
     def connectors(self):
         """Every connector (two-body force element) of the scene, list by list."""

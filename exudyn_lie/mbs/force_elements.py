@@ -1,0 +1,152 @@
+"""The compiled force elements (connectors), one registration each.
+
+A registration (:func:`register`) names the element's list in :class:`~.scene.Scene`
+(``springs``, ...), its fields of :class:`~.compiled.SceneData` with how each is built from
+the scene's items, its forces entry ``(sd, wk, R, r, V, Q)`` and, if it has a potential, its
+energy entry ``(sd, wk, R, r, V, e) -> e + its energy`` (both in the element's own file, both
+``inline="always"`` around functions with array arguments: a compiled function of its own
+that receives the SceneData / Work tuples costs compile time steeply).
+From :data:`ELEMENTS` derive:
+
+* the element fields of ``SceneData`` and their part of ``compile_scene`` (:mod:`.compiled`);
+* :func:`compute_forces`, the applied and inertial forces of a stage (generated below: one
+  ``if sd.<first field>.shape[0] > 0:`` call per element, in registration order);
+* :func:`spring_energy`, the elements' potential (:mod:`.diagnostics`);
+* ``Scene.CONNECTOR_LISTS``, the scene's lists of two-body force elements (:mod:`.scene`).
+
+The order of the registrations is the order of the SceneData fields and of the force sums:
+it is kept as it was (a changed SceneData layout changes the per-step speed, see Work in
+:mod:`.compiled`, and a changed sum order changes the last bits).  Adding a force element:
+its scene dataclass and ``Add*`` (:mod:`.scene`), its own file with the force function and
+the entries, and one :func:`register` line here.
+"""
+from collections import namedtuple
+
+import numpy as np
+from numba import njit
+
+from .coordinate_forces import coordinate_spring_element, coordinate_spring_element_energy
+from .forces import (cartesian_element, cartesian_element_energy, gravity_forces, inertial_forces, load_forces,
+                     rigid_spring_element, spring_element, spring_element_energy, torsional_element,
+                     torsional_element_energy)
+from .linear_spring_forces import linear_spring_element
+
+# one compiled force element: its Scene list, its SceneData fields ((name, build(scene, items)), ...;
+# the first is its integer table, whose rows say whether the scene has the element), its entries
+ForceElement = namedtuple("ForceElement", ["name", "sceneList", "fields", "forces", "energy"])
+
+#: every compiled force element, in registration order
+ELEMENTS = []
+
+
+def register(name, sceneList, fields, forces, energy=None):
+    """Register one compiled force element (module docstring)."""
+    if any(e.name == name for e in ELEMENTS):
+        raise ValueError(f"force element {name!r} is registered twice")
+    ELEMENTS.append(ForceElement(name, sceneList, tuple(fields), forces, energy))
+
+
+def table(row, shape, dtype=float):
+    """A field built row by row from the element's items (zero rows when there are none)."""
+    def build(scene, items):
+        a = np.array([row(s) for s in items], dtype=dtype)
+        return a.reshape(shape) if a.size else np.zeros((0,) + tuple(shape[1:]), dtype)
+    return build
+
+
+def _angles(scene, items):
+    """Rotation coordinates of the coordinate items (springs and constraints), tracked by
+    mbs/coordinate_angles.py."""
+    return int(sum(s.angleA[0] + s.angleB[0] for s in items)
+               + sum(j.coordinate[4] + j.coordinate[5] for j in scene.joints if j.coordinate is not None))
+
+
+# ---------------------------------------------------------------- the registrations
+register("spring", "springs", (
+    ("sint", table(lambda s: [s.bodyA, s.bodyB], (-1, 2), np.int64)),
+    ("spos", table(lambda s: [s.posA, s.posB], (-1, 2, 3))),
+    ("spar", table(lambda s: [s.stiffness, s.damping, s.referenceLength, s.force], (-1, 4)))),
+         spring_element, spring_element_energy)
+register("cartesian", "cartesianSprings", (
+    ("cint", table(lambda s: [s.bodyA, s.bodyB], (-1, 2), np.int64)),
+    ("cpos", table(lambda s: [s.posA, s.posB], (-1, 2, 3))),
+    ("cpar", table(lambda s: [s.stiffness, s.damping, s.offset], (-1, 3, 3)))),
+         cartesian_element, cartesian_element_energy)
+register("torsional", "torsionalSprings", (
+    ("tint", table(lambda s: [s.bodyA, s.bodyB], (-1, 2), np.int64)),
+    ("trot", table(lambda s: [s.rotA, s.rotB], (-1, 2, 3, 3))),
+    ("tpar", table(lambda s: [s.stiffness, s.damping, s.offset, s.torque], (-1, 4)))),
+         torsional_element, torsional_element_energy)
+register("coordinate", "coordinateSprings", (
+    ("kint", table(lambda s: [s.bodyA, s.bodyB, int(s.angleA[0]), int(s.angleB[0])], (-1, 4), np.int64)),
+    ("kpar", table(lambda s: [s.stiffness, s.damping, s.offset, *s.axisA, *s.axisB, s.angleA[2], s.angleB[2]],
+                   (-1, 11))),
+    ("krot", table(lambda s: [s.angleA[1], s.angleB[1]], (-1, 2, 3, 3))),
+    ("nangles", _angles)),
+         coordinate_spring_element, coordinate_spring_element_energy)
+register("linear", "linearSprings", (
+    ("xint", table(lambda s: [s.bodyA, s.bodyB], (-1, 2), np.int64)),
+    ("xpos", table(lambda s: [s.posA, s.posB], (-1, 2, 3))),
+    ("xaxis", table(lambda s: s.axisA, (-1, 3))),
+    ("xpar", table(lambda s: [s.stiffness, s.damping, s.offset, s.force], (-1, 4)))),
+         linear_spring_element)
+register("rigid", "rigidSprings", (
+    ("bint", table(lambda s: [s.bodyA, s.bodyB, int(s.intrinsic)], (-1, 3), np.int64)),
+    ("bpos", table(lambda s: [s.posA, s.posB], (-1, 2, 3))),
+    ("brot", table(lambda s: [s.rotA, s.rotB], (-1, 2, 3, 3))),
+    ("bpar", table(lambda s: np.vstack([s.stiffness, s.damping, s.offset[None]]), (-1, 13, 6)))),
+         rigid_spring_element)
+
+
+def scene_fields():
+    """The element fields of SceneData, in registration order."""
+    return [f for e in ELEMENTS for f, _ in e.fields]
+
+
+def compile_elements(scene):
+    """The element fields' values for ``compile_scene``: {field: value}."""
+    out = {}
+    for e in ELEMENTS:
+        items = getattr(scene, e.sceneList)
+        for f, build in e.fields:
+            out[f] = build(scene, items)
+    return out
+
+
+# ---------------------------------------------------------------- generated from the registrations
+def _generate(name, header, lines, footer, env, doc):
+    """An njit source generated from the registrations, compiled under this file's name so
+    numba caches it (its cache key, exudyn_lie._numba_cache, hashes this file)."""
+    src = "\n".join([header] + ["    " + x for x in lines] + ["    " + x for x in footer]) + "\n"
+    exec(compile(src, __file__, "exec"), env)
+    fn = env[name]
+    fn.__module__ = __name__
+    fn.__doc__ = doc
+    return fn
+
+
+_ENV = {"gravity_forces": gravity_forces, "load_forces": load_forces, "inertial_forces": inertial_forces}
+_ENV.update({f"forces{k}": e.forces for k, e in enumerate(ELEMENTS)})
+_ENV.update({f"energy{k}": e.energy for k, e in enumerate(ELEMENTS) if e.energy is not None})
+
+compute_forces = njit(cache=True, inline="always", _nrt=False)(_generate(
+    "compute_forces", "def compute_forces(sd, wk, t, R, r, V, Q):",
+    ["for i in range(sd.nb):",
+     "    for k in range(6):",
+     "        Q[i, k] = 0.0",
+     "F = wk.v3[6]",
+     "if sd.hasGravity:",
+     "    gravity_forces(sd.gid, sd.mass, sd.com, sd.gravity, R, Q, F)",
+     "if sd.lint.shape[0] > 0:",
+     "    load_forces(sd.gid, sd.lint, sd.lvec, R, Q, F)"]
+    + [x for k, e in enumerate(ELEMENTS) for x in (f"if sd.{e.fields[0][0]}.shape[0] > 0:",
+                                                  f"    forces{k}(sd, wk, R, r, V, Q)")],
+    ["inertial_forces(sd.gid, sd.M, sd.mass, sd.com, R, V, Q)"], dict(_ENV),
+    """Applied and inertial generalised forces ``Q`` (nb, 6) at the state (R, r, V): gravity,
+loads, then every registered force element the scene has (in registration order), then the
+inertial terms."""))
+
+spring_energy = njit(cache=True, inline="always", _nrt=False)(_generate(
+    "spring_energy", "def spring_energy(sd, wk, R, r, V):", ["e = 0.0"]
+    + [f"e = energy{k}(sd, wk, R, r, V, e)" for k, e in enumerate(ELEMENTS) if e.energy is not None],
+    ["return e"], dict(_ENV), """Potential energy of the registered force elements that have one."""))

@@ -42,7 +42,7 @@ from numba import njit
 from ..integrators import control as C
 from .bodies import exp_compose
 from .codes import STAB_NONE, STATUS_OK, STATUS_STEP_MIN
-from .forces import update_torsion_tracking
+from .forces import update_contact_data, update_torsion_tracking
 from .projection import CT_N_PROJ, CT_POS, enforce_constraint_tolerance, project_error_estimate, project_state
 from .rotation_parameters import tracked_at
 from .stepper import (copy_state, mk_finish, mk_stage_k, mk_stage_state, needed_stages, stage_rhs, state_is_finite,
@@ -230,6 +230,7 @@ def mk_adaptive_steps(sd, wk, am, par, S, tol, ctol, fs, ist, tEnd, R, r, V, R0,
             copy_state(R0, r0, V0, R, r, V)
             return st, k
         update_torsion_tracking(sd, wk, R, r, V)
+        update_contact_data(sd, wk, R, r, V)
         if wk.watchBody.shape[0] > 0:
             watch_rotation_entries(wk.watchBody, wk.watchEntry, wk.watchMax, R)
         fs[FS_TPREV] = t

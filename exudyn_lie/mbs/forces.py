@@ -12,6 +12,7 @@ from .coordinate_angles import update_coordinate_angles
 from .rotation_parameters import update_tracked_bodies
 from .coordinate_forces import coordinate_spring_forces
 from .linear_spring_forces import linear_spring_forces
+from .rolling_disc_penalty_forces import rolling_disc_penalty_forces, update_rolling_disc_penalty_data
 
 
 # --------------------------------------------------------------------------- forces
@@ -291,7 +292,20 @@ def compute_forces(sd, wk, t, R, r, V, Q):
     if sd.bint.shape[0] > 0:
         rigid_spring_forces(sd.gid, sd.bint, sd.bpos, sd.brot, sd.bpar, R, r, V, Q, wk.v3, wk.m3, wk.ident,
                             wk.zero3, wk.zero6)
+    if wk.dint.shape[0] > 0:
+        rolling_disc_penalty_forces(sd.gid, wk.dint, wk.dpar, wk.ddat, R, r, V, Q, wk.v3, wk.ident, wk.zero3, wk.zero6)
     inertial_forces(sd.gid, sd.M, sd.mass, sd.com, R, V, Q)
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def update_contact_data(sd, wk, R, r, V):
+    """Data coordinates that Exudyn updates after a step (its PostNewtonStep), after an accepted
+    step: the penalty rolling discs' slip velocity and gap.  (Not in update_torsion_tracking:
+    that one also sets the tracked angles at an initial state, where the data keep their
+    initial values, as in Exudyn.)"""
+    if wk.dint.shape[0] > 0:
+        update_rolling_disc_penalty_data(sd.gid, wk.dint, wk.dpar, wk.ddat, R, r, V, wk.v3, wk.ident, wk.zero3,
+                                         wk.zero6)
 
 
 @njit(cache=True, inline="always", _nrt=False)

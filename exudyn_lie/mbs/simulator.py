@@ -206,6 +206,8 @@ class Simulator:
         self._segmentStart = (self.t, self.R.copy(), self.r.copy(), self.V.copy())
         if len(sc.torsionalSprings):
             self.wk.tphi[:] = 0.0
+        for k, e in enumerate(sc.rollingDiscPenalties):     # data coordinates: as given (Exudyn's initial data)
+            self.wk.ddat[k] = e.data0
         # the tracked angles (torsional springs, rotation coordinates, 2D bodies) at this state
         kernel.update_torsion_tracking(self.sd, self.wk, self.R, self.r, self.V)
 

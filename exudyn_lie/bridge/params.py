@@ -96,6 +96,15 @@ FIELDS = {
     ("object", "JointRollingDisc"): {
         **{k: _JOINT[k] for k in ("markerNumbers", "activeConnector", "constrainedAxes")},
         **{k: _COMPILED_ROW for k in ("discRadius", "discAxis", "planeNormal")}},
+    ("object", "ConnectorRollingDiscPenalty"): {
+        **{k: (LIVE, "contact and friction law (its compiled row is rewritten)")
+           for k in ("discRadius", "discAxis", "planeNormal", "dryFrictionAngle", "contactStiffness", "contactDamping",
+                     "dryFriction", "dryFrictionProportionalZone", "viscousFriction", "rollingViscousFriction",
+                     "useLinearProportionalZone")},
+        "activeConnector": (LIVE, "switches the contact forces off and on (the data coordinates are updated "
+                                  "either way, as in Exudyn)"),
+        "markerNumbers": (FIXED, "the disc and the plane"),
+        "nodeNumber": (FIXED, "the data node (slip velocity and gap of the last step)")},
     ("node", "1D"): dict(_RIGID_NODE),
     ("object", "Mass1D"): {
         "mass": (FIXED, "compiled mass matrix"), "nodeNumber": (FIXED, "the body's node"),
@@ -111,7 +120,8 @@ FIELDS = {
         "load": (LIVE, "the generalised force on the coordinate"), "loadUserFunction": _UF_LIVE,
         "markerNumber": (FIXED, "the loaded coordinate")},
     ("node", "GenericData"): {
-        "initialCoordinates": (INITIAL, "a torsional spring's continuous angle at the start"),
+        "initialCoordinates": (INITIAL, "a torsional spring's continuous angle, a penalty rolling disc's slip "
+                                        "velocity and gap at the start"),
         "numberOfDataCoordinates": (FIXED, "set by Assemble")},
     ("object", "Ground"): {k: (LIVE, "moves the markers on the ground: " + _MARKER_MOVES)
                            for k in ("referencePosition", "referenceRotation", "referenceHT")},
@@ -398,6 +408,8 @@ class ParameterWatch:
                 self._load(i, d, t)
             elif d["objectType"] in _UF_KEY:
                 self._connector(i, d, t)
+            elif d["objectType"] == "ConnectorRollingDiscPenalty":
+                self._rolling_disc_penalty(i, d, t)
             # other objects (ground, rigid bodies, joints) have no live field besides the above
             self.updates += 1
 
@@ -531,6 +543,27 @@ class ParameterWatch:
             sd.bpar[k, :6] = on * np.asarray(f["stiffness"], float).reshape(6, 6)
             sd.bpar[k, 6:12] = on * np.asarray(f["damping"], float).reshape(6, 6)
             sd.bpar[k, 12] = np.asarray(f["offset"], float).reshape(6)
+
+    def _rolling_disc_penalty(self, o, d, t):
+        """A penalty rolling disc (or its markers) changed: the reader reads it again and its
+        compiled row (``Work.dint / dpar``, compiled.rolling_disc_penalty_*) is rewritten; its
+        data coordinates go on."""
+        from ..mbs.compiled import rolling_disc_penalty_flags, rolling_disc_penalty_parameters
+        sc = self.scene
+        row = sc.itemRows.get(("object", o))
+        if row is None:
+            return                       # ground to ground: no force on any body
+        scratch = ExudynScene(self.mbs)
+        scratch.bodies = sc.bodies
+        scratch.nodeTypes = sc.nodeTypes
+        try:
+            self.reader.read_connector(scratch, o, d)
+        except BridgeError as e:
+            raise BridgeError(f"{e} (changed during the solve at t = {t:.6g} s)") from None
+        e = scratch.rollingDiscPenalties[0]
+        wk = self.solver.sim.wk
+        wk.dint[row[1]] = rolling_disc_penalty_flags(e)
+        wk.dpar[row[1]] = rolling_disc_penalty_parameters(e)
 
     def _python_connector(self, o, d, k, active, t):
         """A connector evaluated in Python: rebuilt by the reader from its new dictionary,

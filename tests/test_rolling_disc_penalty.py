@@ -16,6 +16,7 @@ from exudyn.utilities import (MarkerBodyRigid, MarkerNodeRigid, NodeGenericData,
 import exudyn_lie as exl
 import foreign_models as FM
 from exudyn_lie.bridge import BridgeError, SceneFromExudyn
+from exudyn_lie.mbs.rolling_disc_penalty_forces import D_DATA
 from test_bridge_common import INI, add_body, compare, new_mbs, random_state
 
 TOL = 1e-11
@@ -151,7 +152,7 @@ def test_smooth_rolling_coin_is_compiled_and_converges_at_order_4():
     at order 4 (errors at h = 2e-3 and 1e-3 s; measured order printed), and agrees with the
     Exudyn-evaluated path (evaluation='exudyn': Exudyn's own PostNewton after each step) at the
     same step to round-off.  The data coordinates in mbs after the run are Exudyn's PostNewton
-    at the final state, and equal the kernel's own (Work.ddat)."""
+    at the final state, and equal the kernel's own (Work.disc)."""
     ref, refErr, _ = smooth_reference()
     errs = []
     for h in (2e-3, 1e-3):
@@ -163,7 +164,7 @@ def test_smooth_rolling_coin_is_compiled_and_converges_at_order_4():
         sd = m.mbs.systemData
         dataMbs = np.asarray(sd.GetDataCoordinates(), float)[np.asarray(sd.GetNodeLTGData(
             m.mbs.GetObject(m.foreignIndex)["nodeNumber"]), np.int64)]
-        np.testing.assert_allclose(m.mbs.sys["lieGroupSolver"].sim.wk.ddat[0], dataMbs, rtol=0, atol=1e-12)
+        np.testing.assert_allclose(m.mbs.sys["lieGroupSolver"].sim.wk.disc[0, D_DATA:], dataMbs, rtol=0, atol=1e-12)
         assert dataMbs[2] < 0                                                  # in contact at the end
         if h == 2e-3:
             m2 = FM.rolling_disc(h=h)

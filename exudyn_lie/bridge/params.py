@@ -546,9 +546,10 @@ class ParameterWatch:
 
     def _rolling_disc_penalty(self, o, d, t):
         """A penalty rolling disc (or its markers) changed: the reader reads it again and its
-        compiled row (``Work.dint / dpar``, compiled.rolling_disc_penalty_*) is rewritten; its
-        data coordinates go on."""
-        from ..mbs.compiled import rolling_disc_penalty_flags, rolling_disc_penalty_parameters
+        compiled row (``Work.disc``, compiled.rolling_disc_penalty_row) is rewritten; its data
+        coordinates go on."""
+        from ..mbs.compiled import rolling_disc_penalty_row
+        from ..mbs.rolling_disc_penalty_forces import D_DATA
         sc = self.scene
         row = sc.itemRows.get(("object", o))
         if row is None:
@@ -562,8 +563,7 @@ class ParameterWatch:
             raise BridgeError(f"{e} (changed during the solve at t = {t:.6g} s)") from None
         e = scratch.rollingDiscPenalties[0]
         wk = self.solver.sim.wk
-        wk.dint[row[1]] = rolling_disc_penalty_flags(e)
-        wk.dpar[row[1]] = rolling_disc_penalty_parameters(e)
+        wk.disc[row[1], :D_DATA] = rolling_disc_penalty_row(e)
 
     def _python_connector(self, o, d, k, active, t):
         """A connector evaluated in Python: rebuilt by the reader from its new dictionary,

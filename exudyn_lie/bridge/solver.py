@@ -44,6 +44,7 @@ from ..compiling import compile_timer
 from ..integrators.mk_adaptive import resolve_pair
 from ..integrators.tableau import ButcherTableau, method_names
 from ..mbs.compiled import auto_groups
+from ..mbs.rolling_disc_penalty_forces import D_DATA
 from ..mbs.simulator import Simulator
 from ..userwarn import warn_user
 from .fast import CHUNK_ROWS, AdaptiveOutputChunks, NodeTable, OutputChunks
@@ -891,7 +892,7 @@ class LieGroupSolver:
         sd = self.mbs.systemData
         data = np.asarray(sd.GetDataCoordinates(configuration=self._exu.ConfigurationType.Current), float)
         for k, (_, node) in enumerate(self.scene.rollingDiscData):
-            self.sim.wk.ddat[k] = data[np.asarray(sd.GetNodeLTGData(node), np.int64)]
+            self.sim.wk.disc[k, D_DATA:] = data[np.asarray(sd.GetNodeLTGData(node), np.int64)]
 
     def _seed_torsion(self):
         """After the state was re-read from mbs: continue every tracked torsion angle from

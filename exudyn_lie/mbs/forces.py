@@ -292,8 +292,8 @@ def compute_forces(sd, wk, t, R, r, V, Q):
     if sd.bint.shape[0] > 0:
         rigid_spring_forces(sd.gid, sd.bint, sd.bpos, sd.brot, sd.bpar, R, r, V, Q, wk.v3, wk.m3, wk.ident,
                             wk.zero3, wk.zero6)
-    if wk.dint.shape[0] > 0:
-        rolling_disc_penalty_forces(sd.gid, wk.dint, wk.dpar, wk.ddat, R, r, V, Q, wk.v3, wk.ident, wk.zero3, wk.zero6)
+    if wk.disc.shape[0] > 0:
+        rolling_disc_penalty_forces(sd.gid, wk.disc, R, r, V, Q, wk.v3, wk.ident, wk.zero3, wk.zero6)
     inertial_forces(sd.gid, sd.M, sd.mass, sd.com, R, V, Q)
 
 
@@ -303,9 +303,8 @@ def update_contact_data(sd, wk, R, r, V):
     step: the penalty rolling discs' slip velocity and gap.  (Not in update_torsion_tracking:
     that one also sets the tracked angles at an initial state, where the data keep their
     initial values, as in Exudyn.)"""
-    if wk.dint.shape[0] > 0:
-        update_rolling_disc_penalty_data(sd.gid, wk.dint, wk.dpar, wk.ddat, R, r, V, wk.v3, wk.ident, wk.zero3,
-                                         wk.zero6)
+    if wk.disc.shape[0] > 0:
+        update_rolling_disc_penalty_data(sd.gid, wk.disc, R, r, V, wk.v3, wk.ident, wk.zero3, wk.zero6)
 
 
 @njit(cache=True, inline="always", _nrt=False)

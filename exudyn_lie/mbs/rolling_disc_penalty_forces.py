@@ -33,18 +33,23 @@ repeat a step with the updated data, its discontinuous iteration; the explicit s
 the data of the last accepted step throughout the step.)  ``activeConnector=False`` gives no
 force; the data are updated all the same (Exudyn's PostNewtonStep does not check the flag).
 
-Layout (``Work``, one row per disc; in Work, not SceneData: see ``compiled.Work``):
-``dint`` = [A (plane, -1 ground), B (disc), active, useLinearProportionalZone];
-``dpar`` = ``D_*`` below; ``ddat`` = the data coordinates (x0, x1, x2).
+Layout: ``Work.disc``, one row per disc, columns ``D_*`` below: A (plane, -1 ground), B (disc),
+active, useLinearProportionalZone (integers stored as floats), the parameters, and the data
+coordinates (x0, x1, x2) at ``D_DATA``.  One array in Work, not SceneData, and not three: each
+array the stepper's loop carries made the step of every model slower (one row of integers, one of
+parameters and one of data cost the heavy top 3.0 -> 3.6 us per step, measured interleaved; see
+``compiled.Work``).
 """
 import numpy as np
 from numba import njit
 
 from .bodies import _side, add_point_force, add_world_torque, body_point
 
-D_POSA, D_POSB, D_NORMAL, D_AXIS = 0, 3, 6, 9      # marker points (body coordinates), normal on A, axis on B
-D_RADIUS, D_K, D_D, D_MU, D_VMU, D_VISC, D_ALPHA, D_ROLL = 12, 13, 14, 15, 17, 18, 20, 21
-N_DPAR = 22
+D_A, D_B, D_ACTIVE, D_LINEAR = 0, 1, 2, 3             # bodies (plane, disc) and flags
+D_POSA, D_POSB, D_NORMAL, D_AXIS = 4, 7, 10, 13      # marker points (body coordinates), normal on A, axis on B
+D_RADIUS, D_K, D_D, D_MU, D_VMU, D_VISC, D_ALPHA, D_ROLL = 16, 17, 18, 19, 21, 22, 24, 25
+D_DATA = 26                                          # data coordinates: slip (2), gap
+N_DISC = 29
 
 
 @njit(cache=True, inline="always", _nrt=False)
@@ -125,24 +130,24 @@ def slip_force(par, linear, s0, s1, d0, d1, fn):
 
 
 @njit(cache=True, _nrt=False)
-def rolling_disc_penalty_forces(gid, dint, dpar, ddat, R, r, V, Q, v3, ident, zero3, zero6):
+def rolling_disc_penalty_forces(gid, disc, R, r, V, Q, v3, ident, zero3, zero6):
     """Generalised forces of the penalty rolling discs (module docstring) into ``Q``."""
     n0, w2, wl, pC = v3[5], v3[7], v3[9], v3[10]
     v0, v1, om0 = v3[2], v3[3], v3[12]
     F, T, tmp = v3[15], v3[16], v3[14]
-    for s in range(dint.shape[0]):
-        if dint[s, 2] == 0:
+    for s in range(disc.shape[0]):
+        par = disc[s]
+        if par[D_ACTIVE] == 0.0:
             continue
-        a = dint[s, 0]
-        b = dint[s, 1]
-        par = dpar[s]
+        a = int(par[D_A])
+        b = int(par[D_B])
         gA, RA, rA, VA = _side(gid, a, R, r, V, ident, zero3, zero6)
         gB, RB, rB, VB = _side(gid, b, R, r, V, ident, zero3, zero6)
         gap, gapRate, s0, s1 = disc_contact(gA, RA, rA, VA, gB, RB, rB, VB, par, v3)
-        if not ddat[s, 2] < 0.0:                 # Exudyn: contact by the stored gap only
+        if not par[D_DATA + 2] < 0.0:            # Exudyn: contact by the stored gap only
             continue
         fn = -(par[D_K] * gap + par[D_D] * gapRate)
-        ft0, ft1 = slip_force(par, dint[s, 3] != 0, s0, s1, ddat[s, 0], ddat[s, 1], fn)
+        ft0, ft1 = slip_force(par, par[D_LINEAR] != 0.0, s0, s1, par[D_DATA], par[D_DATA + 1], fn)
         for k in range(3):
             F[k] = ft0 * wl[k] + ft1 * w2[k] + fn * n0[k]        # on the disc, at the contact point
         _cross_into(v3[4], F, T)                                   # (r w3) x f about the disc centre
@@ -168,13 +173,14 @@ def rolling_disc_penalty_forces(gid, dint, dpar, ddat, R, r, V, Q, v3, ident, ze
 
 
 @njit(cache=True, _nrt=False)
-def update_rolling_disc_penalty_data(gid, dint, dpar, ddat, R, r, V, v3, ident, zero3, zero6):
+def update_rolling_disc_penalty_data(gid, disc, R, r, V, v3, ident, zero3, zero6):
     """Exudyn's PostNewtonStep after an accepted step: the data coordinates become the slip
     velocity and the gap of the new state."""
-    for s in range(dint.shape[0]):
-        gA, RA, rA, VA = _side(gid, dint[s, 0], R, r, V, ident, zero3, zero6)
-        gB, RB, rB, VB = _side(gid, dint[s, 1], R, r, V, ident, zero3, zero6)
-        gap, gapRate, s0, s1 = disc_contact(gA, RA, rA, VA, gB, RB, rB, VB, dpar[s], v3)
-        ddat[s, 0] = s0
-        ddat[s, 1] = s1
-        ddat[s, 2] = gap
+    for s in range(disc.shape[0]):
+        par = disc[s]
+        gA, RA, rA, VA = _side(gid, int(par[D_A]), R, r, V, ident, zero3, zero6)
+        gB, RB, rB, VB = _side(gid, int(par[D_B]), R, r, V, ident, zero3, zero6)
+        gap, gapRate, s0, s1 = disc_contact(gA, RA, rA, VA, gB, RB, rB, VB, par, v3)
+        par[D_DATA] = s0
+        par[D_DATA + 1] = s1
+        par[D_DATA + 2] = gap

@@ -238,3 +238,33 @@ def test_exudyn_rolling_coin_penalty_test_model():
     assert np.abs(ref).max() > 10.0
     for h, e in errs.items():
         assert e < 1e-5, (h, e)
+
+
+def test_parameters_changed_by_a_pre_step_function_are_honoured():
+    """activeConnector (off at 0.1 s: no force, and the data stay as they are, as in Exudyn, whose
+    PostNewton skips an inactive connector; on again at 0.104 s) and the friction law
+    (dryFriction, viscousFriction from 0.12 s) set by a pre-step user function: the compiled run
+    re-reads the disc (Work.disc) and equals the Exudyn-evaluated run, in which Exudyn reads the
+    changed item itself, at the same step to round-off."""
+    out = []
+    for evaluation in ("auto", "exudyn"):
+        m = FM.rolling_disc(h=2e-3, T=0.2)
+        o = m.foreignIndex
+
+        def pre(mbs, t, o=o):
+            if abs(t - 0.1) < 1e-9:
+                mbs.SetObjectParameter(o, "activeConnector", False)
+            elif abs(t - 0.104) < 1e-9:
+                mbs.SetObjectParameter(o, "activeConnector", True)
+            elif abs(t - 0.12) < 1e-9:
+                mbs.SetObjectParameter(o, "dryFriction", [0.3, 0.4])
+                mbs.SetObjectParameter(o, "viscousFriction", [0.1, 0.0])
+            return True
+        m.mbs.SetPreStepUserFunction(pre)
+        y, _ = _solve(m, evaluation=evaluation)
+        out.append(y)
+        if evaluation == "auto":
+            assert isinstance(m.mbs.sys["lieGroupSolver"], exl.LieGroupSolver)
+    y0, _ = _solve(FM.rolling_disc(h=2e-3, T=0.2))
+    assert np.abs(out[0] - y0).max() > 1e-3                     # the changes matter
+    assert np.abs(out[0] - out[1]).max() < 1e-10, np.abs(out[0] - out[1]).max()

@@ -101,8 +101,8 @@ FIELDS = {
            for k in ("discRadius", "discAxis", "planeNormal", "dryFrictionAngle", "contactStiffness", "contactDamping",
                      "dryFriction", "dryFrictionProportionalZone", "viscousFriction", "rollingViscousFriction",
                      "useLinearProportionalZone")},
-        "activeConnector": (LIVE, "switches the contact forces off and on (the data coordinates are updated "
-                                  "either way, as in Exudyn)"),
+        "activeConnector": (LIVE, "switches the contact forces off and on (an inactive disc keeps its data "
+                                  "coordinates, as in Exudyn)"),
         "markerNumbers": (FIXED, "the disc and the plane"),
         "nodeNumber": (FIXED, "the data node (slip velocity and gap of the last step)")},
     ("node", "1D"): dict(_RIGID_NODE),

@@ -1053,7 +1053,7 @@ def deactivate(sc, row):
             "coordinate": sc.coordinateSprings, "linear": sc.linearSprings, "rigid": sc.rigidSprings,
             "rollingDiscPenalty": sc.rollingDiscPenalties}[table][k]
     if table == "rollingDiscPenalty":
-        item.active = False             # no force (Exudyn's PostNewtonStep still updates its data)
+        item.active = False             # no force, data kept (Exudyn skips it in PostNewton)
         return
     item.stiffness = item.stiffness * 0.0
     item.damping = item.damping * 0.0

@@ -31,7 +31,8 @@ After each accepted step, :func:`update_rolling_disc_penalty_data` stores ``(vt,
 new state in the data coordinates, as Exudyn's PostNewtonStep does.  (Exudyn's own solvers may
 repeat a step with the updated data, its discontinuous iteration; the explicit steps here use
 the data of the last accepted step throughout the step.)  ``activeConnector=False`` gives no
-force; the data are updated all the same (Exudyn's PostNewtonStep does not check the flag).
+force and keeps the data as they are (Exudyn calls no PostNewtonStep of an inactive connector:
+its data node keeps the values of the last active step, measured).
 
 Layout: ``Work.disc``, one row per disc, columns ``D_*`` below: A (plane, -1 ground), B (disc),
 active, useLinearProportionalZone (integers stored as floats), the parameters, and the data
@@ -174,10 +175,12 @@ def rolling_disc_penalty_forces(gid, disc, R, r, V, Q, v3, ident, zero3, zero6):
 
 @njit(cache=True, _nrt=False)
 def update_rolling_disc_penalty_data(gid, disc, R, r, V, v3, ident, zero3, zero6):
-    """Exudyn's PostNewtonStep after an accepted step: the data coordinates become the slip
-    velocity and the gap of the new state."""
+    """Exudyn's PostNewtonStep after an accepted step: the data coordinates of every active disc
+    become the slip velocity and the gap of the new state."""
     for s in range(disc.shape[0]):
         par = disc[s]
+        if par[D_ACTIVE] == 0.0:
+            continue                            # Exudyn skips inactive connectors in PostNewton
         gA, RA, rA, VA = _side(gid, int(par[D_A]), R, r, V, ident, zero3, zero6)
         gB, RB, rB, VB = _side(gid, int(par[D_B]), R, r, V, ident, zero3, zero6)
         gap, gapRate, s0, s1 = disc_contact(gA, RA, rA, VA, gB, RB, rB, VB, par, v3)

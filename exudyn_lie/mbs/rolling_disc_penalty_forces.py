@@ -36,10 +36,10 @@ its data node keeps the values of the last active step, measured).
 
 Layout: ``Work.disc``, one row per disc, columns ``D_*`` below: A (plane, -1 ground), B (disc),
 active, useLinearProportionalZone (integers stored as floats), the parameters, and the data
-coordinates (x0, x1, x2) at ``D_DATA``.  One array in Work, not SceneData, and not three: each
-array the stepper's loop carries made the step of every model slower (one row of integers, one of
-parameters and one of data cost the heavy top 3.0 -> 3.6 us per step, measured interleaved; see
-``compiled.Work``).
+coordinates (x0, x1, x2) at ``D_DATA``.  One array in Work, not SceneData, and not three: with
+three arrays (integers, parameters, data) passed to these functions in the stepper's loop the heavy
+top, which has no disc, took 3.0 -> 3.6 us per step; the same fields without the calls, or one
+array with the calls, left it at 2.9-3.2 us (bench --sections perstep, interleaved with main).
 """
 import numpy as np
 from numba import njit

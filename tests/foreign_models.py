@@ -264,7 +264,8 @@ def rolling_disc(h=None, T=0.5):
     """A coin (RotVecLG cylinder, r = 0.1 m) rolling on the ground through
     ObjectConnectorRollingDiscPenalty (penalty 1e5 N/m, friction 0.5 in its regularised
     zone): leaning 0.2 rad, it rolls on a curve.  Starts at its static penetration with no
-    slip."""
+    slip.  (The compiled kernel reads this item now: tests/test_rolling_disc_penalty.py uses
+    the script; it is no longer a case of tests/test_foreign_items.py.)"""
     SC, mbs = _new()
     r, w, m = 0.1, 0.02, 1.0
     k, d, mu = 1e5, 50.0, 0.5

@@ -567,6 +567,11 @@ def _models_with_every_item():
     mbs.AddObject(U.ObjectJointRollingDisc(markerNumbers=[mbs.AddMarker(U.MarkerBodyRigid(bodyNumber=g)),
                                                           mbs.AddMarker(U.MarkerBodyRigid(bodyNumber=disc))],
                                            discRadius=0.25))
+    disc2 = mbs.CreateRigidBody(inertia=InertiaCuboid(800, [0.05, 0.5, 0.5]), referencePosition=[0, 6, 0.25])
+    mbs.AddObject(U.ObjectConnectorRollingDiscPenalty(
+        markerNumbers=[mbs.AddMarker(U.MarkerBodyRigid(bodyNumber=g)), mbs.AddMarker(U.MarkerBodyRigid(bodyNumber=disc2))],
+        nodeNumber=mbs.AddNode(U.NodeGenericData(initialCoordinates=[0, 0, 0], numberOfDataCoordinates=3)),
+        discRadius=0.25, contactStiffness=1e4))
     n1 = mbs.AddNode(U.Node1D(referenceCoordinates=[0]))
     mbs.AddObject(U.ObjectMass1D(nodeNumber=n1, mass=1, referenceRotation=U.RotationMatrixZ(0.2)))
     n1r = mbs.AddNode(U.Node1D(referenceCoordinates=[0]))

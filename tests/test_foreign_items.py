@@ -43,7 +43,6 @@ CASES = {
     "generic_ode2": ("ga", 1e-4, 4e-3, False),
     "generic_ode1": ("rk", 2.5e-4, 1e-3, False),
     "hydraulic_arm": ("rk", 1e-3, 4e-3, False),
-    "rolling_disc": ("ga", 1e-4, 2e-3, False),
     "beam3d_pendulum": ("ga", 5e-5, 5e-4, True),
     "kinematic_tree": ("ga", 1e-4, 4e-3, False),
     "ffrf_pendulum": ("ga", 1e-4, 1e-3, True),

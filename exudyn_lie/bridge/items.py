@@ -119,8 +119,10 @@ register("node", "1D", "body", "a point mass on a line (Mass1D) or a rotor (Rota
          reader="Node1DNode")
 register("node", "PointGround", "ground", "ground (markers on it)",
          {"referenceCoordinates": (LIVE, "moves the markers on the ground node")})
-register("node", "GenericData", "data", "data only (a torsional spring's continuous angle)", {
-    "initialCoordinates": (INITIAL, "a torsional spring's continuous angle at the start"),
+register("node", "GenericData", "data", "data only (a torsional spring's continuous angle, a penalty rolling "
+         "disc's slip velocity and gap)", {
+    "initialCoordinates": (INITIAL, "a torsional spring's continuous angle, a penalty rolling disc's slip "
+                                    "velocity and gap at the start"),
     "numberOfDataCoordinates": (FIXED, "set by Assemble")})
 
 # ---------------------------------------------------------------- bodies
@@ -223,6 +225,17 @@ register("object", "ConnectorLinearSpringDamper", "connector", "a compiled sprin
     "springForceUserFunction": (REFUSED, "a user function is refused"),
     "markerNumbers": (FIXED, "the connected bodies")},
          reader="read_linear_spring_damper", markers=True, userFunction="springForceUserFunction")
+register("object", "ConnectorRollingDiscPenalty", "connector",
+         "a compiled contact and friction law with data coordinates (mbs/rolling_disc_penalty_forces.py)", {
+    **{k: (LIVE, "contact and friction law (its compiled row is rewritten)")
+       for k in ("discRadius", "discAxis", "planeNormal", "dryFrictionAngle", "contactStiffness", "contactDamping",
+                 "dryFriction", "dryFrictionProportionalZone", "viscousFriction", "rollingViscousFriction",
+                 "useLinearProportionalZone")},
+    "activeConnector": (LIVE, "switches the contact forces off and on (an inactive disc keeps its data "
+                              "coordinates, as in Exudyn)"),
+    "markerNumbers": (FIXED, "the disc and the plane"),
+    "nodeNumber": (FIXED, "the data node (slip velocity and gap of the last step)")},
+         reader="read_rolling_disc_penalty", markers=True)
 
 # ---------------------------------------------------------------- markers
 register("marker", "BodyRigid", "position", "a point and frame on a body",

@@ -267,6 +267,8 @@ class ParameterWatch:
                 self._load(i, d, t)
             elif d["objectType"] in _UF_KEY:
                 self._connector(i, d, t)
+            elif d["objectType"] == "ConnectorRollingDiscPenalty":
+                self._rolling_disc_penalty(i, d, t)
             # other objects (ground, rigid bodies, joints) have no live field besides the above
             self.updates += 1
 
@@ -400,6 +402,27 @@ class ParameterWatch:
             sd.bpar[k, :6] = on * np.asarray(f["stiffness"], float).reshape(6, 6)
             sd.bpar[k, 6:12] = on * np.asarray(f["damping"], float).reshape(6, 6)
             sd.bpar[k, 12] = np.asarray(f["offset"], float).reshape(6)
+
+    def _rolling_disc_penalty(self, o, d, t):
+        """A penalty rolling disc (or its markers) changed: the reader reads it again and its
+        compiled row (``Work.disc``, compiled.rolling_disc_penalty_row) is rewritten; its data
+        coordinates go on."""
+        from ..mbs.compiled import rolling_disc_penalty_row
+        from ..mbs.rolling_disc_penalty_forces import D_DATA
+        sc = self.scene
+        row = sc.itemRows.get(("object", o))
+        if row is None:
+            return                       # ground to ground: no force on any body
+        scratch = ExudynScene(self.mbs)
+        scratch.bodies = sc.bodies
+        scratch.nodeTypes = sc.nodeTypes
+        try:
+            self.reader.read_connector(scratch, o, d)
+        except BridgeError as e:
+            raise BridgeError(f"{e} (changed during the solve at t = {t:.6g} s)") from None
+        e = scratch.rollingDiscPenalties[0]
+        wk = self.solver.sim.wk
+        wk.disc[row[1], :D_DATA] = rolling_disc_penalty_row(e)
 
     def _python_connector(self, o, d, k, active, t):
         """A connector evaluated in Python: rebuilt by the reader from its new dictionary,

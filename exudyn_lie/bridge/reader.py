@@ -159,6 +159,7 @@ class ExudynScene(Scene):
         self.aeZero: List[int] = []           # AE coordinates that stay 0 (EP norm rows, inactive joints)
         self.nodeTypes = {}                   # node index -> Exudyn node type string
         self.torsionData: List[TorsionData] = []   # torsional springs with a data node (turns)
+        self.rollingDiscData = []             # (object, NodeGenericData) of each penalty rolling disc, scene order
         self.configuration = "initial"        # what was read ('items': mbs not assembled yet)
         # where each Exudyn item went: ("object", o) / ("load", l) -> (table, row), table one of
         # "spring", "cartesian", "torsional" (compiled rows), "py" (index in pyItems), "load"
@@ -320,6 +321,13 @@ class _Reader:
             v = np.asarray(self.sd.GetDataCoordinates(configuration=self.config), float)[
                 np.asarray(self.sd.GetNodeLTGData(n), np.int64)]
         return float(v[0]) if len(v) else 0.0
+
+    def data_coordinates(self, n):
+        """All data coordinates of NodeGenericData n in the configuration read."""
+        if self.items:
+            return np.asarray(self.mbs.GetNode(n).get("initialCoordinates", []), float).reshape(-1)
+        return np.asarray(self.sd.GetDataCoordinates(configuration=self.config), float)[
+            np.asarray(self.sd.GetNodeLTGData(n), np.int64)]
 
     # ------------------------------------------------------------------ nodes
     def read_nodes(self, sc: ExudynScene):
@@ -800,7 +808,7 @@ class _Reader:
         name = d.get("name", "") or f"object{o}"
         nPy = len(sc.pyItems)
         counts = (len(sc.springs), len(sc.cartesianSprings), len(sc.torsionalSprings), len(sc.coordinateSprings),
-                  len(sc.linearSprings), len(sc.rigidSprings))
+                  len(sc.linearSprings), len(sc.rigidSprings), len(sc.rollingDiscPenalties))
         getattr(self, reader)(sc, o, d, A, B, what, name)
         sc.itemRows[("object", o)] = _new_row(sc, nPy, counts)
         if not active:
@@ -888,6 +896,37 @@ class _Reader:
                                         intrinsic=bool(d.get("useIntrinsicFormulation", False)))
             return
         self._py(sc, pyforces.RigidBodySpringDamper(self.mbs, o, d, A, B, rotA, rotB, uf))
+
+    def read_rolling_disc_penalty(self, sc, o, d, A, B, what, name):
+        """CObjectConnectorRollingDiscPenalty (mbs/rolling_disc_penalty_forces.py): marker 0 the
+        plane (ground or a 3D rigid body, normal ``A0 planeNormal``), marker 1 the disc centre
+        (axis ``A1 discAxis``); the three data coordinates of its NodeGenericData (slip velocity,
+        gap of the last step) start as stored in mbs."""
+        if B.body == GROUND:
+            raise BridgeError(f"{what}: marker 1 (the disc) is on the ground; Exudyn's rolling disc has the disc "
+                              f"on marker 1 and the plane (ground or body) on marker 0")
+        n = int(d.get("nodeNumber", -1))
+        if not (0 <= n < self.sd.NumberOfNodes()) or self.mbs.GetNode(n)["nodeType"] != "GenericData":
+            raise BridgeError(f"{what}: nodeNumber {n} is not a NodeGenericData; Exudyn needs one with 3 data "
+                              f"coordinates (slip velocity, gap)")
+        data = self.data_coordinates(n)
+        if data.shape != (3,) or not np.all(np.isfinite(data)):
+            raise BridgeError(f"{what}: its NodeGenericData {n} must hold 3 finite data coordinates (Exudyn's slip "
+                              f"velocity and gap), got {data.tolist()}")
+        roll = d.get("rollingViscousFriction", d.get("rollingFrictionViscous", 0.0))
+        try:
+            sc.AddRollingDiscPenalty(
+                A.body, B.body, float(d["discRadius"]), float(d["contactStiffness"]), float(d["contactDamping"]),
+                dryFriction=np.asarray(d["dryFriction"], float),
+                dryFrictionProportionalZone=float(d["dryFrictionProportionalZone"]),
+                viscousFriction=np.asarray(d["viscousFriction"], float),
+                dryFrictionAngle=float(d["dryFrictionAngle"]), rollingViscousFriction=float(roll),
+                useLinearProportionalZone=bool(d["useLinearProportionalZone"]), posA=A.pos,
+                planeNormal=A.rotation() @ np.asarray(d["planeNormal"], float), posB=B.pos,
+                discAxis=B.rotation() @ np.asarray(d["discAxis"], float), data0=data, name=name)
+        except SceneError as e:
+            raise BridgeError(f"{what}: {e}") from None
+        sc.rollingDiscData.append((o, n))
 
     def _py(self, sc, item):
         sc.pyItems.append(item)
@@ -980,9 +1019,11 @@ def _new_row(sc, nPy, counts):
     """(table, row) of the item a connector read just added to ``sc``."""
     if len(sc.pyItems) > nPy:
         return ("py", nPy)
-    for table, before, now in zip(("spring", "cartesian", "torsional", "coordinate", "linear", "rigid"), counts,
+    for table, before, now in zip(("spring", "cartesian", "torsional", "coordinate", "linear", "rigid",
+                                   "rollingDiscPenalty"), counts,
                                   (len(sc.springs), len(sc.cartesianSprings), len(sc.torsionalSprings),
-                                   len(sc.coordinateSprings), len(sc.linearSprings), len(sc.rigidSprings))):
+                                   len(sc.coordinateSprings), len(sc.linearSprings), len(sc.rigidSprings),
+                                   len(sc.rollingDiscPenalties))):
         if now > before:
             return (table, before)
     raise AssertionError("connector read without a scene item")
@@ -996,7 +1037,11 @@ def deactivate(sc, row):
         sc.pyItems[k].active = False
         return
     item = {"spring": sc.springs, "cartesian": sc.cartesianSprings, "torsional": sc.torsionalSprings,
-            "coordinate": sc.coordinateSprings, "linear": sc.linearSprings, "rigid": sc.rigidSprings}[table][k]
+            "coordinate": sc.coordinateSprings, "linear": sc.linearSprings, "rigid": sc.rigidSprings,
+            "rollingDiscPenalty": sc.rollingDiscPenalties}[table][k]
+    if table == "rollingDiscPenalty":
+        item.active = False             # no force, data kept (Exudyn skips it in PostNewton)
+        return
     item.stiffness = item.stiffness * 0.0
     item.damping = item.damping * 0.0
     if table in ("spring", "linear"):

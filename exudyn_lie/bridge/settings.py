@@ -47,8 +47,10 @@ SETTINGS = (
     ("timeIntegration.solverType", HONOURED, "read as Exudyn reads it (when SolveDynamic's solverType is None): "
                                              "an explicit type selects its tableau, the implicit ones are replaced "
                                              "by method=...; see bridge/solvertype.py"),
-    ("timeIntegration.discontinuous", IGNORED, "no supported item has a post-Newton error; a repeated step "
-                                               "(Exudyn's discontinuous iteration) gives the same result"),
+    ("timeIntegration.discontinuous", IGNORED, "explicit steps: the data coordinates of contacts (penalty rolling "
+                                               "disc) are updated after every step from its end state, as Exudyn's "
+                                               "PostNewton does, and no step is repeated (Exudyn's discontinuous "
+                                               "iteration would repeat it with the updated data)"),
     ("timeIntegration", IGNORED, _STEP),       # newton, generalizedAlpha, explicit, adaptive steps, tolerances
     ("solution.restart.continueIfAvailable", REFUSED, "True: exudyn_lie does not continue from a restart file"),
     ("solution", HONOURED, _LOOP + ": solution and restart files, sensors, their periods, image recording"),

@@ -44,6 +44,7 @@ from ..compiling import compile_timer
 from ..integrators.mk_adaptive import resolve_pair
 from ..integrators.tableau import ButcherTableau, method_names
 from ..mbs.compiled import auto_groups
+from ..mbs.rolling_disc_penalty_forces import D_DATA
 from ..mbs.simulator import Simulator
 from ..userwarn import warn_user
 from .fast import CHUNK_ROWS, AdaptiveOutputChunks, NodeTable, OutputChunks
@@ -467,6 +468,7 @@ class LieGroupSolver:
                 if tr is not None:
                     self.sim.wk.bparam[b] = tr[1]
         self._seed_torsion()
+        self._seed_contact_data()
         self._nodes.prev[:] = NodeTable(self.scene.nodeKinds, self.scene.kindBodies, t).prev
 
     # ------------------------------------------------------------------ planning
@@ -667,6 +669,14 @@ class LieGroupSolver:
         # Exudyn runs nsteps / k steps of its implicit solver, whose Newton iteration is the
         # hook, with these settings: on a deep copy (the user's object stays as it is)
         ss2 = loop_settings(ss, nsteps // k, info)
+        if self.scene.rollingDiscPenalties:
+            # the kernel updates the contacts' data coordinates after every step (their
+            # PostNewtonStep); Exudyn's PostNewton after each output recomputes the same values
+            # from the written state: one pass, and its "error" (data of the previous output)
+            # must not make Exudyn repeat the step
+            disc = ss2.timeIntegration.discontinuous
+            disc.maxIterations = 1
+            disc.ignoreMaxIterations = True
 
         solver = exu.MainSolverImplicitSecondOrder()
         self.solver = solver
@@ -873,6 +883,16 @@ class LieGroupSolver:
         for td, angle in zip(tds, self._torsion_angles()):
             data[int(sd.GetNodeLTGData(td.dataNode)[0])] = angle
         sd.SetDataCoordinates(data, configuration=cur)
+
+    def _seed_contact_data(self):
+        """After the state was re-read from mbs: the penalty rolling discs' data coordinates
+        (slip velocity, gap of the last step) as they are in mbs."""
+        if not self.scene.rollingDiscData:
+            return
+        sd = self.mbs.systemData
+        data = np.asarray(sd.GetDataCoordinates(configuration=self._exu.ConfigurationType.Current), float)
+        for k, (_, node) in enumerate(self.scene.rollingDiscData):
+            self.sim.wk.disc[k, D_DATA:] = data[np.asarray(sd.GetNodeLTGData(node), np.int64)]
 
     def _seed_torsion(self):
         """After the state was re-read from mbs: continue every tracked torsion angle from

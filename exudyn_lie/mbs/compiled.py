@@ -13,6 +13,7 @@ from .force_elements import compile_elements, scene_fields
 from .codes import GROUP_NAMES, ROW_COORD, ROW_DIST, ROW_ROLL, ROW_ROT, ROW_TRANS_LOCAL, ROW_TRANS_WORLD
 from .rotation_parameters import TRACK_ANGLE, TRACK_NONE
 from .linalg import REL_PIVOT_TOL, rcm_order
+from .rolling_disc_penalty_forces import N_DISC
 from .scene import GROUND, Scene, SceneError
 from .tree_solve import tree_plan, work_size
 
@@ -60,10 +61,12 @@ Work = namedtuple("Work", [
     "nplanar",                        # number of tracked bodies (bangle or bparam).  In Work, not SceneData,
                                       #   for the reason above: in SceneData these fields made the heavy top's
                                       #   step 0.6 us slower although it tracks nothing (measured interleaved)
+    "disc",                           # penalty rolling discs (rolling_disc_penalty_forces.D_*): bodies, flags,
+                                      #   parameters, data coordinates (updated after every accepted step)
 ])
 
 # the per-body tracking of a scene (compile_tracking), carried into every Work of its simulator
-Tracking = namedtuple("Tracking", ["bangle", "bframe", "btrack", "bparam", "nplanar"])
+Tracking = namedtuple("Tracking", ["bangle", "bframe", "btrack", "bparam", "nplanar", "disc"])
 N_SCRATCH3 = 20
 
 
@@ -419,13 +422,22 @@ def compile_tracking(scene: Scene):
         bframe=arr([np.eye(3) if b.angleFrame is None else b.angleFrame for b in scene.bodies], (-1, 3, 3)),
         btrack=arr([body_track(b) for b in scene.bodies], (-1,), np.int64),
         bparam=arr([np.zeros(4) if b.track is None else b.track[1] for b in scene.bodies], (-1, 4)),
-        nplanar=int(sum(body_track(b) > 0 for b in scene.bodies)))
+        nplanar=int(sum(body_track(b) > 0 for b in scene.bodies)),
+        disc=arr([rolling_disc_penalty_row(e) + list(e.data0) for e in scene.rollingDiscPenalties], (-1, N_DISC)))
+
+
+def rolling_disc_penalty_row(e):
+    """``Work.disc`` row of a Scene.RollingDiscPenalty without its data coordinates (columns
+    ``rolling_disc_penalty_forces.D_A`` ... ``D_DATA - 1``)."""
+    return [float(e.bodyA), float(e.bodyB), float(e.active), float(e.useLinearProportionalZone), *e.posA, *e.posB,
+            *e.normalA, *e.axisB, e.discRadius, e.contactStiffness, e.contactDamping, *e.dryFriction,
+            e.dryFrictionProportionalZone, *e.viscousFriction, e.dryFrictionAngle, e.rollingViscousFriction]
 
 
 def no_tracking(nb):
     """Nothing tracked (bodies whose scene did not go through :func:`compile_tracking`)."""
     return Tracking(bangle=np.zeros(nb), bframe=np.zeros((nb, 3, 3)), btrack=np.zeros(nb, np.int64),
-                    bparam=np.zeros((nb, 4)), nplanar=0)
+                    bparam=np.zeros((nb, 4)), nplanar=0, disc=np.zeros((0, N_DISC)))
 
 
 def with_redundant(sd, flag):
@@ -454,4 +466,5 @@ def make_work(sd, nstages, solve="auto", track=None):
         ext=np.zeros(2, np.int64), Vw=np.zeros((nb, 6) if sd.hasQext else (0, 6)),
         tplan=plan, Tw=np.zeros(work_size(nb, m, plan)) if tree else None,
         bangle=track.bangle, bframe=track.bframe, btrack=track.btrack, bparam=track.bparam, nplanar=track.nplanar,
+        disc=track.disc,
     )

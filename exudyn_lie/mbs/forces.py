@@ -11,6 +11,7 @@ from .bodies import (_matvec, _side, add_pair_force, add_point_force, add_world_
 from .codes import L_BODY, L_FIXED, L_KIND
 from .coordinate_angles import update_coordinate_angles
 from .rotation_parameters import update_tracked_bodies
+from .rolling_disc_penalty_forces import update_rolling_disc_penalty_data
 
 
 # --------------------------------------------------------------------------- forces
@@ -344,6 +345,16 @@ def cartesian_element_energy(sd, wk, R, r, V, e):
 def torsional_element_energy(sd, wk, R, r, V, e):
     return torsional_potential(sd.gid, sd.tint, sd.trot, sd.tpar, wk.tphi, R, r, V, wk.m3, wk.ident, wk.zero3,
                                wk.zero6, e)
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def update_contact_data(sd, wk, R, r, V):
+    """Data coordinates that Exudyn updates after a step (its PostNewtonStep), after an accepted
+    step: the penalty rolling discs' slip velocity and gap.  (Not in update_torsion_tracking:
+    that one also sets the tracked angles at an initial state, where the data keep their
+    initial values, as in Exudyn.)"""
+    if wk.disc.shape[0] > 0:
+        update_rolling_disc_penalty_data(sd.gid, wk.disc, R, r, V, wk.v3, wk.ident, wk.zero3, wk.zero6)
 
 
 @njit(cache=True, inline="always", _nrt=False)

@@ -221,6 +221,33 @@ class RigidBodySpringDamper:
 
 
 @dataclass
+class RollingDiscPenalty:
+    """Exudyn's ``ObjectConnectorRollingDiscPenalty``: a disc (body B, centre ``posB``, axis
+    ``axisB`` in B's coordinates) on the plane of body A or GROUND (through ``posA``, normal
+    ``normalA`` in A's coordinates, world for GROUND), penalty contact and regularised friction;
+    ``data0`` the initial data coordinates (slip velocity, gap) of its NodeGenericData
+    (mbs/rolling_disc_penalty_forces.py has the law)."""
+    bodyA: int
+    posA: np.ndarray
+    normalA: np.ndarray
+    bodyB: int
+    posB: np.ndarray
+    axisB: np.ndarray
+    discRadius: float
+    contactStiffness: float
+    contactDamping: float
+    dryFriction: np.ndarray                 # (mu_x, mu_y)
+    dryFrictionProportionalZone: float
+    viscousFriction: np.ndarray             # (d_x, d_y)
+    dryFrictionAngle: float = 0.0
+    rollingViscousFriction: float = 0.0
+    useLinearProportionalZone: bool = False
+    active: bool = True
+    data0: np.ndarray = None                # (x0, x1, x2); None: zeros
+    name: str = ""
+
+
+@dataclass
 class Load:
     """Constant force (``kind='force'``, applied at ``pos``) or torque on one body;
     ``bodyFixed`` means the vector is given in body coordinates."""
@@ -262,6 +289,7 @@ class Scene:
         self.rigidSprings: List[RigidBodySpringDamper] = []
         self.coordinateSprings: List[CoordinateSpringDamper] = []
         self.linearSprings: List[LinearSpringDamper] = []
+        self.rollingDiscPenalties: List[RollingDiscPenalty] = []
         self.loads: List[Load] = []
         self.pythonForces: List[PythonForce] = []
 
@@ -600,6 +628,40 @@ class Scene:
             _finite(offset, f"{label}: offset"), _finite(force, f"{label}: force"), label))
         return len(self.linearSprings) - 1
 
+    def AddRollingDiscPenalty(self, bodyA, bodyB, discRadius, contactStiffness, contactDamping=0.0,
+                              dryFriction=(0.0, 0.0), dryFrictionProportionalZone=0.0, viscousFriction=(0.0, 0.0),
+                              dryFrictionAngle=0.0, rollingViscousFriction=0.0, useLinearProportionalZone=False,
+                              posA=(0, 0, 0), planeNormal=(0, 0, 1), posB=(0, 0, 0), discAxis=(1, 0, 0),
+                              active=True, data0=(0.0, 0.0, 0.0), name="") -> int:
+        """Exudyn's ``ObjectConnectorRollingDiscPenalty`` (its parameters by Exudyn's names):
+        the disc on body B (centre ``posB``, ``discAxis`` in B's coordinates) on the plane of
+        body A or GROUND (``posA``, ``planeNormal`` in A's coordinates); ``data0``: the initial
+        data coordinates (slip velocity lateral, longitudinal; gap), contact only where the
+        stored gap is negative (Exudyn's rule)."""
+        label = name or f"rollingDiscPenalty{len(self.rollingDiscPenalties)}"
+        self._check_body(bodyA, label)
+        self._check_body(bodyB, label, allow_ground=False)
+        if bodyA == bodyB:
+            raise SceneError(f"{label}: the disc and the plane are the same body")
+        for b, side in ((bodyA, "plane (marker 0)"), (bodyB, "disc (marker 1)")):
+            if b != GROUND and (self.bodies[b].isPoint or self.bodies[b].planar):
+                raise SceneError(f"{label}: the {side} must be a 3D rigid body or the ground, "
+                                 f"not {'a point mass' if self.bodies[b].isPoint else 'a 2D body'}")
+        n = _vec3(planeNormal, f"{label}: planeNormal")
+        a = _vec3(discAxis, f"{label}: discAxis")
+        nw = n if bodyA == GROUND else self.bodies[bodyA].R0 @ n
+        aw = self.bodies[bodyB].R0 @ a
+        if np.linalg.norm(np.cross(aw, nw)) <= 1e-12 * max(1e-300, np.linalg.norm(aw) * np.linalg.norm(nw)):
+            raise SceneError(f"{label}: the disc axis is parallel to the plane normal (or zero); the rolling "
+                             f"direction (discAxis x planeNormal) is undefined")
+        e = RollingDiscPenalty(int(bodyA), _vec3(posA, f"{label}: posA"), n, int(bodyB), _vec3(posB, f"{label}: posB"),
+                               a, discRadius, contactStiffness, contactDamping, dryFriction,
+                               dryFrictionProportionalZone, viscousFriction, dryFrictionAngle, rollingViscousFriction,
+                               bool(useLinearProportionalZone), bool(active), data0, label)
+        _check_rolling_disc_penalty(e)
+        self.rollingDiscPenalties.append(e)
+        return len(self.rollingDiscPenalties) - 1
+
     def AddForce(self, body, force, position=(0, 0, 0), bodyFixed=False, name="") -> int:
         """Constant force at body point ``position`` (body coordinates); world frame unless
         ``bodyFixed``."""
@@ -645,6 +707,8 @@ class Scene:
         for s in self.coordinateSprings:
             for what in ("stiffness", "damping", "offset"):
                 _finite(getattr(s, what), f"{s.name}: {what}")
+        for e in self.rollingDiscPenalties:
+            _check_rolling_disc_penalty(e)
         for l in self.loads:
             _vec3(l.vector, f"{l.name}: vector")
         if not np.all(np.isfinite(self.gravity)):
@@ -669,6 +733,24 @@ class Scene:
         return (f"Scene({len(self.bodies)} bodies, {len(self.joints)} joints, "
                 f"{len(self.connectors())} "
                 f"connectors, {len(self.loads)} loads, gravity={self.gravity.tolist()})")
+
+
+def _check_rolling_disc_penalty(e):
+    """Validate (in place, as floats / arrays) the parameters of a RollingDiscPenalty."""
+    label = e.name
+    for what in ("discRadius", "contactStiffness", "contactDamping", "dryFrictionProportionalZone",
+                 "dryFrictionAngle", "rollingViscousFriction"):
+        setattr(e, what, _finite(getattr(e, what), f"{label}: {what}"))
+    for what in ("dryFriction", "viscousFriction"):
+        v = np.asarray(getattr(e, what), float).reshape(-1)
+        if v.shape != (2,) or not np.all(np.isfinite(v)):
+            raise SceneError(f"{label}: {what} must be 2 finite numbers, got {getattr(e, what)!r}")
+        setattr(e, what, v.copy())
+    d = np.zeros(3) if e.data0 is None else np.asarray(e.data0, float).reshape(-1)
+    if d.shape != (3,) or not np.all(np.isfinite(d)):
+        raise SceneError(f"{label}: data0 (the data coordinates: slip velocity (2), gap) must be 3 finite numbers, "
+                         f"got {e.data0!r}")
+    e.data0 = d.copy()
 
 
 def _checked_mass_properties(label, mass, inertia, com):

@@ -23,6 +23,7 @@ from ..userwarn import warn_user
 from . import external, kernel
 from .codes import BODY_TWIST
 from .bodies import body_dexpinv_stage, exp_compose
+from .rolling_disc_penalty_forces import D_DATA
 from .compiled import compile_scene, compile_tracking, make_work, resolve_groups, with_redundant
 from .linalg import REL_PIVOT_TOL, rows_in_null_space, schur_rank_and_null
 from .scene import Scene, SceneError
@@ -206,6 +207,8 @@ class Simulator:
         self._segmentStart = (self.t, self.R.copy(), self.r.copy(), self.V.copy())
         if len(sc.torsionalSprings):
             self.wk.tphi[:] = 0.0
+        for k, e in enumerate(sc.rollingDiscPenalties):     # data coordinates: as given (Exudyn's initial data)
+            self.wk.disc[k, D_DATA:] = e.data0
         # the tracked angles (torsional springs, rotation coordinates, 2D bodies) at this state
         kernel.update_torsion_tracking(self.sd, self.wk, self.R, self.r, self.V)
 

@@ -46,7 +46,7 @@ from . import external
 from .bodies import body_dexpinv_stage, body_world_velocity, exp_compose, add_point_force_origin, add_world_torque_row
 from .codes import (STAB_NONE, STAGE_ARG_MAX2, STATUS_BLOWUP, STATUS_EXTERNAL, STATUS_NONFINITE, STATUS_OK,
                     STATUS_STAGE_ARG)
-from .forces import update_torsion_tracking
+from .forces import update_contact_data, update_torsion_tracking
 from .rotation_parameters import record_tracked
 from .index1 import rhs
 from .projection import project_state
@@ -455,6 +455,7 @@ def mk_steps(sd, wk, tab, ctl, t0, h, nsteps, R, r, V, vmax, every, Ro, ro, Vo, 
                     copy_state(wk.Rb, wk.rb, wk.Vb, R, r, V)
                     return st, n
         update_torsion_tracking(sd, wk, R, r, V)
+        update_contact_data(sd, wk, R, r, V)
         if wk.watchBody.shape[0] > 0:
             watch_rotation_entries(wk.watchBody, wk.watchEntry, wk.watchMax, R)
         if adaptive:

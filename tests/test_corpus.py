@@ -55,7 +55,12 @@ exudynTestGlobals.testResult = p[0] + p[1]
 '''
 
 DISC = HEADER + '''
-# a block on a slider whose velocity is prescribed by a velocity-level coordinate constraint
+# a block on a slider whose velocity is prescribed by a velocity-level coordinate constraint, beside a
+# generic ODE2 oscillator: Exudyn evaluates the model (the compiled kernel has no ObjectGenericODE2), and
+# that path refuses velocity-level constraints
+nO = mbs.AddNode(NodeGenericODE2(referenceCoordinates=[0], initialCoordinates=[0.1], initialCoordinates_t=[0],
+                                 numberOfODE2Coordinates=1))
+mbs.AddObject(ObjectGenericODE2(nodeNumbers=[nO], massMatrix=np.eye(1), stiffnessMatrix=np.eye(1)))
 oGround = mbs.CreateGround(referencePosition=[0, 0, 0])
 oBlock = mbs.CreateRigidBody(inertia=InertiaCuboid(1000, [0.1, 0.1, 0.1]), referencePosition=[0, 0, 0],
                              initialVelocity=[1, 0, 0], gravity=[0, -9.81, 0])

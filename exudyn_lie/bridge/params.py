@@ -78,9 +78,14 @@ FIELDS = {
     ("object", "ConnectorCoordinate"): {
         "markerNumbers": (FIXED, "the constrained coordinates"), "offset": _COMPILED_ROW, "factor1": _COMPILED_ROW,
         "activeConnector": (FIXED, "the constraint row is compiled (an inactive one has none)"),
-        "velocityLevel": (REFUSED, "True is refused"),
-        "offsetUserFunction": (REFUSED, "a moving offset is refused"),
-        "offsetUserFunction_t": (REFUSED, "a moving offset is refused")},
+        "velocityLevel": (FIXED, "the kind of the compiled constraint row (position or velocity level)"),
+        # a moving offset enters the row's right-hand side with its time derivatives (mbs/row_drives.py);
+        # Exudyn's index-3 solve jumps to a new offset function, the index-1 rows cannot (it would need a
+        # projection of the state), so a change stops the solve
+        "offsetUserFunction": (FIXED, "the moving offset of a position-level row, evaluated in Python at every "
+                                      "stage; ignored with velocityLevel=True, as in Exudyn"),
+        "offsetUserFunction_t": (FIXED, "the moving offset of a velocity-level row, evaluated in Python at every "
+                                        "stage; ignored with velocityLevel=False, as by Exudyn's index-3 solve")},
     ("object", "ConnectorDistance"): {
         "markerNumbers": (FIXED, "the constrained points"), "distance": _COMPILED_ROW,
         "activeConnector": (FIXED, "the constraint row is compiled (an inactive one has none)")},

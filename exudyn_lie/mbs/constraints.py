@@ -8,8 +8,8 @@ is quadratic in the velocities."""
 from numba import njit
 
 from .bodies import _cross, _matTvec, _side, body_axis, body_point, translation_dual
-from .codes import (J_BODY_A, J_BODY_B, J_NROW, J_ROW0, ROW_AX, ROW_BX, ROW_COORD, ROW_DIST, ROW_KIND, ROW_ROLL, ROW_ROT,
-                    ROW_TRANS_LOCAL)
+from .codes import (J_BODY_A, J_BODY_B, J_NROW, J_ROW0, ROW_AX, ROW_BX, ROW_COORD, ROW_COORD_VEL, ROW_DIST, ROW_KIND,
+                    ROW_ROLL, ROW_ROT, ROW_TRANS_LOCAL)
 from .coordinate_rows import coordinate_row
 from .distance_rows import distance_row
 from .rolling_disc_rows import rolling_disc_row
@@ -48,9 +48,13 @@ def joint_rows(j, gid, jint, jpos, jrot, jpar, rint, R, r, V, h, Jr, eta, v3, id
             Jr[q, k] = 0.0
         kind = rint[q, ROW_KIND]
         rax = rint[q, ROW_AX]
-        if kind == ROW_COORD:
+        if kind == ROW_COORD or kind == ROW_COORD_VEL:
             coordinate_row(q, a, b, gA, gB, RA, RB, rax, rint[q, ROW_BX], rotA, rotB, jpar[j], pA, pB, bA, bB, u, RtA,
                            h, Jr, eta)
+            if kind == ROW_COORD_VEL:
+                # velocity level: J V = w(t) constrains no position (as ROW_ROLL); the same J, and
+                # eta = -Jdot V, since d/dt (J V - w) = J Vdot + Jdot V - wdot (wdot: row_drives)
+                h[q] = 0.0
         elif kind == ROW_ROLL:
             rolling_disc_row(q, rax, a, b, gA, gB, RA, RB, rA, rB, VA, VB, rotA, rotB, jpar[j], pB, vB, ax, axd, axb,
                              bx, bxd, bxb, u, h, Jr, eta)
@@ -129,7 +133,12 @@ def joint_rows(j, gid, jint, jpos, jrot, jpar, rint, R, r, V, h, Jr, eta, v3, id
 
 
 @njit(cache=True, inline="always", _nrt=False)
-def joints_rows(gid, jint, jpos, jrot, jpar, rint, R, r, V, h, Jr, eta, v3, ident, zero3, zero6):
-    """:func:`joint_rows` of every joint."""
+def joints_rows(gid, jint, jpos, jrot, jpar, rint, R, r, V, h, Jr, eta, rdrive, v3, ident, zero3, zero6):
+    """:func:`joint_rows` of every joint, with the time-dependent part of each row
+    (``rdrive`` (3, m) at the evaluation time, :mod:`.row_drives`): ``h - c(t)`` and
+    ``eta + cddot(t)`` (the rate ``cdot(t)`` is the velocity target ``J V = cdot``)."""
     for j in range(jint.shape[0]):
         joint_rows(j, gid, jint, jpos, jrot, jpar, rint, R, r, V, h, Jr, eta, v3, ident, zero3, zero6)
+    for q in range(rint.shape[0]):
+        h[q] -= rdrive[0, q]
+        eta[q] += rdrive[2, q]

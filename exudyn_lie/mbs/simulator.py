@@ -130,10 +130,12 @@ class Simulator:
         project the configuration onto ``h(g) = 0`` on the group, then the velocity).
     projectInitial : project inconsistent initial positions/velocities onto the
         constraints instead of raising :class:`ConstraintError`.
+    startTime : the time of the initial state (rows with a moving offset are checked
+        against it; mbs/row_drives.py).
     """
 
     def __init__(self, scene: Scene, method="RK4", liegroup="SE3", stabilization=None,
-                 projectInitial=False, verbose=False):
+                 projectInitial=False, verbose=False, startTime=0.0):
         if not isinstance(scene, Scene):
             raise SceneError(f"Simulator needs an exudyn_lie Scene, got {type(scene).__name__}")
         self.scene = scene
@@ -158,7 +160,8 @@ class Simulator:
         self.gid = self.sd.gid
         self.projectInitial = projectInitial
         self.redundantJoints = []
-        self.SetInitialState()
+        self.startTime = float(startTime)
+        self.SetInitialState(t0=self.startTime)
         self._check_redundancy()
         self._check_initial_consistency()
         if verbose:
@@ -357,6 +360,14 @@ class Simulator:
             fixed["maxAngularVelocityChange"] = float(np.max(np.linalg.norm(om1 - om0, axis=1)))
             fixed["maxVelocityChange"] = float(np.max(np.linalg.norm(ve1 - ve0, axis=1)))
             self.initialProjection = fixed
+
+    CheckInitialState = _check_initial_consistency
+
+    @property
+    def hasRowDrives(self):
+        """True if rows have a moving offset (mbs/row_drives.py): then the initial check
+        depends on the time (``CheckInitialState`` after setting ``t``)."""
+        return bool(self._drives)
 
     def describe_initial_projection(self):
         """One sentence on the correction ``projectInitial`` made (None if none was made)."""

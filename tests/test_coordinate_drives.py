@@ -296,3 +296,46 @@ def test_drive_script_converges_to_native_fine_step_with_order_4(name):
     assert all(d <= e for d, e in zip(drift, errs))
     assert errs[1] < 1e-4
     assert 3.5 < slope < 4.5
+
+
+# ---------------------------------------------------------------------------- projections and drift
+def driven_scene(velocityLevel=False):
+    """A body driven along x (x = 0.1 sin(2 pi t), or its rate at velocity level), y and z
+    held, a second body hanging from it on a spring (something to integrate)."""
+    w = 2 * np.pi
+    sc = Scene()
+    a = sc.AddBody(1.0, np.diag([0.1, 0.2, 0.3]), vel0=[0.1 * w, 0, 0])
+    b = sc.AddBody(0.5, np.diag([0.05, 0.05, 0.05]), r0=[0, -0.5, 0], vel0=[0.0, 0.0, 0.2], omega0=[0.3, 0.1, 0.2])
+    if velocityLevel:
+        sc.AddCoordinateConstraint(GROUND, 0, a, 0, velocityLevel=True, offset=lambda t: 0.1 * w * np.cos(w * t))
+    else:
+        sc.AddCoordinateConstraint(GROUND, 0, a, 0, offset=lambda t: 0.1 * np.sin(w * t))
+    sc.AddCoordinateConstraint(GROUND, 1, a, 1)
+    sc.AddCoordinateConstraint(GROUND, 2, a, 2)
+    sc.AddSpringDamper(a, [0, 0, 0], b, [0.05, 0, 0], stiffness=200.0, damping=0.5, referenceLength=0.45)
+    sc.gravity = np.array([0, -9.81, 0])
+    return sc
+
+
+@pytest.mark.parametrize("velocityLevel", [False, True])
+def test_projection_after_a_step_uses_the_offset_at_the_steps_end(velocityLevel):
+    """Explicit midpoint (its last stage at t + h/2): with stabilization the state after each
+    step satisfies the rows at t + h, h(g, t + h) = 0 (position level) and J V = w(t + h)."""
+    sim = Simulator(driven_scene(velocityLevel), "ExplicitMidpoint", "SE3",
+                    stabilization="velocity" if velocityLevel else "position")
+    res = sim.Run(0.5, 1e-3, outputEvery=50)
+    assert np.max(np.abs(res.residuals)) < 1e-12
+    h, JV = sim._residuals_and_JV()
+    assert np.max(np.abs(JV)) < 1e-12
+    if not velocityLevel:
+        assert abs(sim.r[0, 0] - 0.1 * np.sin(2 * np.pi * 0.5)) < 1e-12
+
+
+def test_constraint_tolerance_of_adaptive_steps_uses_the_moving_offset():
+    """Adaptive DOPRI5 with a constraint tolerance: every output (dense ones projected when
+    their drift exceeds it) satisfies h(g, t) = 0 at its own time to the tolerance, and the
+    driven coordinate follows x(t)."""
+    sim = Simulator(driven_scene(), "DOPRI5", "SE3")
+    res = sim.Run(1.0, outputTimes=np.linspace(0, 1, 41), rtol=1e-4, atol=1e-6, constraintTolerance=1e-9)
+    assert np.max(np.abs(res.residuals)) <= 1e-9
+    np.testing.assert_allclose(res.r[:, 0, 0], 0.1 * np.sin(2 * np.pi * res.times), atol=1e-9)

@@ -145,7 +145,7 @@ def serve_outputs(sd, wk, am, ctol, fs, ist, R0, r0, V0, R, r, V, S, tout, k, Ro
                 ist[IS_EXTRA] = 1
             dense_state(sd, wk, am, (tout[k] - tp) / hp, hp, R0, r0, V0, Ro[k], ro[k], Vo[k], w)
             if ctol[CT_POS] > 0.0:                  # as Simbody's projectInterpolatedStates
-                st = update_row_drives(wk, tout[k])     # the rows' moving offsets at the output time
+                st = update_row_drives(wk.drive, tout[k])     # the rows' moving offsets at the output time
                 if st == STATUS_OK:
                     st, _ = enforce_constraint_tolerance(sd, wk, ctol, Ro[k], ro[k], Vo[k])
                 if st != STATUS_OK:
@@ -223,7 +223,7 @@ def mk_adaptive_steps(sd, wk, am, par, S, tol, ctol, fs, ist, tEnd, R, r, V, R0,
         projected = False
         st = STATUS_OK
         if sd.stabilization != STAB_NONE or ctol[CT_POS] > 0.0:
-            st = update_row_drives(wk, t + htry)        # the rows' moving offsets at the step's end
+            st = update_row_drives(wk.drive, t + htry)        # the rows' moving offsets at the step's end
         if st == STATUS_OK and sd.stabilization != STAB_NONE:
             st = project_state(sd, wk, sd.stabilization, R, r, V)
             projected = True

@@ -45,10 +45,11 @@ Work = namedtuple("Work", [
     "tmp6", "tmp12", "v3", "m3", "ident", "zero3", "zero6",
     "tphi", "watchBody", "watchEntry", "watchMax",
     "ext",                            # [token of the external rhs evaluator (mbs.external), 0: none;
-                                      #  1 if the forces it returned were not finite;
-                                      #  token of the row-drive evaluator (mbs.row_drives), 0: none]
+                                      #  1 if the forces it returned were not finite]
     "rdrive",                         # (3, m): the time-dependent part of each row (mbs.row_drives): value,
                                       #   rate (the velocity target of J V) and acceleration (added to eta)
+    "drive",                          # [token of the row-drive evaluator (mbs.row_drives)], None without
+                                      #   offset functions (then the time loop has no drive code: tplan's rule)
     "Vw",                             # (nb, 6) (omega body, world rdot) at the stage, for Python forces
     "tplan", "Tw",                    # the tree solve's plan (mbs.tree_solve.tree_plan) and flat work; None
                                       # for the band solve (index1._is_tree: then no tree code is compiled).
@@ -493,7 +494,7 @@ def make_work(sd, nstages, solve="auto", track=None):
         tmp6=np.zeros(6), tmp12=np.zeros(12), v3=np.zeros((N_SCRATCH3, 3)), m3=np.zeros((4, 3, 3)),
         ident=np.eye(3), zero3=np.zeros(3), zero6=np.zeros(6), tphi=np.zeros(sd.tint.shape[0]),
         watchBody=np.zeros(0, np.int64), watchEntry=np.zeros((0, 2), np.int64), watchMax=np.zeros(0),
-        ext=np.zeros(3, np.int64), rdrive=constant_drives(sd), Vw=np.zeros((nb, 6) if sd.hasQext else (0, 6)),
+        ext=np.zeros(2, np.int64), rdrive=constant_drives(sd), drive=None, Vw=np.zeros((nb, 6) if sd.hasQext else (0, 6)),
         tplan=plan, Tw=np.zeros(work_size(nb, m, plan)) if tree else None,
         bangle=track.bangle, bframe=track.bframe, btrack=track.btrack, bparam=track.bparam, nplanar=track.nplanar,
     )

@@ -177,7 +177,8 @@ class Simulator:
         extra = dense.extra_stages if (dense is not None and self.tableau.b_hat is not None) else 0
         wk = make_work(self.sd, len(self.method.b) + extra, solve, self._track)
         wk.ext[0] = self._extToken
-        wk.ext[2] = self._driveToken
+        if self._driveToken:
+            wk = wk._replace(drive=np.array([self._driveToken], np.int64))
         self._mkEntry = None
         if getattr(self, "_ad", None) is not None:
             self._ad.pop("entry", None)
@@ -671,13 +672,14 @@ class Simulator:
         return st
 
     # ----------------------------------------------------------------- diagnostics
-    def Diagnostics(self, R=None, r=None, V=None):
+    def Diagnostics(self, R=None, r=None, V=None, t=None):
         """(energy[3], residuals[m], joint position violation[nj], joint rotation violation[nj])
-        at the current state (or at ``R, r, V``)."""
+        at the current state (or at ``R, r, V``), the rows' moving offsets at ``t`` (default: the
+        current time)."""
         sd, wk = self.sd, self.wk
         e = np.zeros(3)
         h = np.zeros(sd.nrows)
-        self._drives_at(self.t)
+        self._drives_at(self.t if t is None else t)
         kernel.all_rows(sd, wk, self.R if R is None else R, self.r if r is None else r, self.V if V is None else V,
                         h, wk.Jr, wk.eta, e)
         nj = len(self.scene.joints)
@@ -896,7 +898,7 @@ class Simulator:
                 print(f"exudyn_lie: t = {self.t:.4g} / {endTime:.4g} s", flush=True)
         energy, res, pv, rv = np.zeros((nout, 3)), np.zeros((nout, m)), np.zeros((nout, nj)), np.zeros((nout, nj))
         for q in range(nout):
-            energy[q], res[q], pv[q], rv[q] = self.Diagnostics(R[q], r[q], V[q])
+            energy[q], res[q], pv[q], rv[q] = self.Diagnostics(R[q], r[q], V[q], t=tout[q])
         omega, vel = twist_to_world_velocity(np.tile(self.gid, nout), R.reshape(-1, 3, 3), V.reshape(-1, 6))
         acc, rej, nrhs = self.adaptiveCounters
         return Result(tout.copy(), R, r, V, omega.reshape(nout, nb, 3), vel.reshape(nout, nb, 3), energy, res, pv,

@@ -226,10 +226,9 @@ def stage_rhs(sd, wk, t, Vdot):
     """``Vdot_j = F(t, g_j, V_j)`` at the stage state ``wk.Rs, wk.rs, wk.Vs``: the
     external part first (if the scene has one: Python forces; the rows' moving offsets at
     ``t``, :mod:`.row_drives`), then the compiled index-1 rhs."""
-    if wk.ext[2] != 0:
-        st = update_row_drives(wk, t)
-        if st != STATUS_OK:
-            return st
+    st = update_row_drives(wk.drive, t)      # no code without offset functions (wk.drive None)
+    if st != STATUS_OK:
+        return st
     if sd.hasQext:
         st = external_forces(wk.ext[0], sd.gid, t, wk.Rs, wk.Vs, wk.Vw, wk.Qext, wk.ext)
         if st != STATUS_OK:
@@ -353,7 +352,7 @@ def mk_steps(sd, wk, tab, ctl, t0, h, nsteps, R, r, V, vmax, every, Ro, ro, Vo, 
                 h = hnext
                 continue
         if sd.stabilization != STAB_NONE:
-            st = update_row_drives(wk, t + h)            # the rows' moving offsets at the step's end
+            st = update_row_drives(wk.drive, t + h)            # the rows' moving offsets at the step's end
             if st == STATUS_OK:
                 st = project_state(sd, wk, sd.stabilization, R, r, V)
             if st != STATUS_OK:

@@ -339,3 +339,49 @@ def test_constraint_tolerance_of_adaptive_steps_uses_the_moving_offset():
     res = sim.Run(1.0, outputTimes=np.linspace(0, 1, 41), rtol=1e-4, atol=1e-6, constraintTolerance=1e-9)
     assert np.max(np.abs(res.residuals)) <= 1e-9
     np.testing.assert_allclose(res.r[:, 0, 0], 0.1 * np.sin(2 * np.pi * res.times), atol=1e-9)
+
+
+# ---------------------------------------------------------------------------- the Exudyn-evaluated path
+def evaluated_drive_model():
+    """Three Mass1D driven by coordinate constraints beside an ObjectGenericODE2 oscillator (an
+    item the compiled kernel lacks: Exudyn evaluates the model): x0 by an offsetUserFunction
+    without offsetUserFunction_t (Exudyn's velocity-level equation omits its rate), x1 at
+    velocity level by offsetUserFunction_t, x2 at velocity level with a constant offset."""
+    from exudyn.utilities import NodeGenericODE2, ObjectGenericODE2
+    mbs = new_mbs()
+    ng = mbs.AddNode(NodePointGround())
+    mg = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=ng, coordinate=0))
+    nodes = []
+    for k, (x0, v0) in enumerate(((0.0, 0.0), (0.0, 0.5), (0.2, 0.7))):
+        n = mbs.AddNode(Node1D(referenceCoordinates=[0.0], initialCoordinates=[x0], initialVelocities=[v0]))
+        mbs.AddObject(ObjectMass1D(nodeNumber=n, mass=1.0 + k))
+        nodes.append(n)
+    mk = [mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=n, coordinate=0)) for n in nodes]
+    mbs.AddObject(ObjectConnectorCoordinate(markerNumbers=[mg, mk[0]], name="x0",
+                                            offsetUserFunction=lambda mbs, t, i, o: 0.3 * (1 - np.cos(2 * np.pi * t))))
+    mbs.AddObject(ObjectConnectorCoordinate(markerNumbers=[mg, mk[1]], velocityLevel=True, name="x1",
+                                            offsetUserFunction_t=lambda mbs, t, i, o: 0.5 * np.cos(2 * t)))
+    mbs.AddObject(ObjectConnectorCoordinate(markerNumbers=[mg, mk[2]], velocityLevel=True, offset=0.7, name="x2"))
+    nO = mbs.AddNode(NodeGenericODE2(referenceCoordinates=[0], initialCoordinates=[0.1], initialCoordinates_t=[0],
+                                     numberOfODE2Coordinates=1))
+    mbs.AddObject(ObjectGenericODE2(nodeNumbers=[nO], massMatrix=np.eye(1), stiffnessMatrix=np.eye(1)))
+    mbs.Assemble()
+    return mbs, nodes
+
+
+def test_evaluated_path_honours_moving_offsets_and_velocity_level_rows():
+    """Exact solutions (the driven coordinates are prescribed): x0 = 0.3 (1 - cos 2 pi t) (before
+    the fix the evaluated path left x0 at 0: Exudyn's velocity-level equation has no offset rate),
+    x1 = 0.25 sin 2t, x2 = 0.2 + 0.7 t."""
+    mbs, nodes = evaluated_drive_model()
+    ss = quiet_settings(endTime=0.25, nsteps=250)
+    with pytest.warns(RuntimeWarning, match="Exudyn evaluates the whole model"):
+        exl.SolveDynamic(mbs, ss)
+    T = 0.25
+    x = [float(np.atleast_1d(mbs.GetNodeOutput(n, exu.OutputVariableType.Coordinates))[0]) for n in nodes]
+    v = [float(np.atleast_1d(mbs.GetNodeOutput(n, exu.OutputVariableType.Coordinates_t))[0]) for n in nodes]
+    assert abs(x[0] - 0.3 * (1 - np.cos(2 * np.pi * T))) < 1e-9
+    assert abs(v[0] - 0.6 * np.pi * np.sin(2 * np.pi * T)) < 1e-8
+    assert abs(x[1] - 0.25 * np.sin(2 * T)) < 1e-9
+    assert abs(v[1] - 0.5 * np.cos(2 * T)) < 1e-9
+    assert abs(x[2] - (0.2 + 0.7 * T)) < 1e-12 and abs(v[2] - 0.7) < 1e-12

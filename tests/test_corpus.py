@@ -55,15 +55,18 @@ exudynTestGlobals.testResult = p[0] + p[1]
 '''
 
 DISC = HEADER + '''
-# a block on a slider whose velocity is prescribed by a velocity-level coordinate constraint
+# a block on a slider whose velocity is prescribed by a velocity-level ObjectConnectorCoordinateVector: Exudyn
+# evaluates the model (the compiled kernel has no ObjectConnectorCoordinateVector), and that path refuses
+# velocity-level constraints other than ObjectConnectorCoordinate's
 oGround = mbs.CreateGround(referencePosition=[0, 0, 0])
 oBlock = mbs.CreateRigidBody(inertia=InertiaCuboid(1000, [0.1, 0.1, 0.1]), referencePosition=[0, 0, 0],
                              initialVelocity=[1, 0, 0], gravity=[0, -9.81, 0])
 nBlock = mbs.GetObject(oBlock)['nodeNumber']
 nG = mbs.AddNode(NodePointGround())
-mG = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=nG, coordinate=0))
-mX = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=nBlock, coordinate=0))
-mbs.AddObject(ObjectConnectorCoordinate(markerNumbers=[mG, mX], offset=1, velocityLevel=True))
+mG = mbs.AddMarker(MarkerNodeCoordinates(nodeNumber=nG))
+mX = mbs.AddMarker(MarkerNodeCoordinates(nodeNumber=nBlock))
+mbs.AddObject(ObjectConnectorCoordinateVector(markerNumbers=[mG, mX], scalingMarker0=np.zeros((1, 0)),
+              scalingMarker1=np.array([[1, 0, 0, 0, 0, 0, 0]]), offset=[1], velocityLevel=True))
 mbs.Assemble()
 simulationSettings = exu.SimulationSettings()
 simulationSettings.timeIntegration.endTime = 0.1
@@ -117,9 +120,9 @@ def test_unsupported_item_is_refused_and_named(corpus_run):
     assert r["exlStatus"] == "refused"
     assert r["exl"]["solves"][0]["exl"] == "refusal"
     assert r["exlReason"].startswith("BridgeError: ")
-    assert r["firstRefusal"] == "ObjectConnectorCoordinate: velocityLevel=True"
+    assert r["firstRefusal"] == "ObjectConnectorCoordinateVector: velocityLevel=True"
     assert r["testResult"][1] is None                        # the script stopped at the solve
-    assert "ObjectConnectorCoordinate" in r["inventory"] and "ObjectRigidBody" in r["inventory"]
+    assert "ObjectConnectorCoordinateVector" in r["inventory"] and "ObjectRigidBody" in r["inventory"]
 
 
 def test_supported_pendulum_agrees_with_native_to_the_native_step_error(corpus_run):
@@ -174,10 +177,10 @@ def test_report_files(corpus_run):
     s = corpus.summarize(list(records.values()))
     assert s["scripts"] == len(STEPS) + 2 and s["base"] == len(STEPS) + 1
     assert s["exl"]["ok"] == len(STEPS) and s["exl"]["refused"] == 1 and s["exl"]["crashed"] == 0
-    assert s["firstRefusal"] == {"ObjectConnectorCoordinate: velocityLevel=True": 1}
+    assert s["firstRefusal"] == {"ObjectConnectorCoordinateVector: velocityLevel=True": 1}
     assert s["fineReferences"] == len(STEPS) and s["exlCloserToFine"] == len(STEPS)
     text = corpus.render(list(records.values()), s, "test", 0.0, 120)
-    assert "| `ObjectConnectorCoordinate: velocityLevel=True` | 1 |" in text
+    assert "| `ObjectConnectorCoordinateVector: velocityLevel=True` | 1 |" in text
     assert "`brokenScript.py`" in (out / "corpus.md").read_text()
 
 

@@ -50,7 +50,8 @@ import numpy as np
 
 from ..errors import ConstraintError, SimulationError
 from .evaluated_kernels import block_kkt_solve, schur_band_solve, write_exudyn_state, write_moved_positions
-from .reader import BridgeError
+from ..mbs.row_drives import offset_and_derivatives
+from .reader import BridgeError, _userfunction
 
 EPS_CBRT = float(np.finfo(float).eps) ** (1.0 / 3.0)
 
@@ -101,10 +102,38 @@ def check_model(mbs):
             raise BridgeError(f"object {o} ('{d.get('name', '')}') of type Object{t} is not supported by exudyn_lie: "
                               f"its constraints are at velocity level (nonholonomic), and exudyn_lie's index-1 solve "
                               f"needs position-level constraints; solve this model with exudyn.SolveDynamic")
-        if d.get("velocityLevel", False) is True and d.get("activeConnector", True):
+        if d.get("velocityLevel", False) is True and d.get("activeConnector", True) and t != "ConnectorCoordinate":
             raise BridgeError(f"{_describe_object(mbs, o, d)}: velocityLevel=True is not supported by exudyn_lie (its "
                               f"index-1 solve needs position-level constraints); use velocityLevel=False or solve "
                               f"with exudyn.SolveDynamic")
+
+
+def coordinate_constraint_rows(mbs):
+    """The ObjectConnectorCoordinate rows that need more than Exudyn's evaluation (active ones):
+    ``(velocity-level AE rows, [(AE row, offset function, label)])``.  A velocity-level row's
+    Jacobian is Exudyn's ``C_qdot`` (``ComputeJacobianAE`` with the ODE2_t factor), its
+    position-level residual does not exist (the initial position check skips it).  A
+    position-level row with an ``offsetUserFunction`` and no ``offsetUserFunction_t``: Exudyn's
+    velocity-level equation (CObjectConnectorCoordinate::ComputeAlgebraicEquations) leaves the
+    offset's rate out, so its rate and acceleration are added here (mbs/row_drives.py's central
+    differences; with an ``offsetUserFunction_t`` Exudyn's equation holds it, as its doc asks)."""
+    from . import pyforces
+    sd = mbs.systemData
+    vel, moving = [], []
+    for o in range(sd.NumberOfObjects()):
+        d = mbs.GetObject(o)
+        if d["objectType"] != "ConnectorCoordinate" or not d.get("activeConnector", True):
+            continue
+        rows = [int(r) for r in sd.GetObjectLTGAE(o)]
+        if d.get("velocityLevel", False):
+            vel += rows
+            continue
+        what = _describe_object(mbs, o, d)
+        uf = _userfunction(d, "offsetUserFunction", what)
+        if uf is not None and _userfunction(d, "offsetUserFunction_t", what) is None:
+            fn = pyforces.OffsetUserFunction(mbs, o, d, uf, "offsetUserFunction")
+            moving += [(r, fn, fn.label) for r in rows]
+    return np.array(vel, np.int64), moving
 
 
 class Layout:
@@ -198,6 +227,9 @@ class EvaluatedModel:
         self._eta0 = np.zeros(0)
         self._etaBuf = np.zeros(m)
         self._vmax = 0.0
+        self.velocityRows, self._movingRows = coordinate_constraint_rows(mbs)
+        # C_qdot of velocity-level rows: the ODE2_t factor (position-level rows have no ODE2_t part)
+        self._factorODE2_t = 1.0 if len(self.velocityRows) else 0.0
         self._perm = np.zeros(m, np.int64)
         self._yw = np.zeros(m)
         self.blk = self.blkPtr = None
@@ -265,7 +297,7 @@ class EvaluatedModel:
         Cq = None
         if self.m:
             self._zeroJ()
-            self._jacAE(mbs)
+            self._jacAE(mbs, scalarFactor_ODE2_t=self._factorODE2_t)
             J = self._getJ()
             Cq = J[self.n + self.n1:, :self.n]
             if self.n1 and np.any(J[self.n + self.n1:, self.n:self.n + self.n1]):
@@ -278,7 +310,10 @@ class EvaluatedModel:
         """``g_v(q, v, t)`` (Exudyn's velocity-level AE residual) at the state in mbs."""
         self._setTime(t)
         self._ae(self.mbs, True)
-        return self._residual()[self.n + self.n1:].copy()
+        gv = self._residual()[self.n + self.n1:].copy()
+        for r, fn, label in self._movingRows:          # - cdot(t): coordinate_constraint_rows
+            gv[r] -= offset_and_derivatives(fn, t, label)[1]
+        return gv
 
     def eta_step(self):
         """The central-difference step (module docstring): ``cbrt(eps) / max(1, max|v|)``."""
@@ -306,6 +341,8 @@ class EvaluatedModel:
         out = self._etaBuf
         np.subtract(gm[o:], gp[o:], out=out)
         out *= 0.5 / eps
+        for row, fn, label in self._movingRows:        # + cddot(t): coordinate_constraint_rows
+            out[row] += offset_and_derivatives(fn, t, label)[2]
         if restore:
             q[:] = self._qsave
             setTime(t)

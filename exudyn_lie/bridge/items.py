@@ -168,9 +168,15 @@ register("object", "JointPrismatic2D", "joint", "joint rows (planar)", {
 register("object", "ConnectorCoordinate", "joint", "a coordinate row (mbs/coordinate_rows.py)", {
     "markerNumbers": (FIXED, "the constrained coordinates"), "offset": _COMPILED_ROW, "factor1": _COMPILED_ROW,
     "activeConnector": (FIXED, "the constraint row is compiled (an inactive one has none)"),
-    "velocityLevel": (REFUSED, "True is refused"),
-    "offsetUserFunction": (REFUSED, "a moving offset is refused"),
-    "offsetUserFunction_t": (REFUSED, "a moving offset is refused")}, reader="read_coordinate_constraint")
+    "velocityLevel": (FIXED, "the kind of the compiled constraint row (position or velocity level)"),
+    # a moving offset enters the row's right-hand side with its time derivatives (mbs/row_drives.py);
+    # Exudyn's index-3 solve jumps to a new offset function, the index-1 rows cannot (it would need a
+    # projection of the state), so a change stops the solve
+    "offsetUserFunction": (FIXED, "the moving offset of a position-level row, evaluated in Python at every "
+                                  "stage; ignored with velocityLevel=True, as in Exudyn"),
+    "offsetUserFunction_t": (FIXED, "the moving offset of a velocity-level row, evaluated in Python at every "
+                                    "stage; ignored with velocityLevel=False, as by Exudyn's index-3 solve")},
+         reader="read_coordinate_constraint")
 register("object", "ConnectorDistance", "joint", "a distance row (mbs/distance_rows.py)", {
     "markerNumbers": (FIXED, "the constrained points"), "distance": _COMPILED_ROW,
     "activeConnector": (FIXED, "the constraint row is compiled (an inactive one has none)")},

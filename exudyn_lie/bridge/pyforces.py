@@ -453,3 +453,19 @@ class CoordinateLoadUF(PyItem):
 
     def add(self, t, st, F, T):
         apply_coordinate(self.cm, float(_call(self.label, self.uf, self.mbs, t, self.load)), F, T)
+
+
+class OffsetUserFunction:
+    """The moving offset of an ObjectConnectorCoordinate, ``t -> uf(mbs, t, i, offset)``
+    (Exudyn's ``offsetUserFunction`` or, with ``velocityLevel=True``, ``offsetUserFunction_t``;
+    its derivatives: mbs/row_drives.py); ``label`` names the item in the errors."""
+
+    def __init__(self, mbs, o, d, uf, key):
+        self.mbs = mbs
+        self.o = int(o)
+        self.offset = float(d.get("offset", 0.0))
+        self.uf = uf
+        self.label = f"object {o} ObjectConnectorCoordinate ('{d.get('name', '')}') {key}"
+
+    def __call__(self, t):
+        return self.uf(self.mbs, t, self.o, self.offset)

@@ -714,7 +714,12 @@ class _Reader:
         return CoordinateMarker(m, self.rigidNodeBody[n], axis, ref + float(axis @ origin))
 
     def read_coordinate_constraint(self, sc, o, d):
-        """ObjectConnectorCoordinate: ``f q_B - q_A - offset = 0`` (CObjectConnectorCoordinate)."""
+        """ObjectConnectorCoordinate (CObjectConnectorCoordinate::ComputeAlgebraicEquations):
+        ``f q_B - q_A - offset = 0``, with ``offsetUserFunction`` in place of ``offset``; with
+        ``velocityLevel=True`` ``f qdot_B - qdot_A - offset = 0`` on the coordinates' rates, with
+        ``offsetUserFunction_t`` in place of ``offset`` (Exudyn ignores ``offsetUserFunction``
+        then, and the position-level equation ignores ``offsetUserFunction_t``: its index-3
+        solve never reads it).  Moving offsets: mbs/row_drives.py."""
         what = self._what("object", o, d)
         try:
             aeAll = np.zeros(0, np.int64) if self.items else np.array(self.sd.GetObjectLTGAE(o), dtype=np.int64)
@@ -724,13 +729,9 @@ class _Reader:
             sc.skipped.append((what, "inactive (activeConnector=False): Exudyn sets its multiplier to 0"))
             sc.aeZero.extend(aeAll.tolist())
             return
-        for key in ("offsetUserFunction", "offsetUserFunction_t"):
-            if _userfunction(d, key, what) is not None:
-                raise BridgeError(f"{what}: {key} is not supported by exudyn_lie yet; solve with "
-                                  f"exudyn.SolveDynamic")
-        if d.get("velocityLevel", False):
-            raise BridgeError(f"{what}: velocityLevel=True is not supported by exudyn_lie yet; solve with "
-                              f"exudyn.SolveDynamic")
+        velocityLevel = bool(d.get("velocityLevel", False))
+        key = "offsetUserFunction_t" if velocityLevel else "offsetUserFunction"
+        uf = _userfunction(d, key, what)
         m0, m1 = (int(m) for m in d["markerNumbers"])
         cA = self.coordinate_marker(m0, what)
         cB = self.coordinate_marker(m1, what)
@@ -740,9 +741,14 @@ class _Reader:
             sc.skipped.append((what, "constrains no body coordinate"))
             sc.aeZero.extend(aeAll.tolist())
             return
+        offset = float(d.get("offset", 0.0))
+        # the references fold into the constant of a position-level row (rates have none); a
+        # user function replaces the offset
+        constant = (0.0 if velocityLevel else f * refB - refA) + (0.0 if uf is not None else offset)
+        moving = None if uf is None else pyforces.OffsetUserFunction(self.mbs, o, d, uf, key)
         try:
             j = sc.AddCoordinateConstraint(A, ka, B, kb, factor=f, name=d.get("name", "") or f"object{o}",
-                                           constant=float(d.get("offset", 0.0)) + f * refB - refA)
+                                           constant=constant, velocityLevel=velocityLevel, offset=moving)
         except SceneError as e:
             raise BridgeError(f"{what}: {e}") from None
         sc.joints_info.append(JointInfo(o, d["objectType"], j, aeAll[:1], aeAll))

@@ -210,14 +210,16 @@ class LieGroupSolver:
                 groups[b], why[b] = "R3", "point mass"
         return groups, why
 
-    def _prepare(self, announce=False):
-        """(Re-)read the model and build the simulator from mbs' initial configuration."""
+    def _prepare(self, announce=False, startTime=0.0):
+        """(Re-)read the model and build the simulator from mbs' initial configuration
+        (checked against the constraints at ``startTime``: rows with a moving offset)."""
         tic = time.perf_counter()
         sc = SceneFromExudyn(self.mbs, self._configuration)
         groups, why = self._groups(sc)
         with warnings.catch_warnings(), compile_timer() as ct:
             warnings.simplefilter("ignore", DeprecationWarning)
-            sim = Simulator(sc, self.tableau, groups, self.stabilization, self.projectInitial, verbose=False)
+            sim = Simulator(sc, self.tableau, groups, self.stabilization, self.projectInitial, verbose=False,
+                            startTime=startTime)
         self._compileSeconds += ct.seconds
         self._prepareSeconds += time.perf_counter() - tic
         self.scene, self.sim, self.groups = sc, sim, groups
@@ -652,7 +654,9 @@ class LieGroupSolver:
         # set-ups before this call (SolveDynamic builds the solver first) count to this run
         pendingCompile, pendingPrepare = self._compileSeconds, self._prepareSeconds
         if self._use_assembled() or refresh or not self._fresh:
-            self._prepare(announce=False)
+            self._prepare(announce=False, startTime=t0)
+        elif self.sim.hasRowDrives and self.sim.startTime != t0:      # moving offsets: checked at another time
+            self._prepare(announce=False, startTime=t0)
         self._fresh = False
         self._warn_projection()
         ticLoop, compileSetUp = time.perf_counter(), ct.seconds
@@ -940,7 +944,7 @@ class LieGroupSolver:
         import exudyn as exu
         self._exu = exu
         if self._use_assembled() or refresh or not self._fresh:
-            self._prepare(announce=False)
+            self._prepare(announce=False, startTime=float(startTime))
         self._fresh = False
         self._warn_projection()
         self.sim.t = float(startTime)

@@ -48,6 +48,7 @@ from ..integrators import control as C
 from .bodies import exp_compose
 from .codes import STAB_NONE, STATUS_OK, STATUS_STEP_MIN
 from .projection import CT_N_PROJ, CT_POS, enforce_constraint_tolerance, project_error_estimate, project_state
+from .row_drives import update_row_drives
 from .rotation_parameters import tracked_at
 from . import stepper
 from .stepper import (ACT_ACCEPT, ACT_RETRY, ACT_STOP, controller_is, copy_state, mk_stage_k, mk_stage_state,
@@ -157,7 +158,9 @@ def serve_outputs(sd, wk, am, ctol, fs, ist, R0, r0, V0, R, r, V, S, tout, k, Ro
                 ist[IS_EXTRA] = 1
             dense_state(sd, wk, am, (tout[k] - tp) / hp, hp, R0, r0, V0, Ro[k], ro[k], Vo[k], w)
             if ctol[CT_POS] > 0.0:                  # as Simbody's projectInterpolatedStates
-                st, _ = enforce_constraint_tolerance(sd, wk, ctol, Ro[k], ro[k], Vo[k])
+                st = update_row_drives(wk.drive, tout[k])     # the rows' moving offsets at the output time
+                if st == STATUS_OK:
+                    st, _ = enforce_constraint_tolerance(sd, wk, ctol, Ro[k], ro[k], Vo[k])
                 if st != STATUS_OK:
                     return st, k
         if Po.shape[0] > k:
@@ -235,10 +238,12 @@ def adaptive_control(sd, wk, am, ctl, R, r, V, htry, ok, st, t):
         return ACT_RETRY, STATUS_OK
     projected = False
     st = STATUS_OK
-    if sd.stabilization != STAB_NONE:
+    if sd.stabilization != STAB_NONE or ctol[CT_POS] > 0.0:
+        st = update_row_drives(wk.drive, t + htry)        # the rows' moving offsets at the step's end
+    if st == STATUS_OK and sd.stabilization != STAB_NONE:
         st = project_state(sd, wk, sd.stabilization, R, r, V)
         projected = True
-    elif ctol[CT_POS] > 0.0:
+    elif st == STATUS_OK and ctol[CT_POS] > 0.0:
         st, projected = enforce_constraint_tolerance(sd, wk, ctol, R, r, V)
         if projected:
             ctol[CT_N_PROJ] += 1.0

@@ -10,7 +10,7 @@ from collections import namedtuple
 import numpy as np
 
 from .force_elements import compile_elements, scene_fields
-from .codes import GROUP_NAMES, ROW_COORD, ROW_DIST, ROW_ROLL, ROW_ROT, ROW_TRANS_LOCAL, ROW_TRANS_WORLD
+from .codes import GROUP_NAMES, J_NROW, J_ROW0, ROW_COORD, ROW_COORD_VEL, ROW_DIST, ROW_KIND, ROW_ROLL, ROW_ROT, ROW_TRANS_LOCAL, ROW_TRANS_WORLD
 from .rotation_parameters import TRACK_ANGLE, TRACK_NONE
 from .linalg import REL_PIVOT_TOL, rcm_order
 from .rolling_disc_penalty_forces import N_DISC
@@ -48,6 +48,10 @@ Work = namedtuple("Work", [
     "tphi", "watchBody", "watchEntry", "watchMax",
     "ext",                            # [token of the external rhs evaluator (mbs.external), 0: none;
                                       #  1 if the forces it returned were not finite]
+    "rdrive",                         # (3, m): the time-dependent part of each row (mbs.row_drives): value,
+                                      #   rate (the velocity target of J V) and acceleration (added to eta)
+    "drive",                          # [token of the row-drive evaluator (mbs.row_drives)], None without
+                                      #   offset functions (then the time loop has no drive code: tplan's rule)
     "Vw",                             # (nb, 6) (omega body, world rdot) at the stage, for Python forces
     "tplan", "Tw",                    # the tree solve's plan (mbs.tree_solve.tree_plan) and flat work; None
                                       # for the band solve (index1._is_tree: then no tree code is compiled).
@@ -114,7 +118,8 @@ def body_track(body):
 def joint_rows_of(joint):
     """(kind, ax, bx) of the rows of a scene joint."""
     if joint.coordinate is not None:
-        return [(ROW_COORD, int(joint.coordinate[4]), int(joint.coordinate[5]))]    # 1: a rotation coordinate
+        kind = ROW_COORD_VEL if joint.velocityLevel else ROW_COORD
+        return [(kind, int(joint.coordinate[4]), int(joint.coordinate[5]))]    # 1: a rotation coordinate
     if joint.distance is not None:
         return [(ROW_DIST, 0, 0)]
     if joint.rollingDisc is not None:
@@ -444,6 +449,18 @@ def with_redundant(sd, flag):
     return sd._replace(redundant=bool(flag), bandwidth=(sd.nrows - 1 if flag else sd.bandwidth))
 
 
+def constant_drives(sd):
+    """The row drives ``Work.rdrive`` (3, m) of the constant parts: a velocity-level row's
+    constant ``c`` (``jpar[j, 1]``) is its velocity target; rows with a moving offset are
+    filled at every evaluation time (mbs/row_drives.py)."""
+    rd = np.zeros((3, sd.nrows))
+    for j in range(sd.jint.shape[0]):
+        q = sd.jint[j, J_ROW0]
+        if sd.jint[j, J_NROW] > 0 and sd.rint[q, ROW_KIND] == ROW_COORD_VEL:
+            rd[1, q] = sd.jpar[j, 1]
+    return rd
+
+
 def make_work(sd, nstages, solve="auto", track=None):
     """Scratch and per-step state of a simulator; ``track`` (:func:`compile_tracking`): the
     tracked per-body arrays, shared (not copied) so that a new Work keeps their state."""
@@ -463,7 +480,7 @@ def make_work(sd, nstages, solve="auto", track=None):
         tmp6=np.zeros(6), tmp12=np.zeros(12), v3=np.zeros((N_SCRATCH3, 3)), m3=np.zeros((4, 3, 3)),
         ident=np.eye(3), zero3=np.zeros(3), zero6=np.zeros(6), tphi=np.zeros(sd.tint.shape[0]),
         watchBody=np.zeros(0, np.int64), watchEntry=np.zeros((0, 2), np.int64), watchMax=np.zeros(0),
-        ext=np.zeros(2, np.int64), Vw=np.zeros((nb, 6) if sd.hasQext else (0, 6)),
+        ext=np.zeros(2, np.int64), rdrive=constant_drives(sd), drive=None, Vw=np.zeros((nb, 6) if sd.hasQext else (0, 6)),
         tplan=plan, Tw=np.zeros(work_size(nb, m, plan)) if tree else None,
         bangle=track.bangle, bframe=track.bframe, btrack=track.btrack, bparam=track.bparam, nplanar=track.nplanar,
         disc=track.disc,

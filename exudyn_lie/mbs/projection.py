@@ -14,7 +14,7 @@ Joints = namedtuple("Joints", ["gid", "jint", "jpos", "jrot", "jpar", "rint"])  
 Schur = namedtuple("Schur", ["Minv", "bw", "redundant", "pivotTol",              # J M^-1 J^T: data...
                              "W", "lam", "Sb", "Sd", "perm", "ytmp", "info", "tmp12",    # ... and work
                              "tree"])                                            # index1.TreeSolve
-Rows = namedtuple("Rows", ["h", "Jr", "eta"])                                    # the rows at a state
+Rows = namedtuple("Rows", ["h", "Jr", "eta", "rdrive"])    # the rows at a state; row drives (mbs.row_drives)
 Scratch = namedtuple("Scratch", ["Psi", "v3", "m3", "ident", "zero3", "zero6"])
 
 
@@ -25,12 +25,16 @@ def project(level, joints, schur, rows, scratch, R, r, V):
     * positions (``level`` 2): Gauss-Newton ``g_i <- g_i exp(delta_i)``,
       ``delta = -M^-1 J^T (J M^-1 J^T)^-1 h(g)`` (the mass-weighted least-change
       correction; J is the derivative of h along g exp(delta) in each body's group);
-    * velocities (``level`` >= 1): ``V <- V - M^-1 J^T (J M^-1 J^T)^-1 J V``.
+    * velocities (``level`` >= 1): ``V <- V - M^-1 J^T (J M^-1 J^T)^-1 (J V - w)``, ``w`` the
+      velocity targets ``rdrive[1]`` (0 but for rows with a moving offset or a velocity-level
+      row's offset, :mod:`.row_drives`; a velocity-level row has ``h = 0``, so the position
+      step leaves it alone).
 
+    The row drives ``rdrive`` must hold their values at the state's time (the caller).
     Returns a status code (STATUS_PROJECTION if max |h| stays above the tolerance)."""
     gid, jint, jpos, jrot, jpar, rint = joints
     Minv, bw, redundant, pivotTol, W, lam, Sb, Sd, perm, ytmp, info, tmp12, tree = schur
-    h, Jr, eta = rows
+    h, Jr, eta, rdrive = rows
     Psi, v3, m3, ident, zero3, zero6 = scratch
     nb = gid.shape[0]
     if level >= STAB_POSITION:
@@ -42,7 +46,7 @@ def project(level, joints, schur, rows, scratch, R, r, V):
         tol = PROJ_TOL * scale
         hmax = 0.0
         for it in range(PROJ_MAX_ITER + 1):
-            joints_rows(gid, jint, jpos, jrot, jpar, rint, R, r, V, h, Jr, eta, v3, ident, zero3, zero6)
+            joints_rows(gid, jint, jpos, jrot, jpar, rint, R, r, V, h, Jr, eta, rdrive, v3, ident, zero3, zero6)
             hmax = 0.0
             for q in range(rint.shape[0]):
                 if abs(h[q]) > hmax:
@@ -68,9 +72,9 @@ def project(level, joints, schur, rows, scratch, R, r, V):
         if hmax > PROJ_FAIL * tol:
             return STATUS_PROJECTION
     else:
-        joints_rows(gid, jint, jpos, jrot, jpar, rint, R, r, V, h, Jr, eta, v3, ident, zero3, zero6)
-    return schur_correct(gid, Minv, rint, bw, redundant, pivotTol, R, V, 0.0, eta, Jr, W, lam, Sb, Sd, perm, ytmp,
-                         info, tmp12, tree)
+        joints_rows(gid, jint, jpos, jrot, jpar, rint, R, r, V, h, Jr, eta, rdrive, v3, ident, zero3, zero6)
+    return schur_correct(gid, Minv, rint, bw, redundant, pivotTol, R, V, -1.0, rdrive[1], Jr, W, lam, Sb, Sd, perm,
+                         ytmp, info, tmp12, tree)
 
 
 @njit(cache=True, inline="always", _nrt=False)
@@ -80,7 +84,8 @@ def project_state(sd, wk, level, R, r, V):
     return project(level, Joints(sd.gid, sd.jint, sd.jpos, sd.jrot, sd.jpar, sd.rint),
                    Schur(sd.Minv, sd.bandwidth, sd.redundant, sd.pivotTol, wk.W, wk.lam, wk.Sb, wk.Sd, wk.perm,
                          wk.ytmp, wk.info, wk.tmp12, tree_of(sd, wk)),
-                   Rows(wk.h, wk.Jr, wk.eta), Scratch(wk.Psi, wk.v3, wk.m3, wk.ident, wk.zero3, wk.zero6), R, r, V)
+                   Rows(wk.h, wk.Jr, wk.eta, wk.rdrive), Scratch(wk.Psi, wk.v3, wk.m3, wk.ident, wk.zero3, wk.zero6),
+                   R, r, V)
 
 
 # ---------------------------------------------------------------- constraint tolerance (adaptive steps)
@@ -92,10 +97,11 @@ CT_POS, CT_VEL, CT_N_PROJ = range(3)
 @njit(cache=True, _nrt=False)
 def constraint_rows_at(sd, wk, R, r, V):
     """Rows h(g), J and eta at (R, r, V) into ``wk.h``, ``wk.Jr``, ``wk.eta``; returns
-    (max |h|, max |J V|), J V computed into ``wk.lam`` (scratch)."""
-    joints_rows(sd.gid, sd.jint, sd.jpos, sd.jrot, sd.jpar, sd.rint, R, r, V, wk.h, wk.Jr, wk.eta, wk.v3, wk.ident,
-                wk.zero3, wk.zero6)
-    rows_times(sd.rint, wk.Jr, V, 0.0, wk.eta, wk.lam)
+    (max |h|, max |J V - w|), J V - w computed into ``wk.lam`` (scratch; ``w`` the velocity
+    targets of the row drives, at the state's time)."""
+    joints_rows(sd.gid, sd.jint, sd.jpos, sd.jrot, sd.jpar, sd.rint, R, r, V, wk.h, wk.Jr, wk.eta, wk.rdrive, wk.v3,
+                wk.ident, wk.zero3, wk.zero6)
+    rows_times(sd.rint, wk.Jr, V, -1.0, wk.rdrive[1], wk.lam)
     hmax = 0.0
     vmax = 0.0
     for q in range(sd.nrows):

@@ -111,6 +111,11 @@ class Joint:
     # kind 'rollingDisc' (ObjectJointRollingDisc, velocity-level rows, mbs/rolling_disc_rows.py):
     # (discRadius, planeNormal in A's marker frame rotA, discAxis in B's marker frame rotB)
     rollingDisc: tuple = None
+    # a coordinate constraint's time dependence (mbs/row_drives.py): velocity level (``velocityLevel``:
+    # f qdot_B - qdot_A = c + offset(t), no position-level row) and the moving part ``offset(t)`` of
+    # the right-hand side (a Python callable of t; None: constant)
+    velocityLevel: bool = False
+    offset: object = None
 
 
 @dataclass
@@ -416,12 +421,19 @@ class Scene:
                                  _rot(rotB, f"{label}: rotB"), ax, kind, label, bool(worldTranslation)))
         return idx
 
-    def AddCoordinateConstraint(self, bodyA, axisA, bodyB, axisB, factor=1.0, constant=0.0, name="") -> int:
+    def AddCoordinateConstraint(self, bodyA, axisA, bodyB, axisB, factor=1.0, constant=0.0, name="",
+                                velocityLevel=False, offset=None) -> int:
         """One row ``h = factor * d_B . p_B - d_A . p_A - constant`` on position coordinates of
         the body frame origins (0 for GROUND) along world directions ``d = axis`` (an index
         0, 1, 2: the world axis; or a 3-vector, e.g. a Mass1D's axis); Exudyn's
         ``ObjectConnectorCoordinate`` on node position coordinates (the bridge folds the
-        node reference coordinates into ``constant``)."""
+        node reference coordinates into ``constant``).
+
+        ``offset``: a Python callable ``offset(t) -> float``, the moving part of the right-hand
+        side: ``h = ... - constant - offset(t)`` (a prescribed motion; its first and second
+        time derivatives enter the velocity and acceleration levels, mbs/row_drives.py).
+        ``velocityLevel``: the row is ``factor qdot_B - qdot_A = constant + offset(t)`` on the
+        coordinates' rates (no position-level equation; Exudyn's ``velocityLevel=True``)."""
         idx = len(self.joints)
         label = name or f"joint{idx}(coordinate)"
         self._check_body(bodyA, label)
@@ -434,9 +446,12 @@ class Scene:
         if bodyB == GROUND or f == 0.0:
             if bodyA == GROUND:
                 raise SceneError(f"{label}: the row acts on no body (factor 0 and side A on the ground)")
+        if offset is not None and not callable(offset):
+            raise SceneError(f"{label}: offset must be a callable offset(t) -> float or None, got {offset!r}")
         self.joints.append(Joint(int(bodyA), int(bodyB), np.zeros(3), angA[1], np.zeros(3), angB[1],
                                  (1, 0, 0, 0, 0, 0), "coordinate", label, False,
-                                 (dA, dB, f, c, angA[0], angB[0], angA[2], angB[2])))
+                                 (dA, dB, f, c, angA[0], angB[0], angA[2], angB[2]),
+                                 velocityLevel=bool(velocityLevel), offset=offset))
         return idx
 
     def AddDistanceConstraint(self, bodyA, posA, bodyB, posB, distance, name="") -> int:

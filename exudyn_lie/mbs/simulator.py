@@ -26,6 +26,7 @@ from .bodies import body_dexpinv_stage, exp_compose
 from .rolling_disc_penalty_forces import D_DATA
 from .compiled import compile_scene, compile_tracking, make_work, resolve_groups, with_redundant
 from .linalg import REL_PIVOT_TOL, rows_in_null_space, schur_rank_and_null
+from .row_drives import RowDrives
 from .scene import Scene, SceneError
 from .state import BodyStates, twist_to_world_velocity, world_velocity_to_twist
 from .stepper import fixed_step_control, method_arrays
@@ -130,10 +131,12 @@ class Simulator:
         project the configuration onto ``h(g) = 0`` on the group, then the velocity).
     projectInitial : project inconsistent initial positions/velocities onto the
         constraints instead of raising :class:`ConstraintError`.
+    startTime : the time of the initial state (rows with a moving offset are checked
+        against it; mbs/row_drives.py).
     """
 
     def __init__(self, scene: Scene, method="RK4", liegroup="SE3", stabilization=None,
-                 projectInitial=False, verbose=False):
+                 projectInitial=False, verbose=False, startTime=0.0):
         if not isinstance(scene, Scene):
             raise SceneError(f"Simulator needs an exudyn_lie Scene, got {type(scene).__name__}")
         self.scene = scene
@@ -152,11 +155,14 @@ class Simulator:
         self.method = method_arrays(self.tableau)
         self.control = fixed_step_control()
         self._extToken = external.register(self, "_external_forces") if self.sd.hasQext else 0
+        self._drives = RowDrives(scene, self.sd)      # rows with a moving offset (mbs/row_drives.py)
+        self._driveToken = external.register(self, "_row_drives") if self._drives else 0
         self.wk = self._make_work()
         self.gid = self.sd.gid
         self.projectInitial = projectInitial
         self.redundantJoints = []
-        self.SetInitialState()
+        self.startTime = float(startTime)
+        self.SetInitialState(t0=self.startTime)
         self._check_redundancy()
         self._check_initial_consistency()
         if verbose:
@@ -172,6 +178,8 @@ class Simulator:
         extra = dense.extra_stages if (dense is not None and self.tableau.b_hat is not None) else 0
         wk = make_work(self.sd, len(self.method.b) + extra, solve, self._track)
         wk.ext[0] = self._extToken
+        if self._driveToken:
+            wk = wk._replace(drive=np.array([self._driveToken], np.int64))
         self._mkEntry = None
         if getattr(self, "_ad", None) is not None:
             self._ad.pop("entry", None)
@@ -241,7 +249,9 @@ class Simulator:
 
     # ----------------------------------------------------------------- constraints
     def jacobian(self, R=None, r=None, V=None):
-        """(h, J, eta) at a state; J is dense (m, 6 nb) in the group velocity coordinates."""
+        """(h, J, eta) at a state (at the time ``self.t``); J is dense (m, 6 nb) in the group
+        velocity coordinates."""
+        self._drives_at(self.t)
         return constraint_jacobian(self.sd, self.wk, self.R if R is None else R,
                                    self.r if r is None else r, self.V if V is None else V)
 
@@ -300,14 +310,16 @@ class Simulator:
         warn_user(msg)
 
     def _residuals_and_JV(self):
-        """h(g) and J V at the current state, row by row (no dense Jacobian)."""
+        """h(g, t) and J V - w(t) at the current state and time, row by row (no dense Jacobian;
+        ``w`` the velocity targets of the rows' drives, mbs/row_drives.py)."""
         sd, wk = self.sd, self.wk
+        self._drives_at(self.t)
         kernel.all_rows(sd, wk, self.R, self.r, self.V, wk.h, wk.Jr, wk.eta, np.zeros(3))
         Vz = np.vstack([self.V, np.zeros((1, 6))])          # row -1: the ground
         a = sd.rint[:, kernel.ROW_BODY_A]
         b = sd.rint[:, kernel.ROW_BODY_B]
         JV = np.einsum("qk,qk->q", wk.Jr[:, :6], Vz[a]) + np.einsum("qk,qk->q", wk.Jr[:, 6:], Vz[b])
-        return wk.h.copy(), JV
+        return wk.h.copy(), JV - wk.rdrive[1]
 
     def _check_initial_consistency(self):
         """Raise for an inconsistent initial state, or (``projectInitial``) project it onto
@@ -353,6 +365,14 @@ class Simulator:
             fixed["maxVelocityChange"] = float(np.max(np.linalg.norm(ve1 - ve0, axis=1)))
             self.initialProjection = fixed
 
+    CheckInitialState = _check_initial_consistency
+
+    @property
+    def hasRowDrives(self):
+        """True if rows have a moving offset (mbs/row_drives.py): then the initial check
+        depends on the time (``CheckInitialState`` after setting ``t``)."""
+        return bool(self._drives)
+
     def describe_initial_projection(self):
         """One sentence on the correction ``projectInitial`` made (None if none was made)."""
         p = self.initialProjection
@@ -381,6 +401,7 @@ class Simulator:
         self._project(kernel.STAB_POSITION)
 
     def _project(self, level):
+        self._drives_at(self.t)
         st = kernel.project_state(self.sd, self.wk, level, self.R, self.r, self.V)
         if st != kernel.STATUS_OK:
             self._raise_status(st, 0.0)
@@ -441,6 +462,17 @@ class Simulator:
                 return out
             self._mkEntry = ep
         return ep(*args)
+
+    def _row_drives(self, t):
+        """The row-drive seam (:mod:`.row_drives`, through :mod:`.external`): called by the
+        compiled stepper once per stage (and before a projection at a step's end); writes the
+        moving offsets of the rows and their derivatives at ``t`` into ``wk.rdrive``."""
+        self._drives.evaluate(t, self.wk.rdrive)
+
+    def _drives_at(self, t):
+        """The rows' moving offsets at ``t`` before rows are evaluated from Python."""
+        if self._drives:
+            self._drives.evaluate(t, self.wk.rdrive)
 
     def _external_forces(self, t):
         """The right-hand side seam (:mod:`.external`): called by the compiled stepper once
@@ -514,6 +546,7 @@ class Simulator:
         if st == kernel.STATUS_STEP_MIN:
             self._raise_step_min()
         if st == kernel.STATUS_EXTERNAL:
+            external.reraise(self._driveToken)
             external.reraise(self._extToken)
             if self.wk.ext[1]:
                 self.wk.ext[1] = 0
@@ -642,12 +675,14 @@ class Simulator:
         return st
 
     # ----------------------------------------------------------------- diagnostics
-    def Diagnostics(self, R=None, r=None, V=None):
+    def Diagnostics(self, R=None, r=None, V=None, t=None):
         """(energy[3], residuals[m], joint position violation[nj], joint rotation violation[nj])
-        at the current state (or at ``R, r, V``)."""
+        at the current state (or at ``R, r, V``), the rows' moving offsets at ``t`` (default: the
+        current time)."""
         sd, wk = self.sd, self.wk
         e = np.zeros(3)
         h = np.zeros(sd.nrows)
+        self._drives_at(self.t if t is None else t)
         kernel.all_rows(sd, wk, self.R if R is None else R, self.r if r is None else r, self.V if V is None else V,
                         h, wk.Jr, wk.eta, e)
         nj = len(self.scene.joints)
@@ -870,7 +905,7 @@ class Simulator:
                 print(f"exudyn_lie: t = {self.t:.4g} / {endTime:.4g} s", flush=True)
         energy, res, pv, rv = np.zeros((nout, 3)), np.zeros((nout, m)), np.zeros((nout, nj)), np.zeros((nout, nj))
         for q in range(nout):
-            energy[q], res[q], pv[q], rv[q] = self.Diagnostics(R[q], r[q], V[q])
+            energy[q], res[q], pv[q], rv[q] = self.Diagnostics(R[q], r[q], V[q], t=tout[q])
         omega, vel = twist_to_world_velocity(np.tile(self.gid, nout), R.reshape(-1, 3, 3), V.reshape(-1, 6))
         acc, rej, nrhs = self.adaptiveCounters
         return Result(tout.copy(), R, r, V, omega.reshape(nout, nb, 3), vel.reshape(nout, nb, 3), energy, res, pv,

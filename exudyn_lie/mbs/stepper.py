@@ -50,6 +50,7 @@ from .forces import update_contact_data, update_torsion_tracking
 from .rotation_parameters import record_tracked
 from .index1 import rhs
 from .projection import project_state
+from .row_drives import update_row_drives
 
 # A tableau as the stepper uses it: A, b, c, the indices of the evaluated stages and the
 # embedded weights (no rows without a pair).
@@ -226,7 +227,11 @@ def external_forces(token, gid, t, Rs, Vs, Vw, Qext, ext):
 @njit(cache=True, inline="always", _nrt=False)
 def stage_rhs(sd, wk, t, Vdot):
     """``Vdot_j = F(t, g_j, V_j)`` at the stage state ``wk.Rs, wk.rs, wk.Vs``: the
-    external part first (if the scene has one), then the compiled index-1 rhs."""
+    external part first (if the scene has one: Python forces; the rows' moving offsets at
+    ``t``, :mod:`.row_drives`), then the compiled index-1 rhs."""
+    st = update_row_drives(wk.drive, t)      # no code without offset functions (wk.drive None)
+    if st != STATUS_OK:
+        return st
     if sd.hasQext:
         st = external_forces(wk.ext[0], sd.gid, t, wk.Rs, wk.Vs, wk.Vw, wk.Qext, wk.ext)
         if st != STATUS_OK:
@@ -450,7 +455,9 @@ def mk_steps(sd, wk, tab, ctl, t0, h, nsteps, R, r, V, vmax, every, Ro, ro, Vo, 
                 copy_state(wk.Rb, wk.rb, wk.Vb, R, r, V)
                 return st, n
             if sd.stabilization != STAB_NONE:
-                st = project_state(sd, wk, sd.stabilization, R, r, V)
+                st = update_row_drives(wk.drive, t + hs)       # the rows' moving offsets at the step's end
+                if st == STATUS_OK:
+                    st = project_state(sd, wk, sd.stabilization, R, r, V)
                 if st != STATUS_OK:
                     copy_state(wk.Rb, wk.rb, wk.Vb, R, r, V)
                     return st, n

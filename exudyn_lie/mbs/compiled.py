@@ -12,6 +12,7 @@ import numpy as np
 from .codes import GROUP_NAMES, ROW_COORD, ROW_DIST, ROW_ROLL, ROW_ROT, ROW_TRANS_LOCAL, ROW_TRANS_WORLD
 from .rotation_parameters import TRACK_ANGLE, TRACK_NONE
 from .linalg import REL_PIVOT_TOL, rcm_order
+from .oblique_solve import oblique_plan
 from .scene import GROUND, Scene, SceneError
 from .tree_solve import tree_plan, work_size
 
@@ -27,8 +28,8 @@ SceneData = namedtuple("SceneData", [
     "sint", "spos", "spar",           # springs: [A, B]; [posA, posB]; [k, d, L0, f0]
     "cint", "cpos", "cpar",           # Cartesian springs: [A, B]; [posA, posB]; [k(3), d(3), offset(3)]
     "tint", "trot", "tpar",           # torsional springs: [A, B]; [rotA, rotB]; [k, d, offset, torque]
-    "kint", "kpar", "krot",           # coordinate springs: [A, B, rotation A, rotation B]; [k, d, offset,
-                                      #   direction A (3), direction B (3), angle A, angle B]; [frame A, frame B]
+    "kint", "kpar", "krot",           # coordinate springs: [A, B, code A, code B]; [k, d, offset,
+                                      #   direction A (3), direction B (3), angle A, angle B, f0]; [frame A, frame B]
     "nangles",                        # rotation coordinates of coordinate items (tracked: coordinate_angles)
     "xint", "xpos", "xaxis", "xpar",  # linear springs: [A, B]; [posA, posB]; axis on A; [k, d, offset, force]
     "bint", "bpos", "brot", "bpar",   # rigid-body springs: [A, B, intrinsic]; [posA, posB]; [rotA, rotB];
@@ -110,7 +111,8 @@ def body_track(body):
 def joint_rows_of(joint):
     """(kind, ax, bx) of the rows of a scene joint."""
     if joint.coordinate is not None:
-        return [(ROW_COORD, int(joint.coordinate[4]), int(joint.coordinate[5]))]    # 1: a rotation coordinate
+        # end codes: 0 position, 1 an angle (coordinate_angles), >= 10 a node rotation parameter (node_coordinates)
+        return [(ROW_COORD, int(joint.coordinate[4]), int(joint.coordinate[5]))]
     if joint.distance is not None:
         return [(ROW_DIST, 0, 0)]
     if joint.rollingDisc is not None:
@@ -318,11 +320,11 @@ def compile_scene(scene: Scene, groups):
         tpar=arr([[s.stiffness, s.damping, s.offset, s.torque] for s in T], (-1, 4)),
         kint=arr([[s.bodyA, s.bodyB, int(s.angleA[0]), int(s.angleB[0])] for s in scene.coordinateSprings], (-1, 4),
                  np.int64),
-        kpar=arr([[s.stiffness, s.damping, s.offset, *s.axisA, *s.axisB, s.angleA[2], s.angleB[2]]
-                  for s in scene.coordinateSprings], (-1, 11)),
+        kpar=arr([[s.stiffness, s.damping, s.offset, *s.axisA, *s.axisB, s.angleA[2], s.angleB[2], s.force]
+                  for s in scene.coordinateSprings], (-1, 12)),
         krot=arr([[s.angleA[1], s.angleB[1]] for s in scene.coordinateSprings], (-1, 2, 3, 3)),
-        nangles=int(sum(s.angleA[0] + s.angleB[0] for s in scene.coordinateSprings)
-                    + sum(j.coordinate[4] + j.coordinate[5] for j in J if j.coordinate is not None)),
+        nangles=int(sum((s.angleA[0] == 1) + (s.angleB[0] == 1) for s in scene.coordinateSprings)
+                    + sum((j.coordinate[4] == 1) + (j.coordinate[5] == 1) for j in J if j.coordinate is not None)),
         xint=arr([[s.bodyA, s.bodyB] for s in scene.linearSprings], (-1, 2), np.int64),
         xpos=arr([[s.posA, s.posB] for s in scene.linearSprings], (-1, 2, 3)),
         xaxis=arr([s.axisA for s in scene.linearSprings], (-1, 3)),
@@ -421,10 +423,24 @@ def _joint_rows_in_order(J, order):
 
 def solve_plan(sd, solve="auto"):
     """The tree solve's plan for ``sd`` (``tree_plan``), or ``None`` for the band (or, with
-    redundant rows, the pivoted) solve.  ``solve``: ``'auto'`` (a forest whose band is at
+    redundant rows, the pivoted) solve, or an ``oblique_solve.ObliquePlan`` when a row's force
+    direction differs from its gradient (then always: that solve is the only one for it).  ``solve``: ``'auto'`` (a forest whose band is at
     least ``TREE_MIN_BANDWIDTH`` wide), or ``'tree'`` / ``'band'`` to compare the two on one
     scene (tests, measurements); a scene whose rows close a loop has no tree solve."""
-    if sd.redundant or solve == "band" or sd.nrows == 0:
+    if sd.nrows == 0:
+        return None
+    oblique = oblique_plan(sd)
+    if oblique is not None:
+        # rows whose force direction differs from their gradient (oblique_solve): the LU
+        # of J M^-1 C^T; neither the symmetric band / pivoted Cholesky nor the tree solve applies
+        if sd.redundant or solve == "tree":
+            raise SceneError("the scene has coordinate constraints on rotation-vector coordinates (force direction "
+                             "e_k, as Exudyn's RotVecLG Jacobian, != gradient) together with "
+                             + ("redundant constraints" if sd.redundant else "solve='tree'")
+                             + ": exudyn_lie's non-symmetric solve has no rank-revealing / tree variant; remove the "
+                             "redundant constraint axes")
+        return oblique
+    if sd.redundant or solve == "band":
         return None
     plan = tree_plan(sd.nb, sd.rint)
     if solve == "tree":
@@ -465,7 +481,7 @@ def make_work(sd, nstages, solve="auto", track=None):
     track = no_tracking(nb) if track is None else track
     m = sd.nrows
     plan = solve_plan(sd, solve)
-    tree = plan is not None
+    tree = isinstance(plan, np.ndarray)        # tree_solve's plan (an ObliquePlan is no tree)
     return Work(
         Rs=np.zeros((nb, 3, 3)), rs=np.zeros((nb, 3)), Vs=np.zeros((nb, 6)),
         Rb=np.zeros((nb, 3, 3)), rb=np.zeros((nb, 3)), Vb=np.zeros((nb, 6)), Psi=np.zeros((nb, 6)),

@@ -12,14 +12,16 @@ from .codes import (J_BODY_A, J_BODY_B, J_NROW, J_ROW0, ROW_AX, ROW_BX, ROW_COOR
                     ROW_TRANS_LOCAL)
 from .coordinate_rows import coordinate_row
 from .distance_rows import distance_row
+from .node_coordinates import PARAM_BASE, node_parameter_terms
 from .rolling_disc_rows import rolling_disc_row
 
 
 # --------------------------------------------------------------------------- constraints
 @njit(cache=True, _nrt=False)
-def joint_rows(j, gid, jint, jpos, jrot, jpar, rint, R, r, V, h, Jr, eta, v3, ident, zero3, zero6):
+def joint_rows(j, gid, jint, jpos, jrot, jpar, rint, bparam, R, r, V, h, Jr, eta, v3, ident, zero3, zero6):
     """Residual ``h``, Jacobian rows ``Jr`` (row, 12: 6 for side A, 6 for side B) and
-    ``eta = -Jdot V`` of all rows of joint ``j``, written at the joint's row slots."""
+    ``eta = -Jdot V`` of all rows of joint ``j``, written at the joint's row slots
+    (``bparam``: the node rotation parameters tracked per body, Work.bparam)."""
     a = jint[j, J_BODY_A]
     b = jint[j, J_BODY_B]
     gA, RA, rA, VA = _side(gid, a, R, r, V, ident, zero3, zero6)
@@ -51,6 +53,9 @@ def joint_rows(j, gid, jint, jpos, jrot, jpar, rint, R, r, V, h, Jr, eta, v3, id
         if kind == ROW_COORD:
             coordinate_row(q, a, b, gA, gB, RA, RB, rax, rint[q, ROW_BX], rotA, rotB, jpar[j], pA, pB, bA, bB, u, RtA,
                            h, Jr, eta)
+            if rax >= PARAM_BASE or rint[q, ROW_BX] >= PARAM_BASE:     # rotation parameters of 3D nodes
+                node_parameter_terms(q, a, b, rax, rint[q, ROW_BX], RA, RB, VA, VB, bparam, jpar[j, 0], h, Jr, eta,
+                                     ax, axd, axb)
         elif kind == ROW_ROLL:
             rolling_disc_row(q, rax, a, b, gA, gB, RA, RB, rA, rB, VA, VB, rotA, rotB, jpar[j], pB, vB, ax, axd, axb,
                              bx, bxd, bxb, u, h, Jr, eta)
@@ -129,7 +134,7 @@ def joint_rows(j, gid, jint, jpos, jrot, jpar, rint, R, r, V, h, Jr, eta, v3, id
 
 
 @njit(cache=True, inline="always", _nrt=False)
-def joints_rows(gid, jint, jpos, jrot, jpar, rint, R, r, V, h, Jr, eta, v3, ident, zero3, zero6):
+def joints_rows(gid, jint, jpos, jrot, jpar, rint, bparam, R, r, V, h, Jr, eta, v3, ident, zero3, zero6):
     """:func:`joint_rows` of every joint."""
     for j in range(jint.shape[0]):
-        joint_rows(j, gid, jint, jpos, jrot, jpar, rint, R, r, V, h, Jr, eta, v3, ident, zero3, zero6)
+        joint_rows(j, gid, jint, jpos, jrot, jpar, rint, bparam, R, r, V, h, Jr, eta, v3, ident, zero3, zero6)

@@ -57,7 +57,7 @@ def spring_energy(gid, sint, spos, spar, cint, cpos, cpar, tint, trot, tpar, tph
 def all_rows(sd, wk, R, r, V, h, Jr, eta, e):
     """Diagnostics at the state (R, r, V): residuals ``h``, Jacobian rows ``Jr`` and
     ``eta`` of every joint, and ``e`` = (kinetic, gravity potential, spring potential)."""
-    joints_rows(sd.gid, sd.jint, sd.jpos, sd.jrot, sd.jpar, sd.rint, R, r, V, h, Jr, eta, wk.v3, wk.ident, wk.zero3,
+    joints_rows(sd.gid, sd.jint, sd.jpos, sd.jrot, sd.jpar, sd.rint, wk.bparam, R, r, V, h, Jr, eta, wk.v3, wk.ident, wk.zero3,
                 wk.zero6)
     ekin, egrav = kinetic_and_gravity(sd.gid, sd.M, sd.mass, sd.com, sd.gravity, R, r, V, wk.tmp6)
     e[0] = ekin
@@ -65,4 +65,4 @@ def all_rows(sd, wk, R, r, V, h, Jr, eta, e):
     e[2] = spring_energy(sd.gid, sd.sint, sd.spos, sd.spar, sd.cint, sd.cpos, sd.cpar, sd.tint, sd.trot, sd.tpar,
                          wk.tphi, R, r, V, wk.v3, wk.m3, wk.ident, wk.zero3, wk.zero6)
     if sd.kint.shape[0] > 0:
-        e[2] += coordinate_spring_energy(sd.gid, sd.kint, sd.kpar, sd.krot, R, r, V, wk.v3, wk.ident, wk.zero3, wk.zero6)
+        e[2] += coordinate_spring_energy(sd.gid, sd.kint, sd.kpar, sd.krot, wk.bparam, R, r, V, wk.v3, wk.ident, wk.zero3, wk.zero6)

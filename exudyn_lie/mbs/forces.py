@@ -284,7 +284,7 @@ def compute_forces(sd, wk, t, R, r, V, Q):
         torsional_forces(sd.gid, sd.tint, sd.trot, sd.tpar, wk.tphi, R, r, V, Q, F, wk.m3, wk.ident, wk.zero3,
                          wk.zero6)
     if sd.kint.shape[0] > 0:
-        coordinate_spring_forces(sd.gid, sd.kint, sd.kpar, sd.krot, R, r, V, Q, wk.v3, wk.ident, wk.zero3, wk.zero6)
+        coordinate_spring_forces(sd.gid, sd.kint, sd.kpar, sd.krot, wk.bparam, R, r, V, Q, wk.v3, wk.ident, wk.zero3, wk.zero6)
     if sd.xint.shape[0] > 0:
         linear_spring_forces(sd.gid, sd.xint, sd.xpos, sd.xaxis, sd.xpar, R, r, V, Q, wk.v3, wk.ident, wk.zero3,
                              wk.zero6)

@@ -10,7 +10,7 @@ from .index1 import apply_correction, rows_times, schur_correct, solve_multiplie
 
 
 # the arguments of project, by what they are (built by project_state from SceneData / Work)
-Joints = namedtuple("Joints", ["gid", "jint", "jpos", "jrot", "jpar", "rint"])           # the joint tables
+Joints = namedtuple("Joints", ["gid", "jint", "jpos", "jrot", "jpar", "rint", "bparam"])  # the joint tables
 Schur = namedtuple("Schur", ["Minv", "bw", "redundant", "pivotTol",              # J M^-1 J^T: data...
                              "W", "lam", "Sb", "Sd", "perm", "ytmp", "info", "tmp12",    # ... and work
                              "tree"])                                            # index1.TreeSolve
@@ -28,7 +28,7 @@ def project(level, joints, schur, rows, scratch, R, r, V):
     * velocities (``level`` >= 1): ``V <- V - M^-1 J^T (J M^-1 J^T)^-1 J V``.
 
     Returns a status code (STATUS_PROJECTION if max |h| stays above the tolerance)."""
-    gid, jint, jpos, jrot, jpar, rint = joints
+    gid, jint, jpos, jrot, jpar, rint, bparam = joints
     Minv, bw, redundant, pivotTol, W, lam, Sb, Sd, perm, ytmp, info, tmp12, tree = schur
     h, Jr, eta = rows
     Psi, v3, m3, ident, zero3, zero6 = scratch
@@ -42,7 +42,7 @@ def project(level, joints, schur, rows, scratch, R, r, V):
         tol = PROJ_TOL * scale
         hmax = 0.0
         for it in range(PROJ_MAX_ITER + 1):
-            joints_rows(gid, jint, jpos, jrot, jpar, rint, R, r, V, h, Jr, eta, v3, ident, zero3, zero6)
+            joints_rows(gid, jint, jpos, jrot, jpar, rint, bparam, R, r, V, h, Jr, eta, v3, ident, zero3, zero6)
             hmax = 0.0
             for q in range(rint.shape[0]):
                 if abs(h[q]) > hmax:
@@ -68,7 +68,7 @@ def project(level, joints, schur, rows, scratch, R, r, V):
         if hmax > PROJ_FAIL * tol:
             return STATUS_PROJECTION
     else:
-        joints_rows(gid, jint, jpos, jrot, jpar, rint, R, r, V, h, Jr, eta, v3, ident, zero3, zero6)
+        joints_rows(gid, jint, jpos, jrot, jpar, rint, bparam, R, r, V, h, Jr, eta, v3, ident, zero3, zero6)
     return schur_correct(gid, Minv, rint, bw, redundant, pivotTol, R, V, 0.0, eta, Jr, W, lam, Sb, Sd, perm, ytmp,
                          info, tmp12, tree)
 
@@ -77,7 +77,7 @@ def project(level, joints, schur, rows, scratch, R, r, V):
 def project_state(sd, wk, level, R, r, V):
     if sd.nrows == 0:
         return STATUS_OK
-    return project(level, Joints(sd.gid, sd.jint, sd.jpos, sd.jrot, sd.jpar, sd.rint),
+    return project(level, Joints(sd.gid, sd.jint, sd.jpos, sd.jrot, sd.jpar, sd.rint, wk.bparam),
                    Schur(sd.Minv, sd.bandwidth, sd.redundant, sd.pivotTol, wk.W, wk.lam, wk.Sb, wk.Sd, wk.perm,
                          wk.ytmp, wk.info, wk.tmp12, tree_of(sd, wk)),
                    Rows(wk.h, wk.Jr, wk.eta), Scratch(wk.Psi, wk.v3, wk.m3, wk.ident, wk.zero3, wk.zero6), R, r, V)
@@ -93,7 +93,7 @@ CT_POS, CT_VEL, CT_N_PROJ = range(3)
 def constraint_rows_at(sd, wk, R, r, V):
     """Rows h(g), J and eta at (R, r, V) into ``wk.h``, ``wk.Jr``, ``wk.eta``; returns
     (max |h|, max |J V|), J V computed into ``wk.lam`` (scratch)."""
-    joints_rows(sd.gid, sd.jint, sd.jpos, sd.jrot, sd.jpar, sd.rint, R, r, V, wk.h, wk.Jr, wk.eta, wk.v3, wk.ident,
+    joints_rows(sd.gid, sd.jint, sd.jpos, sd.jrot, sd.jpar, sd.rint, wk.bparam, R, r, V, wk.h, wk.Jr, wk.eta, wk.v3, wk.ident,
                 wk.zero3, wk.zero6)
     rows_times(sd.rint, wk.Jr, V, 0.0, wk.eta, wk.lam)
     hmax = 0.0

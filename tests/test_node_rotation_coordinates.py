@@ -192,7 +192,7 @@ def oracle_model(node, userFunction=False):
     between body 0's coordinate 2 and body 1's position coordinate 0, and a LoadCoordinate on
     body 0's rotation coordinate 0 (EP: the last Euler parameter)."""
     mbs = new_mbs()
-    R0 = [so3.exp([0.3, -0.2, 0.4]), so3.exp([-0.5, 0.1, 0.2])]
+    R0 = [so3.exp(np.array([0.3, -0.2, 0.4])), so3.exp(np.array([-0.5, 0.1, 0.2]))]
     bodies = [add_body(mbs, node, [0.3 * i, 0, 0], R0[i], gravity=(0, 0, -9.81)) for i in range(2)]
     nodes = [mbs.GetObject(b)["nodeNumber"] for b in bodies]
     ng = mbs.AddNode(NodePointGround())
@@ -394,3 +394,66 @@ def test_tracked_branch_matches_exudyn_over_a_run(node):
     err = np.abs(_final(spinning_model, node, 1e-3, T, True) - ref).max()
     print(f"{node}: total parameters {p}, |exl - native| {err:.2g}")
     assert err < 1e-9, err
+
+
+def test_index2_settings_refused_for_rotvec_constraint():
+    """With Exudyn's index-2 settings its model of the RotVecLG constraint is omega_k = 0 (not
+    theta_k = const): refused before mbs is touched; the EP model (same model at both
+    indices) runs."""
+    for node, refused in (("RotVecLG", True), ("EP", False)):
+        for how in ("useIndex2Constraints", "TrapezoidalIndex2"):
+            mbs = locked_model(node)
+            ss = quiet_settings(0.01, 10)
+            if how == "useIndex2Constraints":
+                ss.timeIntegration.generalizedAlpha.useIndex2Constraints = True
+            else:
+                ss.timeIntegration.solverType = exu.DynamicSolverType.TrapezoidalIndex2
+            q0 = np.array(mbs.systemData.GetODE2Coordinates())
+            if refused:
+                with pytest.raises(exl.BridgeError, match=r"object 3 .*ObjectConnectorCoordinate.*index-2"):
+                    exl.SolveDynamic(mbs, ss)
+                assert np.array_equal(q0, mbs.systemData.GetODE2Coordinates())
+            else:
+                with pytest.warns(RuntimeWarning) if how == "TrapezoidalIndex2" else _nothing():
+                    exl.SolveDynamic(mbs, ss)
+
+
+class _nothing:
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *a):
+        return False
+
+
+def _live_load_model(node):
+    """spring_model with its LoadCoordinate's load changed by a preStepUserFunction at t = 0.2."""
+    mbs = spring_model(node)
+    k = mbs.systemData.NumberOfLoads() - 1
+
+    def pre(mbs, t):
+        mbs.SetLoadParameter(k, "load", 0.05 if t < 0.2 - 1e-9 else -0.3)     # from the step starting at 0.2
+        return True
+    mbs.SetPreStepUserFunction(pre)
+    return mbs
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("node", ["RotVecLG", "EP"])
+def test_live_coordinate_load_on_a_rotation_parameter(node):
+    """LoadCoordinate's ``load`` changed during the solve (its compiled row: f0 of the
+    coordinate-spring row) as Exudyn reads it, from the step starting at t = 0.2.  A load that
+    jumps at a step boundary makes every solver first order (generalized-alpha weighs the new
+    load at the step's end, RK4 uses it in all stages), so: the fine native run (Richardson of
+    2e-5 / 1e-5) is the reference, exl RK4 at 1e-3 / 5e-4 converges to it with order 1 (error
+    ratio about 2; measured EP 1.2e-4 / 5.9e-5), and its order-1 extrapolation agrees with it."""
+    T = 0.4
+    nat = {h: _final(_live_load_model, node, h, T, False) for h in (2e-5, 1e-5)}
+    ref = nat[1e-5] + (nat[1e-5] - nat[2e-5]) / 3
+    const = _final(spring_model, node, 1e-3, T, True)
+    assert np.abs(const - ref).max() > 1e-3           # the change matters
+    exl_h = {h: _final(_live_load_model, node, h, T, True) for h in (1e-3, 5e-4)}
+    e1, e2 = (np.abs(exl_h[h] - ref).max() for h in (1e-3, 5e-4))
+    assert 1.8 < e1 / e2 < 2.2, (e1, e2)
+    extrapolated = 2 * exl_h[5e-4] - exl_h[1e-3]
+    assert np.abs(extrapolated - ref).max() < 0.02 * e2, (np.abs(extrapolated - ref).max(), e2)

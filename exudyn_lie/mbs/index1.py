@@ -107,7 +107,10 @@ def _apply_correction(rint, W, lam, X, tree):
 
 @njit(cache=True, inline="always", _nrt=False)
 def minv_rows(gid, Minv, rint, R, Jr, W, tmp12):
-    """``W = M^-1 Jr^T`` as row blocks (W (m, 12): the two body blocks of each row)."""
+    """``W = M^-1 Jr^T`` as row blocks (W (m, 12): the two body blocks of each row), for the
+    oblique solve.  schur_solve keeps its own copy of this loop: calling this inlined helper
+    there made the heavy top's step slower (CPU time 2.9 -> 3.0 us, measured interleaved), and
+    the common path's code is meant to stay as it was."""
     for q in range(rint.shape[0]):
         a = rint[q, ROW_BODY_A]
         b = rint[q, ROW_BODY_B]
@@ -130,7 +133,19 @@ def schur_solve(gid, Minv, rint, bw, redundant, pivotTol, R, Jr, W, lam, Sb, Sd,
     Cholesky); with redundant rows the pivoted Cholesky drops the dependent ones.
     Returns a status code (info[0] = failing row, info[1] = rank if redundant)."""
     m = rint.shape[0]
-    minv_rows(gid, Minv, rint, R, Jr, W, tmp12)
+    for q in range(m):
+        a = rint[q, ROW_BODY_A]
+        b = rint[q, ROW_BODY_B]
+        if a >= 0:
+            apply_minv(gid[a], Minv[a], R[a], Jr[q, 0:6], W[q, 0:6], tmp12)
+        else:
+            for k in range(6):
+                W[q, k] = 0.0
+        if b >= 0:
+            apply_minv(gid[b], Minv[b], R[b], Jr[q, 6:12], W[q, 6:12], tmp12)
+        else:
+            for k in range(6):
+                W[q, 6 + k] = 0.0
     if redundant:
         for q in range(m):
             for l in range(q + 1):

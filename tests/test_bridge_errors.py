@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import exudyn as exu
-from exudyn.utilities import (ObjectConnectorGravity, NodeGenericODE2, ObjectGenericODE2, LoadCoordinate, LoadForceVector, LoadTorqueVector, MarkerBodyPosition,
+from exudyn.utilities import (ObjectConnectorGravity, NodeGenericODE2, ObjectGenericODE2, LoadForceVector, LoadTorqueVector, MarkerBodyPosition,
                               MarkerNodeCoordinate, MarkerNodePosition, ObjectJointSpherical, RotationMatrixX,
                               SensorBody)
 
@@ -73,9 +73,6 @@ def expect_error(mbs, exc, match, **kw):
         mbs.AddMarker(MarkerBodyPosition(bodyNumber=g)), mbs.AddMarker(MarkerBodyPosition(bodyNumber=b))],
         mass0=1, mass1=1)),
      r"object 3 .*ObjectConnectorGravity is not supported"),
-    (lambda mbs, g, b: mbs.AddLoad(LoadCoordinate(markerNumber=mbs.AddMarker(
-        MarkerNodeCoordinate(nodeNumber=0, coordinate=4)), load=1)),
-     r"load 1 .*LoadCoordinate.*coordinate 4 of node 0 .*a rotation coordinate"),
     (lambda mbs, g, b: mbs.CreateGenericJoint(itemNumbers=[g, b], position=[1, 0, 0],
                                               constrainedAxes=[1, 1, 1, 0, 0, 0]) and
      mbs.SetObjectParameter(3, "offsetUserFunction", lambda mbs, t, i, p: [0, 0, 0, 0, 0, 0]),

@@ -102,6 +102,15 @@ def check_model(mbs):
             raise BridgeError(f"object {o} ('{d.get('name', '')}') of type Object{t} is not supported by exudyn_lie: "
                               f"its constraints are at velocity level (nonholonomic), and exudyn_lie's index-1 solve "
                               f"needs position-level constraints; solve this model with exudyn.SolveDynamic")
+        if t == "ConnectorCoordinate" and d.get("activeConnector", True) and _rotvec_coordinate_marker(mbs, d):
+            # Exudyn's C_q on a RotVecLG rotation coordinate is e_k on the local omega, not the
+            # gradient of theta_k: this path's symmetric solve with Exudyn's C_q would hold the
+            # velocity-level omega_k, not theta_k (the compiled kernel integrates Exudyn's model,
+            # mbs/oblique_solve.py)
+            raise BridgeError(f"{_describe_object(mbs, o, d)}: a constraint on a rotation coordinate of a "
+                              f"NodeRigidBodyRotVecLG is not supported when Exudyn evaluates the model (the model has "
+                              f"items the compiled kernel does not have, or evaluation='exudyn'); solve with "
+                              f"exudyn.SolveDynamic, or use a NodeRigidBodyEP / Rxyz node")
         if d.get("velocityLevel", False) is True and d.get("activeConnector", True) and t != "ConnectorCoordinate":
             raise BridgeError(f"{_describe_object(mbs, o, d)}: velocityLevel=True is not supported by exudyn_lie (its "
                               f"index-1 solve needs position-level constraints); use velocityLevel=False or solve "
@@ -134,6 +143,17 @@ def coordinate_constraint_rows(mbs):
             fn = pyforces.OffsetUserFunction(mbs, o, d, uf, "offsetUserFunction")
             moving += [(r, fn, fn.label) for r in rows]
     return np.array(vel, np.int64), moving
+
+
+def _rotvec_coordinate_marker(mbs, d):
+    """True if a marker of the item is a MarkerNodeCoordinate on a rotation coordinate (3..5)
+    of a NodeRigidBodyRotVecLG."""
+    for m in d.get("markerNumbers", []):
+        md = mbs.GetMarker(int(m))
+        if md["markerType"] == "NodeCoordinate" and int(md["coordinate"]) >= 3:
+            if mbs.GetNode(int(md["nodeNumber"]))["nodeType"] == "RigidBodyRotVecLG":
+                return True
+    return False
 
 
 class Layout:

@@ -324,8 +324,11 @@ class ParameterWatch:
             item = self.scene.pyItems[k]
             item.load, item.uf = load, uf
             return
-        cm = self.reader.coordinate_marker(d["markerNumber"], what)
         sd = self.solver.sim.sd
+        if table == "coordinateLoad":        # a node rotation parameter: f0 = -load of its coordinate spring row
+            sd.kpar[k, 11] = -load
+            return
+        cm = self.reader.coordinate_marker(d["markerNumber"], what)
         sd.lvec[k, 0] = load * cm.direction
 
     def _load_vector(self, l, row, value, t):

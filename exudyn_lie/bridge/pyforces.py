@@ -32,6 +32,8 @@ import math
 
 import numpy as np
 
+from ..mbs.node_coordinates import PARAM_KINDS, PARAM_RXYZ, node_parameter, param_code
+from ..mbs.rotation_parameters import TRACK_QUAT, TRACK_RXYZ, nearest_parameters
 from ..mbs.scene import GROUND
 from . import rotations as rot
 
@@ -400,6 +402,9 @@ def coordinate_state(cm, st):
     marker returned, minus ``ref``, and ``direction . omega_world``."""
     if cm.body == GROUND:
         return 0.0, 0.0
+    if cm.param is not None:
+        v, rate, _ = parameter_state(cm, st)
+        return v - cm.ref, rate
     if cm.angle is not None:
         R = st.R[cm.body]
         F = np.asarray(cm.angle.frame, float)
@@ -411,11 +416,31 @@ def coordinate_state(cm, st):
     return float(cm.direction @ st.r[cm.body]) - cm.ref, float(cm.direction @ st.vel[cm.body])
 
 
-def apply_coordinate(cm, f, F, T):
+def parameter_state(cm, st):
+    """(value, rate, world direction) of a node rotation parameter (reader.CoordinateMarker
+    with ``param``; mbs/node_coordinates.py): the parameter on the branch nearest the one this
+    marker saw last (``cm.paramPrev``, from the node's initial parameters), Exudyn's velocity
+    coordinate ``C . omega``, and ``R C``: the generalised force ``f`` is the torque ``f R C``."""
+    R = np.ascontiguousarray(st.R[cm.body], dtype=float)
+    w = np.ascontiguousarray(st.omega[cm.body], dtype=float)
+    code = param_code(PARAM_KINDS[cm.param.kind], cm.param.index)
+    G, C, tmp = np.zeros(3), np.zeros(3), np.zeros(3)
+    v, _ = node_parameter(code, R, cm.paramPrev, w, G, C, tmp)
+    nearest_parameters(TRACK_RXYZ if PARAM_KINDS[cm.param.kind] == PARAM_RXYZ else TRACK_QUAT, R, cm.paramPrev,
+                       cm.paramPrev)
+    return v, float(C @ w), R @ C
+
+
+def apply_coordinate(cm, f, F, T, st):
     """A generalised force ``f`` on a node coordinate: world force ``f direction`` at the node
-    (the body frame origin), or the world torque ``f direction`` on a rotation coordinate."""
-    if cm.body != GROUND:
-        (F if cm.angle is None else T)[cm.body] += f * cm.direction
+    (the body frame origin), the world torque ``f direction`` on a rotation coordinate, or
+    ``f R C`` on a node rotation parameter (Exudyn's e_k on the node's velocity coordinates)."""
+    if cm.body == GROUND:
+        return
+    if cm.param is not None:
+        T[cm.body] += f * parameter_state(cm, st)[2]
+        return
+    (F if cm.angle is None else T)[cm.body] += f * cm.direction
 
 
 class CoordinateSpringDamperUF(_Connector):
@@ -432,8 +457,8 @@ class CoordinateSpringDamperUF(_Connector):
         qB, vB = coordinate_state(self.B, st)
         f = float(_call(self.label, self.uf, self.mbs, t, self.o, qB - qA, vB - vA, d["stiffness"], d["damping"],
                         d["offset"]))
-        apply_coordinate(self.A, f, F, T)
-        apply_coordinate(self.B, -f, F, T)
+        apply_coordinate(self.A, f, F, T, st)
+        apply_coordinate(self.B, -f, F, T, st)
 
 
 class CoordinateLoadUF(PyItem):
@@ -452,7 +477,7 @@ class CoordinateLoadUF(PyItem):
         return [self.cm.body]
 
     def add(self, t, st, F, T):
-        apply_coordinate(self.cm, float(_call(self.label, self.uf, self.mbs, t, self.load)), F, T)
+        apply_coordinate(self.cm, float(_call(self.label, self.uf, self.mbs, t, self.load)), F, T, st)
 
 
 class OffsetUserFunction:

@@ -52,8 +52,9 @@ import numpy as np
 
 from ..mbs.compiled import joint_row_descriptors
 from ..mbs.kernel import ROW_ROT
-from ..mbs.scene import GROUND, AngleCoordinate, Scene, SceneError, frame_with_axis
+from ..mbs.scene import GROUND, AngleCoordinate, NodeParameterCoordinate, Scene, SceneError, frame_with_axis
 from . import items, pyforces
+from ..mbs.node_coordinates import PARAM_KINDS
 from .nodes import NODE_KINDS
 
 # the lists below derive from the one registration per item type (bridge/items.py)
@@ -90,10 +91,17 @@ class CoordinateMarker:
     markerType: str = "NodeCoordinate"
     # a rotation coordinate (the angle of a NodeRigidBody2D): value = tracked angle - ref
     angle: Optional[AngleCoordinate] = None
+    # a rotation parameter of a 3D rigid node (RotVecLG, EP, Rxyz; mbs/node_coordinates.py):
+    # value = tracked parameter - ref, direction 0
+    param: Optional[NodeParameterCoordinate] = None
+    paramPrev: Optional[np.ndarray] = None  # its node's parameters (4) last seen (Python items, pyforces)
 
     @property
     def spec(self):
-        """The coordinate for Scene.AddCoordinate*: a direction, or the AngleCoordinate."""
+        """The coordinate for Scene.AddCoordinate*: a direction, the AngleCoordinate or the
+        NodeParameterCoordinate."""
+        if self.param is not None:
+            return self.param
         return self.direction if self.angle is None else self.angle
 
 
@@ -695,11 +703,20 @@ class _Reader:
             total = ref + float(self.q[self.node_ltg(n)[2]])
             return CoordinateMarker(m, self.rigidNodeBody[n], np.eye(3)[2], ref,
                                     angle=AngleCoordinate(np.eye(3), total))
+        nrot = getattr(NODE_KINDS.get(nt), "nrot", 0)
+        if nt in PARAM_KINDS and npos <= k < npos + nrot:
+            # a rotation parameter of a 3D rigid node: Exudyn's coordinate (value, rate and
+            # Jacobian as CMarkerNodeCoordinate defines them, mbs/node_coordinates.py)
+            qref = np.asarray(self.mbs.GetNode(n)["referenceCoordinates"], float).reshape(-1)
+            total = qref[npos:npos + nrot] + self.q[self.node_ltg(n)[npos:npos + nrot]]
+            return CoordinateMarker(m, self.rigidNodeBody[n], np.zeros(3), float(qref[k]),
+                                    param=NodeParameterCoordinate(nt, k - npos),
+                                    paramPrev=_tracked_start(nt, total))
         if not 0 <= k < npos:
             raise BridgeError(f"{what}: marker {m} (MarkerNodeCoordinate) is on coordinate {k} of node {n} "
-                              f"(Node{nt}), not a position coordinate (a rotation coordinate); exudyn_lie supports "
-                              f"coordinate items on node position coordinates, the angle of a NodeRigidBody2D and "
-                              f"Node1D coordinates so far; solve with exudyn.SolveDynamic"
+                              f"(Node{nt}), not a position coordinate; exudyn_lie supports coordinate items on node "
+                              f"position coordinates, the rotation parameters of RotVecLG, EP and Rxyz rigid nodes, "
+                              f"the angle of a NodeRigidBody2D and Node1D coordinates; solve with exudyn.SolveDynamic"
                               + (f" (0..{npos - 1} of this node)" if npos else ""))
         ref = float(np.asarray(self.mbs.GetNode(n)["referenceCoordinates"], float).reshape(-1)[k])
         if n in self.nodeRotor:            # a rotor's angle: a rotation coordinate about F e_z
@@ -1014,11 +1031,28 @@ class _Reader:
             sc.itemRows[("load", l)] = ("py", len(sc.pyItems))
             sc.pyItems.append(pyforces.CoordinateLoadUF(self.mbs, l, load, cm, uf))
             return
+        if cm.param is not None:        # a node rotation parameter: the generalised force load C (state-dependent)
+            sc.itemRows[("load", l)] = ("coordinateLoad", len(sc.coordinateSprings))
+            sc.AddCoordinateLoad(cm.body, cm.param, load, name=d.get("name", "") or f"load{l}")
+            return
         sc.itemRows[("load", l)] = ("load", len(sc.loads))
         if cm.angle is not None:        # a rotation coordinate: the world torque load d
             sc.AddTorque(cm.body, load * cm.direction, name=d.get("name", "") or f"load{l}")
         else:
             sc.AddForce(cm.body, load * cm.direction, name=d.get("name", "") or f"load{l}")
+
+
+def _tracked_start(nodeType, p):
+    """The parameters a node's tracking starts from (rotation_parameters: the quaternion of a
+    RotVecLG's rotation vector or an EP node's own, of the sign given; Rxyz angles)."""
+    out = np.zeros(4)
+    if nodeType == "RigidBodyRotVecLG":
+        t = float(np.linalg.norm(p))
+        out[0] = np.cos(0.5 * t)
+        out[1:] = p * (np.sin(0.5 * t) / t if t > 0 else 0.5)
+    else:
+        out[:len(p)] = p
+    return out
 
 
 def _new_row(sc, nPy, counts):

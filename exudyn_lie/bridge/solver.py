@@ -963,6 +963,24 @@ class LieGroupSolver:
         return res
 
 
+def _check_index2_rotvec_constraints(mbs, typeName, settings):
+    """Exudyn's index-2 solves (TrapezoidalIndex2, generalizedAlpha.useIndex2Constraints) hold a
+    ConnectorCoordinate at velocity level, Exudyn's e_k: on a RotVecLG rotation coordinate that
+    is omega_k = 0, another model than the position-level theta_k = const (index 3, Exudyn's
+    default) that exudyn_lie integrates (mbs/node_coordinates.py).  Refused (reads only)."""
+    from .evaluated import _describe_object, _rotvec_coordinate_marker
+    if not (typeName == "TrapezoidalIndex2" or settings.timeIntegration.generalizedAlpha.useIndex2Constraints):
+        return
+    for o in range(mbs.systemData.NumberOfObjects()):
+        d = mbs.GetObject(o)
+        if d["objectType"] == "ConnectorCoordinate" and d.get("activeConnector", True) \
+                and _rotvec_coordinate_marker(mbs, d):
+            raise BridgeError(f"{_describe_object(mbs, o, d)}: on a rotation coordinate of a NodeRigidBodyRotVecLG, "
+                              f"Exudyn's index-2 solve ({'TrapezoidalIndex2' if typeName == 'TrapezoidalIndex2' else 'generalizedAlpha.useIndex2Constraints=True'}) "
+                              f"holds omega_k = 0, not the coordinate; exudyn_lie integrates the position-level "
+                              f"(index-3) model: use Exudyn's default index-3 setting, or solve with exudyn.SolveDynamic")
+
+
 def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialValues=False, storeSolver=True,
                  showHints=False, showCausingItems=True, autoAssemble=True, *, method=None, liegroup="auto",
                  stabilization=None, projectInitial=True, verbose=False, showProgress=True, substeps=None,
@@ -1033,6 +1051,7 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
                             projectInitial=projectInitial, verbose=verbose, constraintTolerance=constraintTolerance,
                             _configuration="items" if assemble else "initial")
     solver._check_run(settings, substeps)
+    _check_index2_rotvec_constraints(mbs, typeName, settings)
     if replaced:
         groups = ", ".join(f"{g} ({solver.groups.count(g)})" for g in dict.fromkeys(solver.groups)) or "none"
         warn_user(f"exudyn_lie.SolveDynamic: DynamicSolverType.{typeName} (Exudyn's implicit solver) is replaced, "

@@ -14,6 +14,7 @@ from .codes import GROUP_NAMES, J_NROW, J_ROW0, ROW_COORD, ROW_COORD_VEL, ROW_DI
 from .rotation_parameters import TRACK_ANGLE, TRACK_NONE
 from .linalg import REL_PIVOT_TOL, rcm_order
 from .rolling_disc_penalty_forces import N_DISC
+from .oblique_solve import oblique_plan
 from .scene import GROUND, Scene, SceneError
 from .tree_solve import tree_plan, work_size
 
@@ -118,8 +119,9 @@ def body_track(body):
 def joint_rows_of(joint):
     """(kind, ax, bx) of the rows of a scene joint."""
     if joint.coordinate is not None:
+        # end codes: 0 position, 1 an angle (coordinate_angles), >= 10 a node rotation parameter (node_coordinates)
         kind = ROW_COORD_VEL if joint.velocityLevel else ROW_COORD
-        return [(kind, int(joint.coordinate[4]), int(joint.coordinate[5]))]    # 1: a rotation coordinate
+        return [(kind, int(joint.coordinate[4]), int(joint.coordinate[5]))]
     if joint.distance is not None:
         return [(ROW_DIST, 0, 0)]
     if joint.rollingDisc is not None:
@@ -403,10 +405,24 @@ def _joint_rows_in_order(J, order):
 
 def solve_plan(sd, solve="auto"):
     """The tree solve's plan for ``sd`` (``tree_plan``), or ``None`` for the band (or, with
-    redundant rows, the pivoted) solve.  ``solve``: ``'auto'`` (a forest whose band is at
+    redundant rows, the pivoted) solve, or an ``oblique_solve.ObliquePlan`` when a row's force
+    direction differs from its gradient (then always: that solve is the only one for it).  ``solve``: ``'auto'`` (a forest whose band is at
     least ``TREE_MIN_BANDWIDTH`` wide), or ``'tree'`` / ``'band'`` to compare the two on one
     scene (tests, measurements); a scene whose rows close a loop has no tree solve."""
-    if sd.redundant or solve == "band" or sd.nrows == 0:
+    if sd.nrows == 0:
+        return None
+    oblique = oblique_plan(sd)
+    if oblique is not None:
+        # rows whose force direction differs from their gradient (oblique_solve): the LU
+        # of J M^-1 C^T; neither the symmetric band / pivoted Cholesky nor the tree solve applies
+        if sd.redundant or solve == "tree":
+            raise SceneError("the scene has coordinate constraints on rotation-vector coordinates (force direction "
+                             "e_k, as Exudyn's RotVecLG Jacobian, != gradient) together with "
+                             + ("redundant constraints" if sd.redundant else "solve='tree'")
+                             + ": exudyn_lie's non-symmetric solve has no rank-revealing / tree variant; remove the "
+                             "redundant constraint axes")
+        return oblique
+    if sd.redundant or solve == "band":
         return None
     plan = tree_plan(sd.nb, sd.rint)
     if solve == "tree":
@@ -468,7 +484,7 @@ def make_work(sd, nstages, solve="auto", track=None):
     track = no_tracking(nb) if track is None else track
     m = sd.nrows
     plan = solve_plan(sd, solve)
-    tree = plan is not None
+    tree = isinstance(plan, np.ndarray)        # tree_solve's plan (an ObliquePlan is no tree)
     return Work(
         Rs=np.zeros((nb, 3, 3)), rs=np.zeros((nb, 3)), Vs=np.zeros((nb, 6)),
         Rb=np.zeros((nb, 3, 3)), rb=np.zeros((nb, 3)), Vb=np.zeros((nb, 6)), Psi=np.zeros((nb, 6)),

@@ -12,15 +12,17 @@ from .codes import (J_BODY_A, J_BODY_B, J_NROW, J_ROW0, ROW_AX, ROW_BX, ROW_COOR
                     ROW_ROLL, ROW_ROT, ROW_TRANS_LOCAL)
 from .coordinate_rows import coordinate_row
 from .distance_rows import distance_row
+from .node_coordinates import PARAM_BASE, node_parameter_terms
 from .rolling_disc_rows import rolling_disc_row
 
 
 # --------------------------------------------------------------------------- constraints
 @njit(cache=True, _nrt=False)
-def joint_rows(j, gid, jint, jpos, jrot, jpar, rint, R, r, V, h, Jr, eta, rdrive, v3, ident, zero3, zero6):
+def joint_rows(j, gid, jint, jpos, jrot, jpar, rint, bparam, R, r, V, h, Jr, eta, rdrive, v3, ident, zero3, zero6):
     """Residual ``h``, Jacobian rows ``Jr`` (row, 12: 6 for side A, 6 for side B) and
-    ``eta = -Jdot V`` of all rows of joint ``j``, written at the joint's row slots (with the
-    time-dependent part ``rdrive`` of a coordinate row, :mod:`.row_drives`)."""
+    ``eta = -Jdot V`` of all rows of joint ``j``, written at the joint's row slots
+    (``bparam``: the node rotation parameters tracked per body, Work.bparam; ``rdrive``: the
+    time-dependent part of a coordinate row, :mod:`.row_drives`)."""
     a = jint[j, J_BODY_A]
     b = jint[j, J_BODY_B]
     gA, RA, rA, VA = _side(gid, a, R, r, V, ident, zero3, zero6)
@@ -52,6 +54,9 @@ def joint_rows(j, gid, jint, jpos, jrot, jpar, rint, R, r, V, h, Jr, eta, rdrive
         if kind == ROW_COORD or kind == ROW_COORD_VEL:
             coordinate_row(q, a, b, gA, gB, RA, RB, rax, rint[q, ROW_BX], rotA, rotB, jpar[j], pA, pB, bA, bB, u, RtA,
                            h, Jr, eta)
+            if rax >= PARAM_BASE or rint[q, ROW_BX] >= PARAM_BASE:     # rotation parameters of 3D nodes
+                node_parameter_terms(q, a, b, rax, rint[q, ROW_BX], RA, RB, VA, VB, bparam, jpar[j, 0], h, Jr, eta,
+                                     ax, axd, axb)
             if kind == ROW_COORD_VEL:
                 # velocity level: J V = w(t) constrains no position (as ROW_ROLL); the same J, and
                 # eta = -Jdot V, since d/dt (J V - w) = J Vdot + Jdot V - wdot (wdot: row_drives)
@@ -137,11 +142,11 @@ def joint_rows(j, gid, jint, jpos, jrot, jpar, rint, R, r, V, h, Jr, eta, rdrive
 
 
 @njit(cache=True, inline="always", _nrt=False)
-def joints_rows(gid, jint, jpos, jrot, jpar, rint, R, r, V, h, Jr, eta, rdrive, v3, ident, zero3, zero6):
+def joints_rows(gid, jint, jpos, jrot, jpar, rint, bparam, R, r, V, h, Jr, eta, rdrive, v3, ident, zero3, zero6):
     """:func:`joint_rows` of every joint.  ``rdrive`` (3, m): the time-dependent part of the
     coordinate rows at the evaluation time (:mod:`.row_drives`): ``h - c(t)``, ``eta + cddot(t)``
     (the rate ``cdot(t)`` is the velocity target ``J V = cdot`` of the projections).  (Applied
     in the coordinate rows' branch: a loop over all rows here cost the heavy top 0.4 us of its
     2.9 us per step, measured.)"""
     for j in range(jint.shape[0]):
-        joint_rows(j, gid, jint, jpos, jrot, jpar, rint, R, r, V, h, Jr, eta, rdrive, v3, ident, zero3, zero6)
+        joint_rows(j, gid, jint, jpos, jrot, jpar, rint, bparam, R, r, V, h, Jr, eta, rdrive, v3, ident, zero3, zero6)

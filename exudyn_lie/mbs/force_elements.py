@@ -61,9 +61,9 @@ def table(row, shape, dtype=float):
 
 def _angles(scene, items):
     """Rotation coordinates of the coordinate items (springs and constraints), tracked by
-    mbs/coordinate_angles.py."""
-    return int(sum(s.angleA[0] + s.angleB[0] for s in items)
-               + sum(j.coordinate[4] + j.coordinate[5] for j in scene.joints if j.coordinate is not None))
+    mbs/coordinate_angles.py (code 1: an angle; node rotation parameters, codes >= 10, are tracked per body)."""
+    return int(sum((s.angleA[0] == 1) + (s.angleB[0] == 1) for s in items)
+               + sum((j.coordinate[4] == 1) + (j.coordinate[5] == 1) for j in scene.joints if j.coordinate is not None))
 
 
 # ---------------------------------------------------------------- the registrations
@@ -84,8 +84,8 @@ register("torsional", "torsionalSprings", (
          torsional_element, torsional_element_energy)
 register("coordinate", "coordinateSprings", (
     ("kint", table(lambda s: [s.bodyA, s.bodyB, int(s.angleA[0]), int(s.angleB[0])], (-1, 4), np.int64)),
-    ("kpar", table(lambda s: [s.stiffness, s.damping, s.offset, *s.axisA, *s.axisB, s.angleA[2], s.angleB[2]],
-                   (-1, 11))),
+    ("kpar", table(lambda s: [s.stiffness, s.damping, s.offset, *s.axisA, *s.axisB, s.angleA[2], s.angleB[2],
+                              s.force], (-1, 12))),
     ("krot", table(lambda s: [s.angleA[1], s.angleB[1]], (-1, 2, 3, 3))),
     ("nangles", _angles)),
          coordinate_spring_element, coordinate_spring_element_energy)

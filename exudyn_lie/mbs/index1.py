@@ -1,6 +1,8 @@
 """The index-1 solve (eq. index1): ``[M J^T; J 0][Vdot; lambda] = [Q; eta]`` by the Schur
-complement ``J M^-1 J^T`` (band Cholesky, or pivoted Cholesky for redundant rows), and
-the stage right-hand side ``rhs`` that assembles forces, rows and the solve."""
+complement ``J M^-1 J^T`` (band Cholesky, or pivoted Cholesky for redundant rows; the tree
+solve; or, for rows whose force direction C differs from J, the LU of ``J M^-1 C^T``,
+:mod:`.oblique_solve`), and the stage right-hand side ``rhs`` that assembles forces, rows
+and the solve."""
 from collections import namedtuple
 
 from numba import njit, types
@@ -11,6 +13,7 @@ from .codes import ROW_BODY_A, ROW_BODY_B, STATUS_OK, STATUS_SINGULAR
 from .constraints import joints_rows
 from .force_elements import compute_forces
 from .linalg import band_cholesky_inplace, band_cholesky_solve_inplace, pivoted_cholesky_solve
+from .oblique_solve import force_direction_rows, lu_solve_inplace
 from .tree_solve import tree_correction, tree_solve
 
 
@@ -72,10 +75,16 @@ def subtract_rows_transposed(rint, W, lam, X):
 
 def _is_tree(tree):
     """At compile time, from numba's type of ``tree`` (index1.TreeSolve): does the scene use
-    the tree solve?  Work.tplan is None for the band solve, so a band scene's compiled time
-    loop contains no tree code at all (with the tree branch present but not taken, the heavy
-    top's step cost 3.3 instead of 2.85 us, measured)."""
-    return not isinstance(tree.types[0], types.NoneType)
+    the tree solve (its plan, an integer array)?  Work.tplan is None for the band solve, so a
+    band scene's compiled time loop contains no tree code at all (with the tree branch present
+    but not taken, the heavy top's step cost 3.3 instead of 2.85 us, measured)."""
+    return isinstance(tree.types[0], types.Array)
+
+
+def _is_oblique(tree):
+    """At compile time: does the scene use the non-symmetric solve (Work.tplan an
+    oblique_solve.ObliquePlan, a namedtuple)?  Only scenes with such rows compile it."""
+    return isinstance(tree.types[0], types.BaseTuple)
 
 
 def apply_correction(rint, W, lam, X, tree):
@@ -94,6 +103,27 @@ def _apply_correction(rint, W, lam, X, tree):
     def by_rows(rint, W, lam, X, tree):
         subtract_rows_transposed(rint, W, lam, X)
     return by_rows
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def minv_rows(gid, Minv, rint, R, Jr, W, tmp12):
+    """``W = M^-1 Jr^T`` as row blocks (W (m, 12): the two body blocks of each row), for the
+    oblique solve.  schur_solve keeps its own copy of this loop: calling this inlined helper
+    there made the heavy top's step slower (CPU time 2.9 -> 3.0 us, measured interleaved), and
+    the common path's code is meant to stay as it was."""
+    for q in range(rint.shape[0]):
+        a = rint[q, ROW_BODY_A]
+        b = rint[q, ROW_BODY_B]
+        if a >= 0:
+            apply_minv(gid[a], Minv[a], R[a], Jr[q, 0:6], W[q, 0:6], tmp12)
+        else:
+            for k in range(6):
+                W[q, k] = 0.0
+        if b >= 0:
+            apply_minv(gid[b], Minv[b], R[b], Jr[q, 6:12], W[q, 6:12], tmp12)
+        else:
+            for k in range(6):
+                W[q, 6 + k] = 0.0
 
 
 @njit(cache=True, _nrt=False)
@@ -141,6 +171,30 @@ def schur_solve(gid, Minv, rint, bw, redundant, pivotTol, R, Jr, W, lam, Sb, Sd,
     return STATUS_OK
 
 
+@njit(cache=True, _nrt=False)
+def oblique_schur_solve(gid, Minv, rint, pivotTol, R, Jr, W, lam, plan, info, tmp12):
+    """``W = M^-1 C^T`` (row blocks; C the force-direction rows, :mod:`.oblique_solve`) and
+    ``lam <- (J M^-1 C^T)^-1 lam`` by a dense LU with partial pivoting: the non-symmetric
+    index-1 solve of rows whose force direction C differs from their gradient J (Exudyn's
+    coordinate constraint on a RotVecLG rotation coordinate).  A pivot at or below
+    ``pivotTol * max |diag S|`` is STATUS_SINGULAR (info[0] = its column)."""
+    force_direction_rows(plan, Jr)
+    minv_rows(gid, Minv, rint, R, plan.Cr, W, tmp12)
+    m = rint.shape[0]
+    S = plan.S
+    dmax = 0.0
+    for q in range(m):
+        for l in range(m):
+            S[q, l] = _row_dot(rint, q, l, Jr, W)
+        if abs(S[q, q]) > dmax:
+            dmax = abs(S[q, q])
+    fail = lu_solve_inplace(S, m, plan.piv, lam, pivotTol * dmax)
+    if fail >= 0:
+        info[0] = fail
+        return STATUS_SINGULAR
+    return STATUS_OK
+
+
 def solve_multipliers(gid, Minv, rint, bw, redundant, pivotTol, R, Jr, W, lam, Sb, Sd, perm, ytmp, info, tmp12,
                       tree):
     """``lam <- (J M^-1 J^T)^-1 lam`` by the solve the scene was compiled for: the tree solve
@@ -157,6 +211,11 @@ def _solve_multipliers(gid, Minv, rint, bw, redundant, pivotTol, R, Jr, W, lam, 
         def by_tree(gid, Minv, rint, bw, redundant, pivotTol, R, Jr, W, lam, Sb, Sd, perm, ytmp, info, tmp12, tree):
             return tree_solve(gid, Minv, rint, R, Jr, lam, tree.plan, tree.Tw, pivotTol, info)
         return by_tree
+    if _is_oblique(tree):
+        def by_oblique(gid, Minv, rint, bw, redundant, pivotTol, R, Jr, W, lam, Sb, Sd, perm, ytmp, info, tmp12,
+                       tree):
+            return oblique_schur_solve(gid, Minv, rint, pivotTol, R, Jr, W, lam, tree.plan, info, tmp12)
+        return by_oblique
 
     def by_schur(gid, Minv, rint, bw, redundant, pivotTol, R, Jr, W, lam, Sb, Sd, perm, ytmp, info, tmp12, tree):
         return schur_solve(gid, Minv, rint, bw, redundant, pivotTol, R, Jr, W, lam, Sb, Sd, perm, ytmp, info, tmp12)
@@ -207,7 +266,7 @@ def rhs(sd, wk, t, R, r, V, Qext, Vdot):
     free_accelerations(sd.gid, sd.Minv, R, Q, Vdot, wk.tmp12)
     if sd.nrows == 0:
         return STATUS_OK
-    joints_rows(sd.gid, sd.jint, sd.jpos, sd.jrot, sd.jpar, sd.rint, R, r, V, wk.h, wk.Jr, wk.eta, wk.rdrive,
+    joints_rows(sd.gid, sd.jint, sd.jpos, sd.jrot, sd.jpar, sd.rint, wk.bparam, R, r, V, wk.h, wk.Jr, wk.eta, wk.rdrive,
                 wk.v3, wk.ident, wk.zero3, wk.zero6)
     return schur_correct(sd.gid, sd.Minv, sd.rint, sd.bandwidth, sd.redundant, sd.pivotTol, R, Vdot, -1.0, wk.eta,
                          wk.Jr, wk.W, wk.lam, wk.Sb, wk.Sd, wk.perm, wk.ytmp, wk.info, wk.tmp12, tree_of(sd, wk))

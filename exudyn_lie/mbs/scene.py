@@ -174,9 +174,11 @@ class CoordinateSpringDamper:
     damping: float
     offset: float = 0.0
     name: str = ""
-    # rotation coordinates (AngleCoordinate): per side (is a rotation, frame F, angle0); d = F e_z
+    # rotation coordinates: per side (end code, frame F, angle0): code 1 an AngleCoordinate
+    # (d = F e_z), >= 10 a NodeParameterCoordinate (node_coordinates.param_code; d = 0)
     angleA: tuple = (False, np.eye(3), 0.0)
     angleB: tuple = (False, np.eye(3), 0.0)
+    force: float = 0.0           # a constant f0 added to f (AddCoordinateLoad)
 
 
 @dataclass(frozen=True)
@@ -188,6 +190,19 @@ class AngleCoordinate:
     ``angle0``, the angle at the initial state.  Its rate is ``(frame e_z) . omega_world``."""
     frame: object = None
     angle0: float = 0.0
+
+
+@dataclass(frozen=True)
+class NodeParameterCoordinate:
+    """A rotation coordinate of a 3D rigid node for the coordinate items (``axis`` argument
+    of :meth:`Scene.AddCoordinateConstraint` / :meth:`Scene.AddCoordinateSpringDamper`):
+    rotation parameter ``index`` (0-based) of the body's node of ``kind`` ``'RigidBodyRotVecLG'``
+    (rotation vector), ``'RigidBodyEP'`` (Euler parameters) or ``'RigidBodyRxyz'`` (Tait-Bryan
+    angles), as Exudyn's MarkerNodeCoordinate on coordinate ``3 + index`` (mbs/node_coordinates.py).
+    The value is taken on the branch tracked from the body's ``track`` (set from ``R0`` if
+    the body has none)."""
+    kind: str
+    index: int
 
 
 @dataclass
@@ -619,8 +634,21 @@ class Scene:
             _finite(damping, f"{label}: damping"), _finite(offset, f"{label}: offset"), label, angA, angB))
         return len(self.coordinateSprings) - 1
 
+    def AddCoordinateLoad(self, body, axis, load, name="") -> int:
+        """A generalised force ``load`` on a coordinate of ``body`` (Exudyn's LoadCoordinate):
+        a coordinate spring from the ground with ``k = d = 0`` and ``f0 = -load`` (``-f`` acts on
+        side B), so the force follows the coordinate's direction (state-dependent for a
+        NodeParameterCoordinate of an EP or Rxyz node)."""
+        label = name or f"coordinateLoad{len(self.coordinateSprings)}"
+        self._check_body(body, label, allow_ground=False)
+        k = self.AddCoordinateSpringDamper(GROUND, 0, body, axis, 0.0, 0.0, name=label)
+        self.coordinateSprings[k].force = -_finite(load, f"{label}: load")
+        return k
+
     def _coordinate_end(self, body, axis, label):
         """(world direction d, (is rotation, frame, angle0)) of one side of a coordinate item."""
+        if isinstance(axis, NodeParameterCoordinate):
+            return np.zeros(3), (self._node_parameter_code(body, axis, label), np.eye(3), 0.0)
         if not isinstance(axis, AngleCoordinate):
             return _coordinate_direction(axis, label), (False, np.eye(3), 0.0)
         if body == GROUND or self.bodies[body].isPoint:
@@ -628,6 +656,34 @@ class Scene:
                              f"{'the ground' if body == GROUND else 'a point mass'}")
         F = _rot(axis.frame, f"{label}: rotation coordinate frame")
         return F[:, 2].copy(), (True, F, _finite(axis.angle0, f"{label}: rotation coordinate angle0"))
+
+    def _node_parameter_code(self, body, axis, label):
+        """End code (node_coordinates.param_code) of a NodeParameterCoordinate; the body's
+        node parameters are tracked (Body.track, from R0 unless already set)."""
+        from .node_coordinates import PARAM_EP, PARAM_KINDS, PARAM_RXYZ, param_code
+        from .rotation_parameters import TRACK_QUAT, TRACK_RXYZ, nearest_rxyz, quat_of
+        kind = PARAM_KINDS.get(axis.kind)
+        if kind is None:
+            raise SceneError(f"{label}: node parameter coordinate of kind {axis.kind!r}; use one of "
+                             f"{sorted(PARAM_KINDS)}")
+        n = 4 if kind == PARAM_EP else 3
+        if not 0 <= int(axis.index) < n:
+            raise SceneError(f"{label}: a {axis.kind} node has rotation parameters 0..{n - 1}, not {axis.index}")
+        if body == GROUND or self.bodies[body].isPoint or self.bodies[body].planar:
+            raise SceneError(f"{label}: a node rotation parameter needs a 3D rigid body")
+        b = self.bodies[body]
+        code = TRACK_RXYZ if kind == PARAM_RXYZ else TRACK_QUAT
+        if b.track is None:
+            p = np.zeros(4)
+            if code == TRACK_RXYZ:
+                nearest_rxyz(np.asarray(b.R0, float), np.zeros(4), p)
+            else:
+                quat_of(np.asarray(b.R0, float), p)
+            b.track = (code, p)
+        elif int(b.track[0]) != code:
+            raise SceneError(f"{label}: body {body} ({b.name}) tracks other rotation parameters than "
+                             f"{axis.kind}'s")
+        return param_code(kind, axis.index)
 
     def AddLinearSpringDamper(self, bodyA, posA, axisA, bodyB, posB, stiffness, damping=0.0, offset=0.0, force=0.0,
                               name="") -> int:

@@ -75,7 +75,20 @@ def _in_package(py_file):
         return False
 
 
+_WRITABLE_DIRS = set()
+
+
 class _PackageKeyMixin:
+    def ensure_cache_path(self):
+        """numba's check that the cache directory is writable (it creates a temporary file
+        there) once per directory and process, not once per function: the package defines
+        300 of them at import (10 ms).  A directory that vanished is checked again."""
+        path = self.get_cache_path()
+        if path in _WRITABLE_DIRS and os.path.isdir(path):
+            return
+        super().ensure_cache_path()
+        _WRITABLE_DIRS.add(path)
+
     def get_source_stamp(self):
         return (super().get_source_stamp(), package_key())
 
@@ -100,6 +113,27 @@ class PackageUserWideCacheLocator(_PackageKeyMixin, caching.UserWideCacheLocator
 
 LOCATORS = (PackageUserProvidedCacheLocator, PackageInTreeCacheLocator, PackageUserWideCacheLocator)
 
+_numba_load_overload = caching.Cache.load_overload
+
+
+def load_overload(self, sig, target_context):
+    """numba's ``Cache.load_overload`` without the full context refresh for the package's
+    functions.
+
+    numba refreshes the target context before every cache load: it imports and installs
+    all its lowering registries, and ``numba.np.arraymath`` imports ``scipy.linalg`` to
+    probe for BLAS.  That is 0.2 s of a warm first solve (0.12 s scipy, 0.1 s registries;
+    ``python -m exudyn_lie bench --sections startup``), spent only for *compiling*: a
+    cached function needs the NRT runtime's symbols when its object code is linked, and
+    nothing of the registries.  So a package function initialises the runtime only, and
+    a cache miss compiles as before (numba's compiler refreshes the contexts itself)."""
+    if not isinstance(self._impl.locator, LOCATORS):
+        return _numba_load_overload(self, sig, target_context)
+    from numba.core.runtime import rtsys
+    rtsys.initialize(target_context)
+    with self._guard_against_spurious_io_errors():
+        return self._load_overload(sig, target_context)
+
 
 def install():
     """Put the package's locators in front of numba's (idempotent), in numba's order of
@@ -109,6 +143,7 @@ def install():
         if cls in classes:
             classes.remove(cls)
     classes[0:0] = list(LOCATORS)
+    caching.Cache.load_overload = load_overload
 
 
 install()

@@ -150,6 +150,7 @@ class Simulator:
                                                   "position": kernel.STAB_POSITION}[self.stabilization])
         self.method = method_arrays(self.tableau)
         self.control = fixed_step_control()
+        self._extViews = None
         self._extToken = external.register(self, "_external_forces") if self.sd.hasQext else 0
         self.wk = self._make_work()
         self.gid = self.sd.gid
@@ -445,7 +446,8 @@ class Simulator:
         at the frame origins and world torques (the compiled caller turns them into
         generalised forces and checks them).  Allocates nothing itself: the callbacks see
         read-only views of the stage state (valid during the call)."""
-        st, F, T, adders = self._external_views()
+        views = self._extViews          # (work set, views); checked here, not in a call: once per stage
+        st, F, T, adders = views[1] if views is not None and views[0] is self.wk else self._external_views()
         st.t = t
         for add in adders:
             add(t, st, F, T)
@@ -471,7 +473,7 @@ class Simulator:
         of the work arrays (the state read-only, so a callback cannot change the stage) and
         one ``add(t, st, F, T)`` per Python force (its ``add_into`` if it has one)."""
         wk = self.wk
-        cached = getattr(self, "_extViews", None)
+        cached = self._extViews
         if cached is not None and cached[0] is wk:
             return cached[1]
 

@@ -45,3 +45,22 @@ def test_warm_first_solve_loads_no_scipy_linalg_nor_numba_arraymath():
     _run()                          # fills numba's cache if it is cold (compiling refreshes the contexts)
     line = _run()
     assert line == "LOADED False False", line
+
+
+def test_bench_startup_section_reports_the_issue_targets():
+    """The bench's start-up harness runs a fresh interpreter and states the issue's targets
+    (no timing asserted)."""
+    from exudyn_lie.apps import bench_startup as B
+    d = B.startup_once("bridge", steps=10)
+    assert d["ok"], d.get("message")
+    assert d["secondSolve"] > 0 and d["imports"] > 0 and abs(d["firstFixed"] - (d["firstSolve"] - d["secondSolve"])) < 1e-12
+    keys = ("wall", "imports", "importsCpu", "firstSolve", "secondSolve", "firstFixed", "firstFixedCpu")
+    res = {"bridge": {"cold": dict(d, loadEnd=d["load"]),
+                      "warm": dict({k: d[k] for k in keys}, min={k: d[k] for k in keys}, load=d["load"][0])},
+           "cores": 2}
+    rows = B.target_lines(res)
+    assert any(r.startswith("| start-up, warm cache: `import exudyn_lie`") and "<= 0.1 s" in r for r in rows)
+    assert any("first solve's fixed cost (bridge path" in r and "<= 0.05 s" in r for r in rows)
+    assert any("first run ever" in r and ("<= 20 s" in r or "<= 30 s" in r) for r in rows)
+    assert all(r.endswith("| yes |") or r.endswith("| no |") for r in rows)
+    assert B.report_lines(res)[0] == "## 4. Start-up"

@@ -208,7 +208,16 @@ class Simulator:
         if len(sc.torsionalSprings):
             self.wk.tphi[:] = 0.0
         # the tracked angles (torsional springs, rotation coordinates, 2D bodies) at this state
-        kernel.update_torsion_tracking(self.sd, self.wk, self.R, self.r, self.V)
+        self._update_tracking()
+
+    def _update_tracking(self):
+        """``kernel.update_torsion_tracking`` at the current state, if the scene tracks an angle
+        (the same three conditions as the compiled function): a scene without one does not
+        load that compiled entry point at all (its cache load and first-call typing are part
+        of a warm first solve, issue 19)."""
+        sd, wk = self.sd, self.wk
+        if sd.tint.shape[0] > 0 or sd.nangles > 0 or wk.nplanar > 0:
+            kernel.update_torsion_tracking(sd, wk, self.R, self.r, self.V)
 
     def states(self):
         omega, vel = twist_to_world_velocity(self.gid, self.R, self.V)
@@ -284,7 +293,7 @@ class Simulator:
         self.redundantJoints = self._joints_of_rows(dep)
         self.sd = with_redundant(self.sd, True)
         self.wk = self._make_work()
-        kernel.update_torsion_tracking(self.sd, self.wk, self.R, self.r, self.V)
+        self._update_tracking()
         names = ", ".join(self.redundantJoints)
         rule = (f"Cholesky pivots of J M^-1 J^T at or below {REL_PIVOT_TOL:g} x its largest diagonal at the "
                 f"initial state")

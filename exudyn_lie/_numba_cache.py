@@ -18,7 +18,7 @@ import hashlib
 import os
 import re
 
-from numba.core import caching
+from numba.core import caching, dispatcher
 
 PACKAGE_DIR = os.path.dirname(os.path.abspath(__file__))
 
@@ -135,6 +135,34 @@ def load_overload(self, sig, target_context):
         return self._load_overload(sig, target_context)
 
 
+class LazyFunctionCache:
+    """numba's ``FunctionCache`` of a package function, made when the dispatcher first uses
+    it (a cache load, save or query) instead of when the function is defined: making it
+    finds the locator, stats the source and reads nothing else, 0.1 ms per function and
+    300 functions in an import of the solver (issue 19, start-up)."""
+    __slots__ = ("_py_func", "_real")
+
+    def __init__(self, py_func):
+        self._py_func = py_func
+        self._real = None
+
+    def __getattr__(self, name):
+        if self._real is None:
+            self._real = caching.FunctionCache(self._py_func)
+        return getattr(self._real, name)
+
+
+_numba_enable_caching = dispatcher.Dispatcher.enable_caching
+
+
+def enable_caching(self):
+    """``Dispatcher.enable_caching`` with a :class:`LazyFunctionCache` for the package's functions."""
+    if getattr(self.py_func, "__module__", "").startswith(__package__ + "."):
+        self._cache = LazyFunctionCache(self.py_func)
+    else:
+        _numba_enable_caching(self)
+
+
 def install():
     """Put the package's locators in front of numba's (idempotent), in numba's order of
     preference: NUMBA_CACHE_DIR if set, else ``__pycache__``, else the user-wide cache."""
@@ -144,6 +172,7 @@ def install():
             classes.remove(cls)
     classes[0:0] = list(LOCATORS)
     caching.Cache.load_overload = load_overload
+    dispatcher.Dispatcher.enable_caching = enable_caching
 
 
 install()

@@ -122,8 +122,9 @@ def load_overload(self, sig, target_context):
 
     numba refreshes the target context before every cache load: it imports and installs
     all its lowering registries, and ``numba.np.arraymath`` imports ``scipy.linalg`` to
-    probe for BLAS.  That is 0.2 s of a warm first solve (0.12 s scipy, 0.1 s registries;
-    ``python -m exudyn_lie bench --sections startup``), spent only for *compiling*: a
+    probe for BLAS.  That was 0.23 s of a warm first solve (0.12 s the scipy import, 0.11 s
+    the registries; wall time on an idle machine, each timed alone in a fresh process; the
+    whole: ``python -m exudyn_lie bench --sections startup``), spent only for *compiling*: a
     cached function needs the NRT runtime's symbols when its object code is linked, and
     nothing of the registries.  So a package function initialises the runtime only, and
     a cache miss compiles as before (numba's compiler refreshes the contexts itself)."""

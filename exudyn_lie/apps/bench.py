@@ -13,7 +13,7 @@ Sections (``--sections``, default all):
 * ``perstep`` cost of one step at h = 1e-3 (MK-RK4 against one generalized-alpha step);
 * ``scaling`` chains of N boxes with spherical joints, cost per step against N;
 * ``startup`` first run with an empty numba cache (compile) and a warm start, in
-  fresh interpreters;
+  fresh interpreters: import time and the first solve's fixed cost (:mod:`.bench_startup`);
 * ``overhead`` the drop-in ``exl.SolveDynamic`` (Exudyn's loop, sensors, solution file,
   write-back) against the integration alone, on the heavy top;
 * ``groups``  one compiled SE(3) exp + dexpinv evaluation (the group work per body and stage);
@@ -46,9 +46,7 @@ import datetime
 import json
 import os
 import platform
-import subprocess
 import sys
-import tempfile
 import time
 
 import numpy as np
@@ -481,79 +479,6 @@ def run_scaling(cfg, log, out):
     out["scaling"] = dict(rows=rows, fits=fits)
 
 
-# --------------------------------------------------------------------------- start-up
-STARTUP_SCRIPT = r"""
-import json, sys, time
-t0 = time.perf_counter()
-import numpy as np
-import exudyn as exu
-import exudyn_lie
-from exudyn_lie import models
-from exudyn_lie.bridge import SceneFromExudyn
-from exudyn_lie.mbs import Simulator
-t_import = time.perf_counter() - t0
-mbs, info = models.build("heavy_top")
-mbs.Assemble()
-path = sys.argv[1]
-t1 = time.perf_counter()
-if path == "kernel":
-    sim = Simulator(SceneFromExudyn(mbs), "RK4", "SE3")
-    sim.Advance(1, 1e-3)
-else:
-    ss = exu.SimulationSettings()
-    ss.timeIntegration.numberOfSteps = 1
-    ss.timeIntegration.endTime = 1e-3
-    ss.solution.file.write = False
-    ss.solution.sensors.active = False
-    exudyn_lie.SolveDynamic(mbs, ss, method="RK4", liegroup="SE3", showProgress=False, projectInitial=False)
-t_first = time.perf_counter() - t1
-print("BENCHJSON" + json.dumps(dict(imports=t_import, firstStep=t_first, total=time.perf_counter() - t0)))
-"""
-
-
-def _startup_once(path, cache=None):
-    """One fresh interpreter; ``cache``: a NUMBA_CACHE_DIR (None: the installed cache
-    next to the sources, as a user gets it after the first run)."""
-    env = dict(os.environ)
-    env.pop("NUMBA_CACHE_DIR", None)
-    if cache:
-        env["NUMBA_CACHE_DIR"] = cache
-    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-    env["PYTHONPATH"] = root + (os.pathsep + env["PYTHONPATH"] if env.get("PYTHONPATH") else "")
-    tic = time.perf_counter()
-    p = subprocess.run([sys.executable, "-c", STARTUP_SCRIPT, path], env=env, capture_output=True, text=True,
-                       cwd=root, timeout=1800)
-    wall = time.perf_counter() - tic
-    line = [x for x in p.stdout.splitlines() if x.startswith("BENCHJSON")]
-    if p.returncode != 0 or not line:
-        return dict(ok=False, wall=wall, message=(p.stderr.strip().splitlines() or ["?"])[-1][:300])
-    d = json.loads(line[-1][len("BENCHJSON"):])
-    d.update(ok=True, wall=wall)
-    return d
-
-
-def run_startup(cfg, log, out):
-    res = {}
-    nwarm = 3 if cfg.quick else 5
-    for path in ("kernel", "bridge"):
-        d = dict()
-        if cfg.coldStart:
-            with tempfile.TemporaryDirectory(prefix="exl_numba_cache_") as cache:
-                log(f"start-up ({path}): cold run with an empty NUMBA_CACHE_DIR, load {loadavg()[0]:.2f}")
-                d["cold"] = _startup_once(path, cache)
-                d["cold"]["load"] = loadavg()
-                log(f"start-up ({path}): cold {d['cold']['wall']:.1f} s")
-        log(f"start-up ({path}): {nwarm} warm runs (installed cache)")
-        _startup_once(path)             # make sure the installed cache holds every function
-        warm = [_startup_once(path) for _ in range(nwarm)]
-        d["warmRuns"] = warm
-        ok = [w for w in warm if w["ok"]]
-        d["warm"] = {k: float(np.median([w[k] for w in ok])) for k in ("wall", "imports", "firstStep", "total")} \
-            if ok else dict(ok=False, message=warm[0].get("message", ""))
-        res[path] = d
-    out["startup"] = res
-
-
 # --------------------------------------------------------------------------- report
 def _fmt_t(t, flag=""):
     if not np.isfinite(t):
@@ -621,18 +546,8 @@ def targets_lines(cfg, out):
         A(f"| scaling, chain: cost per step ~ N^p, p <= 1.2 | p = {sc['fits']['exl']['large']:.3f} (N >= 10), "
           f"{sc['fits']['exl']['all']:.3f} (all N); N = {min(sc['rows'])} ... {max(sc['rows'])} | "
           f"{'yes' if np.isfinite(p) and p <= 1.2 else 'no'} |")
-    su = out.get("startup")
-    if su:
-        for path, d in su.items():
-            if "cold" in d:
-                c = d["cold"]
-                A(f"| start-up: first run, empty numba cache ({path} path) <= 30 s | "
-                  f"{c['wall']:.3g} s wall ({c.get('firstStep', np.nan):.3g} s to the first step after imports) | "
-                  f"{'yes' if c.get('ok') and c['wall'] <= 30 else 'no'} |")
-            w = d["warm"]
-            if "wall" in w:
-                A(f"| start-up: warm start to the first step ({path} path) <= 2 s | {w['wall']:.3g} s wall "
-                  f"(imports {w['imports']:.3g} s, first step {w['firstStep']:.3g} s) | {'yes' if w['wall'] <= 2 else 'no'} |")
+    from .bench_startup import target_lines as startup_target_lines
+    L += startup_target_lines(out.get("startup"))
     ov = out.get("overhead")
     if ov:
         for period, d in ov["periods"].items():
@@ -870,26 +785,8 @@ def write_report(cfg, out, cmdline):
           f"p = {f['GAdense']['large']:.3f} (N >= 10).")
         A("")
     # ---- start-up
-    if su:
-        A("## 4. Start-up")
-        A("")
-        A("A fresh interpreter (subprocess) builds the heavy top with `models.build` and runs one MK-RK4 step, "
-          "either through the kernel (`Simulator(SceneFromExudyn(mbs)).Advance(1, h)`) or through the drop-in "
-          "`exudyn_lie.SolveDynamic(mbs, ss)`. 'Cold': `NUMBA_CACHE_DIR` points to an empty directory, so every "
-          "compiled function is compiled (the first run after a fresh install); 'warm': the installed cache "
-          "(`__pycache__` next to the sources, filled by an earlier run; median of the warm runs). Wall = "
-          "process start to exit, including the interpreter start, imports and building the Exudyn model.")
-        A("")
-        A("| path | cold: wall | cold: imports / first step | warm: wall | warm: imports / first step |")
-        A("|---|---|---|---|---|")
-        for path, d in su.items():
-            c = d.get("cold")
-            w = d["warm"]
-            cw = (f"{c['wall']:.3g} s | {c['imports']:.3g} s / {c['firstStep']:.3g} s" if c and c["ok"] else
-                  ("failed: " + c.get("message", "") + " | -" if c else "not measured | -"))
-            ww = (f"{w['wall']:.3g} s | {w['imports']:.3g} s / {w['firstStep']:.3g} s" if "wall" in w else "failed | -")
-            A(f"| {path} | {cw} | {ww} |")
-        A("")
+    from .bench_startup import report_lines as startup_report_lines
+    L += startup_report_lines(su)
     # ---- bridge overhead, group maps
     ov = out.get("overhead")
     if ov:
@@ -1036,7 +933,8 @@ def main(argv=None):
                         command=cmdline, jobs=cfg.jobs, T=cfg.T, quick=cfg.quick))
     log(f"models {cfg.models}, sections {cfg.sections}, T = {cfg.T:g} s, load {out['env']['loadStart']}")
     if "startup" in cfg.sections:           # first, on a quiet machine
-        run_startup(cfg, log, out)
+        from . import bench_startup
+        out["startup"] = bench_startup.run_section(cfg, log)
     if "wp" in cfg.sections or "perstep" in cfg.sections:
         run_wp(cfg, log, out)
         if "wp" in cfg.sections:

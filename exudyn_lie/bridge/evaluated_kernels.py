@@ -31,7 +31,7 @@ def _rotvec_continuous(R, prev, p):
     whose continuity rule the compiled path uses for the same node type)."""
     z = np.zeros(3)
     pp = prev.copy()
-    rotvec_row(R, z, z, pp, False, p, z.copy(), z.copy())
+    rotvec_row(R, z, z, pp, False, p, z.copy(), z.copy(), np.empty(4))
 
 
 @njit(cache=True)

@@ -85,7 +85,7 @@ class OutputChunks:
         To = t0 + ((np.arange(self.maxRows) + 1) * nsub) * h        # the rows' times (the last: t0 + done h)
         a2 = (rows, sim.sd.gid, self.Ro, self.ro, self.Vo, self.Vdo, self.lamo, self.doacc, nt.code, nt.body,
               nt.idx, nt.nq, nt.qref, nt.prev, self.Q, self.Qt, self.Qtt, nt.flags, jrow, jae, self.AE, To,
-              self.Po)
+              self.Po, nt.scratch)
         nflag = _call(self._ep, "write", write_rows, a2)
         sim.t = t0 + done * h           # on a failure: the last accepted step
         self.tStart, self.rows, self.next = t0, rows, 0
@@ -166,7 +166,7 @@ class AdaptiveOutputChunks(OutputChunks):
         jrow, jae = self.jac
         a2 = (rows, sim.sd.gid, self.Ro, self.ro, self.Vo, self.Vdo, self.lamo, self.doacc, nt.code, nt.body,
               nt.idx, nt.nq, nt.qref, nt.prev, self.Q, self.Qt, self.Qtt, nt.flags, jrow, jae, self.AE,
-              np.ascontiguousarray(tout, dtype=float), self.Po)
+              np.ascontiguousarray(tout, dtype=float), self.Po, nt.scratch)
         nflag = _call(self._ep, "write", write_rows, a2)
         self.tStart, self.rows, self.next = tPrev, rows, 0
         self.done += rows
@@ -189,6 +189,7 @@ class NodeTable:
         self.flags = np.zeros(rows, np.int64)
         self.kindOfRow = []
         self.tracked = None             # the kernel's tracked values of the state written (write)
+        self.scratch = np.zeros((8, 4))  # write_rows' working vectors (it allocates nothing)
         i = 0
         for kind, bodies in zip(kinds, kindBodies):
             n = len(kind)
@@ -216,7 +217,7 @@ class NodeTable:
         record_tracked(sim.wk.btrack, sim.wk.bangle, sim.wk.bparam, self.tracked[0])
         return write_rows(1, sd.gid, sim.R[None], sim.r[None], sim.V[None], Vdot[None], lam[None], bool(doacc),
                           self.code, self.body, self.idx, self.nq, self.qref, self.prev, q[None], qt[None], qtt[None],
-                          self.flags, jrow, jae, ae[None], np.array([float(sim.t)]), self.tracked)
+                          self.flags, jrow, jae, ae[None], np.array([float(sim.t)]), self.tracked, self.scratch)
 
     def warn_flags(self):
         for i in np.nonzero(self.flags)[0]:

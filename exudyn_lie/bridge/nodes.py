@@ -52,11 +52,11 @@ RXYZ_WARN_COS = math.cos(math.radians(85.0))
 # (continuity) and is updated.  Returns 1 if an Rxyz node is near its singularity.
 
 @njit(cache=True)
-def rotvec_row(R, omega, omegad, prev, first, p, p_t, p_tt):
+def rotvec_row(R, omega, omegad, prev, first, p, p_t, p_tt, qv):
     """NodeRigidBodyRotVecLG: Exudyn's total rotation vector ``2 acos(q0) qv / |qv|`` of the
     sign-continuous quaternion q of R (kept in ``prev``; mbs.rotation_parameters: Exudyn's Lie
-    group update composes quaternions, so |theta| <= 2 pi and turns over at 2 pi)."""
-    qv = np.empty(4)
+    group update composes quaternions, so |theta| <= 2 pi and turns over at 2 pi); ``qv``:
+    scratch (4).  The row writers allocate nothing (see :func:`write_nodes`)."""
     if first:
         quat_of(R, qv)
     else:
@@ -88,14 +88,13 @@ def _ep_glocal_T_apply(e, w, out):
 
 
 @njit(cache=True)
-def ep_row(R, omega, omegad, prev, first, p, p_t, p_tt):
+def ep_row(R, omega, omegad, prev, first, p, p_t, p_tt, tmp):
     """NodeRigidBodyEP: sign-continuous Euler parameters, ep_t = GL^T omega / 4,
-    ep_tt = (GL(ep_t)^T omega + GL(ep)^T omegadot) / 4."""
+    ep_tt = (GL(ep_t)^T omega + GL(ep)^T omegadot) / 4; ``tmp``: scratch (4)."""
     if first:
         quat_of(R, p)
     else:
         nearest_quat(R, prev, p)
-    tmp = np.empty(4)
     _ep_glocal_T_apply(p, omega, tmp)
     for k in range(4):
         p_t[k] = 0.25 * tmp[k]
@@ -111,7 +110,10 @@ def ep_row(R, omega, omegad, prev, first, p, p_t, p_tt):
 
 @njit(cache=True)
 def _wrap_near(x, ref):
-    return x + TWO_PI * np.round((ref - x) / TWO_PI)
+    # np.rint, not np.round: the same value (round half to even), but np.round's numba
+    # implementation lives in numba.np.arraymath, which imports scipy.linalg when a
+    # cached kernel is loaded (0.12 s of a warm start, issue 19)
+    return x + TWO_PI * np.rint((ref - x) / TWO_PI)
 
 
 @njit(cache=True)
@@ -182,35 +184,42 @@ def continued_angle(a, omz, prev, first, t, tracked):
 
 
 @njit(cache=True)
-def write_row(code, R, omega, omegad, prev, first, p, p_t, p_tt, t, tracked):
+def write_row(code, R, omega, omegad, prev, first, p, p_t, p_tt, t, tracked, tmp):
     if code == CODE_POINT or code == CODE_POINT2D or code == CODE_1D or code == CODE_1D_ROT:
         return 0                         # no rotation parameters
     if code == CODE_2D:
         return planar_row(R, omega, omegad, prev, first, p, p_t, p_tt, t, tracked)
     if code == CODE_ROTVEC:
-        return rotvec_row(R, omega, omegad, prev, first, p, p_t, p_tt)
+        return rotvec_row(R, omega, omegad, prev, first, p, p_t, p_tt, tmp)
     elif code == CODE_EP:
-        return ep_row(R, omega, omegad, prev, first, p, p_t, p_tt)
+        return ep_row(R, omega, omegad, prev, first, p, p_t, p_tt, tmp)
     return rxyz_row(R, omega, omegad, prev, first, p, p_t, p_tt)
 
 
 # ---------------------------------------------------------------------------- all nodes at once
 # (kept in this file: numba's cache is invalidated only by changes of the defining file)
 @njit(cache=True)
-def write_nodes(gid, R, r, V, Vdot, doacc, code, body, idx, nq, qref, prev, first, q, qt, qtt, flags, t, tracked, exact):
+def write_nodes(gid, R, r, V, Vdot, doacc, code, body, idx, nq, qref, prev, first, q, qt, qtt, flags, t, tracked, exact,
+                scratch):
     """Node coordinates from the body states (R, r, V) and accelerations Vdot (in each
     body's group velocity coordinates: SE3 v body-fixed, SO3xR3 v = rdot).  With ``exact``,
     ``tracked`` (nb, 4) holds what the kernel tracked at this state step by step
     (mbs.rotation_parameters.record_tracked: angle of a 2D body / rotor, quaternion of EP and
     RotVecLG nodes, Tait-Bryan angles of Rxyz nodes): the rotation parameters written are
-    those, i.e. Exudyn's continuous branch however far apart the outputs are."""
-    om = np.zeros(3)
-    vel = np.zeros(3)
-    omd = np.zeros(3)
-    acc = np.zeros(3)
-    p = np.zeros(4)
-    pt = np.zeros(4)
-    ptt = np.zeros(4)
+    those, i.e. Exudyn's continuous branch however far apart the outputs are.  ``scratch``
+    (8, 4): the working vectors, zeroed here; nothing is allocated, so the compiled
+    write-back needs no numba array allocator (its implementation module is not imported
+    when the cached code is loaded: 14 ms CPU of a warm first solve, issue 19)."""
+    for i in range(scratch.shape[0]):
+        for k in range(4):
+            scratch[i, k] = 0.0
+    om = scratch[0, :3]
+    vel = scratch[1, :3]
+    omd = scratch[2, :3]
+    acc = scratch[3, :3]
+    p = scratch[4]
+    pt = scratch[5]
+    ptt = scratch[6]
     nflag = 0
     for i in range(code.shape[0]):
         b = body[i]
@@ -241,7 +250,8 @@ def write_nodes(gid, R, r, V, Vdot, doacc, code, body, idx, nq, qref, prev, firs
         if exact and (code[i] == CODE_EP or code[i] == CODE_ROTVEC or code[i] == CODE_RXYZ):
             for k in range(4):
                 prev[i, k] = tracked[b, k]     # the row writer's nearest branch is then this one
-        f = write_row(code[i], Rb, om, omd, prev[i], first, p, pt, ptt, t, tracked[b, 0] if exact else math.nan)
+        f = write_row(code[i], Rb, om, omd, prev[i], first, p, pt, ptt, t, tracked[b, 0] if exact else math.nan,
+                      scratch[7])
         if f:
             flags[i] = 1                 # kept until the warning is given (warn_flags)
             nflag += 1
@@ -295,29 +305,29 @@ def write_multipliers(lam, jrow, jae, ae):
 
 @njit(cache=True)
 def write_all(gid, R, r, V, Vdot, lam, doacc, code, body, idx, nq, qref, prev, q, qt, qtt, flags, jrow, jae, ae, t,
-              tracked, exact):
+              tracked, exact, scratch):
     """write_nodes + write_multipliers of one state (at time ``t``; ``exact``: ``tracked`` holds
     the kernel's tracked values at it, write_nodes)."""
     if doacc:
         write_multipliers(lam, jrow, jae, ae)
     return write_nodes(gid, R, r, V, Vdot, doacc, code, body, idx, nq, qref, prev, False, q, qt, qtt, flags, t,
-                       tracked, exact)
+                       tracked, exact, scratch)
 
 
 @njit(cache=True)
 def write_rows(nrows, gid, Rs, rs, Vs, Vdots, lams, doacc, code, body, idx, nq, qref, prev, Q, Qt, Qtt, flags, jrow,
-               jae, AE, To, Po):
+               jae, AE, To, Po, scratch):
     """:func:`write_all` of the states ``Rs[o], rs[o], Vs[o]`` at times ``To[o]`` (accelerations
     ``Vdots[o]``, multipliers ``lams[o]``) into rows ``o < nrows`` of ``Q, Qt, Qtt, AE``, in order,
     with the angles and rotation parameters the kernel tracked at each state in ``Po[o]``
     (mbs.rotation_parameters; rows beyond ``Po``'s: continuous from the previous row).  The single compiled entry of
     the write-back: every path uses it, one state being one row.  Returns the number of
-    flagged (node, row) pairs."""
+    flagged (node, row) pairs.  ``scratch``: (8, 4) working array (:func:`write_nodes`)."""
     nflag = 0
     for o in range(nrows):
         nflag += write_all(gid, Rs[o], rs[o], Vs[o], Vdots[o], lams[o], doacc, code, body, idx, nq, qref, prev,
                            Q[o], Qt[o], Qtt[o], flags, jrow, jae, AE[o], To[o], Po[min(o, Po.shape[0] - 1)],
-                           o < Po.shape[0])
+                           o < Po.shape[0], scratch)
     return nflag
 
 
@@ -403,12 +413,13 @@ class NodeKind:
         p_t = np.zeros(m)
         p_tt = np.zeros(m)
         zero = np.zeros(3)
+        tmp = np.zeros(4)
         for i in range(n):
             p = out[i]
             flag = write_row(self.code, np.ascontiguousarray(R[i], dtype=float),
                              np.ascontiguousarray(omega[i], dtype=float),
                              zero if omegad is None else np.ascontiguousarray(omegad[i], dtype=float),
-                             self.prev[i], self.first, p, p_t, p_tt, 0.0, math.nan)
+                             self.prev[i], self.first, p, p_t, p_tt, 0.0, math.nan, tmp)
             ix = self.idx[i]
             q[ix[:3]] = np.asarray(r[i]) - self.qref[i, :3]
             q[ix[3:]] = p - self.qref[i, 3:]

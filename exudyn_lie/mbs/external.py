@@ -27,7 +27,9 @@ def register(owner, method_name):
     """Register ``getattr(owner, method_name)`` (held through a weak reference to
     ``owner``, so the registry does not keep a simulator alive); returns the token."""
     token = next(_TOKENS)
-    _EVALUATORS[token] = weakref.WeakMethod(getattr(owner, method_name))
+    # (a weak reference to the owner and the plain function: calling them costs less
+    # than a WeakMethod, whose call is Python code, on every stage)
+    _EVALUATORS[token] = (weakref.ref(owner), getattr(type(owner), method_name))
     weakref.finalize(owner, _EVALUATORS.pop, token, None)
     return token
 
@@ -36,7 +38,8 @@ def evaluate(token, t):
     """Called by the compiled stepper (objmode): 0 on success, 1 if the evaluator raised
     (the exception is kept for :func:`reraise`)."""
     try:
-        _EVALUATORS[token]()(t)
+        owner, fn = _EVALUATORS[token]
+        fn(owner(), t)
         return 0
     except BaseException as e:       # noqa: BLE001 - re-raised by the caller after the kernel returns
         _ERRORS[token] = e

@@ -154,6 +154,7 @@ class Simulator:
                                                   "position": kernel.STAB_POSITION}[self.stabilization])
         self.method = method_arrays(self.tableau)
         self.control = fixed_step_control()
+        self._extViews = None
         self._extToken = external.register(self, "_external_forces") if self.sd.hasQext else 0
         self._drives = RowDrives(scene, self.sd)      # rows with a moving offset (mbs/row_drives.py)
         self._driveToken = external.register(self, "_row_drives") if self._drives else 0
@@ -218,7 +219,16 @@ class Simulator:
         for k, e in enumerate(sc.rollingDiscPenalties):     # data coordinates: as given (Exudyn's initial data)
             self.wk.disc[k, D_DATA:] = e.data0
         # the tracked angles (torsional springs, rotation coordinates, 2D bodies) at this state
-        kernel.update_torsion_tracking(self.sd, self.wk, self.R, self.r, self.V)
+        self._update_tracking()
+
+    def _update_tracking(self):
+        """``kernel.update_torsion_tracking`` at the current state, if the scene tracks an angle
+        (the same three conditions as the compiled function): a scene without one does not
+        load that compiled entry point at all (its cache load and first-call typing are part
+        of a warm first solve, issue 19)."""
+        sd, wk = self.sd, self.wk
+        if sd.tint.shape[0] > 0 or sd.nangles > 0 or wk.nplanar > 0:
+            kernel.update_torsion_tracking(sd, wk, self.R, self.r, self.V)
 
     def states(self):
         omega, vel = twist_to_world_velocity(self.gid, self.R, self.V)
@@ -296,7 +306,7 @@ class Simulator:
         self.redundantJoints = self._joints_of_rows(dep)
         self.sd = with_redundant(self.sd, True)
         self.wk = self._make_work()
-        kernel.update_torsion_tracking(self.sd, self.wk, self.R, self.r, self.V)
+        self._update_tracking()
         names = ", ".join(self.redundantJoints)
         rule = (f"Cholesky pivots of J M^-1 J^T at or below {REL_PIVOT_TOL:g} x its largest diagonal at the "
                 f"initial state")
@@ -480,7 +490,8 @@ class Simulator:
         at the frame origins and world torques (the compiled caller turns them into
         generalised forces and checks them).  Allocates nothing itself: the callbacks see
         read-only views of the stage state (valid during the call)."""
-        st, F, T, adders = self._external_views()
+        views = self._extViews          # (work set, views); checked here, not in a call: once per stage
+        st, F, T, adders = views[1] if views is not None and views[0] is self.wk else self._external_views()
         st.t = t
         for add in adders:
             add(t, st, F, T)
@@ -506,7 +517,7 @@ class Simulator:
         of the work arrays (the state read-only, so a callback cannot change the stage) and
         one ``add(t, st, F, T)`` per Python force (its ``add_into`` if it has one)."""
         wk = self.wk
-        cached = getattr(self, "_extViews", None)
+        cached = self._extViews
         if cached is not None and cached[0] is wk:
             return cached[1]
 

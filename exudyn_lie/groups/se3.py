@@ -105,12 +105,12 @@ def coef_dexp(u):
     return closed_dexp(u)
 
 
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=_FM, forceinline=True)
 def series_dexpinv(u):
     return horner(_UD, u), horner(_UE2, u)
 
 
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=_FM, forceinline=True)
 def closed_dexpinv(u):
     t = math.sqrt(u)
     h = 0.5 * t
@@ -119,7 +119,7 @@ def closed_dexpinv(u):
     return (1.0 - g) / u, (h * h + (g + 2.0) * (g - 1.0)) / (u * u)
 
 
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=_FM, forceinline=True)
 def coef_dexpinv(u):
     """(D, E2) at u = |xi|^2."""
     if u < U_SWITCH_DEXPINV:
@@ -196,7 +196,7 @@ def from_matrix(C):
 
 
 # ------------------------------------------------------------------- exp / log
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=_FM, forceinline=True)
 def exp_into(X, R, r):
     """R[:], r[:] = exp(X) (eq. expX), no allocation."""
     x0 = X[0]
@@ -296,7 +296,7 @@ def dexp_apply_into(X, Y, out):
     out[5] = z2 + B * f2 + C * g2 + kq3 * a2 + kq4 * b2
 
 
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=_FM, forceinline=True)
 def dexpinv_apply_into(X, Y, out):
     """out[:] = dexpinv_X @ Y without forming the matrix; out may alias Y."""
     x0 = X[0]

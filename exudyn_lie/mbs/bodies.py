@@ -201,7 +201,7 @@ def apply_minv(gid, Minv, R, x, out, tmp):
 
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, forceinline=True, _nrt=False)
 def exp_compose(gid, R, r, X, Rout, rout, ER, Er):
     """``(Rout, rout) = (R, r) exp(X)`` in the body's group (eqs. expX / expSO3xR3, and
     their planar restrictions)."""

@@ -35,27 +35,27 @@ TWIST = "body"
 ALGEBRA_AXES = (2, 3, 4)
 
 
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=_FM, forceinline=False)
 def hat(X):
     return se3.hat(X)
 
 
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=_FM, forceinline=False)
 def vee(M):
     return se3.vee(M)
 
 
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=_FM, forceinline=False)
 def to_matrix(R, r):
     return se3.to_matrix(R, r)
 
 
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=_FM, forceinline=False)
 def from_matrix(C):
     return se3.from_matrix(C)
 
 
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=_FM, forceinline=False)
 def exp_into(X, R, r):
     """``(R, r) = exp(X)``: ``Rz(theta)``, ``V u`` (no allocation)."""
     th = X[2]
@@ -77,7 +77,7 @@ def exp_into(X, R, r):
     r[2] = X[5]
 
 
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=_FM, forceinline=False)
 def exp(X):
     R = np.empty((3, 3))
     r = np.empty(3)
@@ -85,7 +85,7 @@ def exp(X):
     return R, r
 
 
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=_FM, forceinline=False)
 def log_into(R, r, X):
     """``X = log(R, r)``, ``|theta| <= pi``: ``theta = atan2``, ``u = V^-1 r``."""
     th = math.atan2(R[1, 0], R[0, 0])
@@ -99,14 +99,14 @@ def log_into(R, r, X):
     X[5] = r[2]
 
 
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=_FM, forceinline=False)
 def log(R, r):
     X = np.empty(6)
     log_into(R, r, X)
     return X
 
 
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=_FM, forceinline=False)
 def dexp_apply_into(X, Y, out):
     """``out = dexp_X Y`` (right-trivialised); ``out`` may alias ``Y``."""
     th = X[2]
@@ -126,7 +126,7 @@ def dexp_apply_into(X, Y, out):
     out[5] = Y[5]
 
 
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=_FM, forceinline=False)
 def dexpinv_apply_into(X, Y, out):
     """``out = dexp_X^-1 Y``; ``out`` may alias ``Y``."""
     th = X[2]
@@ -147,7 +147,7 @@ def dexpinv_apply_into(X, Y, out):
     out[5] = Y[5]
 
 
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=_FM, forceinline=False)
 def dexp(X):
     M = np.zeros((6, 6))
     e = np.zeros(6)
@@ -160,7 +160,7 @@ def dexp(X):
     return M
 
 
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=_FM, forceinline=False)
 def dexpinv(X):
     M = np.zeros((6, 6))
     e = np.zeros(6)
@@ -173,36 +173,36 @@ def dexpinv(X):
     return M
 
 
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=_FM, forceinline=False)
 def ad(X):
     return se3.ad(X)
 
 
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=_FM, forceinline=False)
 def Ad_into(R, r, M):
     se3.Ad_into(R, r, M)
 
 
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=_FM, forceinline=False)
 def Ad(R, r):
     return se3.Ad(R, r)
 
 
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=_FM, forceinline=False)
 def compose_into(R1, r1, R2, r2, R, r):
     se3.compose_into(R1, r1, R2, r2, R, r)
 
 
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=_FM, forceinline=False)
 def compose(R1, r1, R2, r2):
     return se3.compose(R1, r1, R2, r2)
 
 
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=_FM, forceinline=False)
 def inverse_into(R, r, Ri, ri):
     se3.inverse_into(R, r, Ri, ri)
 
 
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=_FM, forceinline=False)
 def inverse(R, r):
     return se3.inverse(R, r)

@@ -80,12 +80,12 @@ NTERMS = {"dexp": dict(_NP), "dexpinv": dict(_NU), "selig": dict(_NS)}
 
 
 # ------------------------------------------------------------ scalar coefficients
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=_FM, forceinline=False)
 def series_dexp(u):
     return horner(_PB, u), horner(_PC, u), horner(_PQ3, u), horner(_PQ4, u)
 
 
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=_FM, forceinline=False)
 def closed_dexp(u):
     t = math.sqrt(u)
     s = math.sin(0.5 * t)
@@ -97,7 +97,7 @@ def closed_dexp(u):
     return B, C, (A - 2.0 * B) / u, (B - 3.0 * C) / u
 
 
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=_FM, forceinline=False)
 def coef_dexp(u):
     """(B, C, Q3, Q4) at u = |xi|^2."""
     if u < U_SWITCH_DEXP:
@@ -105,12 +105,12 @@ def coef_dexp(u):
     return closed_dexp(u)
 
 
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=_FM, forceinline=False)
 def series_dexpinv(u):
     return horner(_UD, u), horner(_UE2, u)
 
 
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=_FM, forceinline=False)
 def closed_dexpinv(u):
     t = math.sqrt(u)
     h = 0.5 * t
@@ -119,7 +119,7 @@ def closed_dexpinv(u):
     return (1.0 - g) / u, (h * h + (g + 2.0) * (g - 1.0)) / (u * u)
 
 
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=_FM, forceinline=False)
 def coef_dexpinv(u):
     """(D, E2) at u = |xi|^2."""
     if u < U_SWITCH_DEXPINV:
@@ -127,12 +127,12 @@ def coef_dexpinv(u):
     return closed_dexpinv(u)
 
 
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=_FM, forceinline=False)
 def series_selig(u):
     return horner(_S2, u), horner(_S4, u)
 
 
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=_FM, forceinline=False)
 def closed_selig(u):
     t = math.sqrt(u)
     s = math.sin(0.5 * t)
@@ -143,7 +143,7 @@ def closed_selig(u):
             1.0 / (u * u) + (t + sint) / (4.0 * u * t * cm1))
 
 
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=_FM, forceinline=False)
 def coef_selig(u):
     """Selig's ad^2 and ad^4 coefficients (eq. dexpInvSE3) at u = |xi|^2."""
     if u < U_SWITCH_SELIG:
@@ -152,7 +152,7 @@ def coef_selig(u):
 
 
 # ------------------------------------------------------------------- hat / vee
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=_FM, forceinline=False)
 def hat(X):
     """4x4 [[xi^, eta], [0, 0]]."""
     M = np.zeros((4, 4))
@@ -168,7 +168,7 @@ def hat(X):
     return M
 
 
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=_FM, forceinline=False)
 def vee(M):
     out = np.empty(6)
     out[0] = 0.5 * (M[2, 1] - M[1, 2])
@@ -180,7 +180,7 @@ def vee(M):
     return out
 
 
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=_FM, forceinline=False)
 def to_matrix(R, r):
     """4x4 homogeneous matrix of (R, r) (eq. C)."""
     C = np.zeros((4, 4))
@@ -190,13 +190,13 @@ def to_matrix(R, r):
     return C
 
 
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=_FM, forceinline=False)
 def from_matrix(C):
     return np.ascontiguousarray(C[0:3, 0:3]), np.ascontiguousarray(C[0:3, 3])
 
 
 # ------------------------------------------------------------------- exp / log
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=_FM, forceinline=False)
 def exp_into(X, R, r):
     """R[:], r[:] = exp(X) (eq. expX), no allocation."""
     x0 = X[0]
@@ -230,7 +230,7 @@ def exp_into(X, R, r):
     r[2] = e2 + B * c2 + C * (x0 * c1 - x1 * c0)
 
 
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=_FM, forceinline=False)
 def exp(X):
     R = np.empty((3, 3))
     r = np.empty(3)
@@ -238,7 +238,7 @@ def exp(X):
     return R, r
 
 
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=_FM, forceinline=False)
 def log_into(R, r, X):
     """X[:] = log(R, r) = (log R, dexpinv_xi r) (inverse of eq. expX), |xi| <= pi;
     no allocation (X[3:6] is a view)."""
@@ -246,7 +246,7 @@ def log_into(R, r, X):
     so3.dexpinv_apply_into(X, r, X[3:6])        # eta = dexp_xi^-1 r (eq. dexpInvSO3)
 
 
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=_FM, forceinline=False)
 def log(R, r):
     """X = (xi, eta) with exp(X) = (R, r), |xi| <= pi."""
     X = np.empty(6)
@@ -255,7 +255,7 @@ def log(R, r):
 
 
 # ------------------------------------------------------------ dexp / dexpinv
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=_FM, forceinline=False)
 def dexp_apply_into(X, Y, out):
     """out[:] = dexp_X @ Y without forming the matrix; out may alias Y."""
     x0 = X[0]
@@ -296,7 +296,7 @@ def dexp_apply_into(X, Y, out):
     out[5] = z2 + B * f2 + C * g2 + kq3 * a2 + kq4 * b2
 
 
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=_FM, forceinline=False)
 def dexpinv_apply_into(X, Y, out):
     """out[:] = dexpinv_X @ Y without forming the matrix; out may alias Y."""
     x0 = X[0]
@@ -336,7 +336,7 @@ def dexpinv_apply_into(X, Y, out):
     out[5] = z2 - 0.5 * f2 + D * g2 + ke * b2
 
 
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=_FM, forceinline=False)
 def dexp_P(X):
     """Lower-left block P of dexp_X (eq. P1, corrected; see module doc)."""
     xi = X[0:3]
@@ -348,7 +348,7 @@ def dexp_P(X):
     return B * N + C * (mm(N, W) + mm(W, N)) + k * (Q3 * W + Q4 * mm(W, W))
 
 
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=_FM, forceinline=False)
 def dexpinv_U(X):
     """Lower-left block U of dexpinv_X (eq. dexpInvSE3Park, corrected)."""
     xi = X[0:3]
@@ -360,7 +360,7 @@ def dexpinv_U(X):
     return -0.5 * N + D * (mm(N, W) + mm(W, N)) + (k * E2) * mm(W, W)
 
 
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=_FM, forceinline=False)
 def dexp(X):
     """6x6 dexp_X (eq. dexpSE3)."""
     xi = X[0:3]
@@ -374,7 +374,7 @@ def dexp(X):
     return M
 
 
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=_FM, forceinline=False)
 def dexpinv(X):
     """6x6 dexp_X^-1 (eq. dexpInvSE3Park)."""
     xi = X[0:3]
@@ -388,7 +388,7 @@ def dexpinv(X):
     return M
 
 
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=_FM, forceinline=False)
 def dexpinv_selig(X):
     """Selig's closed form (eq. dexpInvSE3): I - ad/2 + S2 ad^2 + S4 ad^4."""
     S2, S4 = coef_selig(X[0] * X[0] + X[1] * X[1] + X[2] * X[2])
@@ -397,20 +397,20 @@ def dexpinv_selig(X):
     return np.eye(6) - 0.5 * a + S2 * a2 + S4 * mm(a2, a2)
 
 
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=_FM, forceinline=False)
 def dexp_series(X, nterms):
     """sum_{i<nterms} ad_X^i/(i+1)! (eq. dexp), cross-check."""
     return ad_series(ad(X), DEXP_SERIES_COEFFS, nterms)
 
 
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=_FM, forceinline=False)
 def dexpinv_series(X, nterms):
     """sum_{i<nterms} B_i/i! ad_X^i (eq. dexpInvSeries), cross-check."""
     return ad_series(ad(X), DEXPINV_SERIES_COEFFS, nterms)
 
 
 # ---------------------------------------------------------------- ad, Ad, group
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=_FM, forceinline=False)
 def ad(X):
     """6x6 [[xi^, 0], [eta^, xi^]] (eq. adse3)."""
     M = np.zeros((6, 6))
@@ -421,7 +421,7 @@ def ad(X):
     return M
 
 
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=_FM, forceinline=False)
 def Ad_into(R, r, M):
     """M[:] = Ad_(R,r) = [[R, 0], [r^ R, R]] (6x6): hat(Ad_C X) = C hat(X) C^-1 with C
     the 4x4 matrix of eq. C; no allocation, M must not alias R or r."""
@@ -440,7 +440,7 @@ def Ad_into(R, r, M):
         M[5, j] = r0 * R[1, j] - r1 * R[0, j]
 
 
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=_FM, forceinline=False)
 def Ad(R, r):
     """6x6 [[R, 0], [r^ R, R]]: hat(Ad_C X) = C hat(X) C^-1."""
     M = np.empty((6, 6))
@@ -448,7 +448,7 @@ def Ad(R, r):
     return M
 
 
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=_FM, forceinline=False)
 def compose_into(R1, r1, R2, r2, R, r):
     """(R, r) = (R1 R2, r1 + R1 r2) (eq. MultSE3), no allocation; the outputs may alias
     the inputs (e.g. in-place update g := g exp(X): R is R1, r is r1)."""
@@ -464,7 +464,7 @@ def compose_into(R1, r1, R2, r2, R, r):
     r[2] = s2
 
 
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=_FM, forceinline=False)
 def compose(R1, r1, R2, r2):
     """(R1, r1)(R2, r2) = (R1 R2, r1 + R1 r2) (eq. MultSE3)."""
     R = np.empty((3, 3))
@@ -473,7 +473,7 @@ def compose(R1, r1, R2, r2):
     return R, r
 
 
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=_FM, forceinline=False)
 def inverse_into(R, r, Ri, ri):
     """(Ri, ri) = (R, r)^-1 = (R^T, -R^T r), no allocation; outputs may alias inputs."""
     x0 = r[0]
@@ -488,7 +488,7 @@ def inverse_into(R, r, Ri, ri):
     ri[2] = s2
 
 
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=_FM, forceinline=False)
 def inverse(R, r):
     Ri = np.empty((3, 3))
     ri = np.empty(3)

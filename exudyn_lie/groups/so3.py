@@ -72,12 +72,12 @@ _CATAN = _taylor.coeffs("ATAN", N_ATAN)
 
 
 # ------------------------------------------------------------ scalar coefficients
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=_FM, forceinline=False)
 def series_ABC(u):
     return horner(_CA, u), horner(_CB, u), horner(_CC, u)
 
 
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=_FM, forceinline=False)
 def closed_ABC(u):
     t = math.sqrt(u)
     s = math.sin(0.5 * t)
@@ -86,7 +86,7 @@ def closed_ABC(u):
     return sint / t, 2.0 * s * s / u, (t - sint) / (u * t)
 
 
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=_FM, forceinline=False)
 def coef_ABC(u):
     """(A, B, C) at u = |xi|^2."""
     if u < U_SWITCH_EXP:
@@ -94,7 +94,7 @@ def coef_ABC(u):
     return closed_ABC(u)
 
 
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=_FM, forceinline=False)
 def coef_AB(u):
     """(A, B) at u = |xi|^2 (exp)."""
     if u < U_SWITCH_EXP:
@@ -105,7 +105,7 @@ def coef_AB(u):
     return 2.0 * s * c / t, 2.0 * s * s / u
 
 
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=_FM, forceinline=False)
 def coef_BC(u):
     """(B, C) at u = |xi|^2 (dexp)."""
     if u < U_SWITCH_EXP:
@@ -116,19 +116,19 @@ def coef_BC(u):
     return 2.0 * s * s / u, (t - 2.0 * s * c) / (u * t)
 
 
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=_FM, forceinline=False)
 def series_D(u):
     return horner(_CD, u)
 
 
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=_FM, forceinline=False)
 def closed_D(u):
     t = math.sqrt(u)
     h = 0.5 * t
     return (1.0 - h / math.tan(h)) / u
 
 
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=_FM, forceinline=False)
 def coef_D(u):
     """D = (1 - (t/2)cot(t/2))/t^2 at u = t^2 (dexpinv)."""
     if u < U_SWITCH_DEXPINV:
@@ -137,7 +137,7 @@ def coef_D(u):
 
 
 # ------------------------------------------------------------------- hat / vee
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=_FM, forceinline=False)
 def hat(x):
     W = np.zeros((3, 3))
     W[0, 1] = -x[2]
@@ -149,7 +149,7 @@ def hat(x):
     return W
 
 
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=_FM, forceinline=False)
 def vee(W):
     """Inverse of hat (uses the skew part, so it is exact for skew input)."""
     out = np.empty(3)
@@ -160,7 +160,7 @@ def vee(W):
 
 
 # ------------------------------------------------------------------------ exp
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=_FM, forceinline=False)
 def exp_into(x, R):
     """R[:] = exp(hat(x)) (eq. expSO3), no allocation."""
     x0 = x[0]
@@ -184,7 +184,7 @@ def exp_into(x, R):
     R[2, 1] = b12 + A * x0
 
 
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=_FM, forceinline=False)
 def exp(x):
     R = np.empty((3, 3))
     exp_into(x, R)
@@ -192,7 +192,7 @@ def exp(x):
 
 
 # ----------------------------------------------------------------------- dexp
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=_FM, forceinline=False)
 def dexp_apply_into(x, y, out):
     """out[:] = dexp_x @ y = y + B x*y + C x*(x*y); out may alias y."""
     x0 = x[0]
@@ -213,7 +213,7 @@ def dexp_apply_into(x, y, out):
     out[2] = y2 + B * c2 + C * d2
 
 
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=_FM, forceinline=False)
 def dexpinv_apply_into(x, y, out):
     """out[:] = dexpinv_x @ y = y - x*y/2 + D x*(x*y); out may alias y."""
     x0 = x[0]
@@ -234,7 +234,7 @@ def dexpinv_apply_into(x, y, out):
     out[2] = y2 - 0.5 * c2 + D * d2
 
 
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=_FM, forceinline=False)
 def dexp(x):
     """3x3 dexp matrix (eq. dexpSO3)."""
     B, C = coef_BC(x[0] * x[0] + x[1] * x[1] + x[2] * x[2])
@@ -242,7 +242,7 @@ def dexp(x):
     return np.eye(3) + B * W + C * mm(W, W)
 
 
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=_FM, forceinline=False)
 def dexpinv(x):
     """3x3 inverse dexp matrix (eq. dexpInvSO3)."""
     D = coef_D(x[0] * x[0] + x[1] * x[1] + x[2] * x[2])
@@ -250,20 +250,20 @@ def dexpinv(x):
     return np.eye(3) - 0.5 * W + D * mm(W, W)
 
 
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=_FM, forceinline=False)
 def dexp_series(x, nterms):
     """sum_{i<nterms} ad_x^i/(i+1)! (eq. dexp), cross-check."""
     return ad_series(hat(x), DEXP_SERIES_COEFFS, nterms)
 
 
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=_FM, forceinline=False)
 def dexpinv_series(x, nterms):
     """sum_{i<nterms} B_i/i! ad_x^i (eq. dexpInvSeries), cross-check."""
     return ad_series(hat(x), DEXPINV_SERIES_COEFFS, nterms)
 
 
 # ------------------------------------------------------------------------ log
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=_FM, forceinline=False)
 def _quat_tuple(R):
     """(q0, q1, q2, q3) of R as scalars (Shepperd's method), q0 >= 0, unit; no allocation.
 
@@ -303,7 +303,7 @@ def _quat_tuple(R):
     return q0 / n, q1 / n, q2 / n, q3 / n
 
 
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=_FM, forceinline=False)
 def quat_from_matrix(R):
     """Unit quaternion (q0, q1, q2, q3), q0 >= 0, of R (Shepperd's method).
 
@@ -314,7 +314,7 @@ def quat_from_matrix(R):
     return q
 
 
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=_FM, forceinline=False)
 def _rotvec_factor(q0, s):
     """f with xi = f q, f = 2 atan2(s, q0)/s, s = |q| (vector part), q0 >= 0."""
     if s < T_SWITCH_LOG * q0:
@@ -324,7 +324,7 @@ def _rotvec_factor(q0, s):
     return 2.0 * math.atan2(s, q0) / s
 
 
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=_FM, forceinline=False)
 def rotvec_from_quat(q):
     """xi = 2 atan2(|q|, q0) q/|q| for q0 >= 0 (|xi| <= pi); q need not be unit."""
     f = _rotvec_factor(q[0], math.sqrt(q[1] * q[1] + q[2] * q[2] + q[3] * q[3]))
@@ -335,7 +335,7 @@ def rotvec_from_quat(q):
     return out
 
 
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=_FM, forceinline=False)
 def log_into(R, x):
     """x[0:3] = log(R), |xi| <= pi, no allocation (x may be longer: only x[0:3] is written)."""
     q0, q1, q2, q3 = _quat_tuple(R)
@@ -345,7 +345,7 @@ def log_into(R, x):
     x[2] = f * q3
 
 
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=_FM, forceinline=False)
 def log(R):
     """Rotation vector xi, |xi| <= pi, with exp(xi) = R."""
     x = np.empty(3)
@@ -354,12 +354,12 @@ def log(R):
 
 
 # ---------------------------------------------------------------- ad, Ad, group
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=_FM, forceinline=False)
 def ad(x):
     return hat(x)
 
 
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=_FM, forceinline=False)
 def Ad_into(R, M):
     """M[0:3, 0:3] = Ad_R = R (hat(R x) = R hat(x) R^T), no allocation."""
     for i in range(3):
@@ -367,14 +367,14 @@ def Ad_into(R, M):
             M[i, j] = R[i, j]
 
 
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=_FM, forceinline=False)
 def Ad(R):
     M = np.empty((3, 3))
     Ad_into(R, M)
     return M
 
 
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=_FM, forceinline=False)
 def compose_into(R1, R2, R):
     """R[:] = R1 R2, no allocation; R may alias R1 and/or R2 (R2 is read first,
     then R1 row by row)."""
@@ -396,14 +396,14 @@ def compose_into(R1, R2, R):
         R[i, 2] = a0 * b02 + a1 * b12 + a2 * b22
 
 
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=_FM, forceinline=False)
 def compose(R1, R2):
     R = np.empty((3, 3))
     compose_into(R1, R2, R)
     return R
 
 
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=_FM, forceinline=False)
 def inverse_into(R, Ri):
     """Ri[:] = R^-1 = R^T, no allocation; Ri may alias R (in-place transpose)."""
     a01 = R[0, 1]
@@ -420,7 +420,7 @@ def inverse_into(R, Ri):
     Ri[2, 1] = a12
 
 
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=_FM, forceinline=False)
 def inverse(R):
     Ri = np.empty((3, 3))
     inverse_into(R, Ri)

@@ -36,13 +36,13 @@ def _cross(a0, a1, a2, b0, b1, b2):
     return a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, forceinline=True, _nrt=False)
 def _matvec(M, x, out):
     for i in range(3):
         out[i] = M[i, 0] * x[0] + M[i, 1] * x[1] + M[i, 2] * x[2]
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, forceinline=True, _nrt=False)
 def _matTvec(M, x, out):
     for i in range(3):
         out[i] = M[0, i] * x[0] + M[1, i] * x[1] + M[2, i] * x[2]
@@ -81,7 +81,7 @@ def add_pair_force(gA, RA, posA, a, gB, RB, posB, b, F, Q):
         add_point_force(gB, RB, posB, F, Q[b])
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, forceinline=True, _nrt=False)
 def body_point(gid, R, r, V, s, p, pd, beta):
     """World position ``p``, velocity ``pd`` and velocity-product acceleration ``beta``
     of the body point ``s`` (body coordinates)."""
@@ -108,7 +108,7 @@ def body_point(gid, R, r, V, s, p, pd, beta):
             beta[i] = R[i, 0] * wws0 + R[i, 1] * wws1 + R[i, 2] * wws2
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, forceinline=True, _nrt=False)
 def body_axis(R, V, u, a, ad, beta):
     """World direction ``a = R u`` of the body-fixed unit vector ``u``, its rate
     ``ad = R (omega x u)`` and bias acceleration ``beta = R (omega x (omega x u))``."""
@@ -120,7 +120,7 @@ def body_axis(R, V, u, a, ad, beta):
         beta[i] = R[i, 0] * wwu0 + R[i, 1] * wwu1 + R[i, 2] * wwu2
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, forceinline=True, _nrt=False)
 def add_point_force(gid, R, s, F, Q):
     """Generalised force of a world force ``F`` at body point ``s``:
     ``Q = (s x R^T F, T^T F)`` so that ``Q . V`` is the power (R3: ``(0, F)``, omega = 0)."""
@@ -146,7 +146,7 @@ def add_point_force(gid, R, s, F, Q):
         Q[5] += F[2]
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, forceinline=True, _nrt=False)
 def add_world_torque(R, T, Q):
     """Body-fixed generalised torque of a world torque ``T``."""
     for i in range(3):
@@ -172,7 +172,7 @@ def add_world_torque_row(R, FT, Q):
         Q[i] += R[0, i] * FT[3] + R[1, i] * FT[4] + R[2, i] * FT[5]
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, forceinline=True, _nrt=False)
 def apply_minv(gid, Minv, R, x, out, tmp):
     """``out = M_rep^-1 x`` for the body's velocity representation.
 
@@ -278,7 +278,7 @@ the rotation part, the identity on the translation; SE2 the planar closed form; 
 R3 and SO2xR2 the identity)."""
 
 
-exp_compose = njit(cache=True, _nrt=False)(_generated_dispatch(
+exp_compose = njit(cache=True, forceinline=True, _nrt=False)(_generated_dispatch(
     "exp_compose", "R, r, X, Rout, rout, ER, Er",
     lambda k, G: [f"group{k}_exp_into(X, ER, Er)", f"{composition_of(G)}(R, r, ER, Er, Rout, rout)"],
     _EXP_COMPOSE_DOC))

@@ -17,7 +17,7 @@ from .rolling_disc_rows import rolling_disc_row
 
 
 # --------------------------------------------------------------------------- constraints
-@njit(cache=True, _nrt=False)
+@njit(cache=True, forceinline=True, _nrt=False)
 def joint_rows(j, gid, jint, jpos, jrot, jpar, rint, bparam, R, r, V, h, Jr, eta, rdrive, v3, ident, zero3, zero6):
     """Residual ``h``, Jacobian rows ``Jr`` (row, 12: 6 for side A, 6 for side B) and
     ``eta = -Jdot V`` of all rows of joint ``j``, written at the joint's row slots

@@ -44,7 +44,7 @@ def load_forces(gid, lint, lvec, R, Q, F):
                 add_world_torque(R[i], lvec[l, 0], Q[i])
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, forceinline=True, _nrt=False)
 def spring_forces(gid, sint, spos, spar, R, r, V, Q, v3, ident, zero3, zero6):
     """Point-to-point spring-dampers: tension ``f = k (L - L0) + d Ldot + f0``
     (``spar`` = k, d, L0, f0)."""
@@ -258,7 +258,7 @@ def torsion_angles(gid, tint, trot, tphi, R, r, V, m3, ident, zero3, zero6):
         tphi[s] = phi
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, forceinline=True, _nrt=False)
 def inertial_forces(gid, M, mass, com, R, V, Q):
     """Velocity-dependent (gyroscopic / centrifugal) terms of every body, in its group
     (:func:`~.bodies.body_inertial_forces`, inlined here; this loop is compiled on its own:

@@ -126,7 +126,7 @@ def minv_rows(gid, Minv, rint, R, Jr, W, tmp12):
                 W[q, 6 + k] = 0.0
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, forceinline=True, _nrt=False)
 def schur_solve(gid, Minv, rint, bw, redundant, pivotTol, R, Jr, W, lam, Sb, Sd, perm, ytmp, info, tmp12):
     """``W = M^-1 J^T`` (row blocks) and ``lam <- (J M^-1 J^T)^-1 lam``: the Schur
     complement shared by the index-1 solve and the projections.  ``S`` is banded (band

@@ -40,7 +40,7 @@ from numba import njit
 REL_PIVOT_TOL = 1e-10
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, forceinline=True, _nrt=False)
 def band_cholesky_inplace(B, m, bw, tol):
     """Factor S = L L^T in band storage (overwrites B with L).
 
@@ -68,7 +68,7 @@ def band_cholesky_inplace(B, m, bw, tol):
     return -1
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, forceinline=True, _nrt=False)
 def band_cholesky_solve_inplace(B, m, bw, x):
     """Solve L L^T x = x in place with the band factor from band_cholesky_inplace."""
     for i in range(m):

@@ -118,7 +118,7 @@ def stage_state(gid, A, j, h, R, r, V, K, Vd, Psi, Rs, rs, Vs, ER, Er):
     return -1
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, forceinline=True, _nrt=False)
 def stage_k(gid, j, Psi, Vs, K, tmp6):
     """``k_j = dexp^-1_{-Psi_j} V_j`` (eq. MK1), per body in its own group.  (Compiled on its
     own, with the group dispatch inlined: one call per stage; inlining it into mk_steps

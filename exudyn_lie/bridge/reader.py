@@ -51,6 +51,7 @@ from typing import List, Optional
 import numpy as np
 
 from ..mbs.compiled import joint_row_descriptors
+from ..mbs.force_elements import ELEMENTS
 from ..mbs.kernel import ROW_ROT
 from ..mbs.scene import GROUND, AngleCoordinate, NodeParameterCoordinate, Scene, SceneError, frame_with_axis
 from . import items, pyforces
@@ -830,8 +831,7 @@ class _Reader:
             sc.skipped.append((what, "inactive (activeConnector=False): no force until it is switched on"))
         name = d.get("name", "") or f"object{o}"
         nPy = len(sc.pyItems)
-        counts = (len(sc.springs), len(sc.cartesianSprings), len(sc.torsionalSprings), len(sc.coordinateSprings),
-                  len(sc.linearSprings), len(sc.rigidSprings), len(sc.rollingDiscPenalties))
+        counts = _element_counts(sc)
         getattr(self, reader)(sc, o, d, A, B, what, name)
         sc.itemRows[("object", o)] = _new_row(sc, nPy, counts)
         if not active:
@@ -1055,17 +1055,23 @@ def _tracked_start(nodeType, p):
     return out
 
 
+#: the scene list of every registered compiled force element, by its registered name (the tables of itemRows)
+ELEMENT_LISTS = {e.name: e.sceneList for e in ELEMENTS}
+
+
+def _element_counts(sc):
+    """The number of items of every registered compiled force element (mbs/force_elements.py)."""
+    return tuple(len(getattr(sc, e.sceneList)) for e in ELEMENTS)
+
+
 def _new_row(sc, nPy, counts):
-    """(table, row) of the item a connector read just added to ``sc``."""
+    """(table, row) of the item a connector read just added to ``sc``: ``("py", k)`` or (the
+    registered force element's name, its row)."""
     if len(sc.pyItems) > nPy:
         return ("py", nPy)
-    for table, before, now in zip(("spring", "cartesian", "torsional", "coordinate", "linear", "rigid",
-                                   "rollingDiscPenalty"), counts,
-                                  (len(sc.springs), len(sc.cartesianSprings), len(sc.torsionalSprings),
-                                   len(sc.coordinateSprings), len(sc.linearSprings), len(sc.rigidSprings),
-                                   len(sc.rollingDiscPenalties))):
+    for e, before, now in zip(ELEMENTS, counts, _element_counts(sc)):
         if now > before:
-            return (table, before)
+            return (e.name, before)
     raise AssertionError("connector read without a scene item")
 
 
@@ -1076,9 +1082,7 @@ def deactivate(sc, row):
     if table == "py":
         sc.pyItems[k].active = False
         return
-    item = {"spring": sc.springs, "cartesian": sc.cartesianSprings, "torsional": sc.torsionalSprings,
-            "coordinate": sc.coordinateSprings, "linear": sc.linearSprings, "rigid": sc.rigidSprings,
-            "rollingDiscPenalty": sc.rollingDiscPenalties}[table][k]
+    item = getattr(sc, ELEMENT_LISTS[table])[k]
     if table == "rollingDiscPenalty":
         item.active = False             # no force, data kept (Exudyn skips it in PostNewton)
         return

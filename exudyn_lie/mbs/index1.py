@@ -108,9 +108,11 @@ def _apply_correction(rint, W, lam, X, tree):
 @njit(cache=True, inline="always", _nrt=False)
 def minv_rows(gid, Minv, rint, R, Jr, W, tmp12):
     """``W = M^-1 Jr^T`` as row blocks (W (m, 12): the two body blocks of each row), for the
-    oblique solve.  schur_solve keeps its own copy of this loop: calling this inlined helper
-    there made the heavy top's step slower (CPU time 2.9 -> 3.0 us, measured interleaved), and
-    the common path's code is meant to stay as it was."""
+    oblique solve.  schur_solve keeps its own copy of this loop: calling this helper there made
+    the step slower, inline="always" (heavy top CPU time 2.9 -> 3.0 us) and forceinline alike
+    (`bench --sections perstep --quick --models heavytop,doublependulum`, twice, interleaved:
+    heavy top 1.72-1.78 -> 1.83 us, double pendulum 3.27-3.30 -> 3.44-3.47 us, states
+    bit-identical), and the common path's code is meant to stay as it was."""
     for q in range(rint.shape[0]):
         a = rint[q, ROW_BODY_A]
         b = rint[q, ROW_BODY_B]

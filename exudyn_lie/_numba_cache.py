@@ -177,3 +177,4 @@ def install():
 
 
 install()
+from . import _noinline  # noqa: E402,F401  (LLVM noinline on the group maps, before any compile)

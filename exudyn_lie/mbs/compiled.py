@@ -9,7 +9,7 @@ from collections import namedtuple
 
 import numpy as np
 
-from .force_elements import compile_elements, scene_fields
+from .force_elements import compile_elements, lean_elements_only, scene_fields
 from .codes import GROUP_NAMES, J_NROW, J_ROW0, ROW_COORD, ROW_COORD_VEL, ROW_DIST, ROW_KIND, ROW_ROLL, ROW_ROT, ROW_TRANS_LOCAL, ROW_TRANS_WORLD
 from .rotation_parameters import TRACK_ANGLE, TRACK_NONE
 from .linalg import REL_PIVOT_TOL, rcm_order
@@ -40,6 +40,8 @@ SceneData = namedtuple("SceneData", [
     "rint",                           # constraint rows: [kind, axis of A, axis of B, body A, body B]
     "nrows", "bandwidth", "redundant", "pivotTol",
     "stabilization",                  # kernel.STAB_*: projection after every step
+    "rowsAll",                        # None in a lean scene (scene_is_lean): the coordinate and rolling-disc
+                                      #   row kinds are not compiled (mbs/presence.py); True otherwise
 ])
 
 Work = namedtuple("Work", [
@@ -280,6 +282,22 @@ def auto_groups(scene: Scene):
     return out
 
 
+#: the row kinds of a lean scene (mbs/presence.py); the others (coordinate, rolling disc) make it full
+LEAN_ROW_KINDS = (ROW_TRANS_LOCAL, ROW_TRANS_WORLD, ROW_ROT, ROW_DIST)
+
+
+#: False compiles every scene full (tests compare the two kinds on one scene)
+LEAN_SCENES = True
+
+
+def scene_is_lean(scene: Scene):
+    """A lean scene (mbs/presence.py): force elements registered ``lean`` only and joints
+    whose rows are of ``LEAN_ROW_KINDS``.  Its other features' tables are None, so the kernel
+    compiled for it has none of their code (a first run compiles less)."""
+    return LEAN_SCENES and lean_elements_only(scene) and all(kind in LEAN_ROW_KINDS for j in scene.joints
+                                             for kind, _, _ in joint_rows_of(j))
+
+
 def compile_scene(scene: Scene, groups):
     """Flat arrays for the kernel.  ``groups`` is the per-body list of group names."""
     nb = scene.nBodies
@@ -308,19 +326,21 @@ def compile_scene(scene: Scene, groups):
     jrow0, jnrow, cols, bw = choose_solve(nb, J)
     rkind, rax, rbx, rA, rB, rjoint = cols
     m = len(rkind)
+    lean = scene_is_lean(scene)
     sd = SceneData(
         nb=nb, gid=gid, mass=mass, com=com, M=M, Minv=Minv,
         gravity=scene.gravity.astype(float), hasGravity=bool(np.any(scene.gravity != 0)),
         hasQext=bool(scene.pythonForces),
         lint=arr([[l.body, 0 if l.kind == "force" else 1, int(l.bodyFixed)] for l in L], (-1, 3), np.int64),
         lvec=arr([[l.vector, l.pos] for l in L], (-1, 2, 3)),
-        **compile_elements(scene),
+        **compile_elements(scene, lean),
         jint=arr([[j.bodyA, j.bodyB, jrow0[k], jnrow[k]] for k, j in enumerate(J)], (-1, 4), np.int64),
         jpos=arr([[j.posA, j.posB] for j in J], (-1, 2, 3)),
         jrot=arr([[j.rotA, j.rotB] for j in J], (-1, 2, 3, 3)),
         jpar=arr([joint_parameters(j) for j in J], (-1, N_JPAR)),
         rint=arr([list(x) for x in zip(rkind, rax, rbx, rA, rB)], (-1, 5), np.int64),
         nrows=m, bandwidth=bw, redundant=False, pivotTol=REL_PIVOT_TOL, stabilization=0,
+        rowsAll=None if lean else True,
     )
     return sd, np.array(rjoint, dtype=np.int64)
 
@@ -444,7 +464,7 @@ def compile_tracking(scene: Scene):
         btrack=arr([body_track(b) for b in scene.bodies], (-1,), np.int64),
         bparam=arr([np.zeros(4) if b.track is None else b.track[1] for b in scene.bodies], (-1, 4)),
         nplanar=int(sum(body_track(b) > 0 for b in scene.bodies)),
-        disc=arr([rolling_disc_penalty_row(e) + list(e.data0) for e in scene.rollingDiscPenalties], (-1, N_DISC)))
+        disc=None if scene_is_lean(scene) else arr([rolling_disc_penalty_row(e) + list(e.data0) for e in scene.rollingDiscPenalties], (-1, N_DISC)))
 
 
 def rolling_disc_penalty_row(e):
@@ -455,10 +475,11 @@ def rolling_disc_penalty_row(e):
             e.dryFrictionProportionalZone, *e.viscousFriction, e.dryFrictionAngle, e.rollingViscousFriction]
 
 
-def no_tracking(nb):
-    """Nothing tracked (bodies whose scene did not go through :func:`compile_tracking`)."""
+def no_tracking(nb, lean=False):
+    """Nothing tracked (bodies whose scene did not go through :func:`compile_tracking`); ``lean``:
+    for a lean scene's SceneData (no penalty discs: ``disc`` None, mbs/presence.py)."""
     return Tracking(bangle=np.zeros(nb), bframe=np.zeros((nb, 3, 3)), btrack=np.zeros(nb, np.int64),
-                    bparam=np.zeros((nb, 4)), nplanar=0, disc=np.zeros((0, N_DISC)))
+                    bparam=np.zeros((nb, 4)), nplanar=0, disc=None if lean else np.zeros((0, N_DISC)))
 
 
 def with_redundant(sd, flag):
@@ -481,7 +502,7 @@ def make_work(sd, nstages, solve="auto", track=None):
     """Scratch and per-step state of a simulator; ``track`` (:func:`compile_tracking`): the
     tracked per-body arrays, shared (not copied) so that a new Work keeps their state."""
     nb = sd.nb
-    track = no_tracking(nb) if track is None else track
+    track = no_tracking(nb, sd.rowsAll is None) if track is None else track
     m = sd.nrows
     plan = solve_plan(sd, solve)
     tree = isinstance(plan, np.ndarray)        # tree_solve's plan (an ObliquePlan is no tree)
@@ -494,7 +515,7 @@ def make_work(sd, nstages, solve="auto", track=None):
         Sd=np.zeros((m, m)) if sd.redundant else np.zeros((0, 0)),
         perm=np.zeros(m, np.int64), ytmp=np.zeros(m), info=np.zeros(4, np.int64),
         tmp6=np.zeros(6), tmp12=np.zeros(12), v3=np.zeros((N_SCRATCH3, 3)), m3=np.zeros((4, 3, 3)),
-        ident=np.eye(3), zero3=np.zeros(3), zero6=np.zeros(6), tphi=np.zeros(sd.tint.shape[0]),
+        ident=np.eye(3), zero3=np.zeros(3), zero6=np.zeros(6), tphi=np.zeros(0 if sd.tint is None else sd.tint.shape[0]),
         watchBody=np.zeros(0, np.int64), watchEntry=np.zeros((0, 2), np.int64), watchMax=np.zeros(0),
         ext=np.zeros(2, np.int64), rdrive=constant_drives(sd), drive=None, Vw=np.zeros((nb, 6) if sd.hasQext else (0, 6)),
         tplan=plan, Tw=np.zeros(work_size(nb, m, plan)) if tree else None,

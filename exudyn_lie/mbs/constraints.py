@@ -13,15 +13,47 @@ from .codes import (J_BODY_A, J_BODY_B, J_NROW, J_ROW0, ROW_AX, ROW_BX, ROW_COOR
 from .coordinate_rows import coordinate_row
 from .distance_rows import distance_row
 from .node_coordinates import PARAM_BASE, node_parameter_terms
+from .presence import guarded
 from .rolling_disc_rows import rolling_disc_row
 
 
 # --------------------------------------------------------------------------- constraints
+@njit(cache=True, inline="always", _nrt=False)
+def extra_row(kind, q, j, a, b, gA, gB, RA, RB, rA, rB, VA, VB, rint, rotA, rotB, jpar, bparam, v3, h, Jr, eta, rdrive):
+    """Row ``q`` of joint ``j`` of a coordinate or rolling-disc kind (:func:`joint_rows`; its
+    points and scratch in ``v3``; fewer than 30 arguments: a longer call is a star-argument
+    call in Python's bytecode, which numba's inliner refuses)."""
+    rax = rint[q, ROW_AX]
+    pA, pB, vB, bA, bB = v3[0], v3[1], v3[3], v3[4], v3[5]
+    ax, axd, axb, bx, bxd, bxb = v3[11], v3[12], v3[13], v3[14], v3[15], v3[16]
+    u, RtA = v3[17], v3[19]
+    if kind == ROW_COORD or kind == ROW_COORD_VEL:
+        coordinate_row(q, a, b, gA, gB, RA, RB, rax, rint[q, ROW_BX], rotA, rotB, jpar[j], pA, pB, bA, bB, u, RtA,
+                       h, Jr, eta)
+        if rax >= PARAM_BASE or rint[q, ROW_BX] >= PARAM_BASE:     # rotation parameters of 3D nodes
+            node_parameter_terms(q, a, b, rax, rint[q, ROW_BX], RA, RB, VA, VB, bparam, jpar[j, 0], h, Jr, eta,
+                                 ax, axd, axb)
+        if kind == ROW_COORD_VEL:
+            # velocity level: J V = w(t) constrains no position (as ROW_ROLL); the same J, and
+            # eta = -Jdot V, since d/dt (J V - w) = J Vdot + Jdot V - wdot (wdot: row_drives)
+            h[q] = 0.0
+        else:
+            h[q] -= rdrive[0, q]          # h(g) - c(t)
+        eta[q] += rdrive[2, q]            # + cddot(t) (velocity level: + wdot(t))
+    elif kind == ROW_ROLL:
+        rolling_disc_row(q, rax, a, b, gA, gB, RA, RB, rA, rB, VA, VB, rotA, rotB, jpar[j], pB, vB, ax, axd, axb,
+                         bx, bxd, bxb, u, h, Jr, eta)
+
+
+extra_row_if = guarded(extra_row)
+
+
 @njit(cache=True, forceinline=True, _nrt=False)
-def joint_rows(j, gid, jint, jpos, jrot, jpar, rint, bparam, R, r, V, h, Jr, eta, rdrive, v3, ident, zero3, zero6):
+def joint_rows(j, gid, jint, jpos, jrot, jpar, rint, rowsAll, bparam, R, r, V, h, Jr, eta, rdrive, v3, ident, zero3, zero6):
     """Residual ``h``, Jacobian rows ``Jr`` (row, 12: 6 for side A, 6 for side B) and
     ``eta = -Jdot V`` of all rows of joint ``j``, written at the joint's row slots
-    (``bparam``: the node rotation parameters tracked per body, Work.bparam; ``rdrive``: the
+    (``rowsAll``: SceneData.rowsAll, None compiles no coordinate and rolling-disc rows, mbs/presence.py;
+    ``bparam``: the node rotation parameters tracked per body, Work.bparam; ``rdrive``: the
     time-dependent part of a coordinate row, :mod:`.row_drives`)."""
     a = jint[j, J_BODY_A]
     b = jint[j, J_BODY_B]
@@ -51,22 +83,10 @@ def joint_rows(j, gid, jint, jpos, jrot, jpar, rint, bparam, R, r, V, h, Jr, eta
             Jr[q, k] = 0.0
         kind = rint[q, ROW_KIND]
         rax = rint[q, ROW_AX]
-        if kind == ROW_COORD or kind == ROW_COORD_VEL:
-            coordinate_row(q, a, b, gA, gB, RA, RB, rax, rint[q, ROW_BX], rotA, rotB, jpar[j], pA, pB, bA, bB, u, RtA,
-                           h, Jr, eta)
-            if rax >= PARAM_BASE or rint[q, ROW_BX] >= PARAM_BASE:     # rotation parameters of 3D nodes
-                node_parameter_terms(q, a, b, rax, rint[q, ROW_BX], RA, RB, VA, VB, bparam, jpar[j, 0], h, Jr, eta,
-                                     ax, axd, axb)
-            if kind == ROW_COORD_VEL:
-                # velocity level: J V = w(t) constrains no position (as ROW_ROLL); the same J, and
-                # eta = -Jdot V, since d/dt (J V - w) = J Vdot + Jdot V - wdot (wdot: row_drives)
-                h[q] = 0.0
-            else:
-                h[q] -= rdrive[0, q]          # h(g) - c(t)
-            eta[q] += rdrive[2, q]            # + cddot(t) (velocity level: + wdot(t))
-        elif kind == ROW_ROLL:
-            rolling_disc_row(q, rax, a, b, gA, gB, RA, RB, rA, rB, VA, VB, rotA, rotB, jpar[j], pB, vB, ax, axd, axb,
-                             bx, bxd, bxb, u, h, Jr, eta)
+        if kind == ROW_COORD or kind == ROW_COORD_VEL or kind == ROW_ROLL:
+            # not in a lean scene: compiled only for full ones (mbs/presence.py)
+            extra_row_if(rowsAll, kind, q, j, a, b, gA, gB, RA, RB, rA, rB, VA, VB, rint, rotA, rotB, jpar, bparam, v3,
+                         h, Jr, eta, rdrive)
         elif kind == ROW_ROT:
             rbx = rint[q, ROW_BX]
             for k in range(3):
@@ -142,11 +162,11 @@ def joint_rows(j, gid, jint, jpos, jrot, jpar, rint, bparam, R, r, V, h, Jr, eta
 
 
 @njit(cache=True, inline="always", _nrt=False)
-def joints_rows(gid, jint, jpos, jrot, jpar, rint, bparam, R, r, V, h, Jr, eta, rdrive, v3, ident, zero3, zero6):
+def joints_rows(gid, jint, jpos, jrot, jpar, rint, rowsAll, bparam, R, r, V, h, Jr, eta, rdrive, v3, ident, zero3, zero6):
     """:func:`joint_rows` of every joint.  ``rdrive`` (3, m): the time-dependent part of the
     coordinate rows at the evaluation time (:mod:`.row_drives`): ``h - c(t)``, ``eta + cddot(t)``
     (the rate ``cdot(t)`` is the velocity target ``J V = cdot`` of the projections).  (Applied
     in the coordinate rows' branch: a loop over all rows here cost the heavy top 0.4 us of its
     2.9 us per step, measured.)"""
     for j in range(jint.shape[0]):
-        joint_rows(j, gid, jint, jpos, jrot, jpar, rint, bparam, R, r, V, h, Jr, eta, rdrive, v3, ident, zero3, zero6)
+        joint_rows(j, gid, jint, jpos, jrot, jpar, rint, rowsAll, bparam, R, r, V, h, Jr, eta, rdrive, v3, ident, zero3, zero6)

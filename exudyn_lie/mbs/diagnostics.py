@@ -28,7 +28,7 @@ def kinetic_and_gravity(gid, M, mass, com, gravity, R, r, V, Vb):
 def all_rows(sd, wk, R, r, V, h, Jr, eta, e):
     """Diagnostics at the state (R, r, V): residuals ``h``, Jacobian rows ``Jr`` and
     ``eta`` of every joint, and ``e`` = (kinetic, gravity potential, spring potential)."""
-    joints_rows(sd.gid, sd.jint, sd.jpos, sd.jrot, sd.jpar, sd.rint, wk.bparam, R, r, V, h, Jr, eta, wk.rdrive, wk.v3, wk.ident,
+    joints_rows(sd.gid, sd.jint, sd.jpos, sd.jrot, sd.jpar, sd.rint, sd.rowsAll, wk.bparam, R, r, V, h, Jr, eta, wk.rdrive, wk.v3, wk.ident,
                 wk.zero3, wk.zero6)
     ekin, egrav = kinetic_and_gravity(sd.gid, sd.M, sd.mass, sd.com, sd.gravity, R, r, V, wk.tmp6)
     e[0] = ekin

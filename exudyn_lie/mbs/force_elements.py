@@ -30,25 +30,28 @@ from .forces import (cartesian_element, cartesian_element_energy, gravity_forces
                      rigid_spring_element, spring_element, spring_element_energy, torsional_element,
                      torsional_element_energy)
 from .linear_spring_forces import linear_spring_element
+from .presence import guarded
 from .rolling_disc_penalty_forces import rolling_disc_penalty_element
 
 # one compiled force element: its Scene list, its SceneData fields ((name, build(scene, items)), ...;
 # the first is its integer table, whose rows say whether the scene has the element), its entries
-ForceElement = namedtuple("ForceElement", ["name", "sceneList", "fields", "forces", "energy", "table"])
+ForceElement = namedtuple("ForceElement", ["name", "sceneList", "fields", "forces", "energy", "table", "lean"])
 
 #: every compiled force element, in registration order
 ELEMENTS = []
 
 
-def register(name, sceneList, fields, forces, energy=None, table=None):
+def register(name, sceneList, fields, forces, energy=None, table=None, lean=False):
     """Register one compiled force element (module docstring).  ``table``: the array whose rows
     say whether the scene has the element, as an expression on the scene tuples (default: its
     first SceneData field); an element whose data Exudyn updates after a step keeps them in
-    ``Work`` (e.g. ``wk.disc``) and registers no SceneData field."""
+    ``Work`` (e.g. ``wk.disc``) and registers no SceneData field.  ``lean``: part of a lean
+    scene (:mod:`.presence`); the fields of any other element are None in a lean scene and its
+    code is compiled only for full scenes."""
     if any(e.name == name for e in ELEMENTS):
         raise ValueError(f"force element {name!r} is registered twice")
     fields = tuple(fields)
-    ELEMENTS.append(ForceElement(name, sceneList, fields, forces, energy, table or f"sd.{fields[0][0]}"))
+    ELEMENTS.append(ForceElement(name, sceneList, fields, forces, energy, table or f"sd.{fields[0][0]}", bool(lean)))
 
 
 def table(row, shape, dtype=float):
@@ -71,7 +74,7 @@ register("spring", "springs", (
     ("sint", table(lambda s: [s.bodyA, s.bodyB], (-1, 2), np.int64)),
     ("spos", table(lambda s: [s.posA, s.posB], (-1, 2, 3))),
     ("spar", table(lambda s: [s.stiffness, s.damping, s.referenceLength, s.force], (-1, 4)))),
-         spring_element, spring_element_energy)
+         spring_element, spring_element_energy, lean=True)
 register("cartesian", "cartesianSprings", (
     ("cint", table(lambda s: [s.bodyA, s.bodyB], (-1, 2), np.int64)),
     ("cpos", table(lambda s: [s.posA, s.posB], (-1, 2, 3))),
@@ -112,13 +115,19 @@ def scene_fields():
     return [f for e in ELEMENTS for f, _ in e.fields]
 
 
-def compile_elements(scene):
-    """The element fields' values for ``compile_scene``: {field: value}."""
+def lean_elements_only(scene):
+    """Whether the scene has items of lean elements only (:mod:`.presence`)."""
+    return not any(getattr(scene, e.sceneList) for e in ELEMENTS if not e.lean)
+
+
+def compile_elements(scene, lean=False):
+    """The element fields' values for ``compile_scene``: {field: value}; with ``lean``, None
+    for the fields of the elements that are not lean."""
     out = {}
     for e in ELEMENTS:
         items = getattr(scene, e.sceneList)
         for f, build in e.fields:
-            out[f] = build(scene, items)
+            out[f] = None if (lean and not e.lean) else build(scene, items)
     return out
 
 
@@ -134,9 +143,23 @@ def _generate(name, header, lines, footer, env, doc):
     return fn
 
 
+# a lean element is called when its table has rows; any other through a guard that compiles to
+# nothing when the scene is lean (its table None, mod:`.presence`)
 _ENV = {"gravity_forces": gravity_forces, "load_forces": load_forces, "inertial_forces": inertial_forces}
-_ENV.update({f"forces{k}": e.forces for k, e in enumerate(ELEMENTS)})
-_ENV.update({f"energy{k}": e.energy for k, e in enumerate(ELEMENTS) if e.energy is not None})
+_ENV.update({f"forces{k}": e.forces if e.lean else guarded(e.forces, rows=True) for k, e in enumerate(ELEMENTS)})
+_ENV.update({f"energy{k}": e.energy if e.lean else guarded(e.energy, rows=True, result=5)
+             for k, e in enumerate(ELEMENTS) if e.energy is not None})
+
+
+def _force_call(k, e):
+    if e.lean:
+        return [f"if {e.table}.shape[0] > 0:", f"    forces{k}(sd, wk, R, r, V, Q)"]
+    return [f"forces{k}({e.table}, sd, wk, R, r, V, Q)"]
+
+
+def _energy_call(k, e):
+    return f"e = energy{k}(sd, wk, R, r, V, e)" if e.lean else f"e = energy{k}({e.table}, sd, wk, R, r, V, e)"
+
 
 compute_forces = njit(cache=True, inline="always", _nrt=False)(_generate(
     "compute_forces", "def compute_forces(sd, wk, t, R, r, V, Q):",
@@ -148,8 +171,7 @@ compute_forces = njit(cache=True, inline="always", _nrt=False)(_generate(
      "    gravity_forces(sd.gid, sd.mass, sd.com, sd.gravity, R, Q, F)",
      "if sd.lint.shape[0] > 0:",
      "    load_forces(sd.gid, sd.lint, sd.lvec, R, Q, F)"]
-    + [x for k, e in enumerate(ELEMENTS) for x in (f"if {e.table}.shape[0] > 0:",
-                                                  f"    forces{k}(sd, wk, R, r, V, Q)")],
+    + [x for k, e in enumerate(ELEMENTS) for x in _force_call(k, e)],
     ["inertial_forces(sd.gid, sd.M, sd.mass, sd.com, R, V, Q)"], dict(_ENV),
     """Applied and inertial generalised forces ``Q`` (nb, 6) at the state (R, r, V): gravity,
 loads, then every registered force element the scene has (in registration order), then the
@@ -157,5 +179,5 @@ inertial terms."""))
 
 spring_energy = njit(cache=True, inline="always", _nrt=False)(_generate(
     "spring_energy", "def spring_energy(sd, wk, R, r, V):", ["e = 0.0"]
-    + [f"e = energy{k}(sd, wk, R, r, V, e)" for k, e in enumerate(ELEMENTS) if e.energy is not None],
+    + [_energy_call(k, e) for k, e in enumerate(ELEMENTS) if e.energy is not None],
     ["return e"], dict(_ENV), """Potential energy of the registered force elements that have one."""))

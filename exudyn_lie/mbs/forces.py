@@ -10,6 +10,7 @@ from .bodies import (_matvec, _side, add_pair_force, add_point_force, add_world_
                      body_point, connector_ends)
 from .codes import L_BODY, L_FIXED, L_KIND
 from .coordinate_angles import update_coordinate_angles
+from .presence import guarded
 from .rotation_parameters import update_tracked_bodies
 from .rolling_disc_penalty_forces import update_rolling_disc_penalty_data
 
@@ -351,21 +352,42 @@ def torsional_element_energy(sd, wk, R, r, V, e):
 
 
 @njit(cache=True, inline="always", _nrt=False)
+def _rolling_disc_penalty_data(gid, disc, R, r, V, v3, ident, zero3, zero6):
+    if disc.shape[0] > 0:
+        update_rolling_disc_penalty_data(gid, disc, R, r, V, v3, ident, zero3, zero6)
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def _torsion_angles(gid, tint, trot, tphi, R, r, V, m3, ident, zero3, zero6):
+    if tint.shape[0] > 0:
+        torsion_angles(gid, tint, trot, tphi, R, r, V, m3, ident, zero3, zero6)
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def _coordinate_angles(nangles, jint, jrot, jpar, rint, kint, krot, kpar, R):
+    if nangles > 0:
+        update_coordinate_angles(jint, jrot, jpar, rint, kint, krot, kpar, R)
+
+
+# none of them in a lean scene (their tables None, mbs/presence.py)
+rolling_disc_penalty_data_if = guarded(_rolling_disc_penalty_data)
+torsion_angles_if = guarded(_torsion_angles)
+coordinate_angles_if = guarded(_coordinate_angles)
+
+
+@njit(cache=True, inline="always", _nrt=False)
 def update_contact_data(sd, wk, R, r, V):
     """Data coordinates that Exudyn updates after a step (its PostNewtonStep), after an accepted
     step: the penalty rolling discs' slip velocity and gap.  (Not in update_torsion_tracking:
     that one also sets the tracked angles at an initial state, where the data keep their
     initial values, as in Exudyn.)"""
-    if wk.disc.shape[0] > 0:
-        update_rolling_disc_penalty_data(sd.gid, wk.disc, R, r, V, wk.v3, wk.ident, wk.zero3, wk.zero6)
+    rolling_disc_penalty_data_if(wk.disc, sd.gid, wk.disc, R, r, V, wk.v3, wk.ident, wk.zero3, wk.zero6)
 
 
 @njit(cache=True, inline="always", _nrt=False)
 def update_torsion_tracking(sd, wk, R, r, V):
     """The tracked angles (torsional springs, rotation coordinates) after an accepted step."""
-    if sd.tint.shape[0] > 0:
-        torsion_angles(sd.gid, sd.tint, sd.trot, wk.tphi, R, r, V, wk.m3, wk.ident, wk.zero3, wk.zero6)
-    if sd.nangles > 0:
-        update_coordinate_angles(sd.jint, sd.jrot, sd.jpar, sd.rint, sd.kint, sd.krot, sd.kpar, R)
+    torsion_angles_if(sd.tint, sd.gid, sd.tint, sd.trot, wk.tphi, R, r, V, wk.m3, wk.ident, wk.zero3, wk.zero6)
+    coordinate_angles_if(sd.nangles, sd.nangles, sd.jint, sd.jrot, sd.jpar, sd.rint, sd.kint, sd.krot, sd.kpar, R)
     if wk.nplanar > 0:
         update_tracked_bodies(wk.btrack, wk.bframe, wk.bangle, wk.bparam, R)

@@ -93,7 +93,7 @@ def apply_correction(rint, W, lam, X, tree):
     raise NotImplementedError("compiled only")
 
 
-@overload(apply_correction)
+@overload(apply_correction, jit_options={"forceinline": True})
 def _apply_correction(rint, W, lam, X, tree):
     if _is_tree(tree):
         def by_tree(rint, W, lam, X, tree):
@@ -206,7 +206,7 @@ def solve_multipliers(gid, Minv, rint, bw, redundant, pivotTol, R, Jr, W, lam, S
     raise NotImplementedError("compiled only")
 
 
-@overload(solve_multipliers)
+@overload(solve_multipliers, jit_options={"forceinline": True})
 def _solve_multipliers(gid, Minv, rint, bw, redundant, pivotTol, R, Jr, W, lam, Sb, Sd, perm, ytmp, info, tmp12,
                        tree):
     if _is_tree(tree):
@@ -268,7 +268,7 @@ def rhs(sd, wk, t, R, r, V, Qext, Vdot):
     free_accelerations(sd.gid, sd.Minv, R, Q, Vdot, wk.tmp12)
     if sd.nrows == 0:
         return STATUS_OK
-    joints_rows(sd.gid, sd.jint, sd.jpos, sd.jrot, sd.jpar, sd.rint, wk.bparam, R, r, V, wk.h, wk.Jr, wk.eta, wk.rdrive,
+    joints_rows(sd.gid, sd.jint, sd.jpos, sd.jrot, sd.jpar, sd.rint, sd.rowsAll, wk.bparam, R, r, V, wk.h, wk.Jr, wk.eta, wk.rdrive,
                 wk.v3, wk.ident, wk.zero3, wk.zero6)
     return schur_correct(sd.gid, sd.Minv, sd.rint, sd.bandwidth, sd.redundant, sd.pivotTol, R, Vdot, -1.0, wk.eta,
                          wk.Jr, wk.W, wk.lam, wk.Sb, wk.Sd, wk.perm, wk.ytmp, wk.info, wk.tmp12, tree_of(sd, wk))

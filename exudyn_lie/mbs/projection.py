@@ -10,7 +10,7 @@ from .index1 import apply_correction, rows_times, schur_correct, solve_multiplie
 
 
 # the arguments of project, by what they are (built by project_state from SceneData / Work)
-Joints = namedtuple("Joints", ["gid", "jint", "jpos", "jrot", "jpar", "rint", "bparam"])  # the joint tables
+Joints = namedtuple("Joints", ["gid", "jint", "jpos", "jrot", "jpar", "rint", "rowsAll", "bparam"])  # the joint tables
 Schur = namedtuple("Schur", ["Minv", "bw", "redundant", "pivotTol",              # J M^-1 J^T: data...
                              "W", "lam", "Sb", "Sd", "perm", "ytmp", "info", "tmp12",    # ... and work
                              "tree"])                                            # index1.TreeSolve
@@ -32,7 +32,7 @@ def project(level, joints, schur, rows, scratch, R, r, V):
 
     The row drives ``rdrive`` must hold their values at the state's time (the caller).
     Returns a status code (STATUS_PROJECTION if max |h| stays above the tolerance)."""
-    gid, jint, jpos, jrot, jpar, rint, bparam = joints
+    gid, jint, jpos, jrot, jpar, rint, rowsAll, bparam = joints
     Minv, bw, redundant, pivotTol, W, lam, Sb, Sd, perm, ytmp, info, tmp12, tree = schur
     h, Jr, eta, rdrive = rows
     Psi, v3, m3, ident, zero3, zero6 = scratch
@@ -46,7 +46,7 @@ def project(level, joints, schur, rows, scratch, R, r, V):
         tol = PROJ_TOL * scale
         hmax = 0.0
         for it in range(PROJ_MAX_ITER + 1):
-            joints_rows(gid, jint, jpos, jrot, jpar, rint, bparam, R, r, V, h, Jr, eta, rdrive, v3, ident, zero3, zero6)
+            joints_rows(gid, jint, jpos, jrot, jpar, rint, rowsAll, bparam, R, r, V, h, Jr, eta, rdrive, v3, ident, zero3, zero6)
             hmax = 0.0
             for q in range(rint.shape[0]):
                 if abs(h[q]) > hmax:
@@ -72,7 +72,7 @@ def project(level, joints, schur, rows, scratch, R, r, V):
         if hmax > PROJ_FAIL * tol:
             return STATUS_PROJECTION
     else:
-        joints_rows(gid, jint, jpos, jrot, jpar, rint, bparam, R, r, V, h, Jr, eta, rdrive, v3, ident, zero3, zero6)
+        joints_rows(gid, jint, jpos, jrot, jpar, rint, rowsAll, bparam, R, r, V, h, Jr, eta, rdrive, v3, ident, zero3, zero6)
     return schur_correct(gid, Minv, rint, bw, redundant, pivotTol, R, V, -1.0, rdrive[1], Jr, W, lam, Sb, Sd, perm,
                          ytmp, info, tmp12, tree)
 
@@ -81,7 +81,7 @@ def project(level, joints, schur, rows, scratch, R, r, V):
 def project_state(sd, wk, level, R, r, V):
     if sd.nrows == 0:
         return STATUS_OK
-    return project(level, Joints(sd.gid, sd.jint, sd.jpos, sd.jrot, sd.jpar, sd.rint, wk.bparam),
+    return project(level, Joints(sd.gid, sd.jint, sd.jpos, sd.jrot, sd.jpar, sd.rint, sd.rowsAll, wk.bparam),
                    Schur(sd.Minv, sd.bandwidth, sd.redundant, sd.pivotTol, wk.W, wk.lam, wk.Sb, wk.Sd, wk.perm,
                          wk.ytmp, wk.info, wk.tmp12, tree_of(sd, wk)),
                    Rows(wk.h, wk.Jr, wk.eta, wk.rdrive), Scratch(wk.Psi, wk.v3, wk.m3, wk.ident, wk.zero3, wk.zero6),
@@ -99,7 +99,7 @@ def constraint_rows_at(sd, wk, R, r, V):
     """Rows h(g), J and eta at (R, r, V) into ``wk.h``, ``wk.Jr``, ``wk.eta``; returns
     (max |h|, max |J V - w|), J V - w computed into ``wk.lam`` (scratch; ``w`` the velocity
     targets of the row drives, at the state's time)."""
-    joints_rows(sd.gid, sd.jint, sd.jpos, sd.jrot, sd.jpar, sd.rint, wk.bparam, R, r, V, wk.h, wk.Jr, wk.eta, wk.rdrive, wk.v3,
+    joints_rows(sd.gid, sd.jint, sd.jpos, sd.jrot, sd.jpar, sd.rint, sd.rowsAll, wk.bparam, R, r, V, wk.h, wk.Jr, wk.eta, wk.rdrive, wk.v3,
                 wk.ident, wk.zero3, wk.zero6)
     rows_times(sd.rint, wk.Jr, V, -1.0, wk.rdrive[1], wk.lam)
     hmax = 0.0

@@ -24,6 +24,7 @@ from . import external, kernel
 from .codes import BODY_TWIST
 from .bodies import body_dexpinv_stage, exp_compose
 from .rolling_disc_penalty_forces import D_DATA
+from .presence import is_present
 from .compiled import compile_scene, compile_tracking, make_work, resolve_groups, with_redundant
 from .linalg import REL_PIVOT_TOL, rows_in_null_space, schur_rank_and_null
 from .row_drives import RowDrives
@@ -227,7 +228,7 @@ class Simulator:
         load that compiled entry point at all (its cache load and first-call typing are part
         of a warm first solve, issue 19)."""
         sd, wk = self.sd, self.wk
-        if sd.tint.shape[0] > 0 or sd.nangles > 0 or wk.nplanar > 0:
+        if is_present(sd.tint) or (sd.nangles or 0) > 0 or wk.nplanar > 0:
             kernel.update_torsion_tracking(sd, wk, self.R, self.r, self.V)
 
     def states(self):

@@ -1,0 +1,28 @@
+"""The group maps stay calls in the compiled kernel: LLVM ``noinline`` on them.
+
+numba has ``forceinline=True`` (LLVM ``alwaysinline``) but no way to say the opposite, and
+without either attribute LLVM's inliner decides by the size of the caller.  The group maps
+(``exudyn_lie.groups``: exp, dexp^-1, their Taylor branches) are then inlined into the stage
+loop or not depending on how much else the loop holds, i.e. on which features the scene
+compiles (mbs/presence.py).  Inlined, they made the heavy top's step 10-15 % slower (1.65 ->
+1.91 us, measured interleaved), and they may change a state's last bits (their FMA
+contractions are decided again in the caller).  So every function of ``exudyn_lie.groups``
+that is not ``forceinline`` gets ``noinline`` where numba declares it.  Imported by
+``exudyn_lie/__init__.py`` before any compiled function is defined.
+"""
+from numba.core import base
+
+_PREFIX = __name__.rpartition(".")[0] + ".groups."
+_declare = base.BaseContext.declare_function
+
+
+def _declare_function(self, module, fndesc):
+    fn = _declare(self, module, fndesc)
+    if not fndesc.inline and (fndesc.modname or "").startswith(_PREFIX):
+        fn.attributes.add("noinline")
+    return fn
+
+
+if not getattr(base.BaseContext.declare_function, "_exudyn_lie", False):
+    _declare_function._exudyn_lie = True
+    base.BaseContext.declare_function = _declare_function

@@ -1,0 +1,107 @@
+"""Lean scenes (mbs/presence.py): a scene with only the common features compiles none of the
+other features' code, and runs the same solution as when it is compiled full.
+
+* which scenes are lean: every force element registered ``lean`` and the lower-pair and
+  distance row kinds; one item of any other kind makes the scene full;
+* the same scene compiled lean and full (``compiled.LEAN_SCENES``) gives bit-identical states
+  and multipliers, with every row kind and force element of a lean scene present;
+* the lean stage's LLVM IR has none of the absent features' functions (the full one has them).
+"""
+import numpy as np
+import pytest
+
+from exudyn_lie.groups import so3
+from exudyn_lie.mbs import GROUND, Scene, Simulator, compiled, force_elements
+from exudyn_lie.mbs.codes import ROW_DIST, ROW_ROT, ROW_TRANS_LOCAL, ROW_TRANS_WORLD
+
+
+def lean_scene():
+    """Two bodies with every lean feature: gravity, a load, a point-to-point spring, a
+    spherical joint (world rows), a cylindrical joint (local translation and rotation rows), a distance
+    constraint."""
+    sc = Scene()
+    sc.gravity = np.array([0.0, -9.81, 0.0])
+    for k in range(3):
+        sc.AddBody(mass=1.0 + k, inertia=np.diag([0.1, 0.2, 0.15]) * (1 + k), com=[0.05, 0.0, 0.02],
+                   R0=so3.exp(np.array([0.1 * k, 0.2, -0.1])), r0=[0.5 * k, 0.0, 0.0], omega0=[0.3, -0.2, 0.5 * k],
+                   vel0=[0.0, 0.0, 0.0])
+    sc.AddSphericalJoint(GROUND, 0, position=[0.0, 0.0, 0.0])
+    sc.AddCylindricalJoint(0, 1, position=[0.25, 0.0, 0.0], axis=[0, 0, 1])
+    sc.AddDistanceConstraint(GROUND, [1.5, 0.5, 0.0], 2, [0.0, 0.0, 0.0], distance=0.55)
+    sc.AddSpringDamper(1, [0.25, 0.0, 0.0], 2, [-0.25, 0.0, 0.0], stiffness=200.0, damping=1.0)
+    sc.AddForce(2, [0.0, 0.0, 1.5])
+    return sc
+
+
+def run(sc, lean, group="SE3", monkeypatch=None):
+    monkeypatch.setattr(compiled, "LEAN_SCENES", lean)
+    sim = Simulator(sc, "RK4", group, projectInitial=True)
+    sim.Advance(200, 1e-3)
+    return sim
+
+
+def test_lean_scene_has_every_lean_feature():
+    sc = lean_scene()
+    assert compiled.scene_is_lean(sc)
+    kinds = {k for j in sc.joints for k, _, _ in compiled.joint_rows_of(j)}
+    assert {ROW_TRANS_WORLD, ROW_TRANS_LOCAL, ROW_ROT, ROW_DIST} <= kinds
+    lean = [e.name for e in force_elements.ELEMENTS if e.lean]
+    assert lean == ["spring"]
+
+
+@pytest.mark.parametrize("group", ["SE3", "SO3xR3"])
+def test_lean_and_full_give_identical_states(group, monkeypatch):
+    sc = lean_scene()
+    a = run(sc, True, group, monkeypatch)
+    assert a.sd.rowsAll is None and a.sd.cint is None and a.wk.disc is None
+    b = run(sc, False, group, monkeypatch)
+    assert b.sd.rowsAll is True and b.sd.cint is not None and b.wk.disc is not None
+    for x, y in ((a.R, b.R), (a.r, b.r), (a.V, b.V), (a.wk.lam, b.wk.lam)):
+        assert np.array_equal(x, y)
+    # a real motion, constrained: the check is not vacuous
+    assert np.abs(a.V).max() > 0.1 and np.abs(a.wk.lam).max() > 1.0
+
+
+def _add_non_lean(sc, kind):
+    if kind == "cartesian":
+        sc.AddCartesianSpringDamper(1, [0.25, 0, 0], 2, [-0.25, 0, 0], stiffness=[10.0, 10.0, 10.0],
+                                    damping=[0.1, 0.1, 0.1])
+    elif kind == "torsional":
+        sc.AddTorsionalSpringDamper(1, 2, stiffness=5.0, damping=0.1)
+    elif kind == "coordinate row":
+        sc.AddCoordinateConstraint(GROUND, 2, 0, 1, constant=0.0)
+
+
+@pytest.mark.parametrize("kind", ["cartesian", "torsional", "coordinate row"])
+def test_one_other_item_makes_a_scene_full(kind):
+    sc = lean_scene()
+    _add_non_lean(sc, kind)
+    assert not compiled.scene_is_lean(sc)
+    sd, _ = compiled.compile_scene(sc, ["SE3"] * sc.nBodies)
+    assert sd.rowsAll is True
+    assert all(sd._asdict()[f] is not None for f in force_elements.scene_fields())
+
+
+def test_lean_stage_has_no_code_of_absent_features(monkeypatch):
+    """The compiled stage of a lean scene contains none of the functions of the features it
+    lacks; compiled full, the same scene's stage contains them."""
+    from numba import njit
+    from exudyn_lie.mbs import index1
+
+    @njit
+    def stage(sd, wk, R, r, V, Vdot):
+        return index1.rhs(sd, wk, 0.0, R, r, V, wk.Qext, Vdot)
+
+    absent = ["rolling_disc_row", "coordinate_row", "node_parameter", "cartesian_forces", "torsional_forces",
+              "rigid_spring_forces", "rolling_disc_penalty_forces", "coordinate_spring_forces", "linear_spring_forces"]
+    irs = {}
+    for lean in (True, False):
+        monkeypatch.setattr(compiled, "LEAN_SCENES", lean)
+        sim = Simulator(lean_scene(), "RK4", "SE3", projectInitial=True)
+        Vdot = np.zeros((sim.sd.nb, 6))
+        assert stage(sim.sd, sim.wk, sim.R, sim.r, sim.V, Vdot) == 0
+        irs[lean] = stage.inspect_llvm(stage.signatures[-1])
+    for name in absent:
+        assert name not in irs[True], name
+        assert name in irs[False], name
+    assert "spring_forces" in irs[True]

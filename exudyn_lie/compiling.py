@@ -5,7 +5,6 @@ only the first run on a machine (or after the sources changed) compiles.  A cold
 recognised by numba's own cache index of the kernel's time loop: missing or stale (numba
 compares the source file's time stamp and size) and not compiled in this process yet.
 """
-import atexit
 import contextlib
 import os
 import sys
@@ -17,6 +16,9 @@ import sys
 COLD_COMPILE_SECONDS = 30
 #: numba's compile seconds of the last cold start on this machine (beside numba's cache)
 MEASURED_FILE = os.path.join(os.path.dirname(os.path.abspath(__file__)), "__pycache__", "cold_compile_seconds.txt")
+
+#: a cold start shorter than this is not stored (a probe, not the solver)
+MIN_STORED_SECONDS = 1.0
 
 _announced = False
 
@@ -34,23 +36,33 @@ def estimated_seconds():
     return COLD_COMPILE_SECONDS
 
 
-def _measure_this_cold_start():
-    """Sum numba's compile time for the rest of the process and store it at exit (the
-    next cold start on this machine, e.g. after an update, announces it)."""
+def _measure_this_cold_start(disp):
+    """Sum numba's compile time from now until the kernel's time loop ``disp`` is compiled,
+    and store it (the next cold start on this machine, e.g. after an update, announces it).
+    Only up to that point: a process that goes on compiling other scenes (a test session)
+    would otherwise store its own total."""
     from numba.core import event
     tl = event.TimingListener()
     event.register("numba:compile", tl)
 
-    def save():
-        if not tl.done or tl.duration < 1.0:
-            return
-        try:
-            os.makedirs(os.path.dirname(MEASURED_FILE), exist_ok=True)
-            with open(MEASURED_FILE, "w") as f:
-                f.write(f"{tl.duration:.1f}\n")
-        except OSError:
+    class _KernelDone(event.Listener):
+        def on_start(self, ev):
             pass
-    atexit.register(save)
+
+        def on_end(self, ev):
+            if (ev.data or {}).get("dispatcher") is not disp:
+                return
+            event.unregister("numba:compile", self)
+            event.unregister("numba:compile", tl)
+            if not tl.done or tl.duration < MIN_STORED_SECONDS:
+                return
+            try:
+                os.makedirs(os.path.dirname(MEASURED_FILE), exist_ok=True)
+                with open(MEASURED_FILE, "w") as f:
+                    f.write(f"{tl.duration:.1f}\n")
+            except OSError:
+                pass
+    event.register("numba:compile", _KernelDone())
     return tl
 
 
@@ -74,7 +86,7 @@ def announce_cold_compile(disp, stream=None):
     _announced = True
     print(f"exudyn_lie: compiling the solver for this machine, first run only, about {estimated_seconds()} s",
           file=sys.stderr if stream is None else stream, flush=True)
-    _measure_this_cold_start()
+    _measure_this_cold_start(disp)
     return True
 
 

@@ -120,6 +120,9 @@ def test_cold_compile_is_announced_once_and_timed(tmp_path, monkeypatch):
     it is not; the compile timer sees the compilation."""
     from exudyn_lie import compiling
     monkeypatch.setattr(compiling, "_announced", False)
+    measured = tmp_path / "cold_compile_seconds.txt"
+    monkeypatch.setattr(compiling, "MEASURED_FILE", str(measured))
+    monkeypatch.setattr(compiling, "MIN_STORED_SECONDS", 0.0)
     f = _fresh_cached_function(tmp_path, "cold_probe_a")
     assert compiling.cache_is_cold(f)
     buf = io.StringIO()
@@ -130,6 +133,14 @@ def test_cold_compile_is_announced_once_and_timed(tmp_path, monkeypatch):
     with compiling.compile_timer() as ct:
         assert f(2.0) == 4.0
     assert ct.seconds > 0
+    # the compile time up to f's compilation is stored, and later compilations in the
+    # process (other scenes, a test session) do not change it
+    stored = measured.read_text()
+    assert 0.0 < float(stored) <= ct.seconds + 0.05
+    (tmp_path / "other").mkdir()
+    h = _fresh_cached_function(tmp_path / "other", "cold_probe_b")
+    assert h(3.0) == 6.0
+    assert measured.read_text() == stored
     assert not compiling.cache_is_cold(f)
     g = _fresh_cached_function(tmp_path, "cold_probe_a")               # same source, new process-like import
     assert not compiling.cache_is_cold(g)                              # the index file exists now

@@ -40,30 +40,40 @@ def _measure_this_cold_start(disp):
     """Sum numba's compile time from now until the kernel's time loop ``disp`` is compiled,
     and store it (the next cold start on this machine, e.g. after an update, announces it).
     Only up to that point: a process that goes on compiling other scenes (a test session)
-    would otherwise store its own total."""
+    would otherwise store its own total.  (The listener stays registered, inert: numba's
+    broadcast iterates over the listeners' list, so removing one during it skips another.)"""
+    import time
     from numba.core import event
-    tl = event.TimingListener()
-    event.register("numba:compile", tl)
 
-    class _KernelDone(event.Listener):
+    class _UntilKernel(event.Listener):
+        depth, start, seconds, finished = 0, 0.0, 0.0, False
+
         def on_start(self, ev):
-            pass
+            if not self.finished:
+                if self.depth == 0:
+                    self.start = time.perf_counter()
+                self.depth += 1
 
         def on_end(self, ev):
+            if self.finished:
+                return
+            self.depth -= 1
+            if self.depth == 0:
+                self.seconds += time.perf_counter() - self.start
             if (ev.data or {}).get("dispatcher") is not disp:
                 return
-            event.unregister("numba:compile", self)
-            event.unregister("numba:compile", tl)
-            if not tl.done or tl.duration < MIN_STORED_SECONDS:
+            self.finished = True
+            if self.seconds < MIN_STORED_SECONDS:
                 return
             try:
                 os.makedirs(os.path.dirname(MEASURED_FILE), exist_ok=True)
                 with open(MEASURED_FILE, "w") as f:
-                    f.write(f"{tl.duration:.1f}\n")
+                    f.write(f"{self.seconds:.1f}\n")
             except OSError:
                 pass
-    event.register("numba:compile", _KernelDone())
-    return tl
+    listener = _UntilKernel()
+    event.register("numba:compile", listener)
+    return listener
 
 
 def cache_is_cold(disp):

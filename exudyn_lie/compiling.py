@@ -68,7 +68,7 @@ def _measure_this_cold_start(disp):
             try:
                 os.makedirs(os.path.dirname(MEASURED_FILE), exist_ok=True)
                 with open(MEASURED_FILE, "w") as f:
-                    f.write(f"{self.seconds:.1f}\n")
+                    f.write(f"{self.seconds:.3f}\n")
             except OSError:
                 pass
     listener = _UntilKernel()

@@ -7,8 +7,9 @@ loop or not depending on how much else the loop holds, i.e. on which features th
 compiles (mbs/presence.py).  Inlined, they made the heavy top's step 10-15 % slower (1.65 ->
 1.91 us, measured interleaved), and they may change a state's last bits (their FMA
 contractions are decided again in the caller).  So every function of ``exudyn_lie.groups``
-that is not ``forceinline`` gets ``noinline`` where numba declares it.  Imported by
-``exudyn_lie/__init__.py`` before any compiled function is defined.
+that is not ``forceinline`` gets ``noinline`` where numba declares it.  Imported at the end
+of :mod:`exudyn_lie._numba_cache`, which every compiled module imports first, so the patch is in
+place before any compiled function is defined.
 """
 from numba.core import base
 

@@ -10,7 +10,10 @@ From :data:`ELEMENTS` derive:
 
 * the element fields of ``SceneData`` and their part of ``compile_scene`` (:mod:`.compiled`);
 * :func:`compute_forces`, the applied and inertial forces of a stage (generated below: one
-  ``if sd.<first field>.shape[0] > 0:`` call per element, in registration order);
+  call per element, in registration order; a ``lean`` element's call is guarded by
+  ``if <its table>.shape[0] > 0:``, any other element's goes through
+  :func:`~.presence.guarded`, which compiles to nothing when its table is None, i.e. in a
+  lean scene);
 * :func:`spring_energy`, the elements' potential (:mod:`.diagnostics`);
 * ``Scene.CONNECTOR_LISTS``, the scene's lists of two-body force elements (:mod:`.scene`).
 

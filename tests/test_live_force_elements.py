@@ -242,3 +242,29 @@ def test_changed_mid_run_equals_a_restart_from_the_state_with_the_new_values(nam
     print(f"{name} {variant}: max |changed mid-run - restarted| = {err:.3g}")
     # the restart reads the nodes' coordinates back into rotation matrices: round-off
     assert err <= 1e-11 * max(1.0, np.max(np.abs(ref)))
+
+
+@pytest.mark.filterwarnings("ignore:exudyn_lie. the initial state:RuntimeWarning")   # the spin breaks J V = 0
+def test_a_moved_marker_of_a_constraint_connector_stops_the_solve():
+    """The markers of every item with the joint role (bridge/items.py) are fixed during a run,
+    ConnectorDistance's too (its row would need the marker's velocity and acceleration)."""
+    from exudyn.utilities import MarkerBodyPosition, ObjectConnectorDistance
+    from exudyn_lie.bridge import BridgeError
+    mbs, g, b, _, _ = _pair()
+    mG = mbs.AddMarker(MarkerBodyPosition(bodyNumber=g, localPosition=[0.0, 0.0, 0.6]))
+    mB = mbs.AddMarker(MarkerBodyPosition(bodyNumber=b, localPosition=[0.1, 0.0, 0.0]))
+    o = mbs.AddObject(ObjectConnectorDistance(markerNumbers=[mG, mB], distance=0.5))
+    mbs.Assemble()
+    p0, p1 = (np.asarray(mbs.GetMarkerOutput(m, exu.OutputVariableType.Position)) for m in (mG, mB))
+    mbs.SetObjectParameter(o, "distance", float(np.linalg.norm(p1 - p0)))      # the initial state satisfies it
+
+    def pre_step(mbs, t):
+        if t > 0.0105:
+            mbs.SetMarkerParameter(mG, "localPosition", [0.0, 0.01, 0.6])
+        return True
+
+    mbs.SetPreStepUserFunction(pre_step)
+    mbs.Assemble()
+    with pytest.raises(BridgeError) as e:
+        exl.SolveDynamic(mbs, _settings(20), showProgress=False)
+    assert "ObjectConnectorDistance" in str(e.value) and "moved during the solve" in str(e.value), str(e.value)

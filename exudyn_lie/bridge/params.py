@@ -43,6 +43,7 @@ import numpy as np
 from . import items
 from .items import FIXED, IGNORED, INITIAL, ITEMS, LIVE, REFUSED  # noqa: F401 (the statuses)
 from ..mbs.force_elements import element, write_row
+from ..mbs.scene import SceneError
 from .reader import BridgeError, ExudynScene, _userfunction
 
 # the status of every field of every supported item type comes from its registration
@@ -97,10 +98,14 @@ def _same(a, b):
 
 
 def _finite(x, what, key):
-    v = np.asarray(x, float)
-    if not np.all(np.isfinite(v)):
+    if isinstance(x, (float, int)):          # most fields: a number (the fast check, once per changed field)
+        ok = math.isfinite(x)
+    else:
+        x = np.asarray(x, float)
+        ok = bool(np.isfinite(x).all())
+    if not ok:
         raise BridgeError(f"{what}: {key} set to a non-finite value {x!r} during the solve")
-    return v
+    return x
 
 
 class ParameterWatch:
@@ -378,7 +383,7 @@ class ParameterWatch:
                     _finite(d[key], what, key)
         try:
             scratch, new = self.reader.reread_connector(sc, o, d)
-        except BridgeError as e:
+        except SceneError as e:             # (a BridgeError is one)
             raise BridgeError(f"{e} (changed during the solve at t = {t:.6g} s)") from None
         if table == "py":
             self._python_connector(o, d, k, scratch, new, t)

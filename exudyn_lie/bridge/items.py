@@ -8,8 +8,8 @@ Everything else derives from :data:`ITEMS`:
 * the reader's lists (``reader.SUPPORTED_NODES / SUPPORTED_OBJECTS / SUPPORTED_MARKERS /
   SUPPORTED_LOADS``, ``BODY_OBJECTS``, ``JOINT_TYPES``, ``JOINT_READERS``,
   ``CONNECTOR_READERS``) and the node write-back registry ``nodes.NODE_KINDS``;
-* the field statuses of :mod:`.params` (:data:`FIELDS`) and its list of connectors with a live
-  user function;
+* the field statuses of :mod:`.params` (:data:`FIELDS`) and which changed objects it reads
+  again during a solve (the connectors; a moved marker of a joint stops the solve);
 * the items that keep a model on the compiled path (:mod:`.evaluated_dispatch`: any other
   type makes Exudyn evaluate the model);
 * the README's list of supported items (``python -m exudyn_lie items --readme README.md``;

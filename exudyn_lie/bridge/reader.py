@@ -171,7 +171,8 @@ class ExudynScene(Scene):
         self.rollingDiscData = []             # (object, NodeGenericData) of each penalty rolling disc, scene order
         self.configuration = "initial"        # what was read ('items': mbs not assembled yet)
         # where each Exudyn item went: ("object", o) / ("load", l) -> (table, row), table one of
-        # "spring", "cartesian", "torsional" (compiled rows), "py" (index in pyItems), "load"
+        # the name of a registered force element (its compiled row, mbs/force_elements.py: "spring",
+        # "cartesian", ...), "py" (index in pyItems), "load"
         # (compiled load row), "massProportional", "ground" (no effect); joints: joints_info
         self.itemRows = {}
         self.reader = None                    # the _Reader (marker frames), for bridge.params

@@ -8,7 +8,8 @@ import warnings
 import numpy as np
 import pytest
 
-from exudyn_lie import GROUND, Scene, Simulator, StepSizeError
+from exudyn_lie import Simulator, StepSizeError
+from exudyn_lie.models import heavy_top as HT
 from exudyn_lie.integrators import ButcherTableau, get_method, mk
 from exudyn_lie.integrators.stability import stability_coefficients, stability_radius
 from exudyn_lie.mbs import stepper
@@ -16,10 +17,9 @@ from exudyn_lie.mbs.stepper import Method, needed_stages
 
 
 def _two_bodies(python_force=None):
-    sc = Scene(gravity=[0, 0, -9.81])
-    b = sc.AddBody(mass=21.6, inertia=[0.36, 0.306, 0.09], r0=[0.5, 0, 0], omega0=[0, 0, 0.5], vel0=[0, 0.25, 0])
-    sc.AddSphericalJoint(GROUND, b, [0, 0, 0])
-    sc.AddSpringDamper(GROUND, [1, 0, 0.5], b, [0, 0, 0], stiffness=1e4)
+    """The paper's heavy top (the models' one builder) with a second body on a revolute joint."""
+    sc = HT.scene()
+    b = 0
     b2 = sc.AddBody(mass=2.0, inertia=[0.1, 0.2, 0.3], com=[0.1, 0, 0], r0=[1.0, 0, 0], omega0=[0.3, 0.1, 2.0])
     sc.AddRevoluteJoint(b, b2, [1.0, 0, 0], axis=[0, 0, 1])
     if python_force is not None:

@@ -53,6 +53,7 @@ import numpy as np
 
 from . import bench_runs as BR
 from . import bench_wp as WP
+from . import versions
 
 EXL_GROUPS = ("SE3", "SO3xR3", "auto")
 EXL_METHODS = ("RK4", "DOPRI5", "RK6")
@@ -925,11 +926,8 @@ def main(argv=None):
     log = Log(cfg.progress)
     cmdline = "python -m exudyn_lie bench" + ("" if not argv else " " + " ".join(argv))
     wait_quiet(args.wait_quiet, log)
-    import exudyn
-    import numba
     out = dict(env=dict(date=datetime.datetime.now().isoformat(timespec="seconds"), cpu=cpu_name(),
-                        cores=os.cpu_count(), python=platform.python_version(), numpy=np.__version__,
-                        numba=numba.__version__, exudyn=exudyn.__version__, loadStart=loadavg(),
+                        cores=os.cpu_count(), python=platform.python_version(), **versions(), loadStart=loadavg(),
                         command=cmdline, jobs=cfg.jobs, T=cfg.T, quick=cfg.quick))
     log(f"models {cfg.models}, sections {cfg.sections}, T = {cfg.T:g} s, load {out['env']['loadStart']}")
     if "startup" in cfg.sections:           # first, on a quiet machine
@@ -962,9 +960,10 @@ def main(argv=None):
         from . import bench_mujoco
         out["mujoco"] = bench_mujoco.run_section(cfg, log)
     if "params" in cfg.sections:
-        from .bench_params import parameter_updates
+        from .bench_params import connector_rereads, parameter_updates
         log("parameters changed during a solve (serialRobotTest PD controller)")
         out["params"] = parameter_updates(T=0.1 if cfg.quick else 0.5, repeats=3 if cfg.quick else 7)
+        out["params"]["reread"] = connector_rereads(calls=200 if cfg.quick else 1000)
     if "items" in cfg.sections:
         from .bench_items import per_step as items_per_step
         log("point masses against rigid bodies")

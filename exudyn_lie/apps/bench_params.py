@@ -148,6 +148,68 @@ def parameter_updates(T=0.2, h=1e-3, repeats=7):
     return out
 
 
+def connector_models():
+    """One Exudyn model with one item of every compiled connector type (a spinning body on
+    each); returns (mbs, {connector type: object index})."""
+    import exudyn as exu
+    from exudyn.utilities import (InertiaCuboid, MarkerBodyRigid, MarkerNodeCoordinate, NodeGenericData,
+                                  NodePointGround)
+    U = exu.utilities
+    mbs = exu.SystemContainer().AddSystem()
+    g = mbs.CreateGround()
+    mG = mbs.AddMarker(MarkerBodyRigid(bodyNumber=g, localPosition=[0.2, 0.0, 0.1]))
+    out = {}
+
+    def body(k):
+        b = mbs.CreateRigidBody(inertia=InertiaCuboid(1000, [0.4, 0.2, 0.1]), referencePosition=[k, 0.1, 0.2],
+                                initialAngularVelocity=[0.3, -0.2, 2.0])
+        return b, mbs.AddMarker(MarkerBodyRigid(bodyNumber=b, localPosition=[0.05, 0.02, -0.03]))
+
+    items = {
+        "ConnectorSpringDamper": lambda b, m: U.ObjectConnectorSpringDamper(markerNumbers=[mG, m], stiffness=100),
+        "ConnectorCartesianSpringDamper": lambda b, m: U.ObjectConnectorCartesianSpringDamper(
+            markerNumbers=[mG, m], stiffness=[100, 100, 100]),
+        "ConnectorTorsionalSpringDamper": lambda b, m: U.ObjectConnectorTorsionalSpringDamper(
+            markerNumbers=[mG, m], stiffness=10, nodeNumber=mbs.AddNode(NodeGenericData(
+                initialCoordinates=[0.0], numberOfDataCoordinates=1))),
+        "ConnectorCoordinateSpringDamper": lambda b, m: U.ObjectConnectorCoordinateSpringDamper(markerNumbers=[
+            mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=mbs.AddNode(NodePointGround()), coordinate=0)),
+            mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=mbs.GetObject(b)["nodeNumber"], coordinate=0))],
+            stiffness=100),
+        "ConnectorLinearSpringDamper": lambda b, m: U.ObjectConnectorLinearSpringDamper(markerNumbers=[mG, m],
+                                                                                        stiffness=100),
+        "ConnectorRigidBodySpringDamper": lambda b, m: U.ObjectConnectorRigidBodySpringDamper(
+            markerNumbers=[mG, m], stiffness=np.eye(6), damping=np.zeros((6, 6))),
+        "ConnectorRollingDiscPenalty": lambda b, m: U.ObjectConnectorRollingDiscPenalty(
+            markerNumbers=[mG, m], discRadius=0.2, contactStiffness=1e4, nodeNumber=mbs.AddNode(NodeGenericData(
+                initialCoordinates=[0.0, 0.0, 0.0], numberOfDataCoordinates=3))),
+    }
+    for k, (name, make) in enumerate(items.items()):
+        out[name] = int(mbs.AddObject(make(*body(k))))
+    mbs.Assemble()
+    return mbs, out
+
+
+def connector_rereads(calls=1000, repeats=5):
+    """Time of one re-read of a changed connector during a solve (``ParameterWatch``: the
+    reader reads it again, its force element's registration rewrites its compiled row), per
+    compiled connector type; median of ``repeats`` rounds of ``calls`` re-reads, types
+    interleaved in every round; seconds."""
+    import exudyn_lie as exl
+    from exudyn_lie.bridge.params import ParameterWatch
+    mbs, objects = connector_models()
+    solver = exl.LieGroupSolver(mbs)
+    watch = ParameterWatch(solver)
+    times = {name: [] for name in objects}
+    for _ in range(repeats):
+        for name, o in objects.items():
+            tic = time.perf_counter()
+            for _ in range(calls):
+                watch._rebuild([("object", o)], 0.0)
+            times[name].append((time.perf_counter() - tic) / calls)
+    return {name: float(np.median(x)) for name, x in times.items()}
+
+
 def report_lines(p):
     """The BENCHMARKS.md section (empty without the measurement)."""
     if not p:
@@ -177,4 +239,7 @@ def report_lines(p):
         f"{100 * p['bridgeOwn'] / p['control']:.1f} % of a controlled step; without any pre-step function the "
         f"same model costs {us(p['none'])} per step.",
         "",
-    ]
+    ] + ([f"A changed connector (a live field or one of its markers) is read again by the reader and its force "
+          f"element's compiled row rewritten by its registration: "
+          + ", ".join(f"`{name}` {us(x)}" for name, x in p["reread"].items()) + " per re-read.", ""]
+         if p.get("reread") else [])

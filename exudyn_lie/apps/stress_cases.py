@@ -1245,8 +1245,8 @@ def _compare_exudyn(cr, s, spec, Tend):
 # =========================================================================== bad input
 def _scene_snapshot(sc):
     import pickle
-    return pickle.dumps([sc.gravity, sc.bodies, sc.joints, sc.springs, sc.torsionalSprings, sc.cartesianSprings,
-                         sc.rigidSprings, sc.loads])
+    return pickle.dumps([sc.gravity, sc.bodies, sc.joints, *(getattr(sc, name) for name in sc.CONNECTOR_LISTS),
+                         sc.loads])
 
 
 def _sim_snapshot(sim):

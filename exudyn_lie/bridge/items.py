@@ -8,8 +8,8 @@ Everything else derives from :data:`ITEMS`:
 * the reader's lists (``reader.SUPPORTED_NODES / SUPPORTED_OBJECTS / SUPPORTED_MARKERS /
   SUPPORTED_LOADS``, ``BODY_OBJECTS``, ``JOINT_TYPES``, ``JOINT_READERS``,
   ``CONNECTOR_READERS``) and the node write-back registry ``nodes.NODE_KINDS``;
-* the field statuses of :mod:`.params` (:data:`FIELDS`) and its list of connectors with a live
-  user function;
+* the field statuses of :mod:`.params` (:data:`FIELDS`) and which changed objects it reads
+  again during a solve (the connectors; a moved marker of a joint stops the solve);
 * the items that keep a model on the compiled path (:mod:`.evaluated_dispatch`: any other
   type makes Exudyn evaluate the model);
 * the README's list of supported items (``python -m exudyn_lie items --readme README.md``;
@@ -96,7 +96,7 @@ _JOINT = {
                                "acceleration in the index-1 formulation)"),
     "rotationMarker1": (FIXED, "the joint frame on marker 1"),
 }
-_COMPILED_ROW = (FIXED, "compiled into a constraint row or force element of issue 16's items; a change during "
+_COMPILED_ROW = (FIXED, "compiled into a constraint row (issue 16's items); a change during "
                         "a run is not re-read yet")
 _UF_LIVE = (LIVE, "another Python function: live; switching between no function and a function stops the solve "
                   "(compiled item vs Python item)")
@@ -221,13 +221,14 @@ register("object", "ConnectorTorsionalSpringDamper", "connector",
          reader="read_torsional_spring_damper", markers=True, userFunction="springTorqueUserFunction")
 register("object", "ConnectorCoordinateSpringDamper", "connector",
          "a compiled spring (mbs/coordinate_forces.py); with its user function, a Python force", {
-             **{k: _COMPILED_ROW for k in ("stiffness", "damping", "offset", "activeConnector")},
+             **{k: (LIVE, "force law") for k in ("stiffness", "damping", "offset")},
+             "activeConnector": (LIVE, "switches the force off and on"),
              "springForceUserFunction": (FIXED, "compiled item or Python item, chosen at the start"),
              "markerNumbers": (FIXED, "the connected coordinates")},
          reader="read_coordinate_spring_damper", markers="coordinate", userFunction="springForceUserFunction")
 register("object", "ConnectorLinearSpringDamper", "connector", "a compiled spring (mbs/linear_spring_forces.py)", {
-    **{k: _COMPILED_ROW for k in ("stiffness", "damping", "axisMarker0", "offset", "velocityOffset", "force",
-                                  "activeConnector")},
+    **{k: (LIVE, "force law") for k in ("stiffness", "damping", "axisMarker0", "offset", "velocityOffset", "force")},
+    "activeConnector": (LIVE, "switches the force off and on"),
     "springForceUserFunction": (REFUSED, "a user function is refused"),
     "markerNumbers": (FIXED, "the connected bodies")},
          reader="read_linear_spring_damper", markers=True, userFunction="springForceUserFunction")

@@ -13,9 +13,11 @@ How the bridge does the same (:class:`ParameterWatch`): while Exudyn's time loop
 ``Modify{Object,Node,Marker,Load}`` are wrapped (class attributes, restored in a
 ``finally``) so that each call on the solved ``mbs`` records the item.  Before the next
 integration step the bridge re-reads only the recorded items and writes the compiled rows
-they own (``SceneData.lvec / lint``, ``spos / spar``, ``cpos / cpar``, ``trot / tpar``),
-or refreshes their Python force items (:mod:`.pyforces`).  A controller setting 12 load
-vectors per step costs 12 dictionary reads and 12 row writes, not a new scene.
+they own (a load's ``SceneData.lvec / lint`` row; a connector's row of every field of its
+force element, rewritten by the element's registration from the item the reader reads again,
+:func:`~exudyn_lie.mbs.force_elements.write_row`), or refreshes their Python force items
+(:mod:`.pyforces`).  A controller setting 12 load vectors per step costs 12 dictionary reads
+and 12 row writes, not a new scene.
 
 Every field of every supported item has a status in :data:`FIELDS`:
 
@@ -39,8 +41,10 @@ import math
 import numpy as np
 
 from . import items
-from .items import FIXED, IGNORED, INITIAL, LIVE, REFUSED  # noqa: F401 (the statuses)
-from .reader import BridgeError, ExudynScene, _orthonormal, _userfunction
+from .items import FIXED, IGNORED, INITIAL, ITEMS, LIVE, REFUSED  # noqa: F401 (the statuses)
+from ..mbs.force_elements import element, write_row
+from ..mbs.scene import SceneError
+from .reader import BridgeError, ExudynScene, _userfunction
 
 # the status of every field of every supported item type comes from its registration
 # (bridge/items.py); FIELDS: (kind, type) -> {field: (status, reason)}
@@ -62,9 +66,6 @@ _WRAPPED = {  # MainSystem method -> kind (the item index is the first argument)
     "SetLoadParameter": "load", "ModifyObject": "object", "ModifyNode": "node", "ModifyMarker": "marker",
     "ModifyLoad": "load",
 }
-# connectors whose user function is live (a Python item re-read during the solve)
-_UF_KEY = {it.typeName: it.userFunction for it in items.of("object", "connector")
-           if it.userFunction and it.fields.get(it.userFunction, (None,))[0] == LIVE}
 
 
 def is_visualization(key):
@@ -97,10 +98,14 @@ def _same(a, b):
 
 
 def _finite(x, what, key):
-    v = np.asarray(x, float)
-    if not np.all(np.isfinite(v)):
+    if isinstance(x, (float, int)):          # most fields: a number (the fast check, once per changed field)
+        ok = math.isfinite(x)
+    else:
+        x = np.asarray(x, float)
+        ok = bool(np.isfinite(x).all())
+    if not ok:
         raise BridgeError(f"{what}: {key} set to a non-finite value {x!r} during the solve")
-    return v
+    return x
 
 
 class ParameterWatch:
@@ -146,7 +151,6 @@ class ParameterWatch:
                 self.markersOn.setdefault(("node", int(d["nodeNumber"])), []).append(m)
         for n in range(self.nItems["node"]):
             self.snap[("node", n)] = mbs.GetNode(n)
-        self.torsionOfSpring = {td.spring: td for td in self.scene.torsionData if td.spring is not None}
 
     def __enter__(self):
         import exudyn as exu
@@ -252,7 +256,7 @@ class ParameterWatch:
         for m in dict.fromkeys(markers):
             rd.markers.pop(m, None)
             for user in self.markerUsers.get(m, []):
-                if user[0] == "object" and self.snap[user]["objectType"].startswith("Joint"):
+                if user[0] == "object" and ITEMS[("object", self.snap[user]["objectType"])].role == "joint":
                     raise BridgeError(
                         f"{self.what(*user)}: its marker {m} ({self.what('marker', m)}) moved during the solve at "
                         f"t = {t:.6g} s; exudyn_lie cannot move a joint's marker during a run (a moving joint frame "
@@ -265,11 +269,9 @@ class ParameterWatch:
                 self._coordinate_load(i, d, t)
             elif kind == "load":
                 self._load(i, d, t)
-            elif d["objectType"] in _UF_KEY:
+            elif ITEMS[("object", d["objectType"])].role == "connector":
                 self._connector(i, d, t)
-            elif d["objectType"] == "ConnectorRollingDiscPenalty":
-                self._rolling_disc_penalty(i, d, t)
-            # other objects (ground, rigid bodies, joints) have no live field besides the above
+            # other objects (ground, bodies, joints) have no live field besides the above
             self.updates += 1
 
     def _load(self, l, d, t):
@@ -357,89 +359,52 @@ class ParameterWatch:
         self.updates += 1
 
     def _connector(self, o, d, t):
-        sc, rd = self.scene, self.reader
+        """A connector (or one of its markers) changed: the reader reads it again with the code
+        that read it before the solve (reader.reread_connector: marker frames, velocityOffset
+        folded, activeConnector, the torsional spring's kept turns), and its compiled row is
+        rewritten by its force element's registration (force_elements.write_row: the row
+        builders of its SceneData fields, its Work table's ``writeRow``); an item evaluated in
+        Python is refreshed in place."""
+        sc = self.scene
         row = sc.itemRows.get(("object", o))
         if row is None:
             return                       # ground to ground: no force on any body
         table, k = row
-        t_ = d["objectType"]
         what = self.what("object", o, d)
-        uf = _userfunction(d, _UF_KEY[t_], what)
+        it = ITEMS[("object", d["objectType"])]
+        uf = _userfunction(d, it.userFunction, what) if it.userFunction else None
         if uf is not None and table != "py":
-            raise BridgeError(f"{what}: {_UF_KEY[t_]} was set during the solve at t = {t:.6g} s; exudyn_lie compiled "
-                              f"the connector without it and cannot switch during a run; set it before the solve")
-        active = bool(d.get("activeConnector", True))
-        on = 1.0 if active else 0.0
-        if table == "py":
-            self._python_connector(o, d, k, active, t)
-            return
-        m0, m1 = (int(m) for m in d["markerNumbers"])
-        rigid = items.ITEMS[("object", t_)].markers is True
-        A = rd.marker(m0, what, need_rotation=rigid)
-        B = rd.marker(m1, what, need_rotation=rigid)
-        sd = self.solver.sim.sd
-        f = {key: _finite(d[key], what, key) for key in FIELDS[("object", t_)]
-             if FIELDS[("object", t_)][key][0] == LIVE and key in d and not key.endswith("UserFunction")
-             and key != "activeConnector"}
-        if table == "spring":
-            # compile_scene: spar = [k, d, L0, f0] with Exudyn's velocityOffset folded into f0 (reader)
-            sd.spos[k, 0], sd.spos[k, 1] = A.pos, B.pos
-            sd.spar[k] = (on * f["stiffness"], on * f["damping"], f["referenceLength"],
-                          on * (f["force"] - f["damping"] * f.get("velocityOffset", 0.0)))
-        elif table == "cartesian":
-            sd.cpos[k, 0], sd.cpos[k, 1] = A.pos, B.pos
-            sd.cpar[k, 0], sd.cpar[k, 1], sd.cpar[k, 2] = on * f["stiffness"], on * f["damping"], f["offset"]
-        elif table == "torsional":
-            td = self.torsionOfSpring.get(k)
-            turns0 = td.turns0 if td is not None else 0
-            sd.trot[k, 0] = _orthonormal(A.rot @ np.asarray(d.get("rotationMarker0", np.eye(3)), float))
-            sd.trot[k, 1] = _orthonormal(B.rot @ np.asarray(d.get("rotationMarker1", np.eye(3)), float))
-            sd.tpar[k] = (on * f["stiffness"], on * f["damping"], f["offset"] - 2.0 * math.pi * turns0,
-                          on * (f["torque"] - f["damping"] * f.get("velocityOffset", 0.0)))
-        elif table == "rigid":
-            # compile_scene: bint [A, B, intrinsic]; bpar rows K (6), D (6), offset
-            sd.bpos[k, 0], sd.bpos[k, 1] = A.pos, B.pos
-            sd.brot[k, 0] = _orthonormal(A.rot @ np.asarray(d.get("rotationMarker0", np.eye(3)), float))
-            sd.brot[k, 1] = _orthonormal(B.rot @ np.asarray(d.get("rotationMarker1", np.eye(3)), float))
-            sd.bint[k, 2] = int(bool(d.get("useIntrinsicFormulation", False)))
-            sd.bpar[k, :6] = on * np.asarray(f["stiffness"], float).reshape(6, 6)
-            sd.bpar[k, 6:12] = on * np.asarray(f["damping"], float).reshape(6, 6)
-            sd.bpar[k, 12] = np.asarray(f["offset"], float).reshape(6)
-
-    def _rolling_disc_penalty(self, o, d, t):
-        """A penalty rolling disc (or its markers) changed: the reader reads it again and its
-        compiled row (``Work.disc``, compiled.rolling_disc_penalty_row) is rewritten; its data
-        coordinates go on."""
-        from ..mbs.compiled import rolling_disc_penalty_row
-        from ..mbs.rolling_disc_penalty_forces import D_DATA
-        sc = self.scene
-        row = sc.itemRows.get(("object", o))
-        if row is None:
-            return                       # ground to ground: no force on any body
-        scratch = ExudynScene(self.mbs)
-        scratch.bodies = sc.bodies
-        scratch.nodeTypes = sc.nodeTypes
+            raise BridgeError(f"{what}: {it.userFunction} was set during the solve at t = {t:.6g} s; exudyn_lie "
+                              f"compiled the connector without it and cannot switch during a run; set it before "
+                              f"the solve")
+        if table != "py":
+            for key, (status, _) in it.fields.items():
+                if status == LIVE and key in d and not key.endswith("UserFunction") and key != "activeConnector":
+                    _finite(d[key], what, key)
         try:
-            self.reader.read_connector(scratch, o, d)
-        except BridgeError as e:
+            scratch, new = self.reader.reread_connector(sc, o, d)
+        except SceneError as e:             # (a BridgeError is one)
             raise BridgeError(f"{e} (changed during the solve at t = {t:.6g} s)") from None
-        e = scratch.rollingDiscPenalties[0]
-        wk = self.solver.sim.wk
-        wk.disc[row[1], :D_DATA] = rolling_disc_penalty_row(e)
+        if table == "py":
+            self._python_connector(o, d, k, scratch, new, t)
+            return
+        if new is None or new[0] != table:
+            raise BridgeError(f"{what}: changed at t = {t:.6g} s so that exudyn_lie would compile it otherwise "
+                              f"({table} -> {new and new[0]}); set its parameters before the solve")
+        e = element(table)
+        try:
+            write_row(e, sc, self.solver.sim.sd, self.solver.sim.wk, k, getattr(scratch, e.sceneList)[0])
+        except ValueError as err:
+            raise BridgeError(f"{what}: changed during the solve at t = {t:.6g} s: {err}") from None
 
-    def _python_connector(self, o, d, k, active, t):
-        """A connector evaluated in Python: rebuilt by the reader from its new dictionary,
-        keeping its angle tracking."""
-        sc = self.scene
-        scratch = ExudynScene(self.mbs)
-        scratch.bodies = sc.bodies
-        scratch.nodeTypes = sc.nodeTypes
-        self.reader.read_connector(scratch, o, d)
-        if not scratch.pyItems:
+    def _python_connector(self, o, d, k, scratch, new, t):
+        """A connector evaluated in Python: its item replaced by the one read again, keeping
+        its angle tracking."""
+        if new is None or new[0] != "py":
             raise BridgeError(f"{self.what('object', o, d)}: changed at t = {t:.6g} s so that it is no longer "
                               f"evaluated in Python; set its parameters before the solve")
-        item = sc.pyItems[k]
+        item = self.scene.pyItems[k]
         keep = {key: getattr(item, key) for key in ("prev",) if hasattr(item, key)}
         item.__dict__.update(scratch.pyItems[0].__dict__)
         item.__dict__.update(keep)
-        item.active = active
+        item.active = bool(d.get("activeConnector", True))

@@ -171,10 +171,14 @@ class ExudynScene(Scene):
         self.rollingDiscData = []             # (object, NodeGenericData) of each penalty rolling disc, scene order
         self.configuration = "initial"        # what was read ('items': mbs not assembled yet)
         # where each Exudyn item went: ("object", o) / ("load", l) -> (table, row), table one of
-        # "spring", "cartesian", "torsional" (compiled rows), "py" (index in pyItems), "load"
+        # the name of a registered force element (its compiled row, mbs/force_elements.py: "spring",
+        # "cartesian", ...), "py" (index in pyItems), "load"
         # (compiled load row), "massProportional", "ground" (no effect); joints: joints_info
         self.itemRows = {}
         self.reader = None                    # the _Reader (marker frames), for bridge.params
+        # a re-read during a solve (_Reader.reread_connector): the turns folded into each compiled
+        # torsional spring's offset when it was first read (object -> turns0), kept by the re-read
+        self.keptTurns = {}
 
     def body_of_object(self, obj):
         try:
@@ -837,6 +841,20 @@ class _Reader:
         if not active:
             deactivate(sc, sc.itemRows[("object", o)])
 
+    def reread_connector(self, sc, o, d):
+        """A connector read again during a solve (bridge.params: a live field or one of its
+        markers changed), by the same code that read it before the solve, into a scratch scene
+        sharing ``sc``'s bodies.  Returns ``(scratch, row)``: ``row`` its ``itemRows`` entry in
+        the scratch scene (``("py", 0)`` or (the force element's name, 0)), None if it connects
+        ground to ground.  What the kernel tracks from the first read stays: a torsional
+        spring's turns (``keptTurns``)."""
+        scratch = ExudynScene(self.mbs)
+        scratch.bodies = sc.bodies
+        scratch.nodeTypes = sc.nodeTypes
+        scratch.keptTurns = {td.objectIndex: td.turns0 for td in sc.torsionData if td.spring is not None}
+        self.read_connector(scratch, o, d)
+        return scratch, scratch.itemRows.get(("object", o))
+
     def read_spring_damper(self, sc, o, d, A, B, what, name):
         uf = _userfunction(d, "springForceUserFunction", what)
         if uf is None:
@@ -890,6 +908,9 @@ class _Reader:
             # stored one, turns0 turns away: folded into the offset
             phi = _principal_torsion_angle(sc, A, B, rotA, rotB)
             turns0 = int(np.round((angle0 - phi) / (2 * np.pi)))
+            # re-read during a solve: the kernel's tracked angle goes on from the first read, so
+            # its turns stay (Exudyn's angle = kernel angle + 2 pi turns0 throughout the solve)
+            turns0 = sc.keptTurns.get(o, turns0)
             s_ = sc.AddTorsionalSpringDamper(A.body, B.body, rotA=_orthonormal(rotA), rotB=_orthonormal(rotB),
                                              stiffness=d["stiffness"], damping=d["damping"],
                                              offset=float(d["offset"]) - 2 * np.pi * turns0,
@@ -1082,16 +1103,7 @@ def deactivate(sc, row):
     if table == "py":
         sc.pyItems[k].active = False
         return
-    item = getattr(sc, ELEMENT_LISTS[table])[k]
-    if table == "rollingDiscPenalty":
-        item.active = False             # no force, data kept (Exudyn skips it in PostNewton)
-        return
-    item.stiffness = item.stiffness * 0.0
-    item.damping = item.damping * 0.0
-    if table in ("spring", "linear"):
-        item.force = 0.0
-    elif table == "torsional":
-        item.torque = 0.0
+    getattr(sc, ELEMENT_LISTS[table])[k].switch_off()        # the element's own (mbs/scene.py)
 
 
 def _principal_torsion_angle(sc, A, B, rotA, rotB):

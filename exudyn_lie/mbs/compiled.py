@@ -13,7 +13,7 @@ from .force_elements import compile_elements, lean_elements_only, scene_fields
 from .codes import GROUP_NAMES, J_NROW, J_ROW0, ROW_COORD, ROW_COORD_VEL, ROW_DIST, ROW_KIND, ROW_ROLL, ROW_ROT, ROW_TRANS_LOCAL, ROW_TRANS_WORLD
 from .rotation_parameters import TRACK_ANGLE, TRACK_NONE
 from .linalg import REL_PIVOT_TOL, rcm_order
-from .rolling_disc_penalty_forces import N_DISC
+from .rolling_disc_penalty_forces import N_DISC, rolling_disc_penalty_row
 from .oblique_solve import oblique_plan
 from .scene import GROUND, Scene, SceneError
 from .tree_solve import tree_plan, work_size
@@ -465,14 +465,6 @@ def compile_tracking(scene: Scene):
         bparam=arr([np.zeros(4) if b.track is None else b.track[1] for b in scene.bodies], (-1, 4)),
         nplanar=int(sum(body_track(b) > 0 for b in scene.bodies)),
         disc=None if scene_is_lean(scene) else arr([rolling_disc_penalty_row(e) + list(e.data0) for e in scene.rollingDiscPenalties], (-1, N_DISC)))
-
-
-def rolling_disc_penalty_row(e):
-    """``Work.disc`` row of a Scene.RollingDiscPenalty without its data coordinates (columns
-    ``rolling_disc_penalty_forces.D_A`` ... ``D_DATA - 1``)."""
-    return [float(e.bodyA), float(e.bodyB), float(e.active), float(e.useLinearProportionalZone), *e.posA, *e.posB,
-            *e.normalA, *e.axisB, e.discRadius, e.contactStiffness, e.contactDamping, *e.dryFriction,
-            e.dryFrictionProportionalZone, *e.viscousFriction, e.dryFrictionAngle, e.rollingViscousFriction]
 
 
 def no_tracking(nb, lean=False):

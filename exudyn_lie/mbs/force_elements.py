@@ -34,34 +34,43 @@ from .forces import (cartesian_element, cartesian_element_energy, gravity_forces
                      torsional_element_energy)
 from .linear_spring_forces import linear_spring_element
 from .presence import guarded
-from .rolling_disc_penalty_forces import rolling_disc_penalty_element
+from .rolling_disc_penalty_forces import rolling_disc_penalty_element, write_rolling_disc_penalty_row
 
 # one compiled force element: its Scene list, its SceneData fields ((name, build(scene, items)), ...;
-# the first is its integer table, whose rows say whether the scene has the element), its entries
-ForceElement = namedtuple("ForceElement", ["name", "sceneList", "fields", "forces", "energy", "table", "lean"])
+# the first is its integer table, whose rows say whether the scene has the element), its entries;
+# writeRow(sd, wk, k, item): its compiled data kept outside its fields (a Work table), rewritten
+# from a changed scene item (write_row); lean: part of a lean scene (:mod:`.presence`)
+ForceElement = namedtuple("ForceElement", ["name", "sceneList", "fields", "forces", "energy", "table", "writeRow",
+                                           "lean"])
 
 #: every compiled force element, in registration order
 ELEMENTS = []
 
 
-def register(name, sceneList, fields, forces, energy=None, table=None, lean=False):
+def register(name, sceneList, fields, forces, energy=None, table=None, writeRow=None, lean=False):
     """Register one compiled force element (module docstring).  ``table``: the array whose rows
     say whether the scene has the element, as an expression on the scene tuples (default: its
     first SceneData field); an element whose data Exudyn updates after a step keeps them in
-    ``Work`` (e.g. ``wk.disc``) and registers no SceneData field.  ``lean``: part of a lean
-    scene (:mod:`.presence`); the fields of any other element are None in a lean scene and its
-    code is compiled only for full scenes."""
+    ``Work`` (e.g. ``wk.disc``), registers no SceneData field and gives ``writeRow(sd, wk, k,
+    item)``, which rewrites its row ``k`` from a changed scene item (:func:`write_row`).
+    ``lean``: part of a lean scene (:mod:`.presence`); the fields of any other element are None
+    in a lean scene and its code is compiled only for full scenes."""
     if any(e.name == name for e in ELEMENTS):
         raise ValueError(f"force element {name!r} is registered twice")
     fields = tuple(fields)
-    ELEMENTS.append(ForceElement(name, sceneList, fields, forces, energy, table or f"sd.{fields[0][0]}", bool(lean)))
+    if not fields and writeRow is None:
+        raise ValueError(f"force element {name!r}: without SceneData fields it needs writeRow (its Work table)")
+    ELEMENTS.append(ForceElement(name, sceneList, fields, forces, energy, table or f"sd.{fields[0][0]}", writeRow,
+                                 bool(lean)))
 
 
 def table(row, shape, dtype=float):
-    """A field built row by row from the element's items (zero rows when there are none)."""
+    """A field built row by row from the element's items (zero rows when there are none).
+    The builder keeps ``row``, ``shape`` and ``dtype``: :func:`write_row` rewrites one row."""
     def build(scene, items):
         a = np.array([row(s) for s in items], dtype=dtype)
         return a.reshape(shape) if a.size else np.zeros((0,) + tuple(shape[1:]), dtype)
+    build.row, build.shape, build.dtype = row, tuple(shape), dtype
     return build
 
 
@@ -110,7 +119,8 @@ register("rigid", "rigidSprings", (
 # the penalty rolling disc: bodies, flags, law and data coordinates packed into Work.disc (the data
 # change after every accepted step, forces.update_contact_data; one packed array: three separate
 # ones cost the heavy top's step 3.0 -> 3.6 us, measured)
-register("rollingDiscPenalty", "rollingDiscPenalties", (), rolling_disc_penalty_element, table="wk.disc")
+register("rollingDiscPenalty", "rollingDiscPenalties", (), rolling_disc_penalty_element, table="wk.disc",
+         writeRow=write_rolling_disc_penalty_row)
 
 
 def scene_fields():
@@ -132,6 +142,41 @@ def compile_elements(scene, lean=False):
         for f, build in e.fields:
             out[f] = None if (lean and not e.lean) else build(scene, items)
     return out
+
+
+def element(name):
+    """The registration of the element named ``name`` (the tables of the bridge's itemRows)."""
+    for e in ELEMENTS:
+        if e.name == name:
+            return e
+    raise KeyError(f"no force element {name!r}; registered: {[e.name for e in ELEMENTS]}")
+
+
+def write_row(e, scene, sd, wk, k, item):
+    """Rewrite row ``k`` of element ``e``'s compiled data with ``item``, the new scene item
+    (a parameter changed during a run, bridge/params.py), by the registration's own builders:
+    each row field's ``row(item)``, then the ``writeRow`` hook (a Work table).  A field built
+    from the whole scene (``nangles``) cannot change during a run: it is recomputed with the
+    item replaced and must stay as compiled (ValueError otherwise).  ``scene``'s item ``k`` is
+    replaced too, so that scene and compiled rows agree."""
+    items = getattr(scene, e.sceneList)
+    old = items[k]
+    items[k] = item
+    try:
+        for f, build in e.fields:
+            if hasattr(build, "row"):
+                continue
+            if not np.array_equal(np.asarray(build(scene, items)), np.asarray(getattr(sd, f))):
+                raise ValueError(f"{f} of the {e.name} elements would change (it is compiled for the whole "
+                                 f"scene and cannot change during a run)")
+    except Exception:
+        items[k] = old
+        raise
+    for f, build in e.fields:
+        if hasattr(build, "row"):
+            getattr(sd, f)[k] = np.asarray(build.row(item), build.dtype).reshape(build.shape[1:])
+    if e.writeRow is not None:
+        e.writeRow(sd, wk, k, item)
 
 
 # ---------------------------------------------------------------- generated from the registrations

@@ -53,6 +53,21 @@ D_DATA = 26                                          # data coordinates: slip (2
 N_DISC = 29
 
 
+def rolling_disc_penalty_row(e):
+    """``Work.disc`` row of a Scene.RollingDiscPenalty without its data coordinates (columns
+    ``D_A`` ... ``D_DATA - 1``)."""
+    return [float(e.bodyA), float(e.bodyB), float(e.active), float(e.useLinearProportionalZone), *e.posA, *e.posB,
+            *e.normalA, *e.axisB, e.discRadius, e.contactStiffness, e.contactDamping, *e.dryFriction,
+            e.dryFrictionProportionalZone, *e.viscousFriction, e.dryFrictionAngle, e.rollingViscousFriction]
+
+
+def write_rolling_disc_penalty_row(sd, wk, k, e):
+    """The registration's ``writeRow`` (mbs/force_elements.py): disc ``k``'s bodies, flags and
+    parameters from the scene item ``e`` (changed during a run); its data coordinates (slip
+    velocity and gap of the last step, columns ``D_DATA:``) go on as they are."""
+    wk.disc[k, :D_DATA] = rolling_disc_penalty_row(e)
+
+
 @njit(cache=True, inline="always", _nrt=False)
 def _rot_apply(R, x, i0, out):
     for k in range(3):

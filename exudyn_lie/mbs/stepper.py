@@ -43,6 +43,7 @@ from numba import njit, objmode, types
 from numba.extending import overload
 
 from . import external
+from .external_probes import probe_kinematics
 from .bodies import body_dexpinv_stage, body_world_velocity, exp_compose, add_point_force_origin, add_world_torque_row
 from .codes import (STAB_NONE, STAGE_ARG_MAX2, STATUS_BLOWUP, STATUS_EXTERNAL, STATUS_NONFINITE, STATUS_OK,
                     STATUS_STAGE_ARG)
@@ -202,11 +203,12 @@ def call_evaluator(token, t):
 
 
 @njit(cache=True, _nrt=False)
-def external_forces(token, gid, t, Rs, Vs, Vw, Qext, ext):
+def external_forces(token, gid, t, Rs, Vs, Vw, Qext, ext, probe):
     """The right-hand side seam (:mod:`.external`), one Python call per stage.
 
     Before the call, compiled: the world velocities ``Vw = (omega, rdot)`` of the stage
-    state and ``Qext = 0``.  The call passes only ``(token, t)`` (no array is boxed: the
+    state, ``Qext = 0`` and the kinematics the Python items read (``probe``,
+    :mod:`.external_probes`).  The call passes only ``(token, t)`` (no array is boxed: the
     evaluator holds views of ``wk.Rs, wk.rs, wk.Vw, wk.Qext``) and the evaluator adds the
     world forces at the frame origins and the world torques, ``Qext[i] = (F_i, T_i)``.
     After it, compiled: ``Qext[i]`` becomes the generalised force of ``(F_i, T_i)``
@@ -216,6 +218,7 @@ def external_forces(token, gid, t, Rs, Vs, Vw, Qext, ext):
         body_world_velocity(gid[i], Rs[i], Vs[i], Vw[i])
         for k in range(6):
             Qext[i, k] = 0.0
+    probe_kinematics(Rs, Vw, probe)
     if call_evaluator(token, t):
         return STATUS_EXTERNAL
     for i in range(gid.shape[0]):
@@ -243,7 +246,7 @@ def stage_rhs(sd, wk, t, Vdot):
     if st != STATUS_OK:
         return st
     if sd.hasQext:
-        st = external_forces(wk.ext[0], sd.gid, t, wk.Rs, wk.Vs, wk.Vw, wk.Qext, wk.ext)
+        st = external_forces(wk.ext[0], sd.gid, t, wk.Rs, wk.Vs, wk.Vw, wk.Qext, wk.ext, wk.probe)
         if st != STATUS_OK:
             return st
     return rhs(sd, wk, t, wk.Rs, wk.rs, wk.Vs, wk.Qext, Vdot)

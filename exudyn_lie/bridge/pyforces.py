@@ -260,7 +260,7 @@ class TorsionalSpringDamperUF(_Connector):
         :meth:`angle` uses."""
         return torsion_probe_row(self.A.body, self.B.body, self._colsA, self._colsB)
 
-    def add_stage(self, t, st, P, Q):
+    def add_stage(self, t, st, F, T, P, Q):
         """:meth:`add` in the stepper's seam (:meth:`Combined.stage_adder`) from its probe's
         outputs: ``P`` the flat ``Work.probe`` (the principal angle, rate and world z0 of
         this stage, computed as :meth:`angle` does), ``Q`` the flat ``Work.Qext`` (torques in
@@ -381,19 +381,39 @@ class LoadUF(PyItem):
         self.com = com
         self.label = f"load {l} Load{loadType}"
 
-    def add(self, t, st, F, T):
-        # scalar arithmetic: this runs once per stage, numpy's per-call cost on 3-vectors
-        # would be most of it
+    def vector(self, t):
+        """The user function's vector as three floats."""
         try:
             v = self.uf(self.mbs, t, self.lv)
         except Exception as e:
             raise type(e)(f"{self.label}: user function raised: {e}") from e
         try:
-            v0, v1, v2 = float(v[0]), float(v[1]), float(v[2])
-            if len(v) != 3:
-                raise ValueError
-        except (TypeError, ValueError, IndexError):
+            v0, v1, v2 = v
+        except (TypeError, ValueError):
             v0, v1, v2 = np.asarray(v, float).reshape(3)
+        if type(v0) is not float or type(v1) is not float or type(v2) is not float:   # (cheaper than float())
+            v0, v1, v2 = float(v0), float(v1), float(v2)
+        return v0, v1, v2
+
+    def add_stage(self, t, st, F, T, P, Q):
+        """:meth:`add` in the stepper's seam (:meth:`Combined.stage_adder`): a world torque
+        (LoadTorqueVector, not bodyFixed) added through the flat memoryview ``Q`` of
+        ``Work.Qext`` (numpy's item access cost more than the rest; zero user load of
+        ``bench --sections userfunctions``, one call, timeit: 0.50 us in :meth:`add`, 0.30 here); the other loads
+        as :meth:`add`."""
+        if self.bodyFixed or self.loadType != "TorqueVector":
+            self.add(t, st, F, T)
+            return
+        v0, v1, v2 = self.vector(t)
+        i = 6 * self.mf.body + 3
+        Q[i] += v0
+        Q[i + 1] += v1
+        Q[i + 2] += v2
+
+    def add(self, t, st, F, T):
+        # scalar arithmetic: this runs once per stage, numpy's per-call cost on 3-vectors
+        # would be most of it
+        v0, v1, v2 = self.vector(t)
         b = self.mf.body
         if self.loadType == "MassProportional":
             m = self.mass
@@ -463,7 +483,7 @@ class Combined:
 
     def stage_adder(self, probe, Qext):
         """``add_into`` for the stepper's seam (``Simulator._external_views``, once per work
-        set): items with an ``add_stage(t, st, P, Q)`` add through flat memoryviews ``P`` of
+        set): items with an ``add_stage(t, st, F, T, P, Q)`` add through flat memoryviews ``P`` of
         ``probe`` (the kinematics the compiled stage computed, mbs/external_probes.py) and
         ``Q`` of ``Qext`` (rows (F, T) of six); the others run as in :meth:`add_into`.  In the
         items' order, so the sums are :meth:`add_into`'s to the bit."""
@@ -481,7 +501,7 @@ class Combined:
                 if not it.active:
                     it.idle(st)
                 elif fast is not None:
-                    fast(t, st, P, Q)
+                    fast(t, st, F, T, P, Q)
                 else:
                     it.add(t, st, F, T)
         return add

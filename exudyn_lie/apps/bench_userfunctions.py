@@ -12,7 +12,8 @@ compiled stepper (``Simulator.Advance``), three ways, interleaved inside every r
   (a controller as Exudyn's examples write it: scalar arithmetic on the arguments).
 
 Each user function is called once per evaluated stage (4 per RK4 step) from the compiled
-stage through ``mbs/external.py`` (one numba ``objmode`` call per stage, no array boxed).
+stage through ``mbs/external.py`` (one call through the C API per stage, no array boxed);
+the torsional spring's angle and rate come from the compiled stage (``mbs/external_probes.py``).
 Reported: the cost per step of each, the user function's own cost per call (the same Python
 function called on its own with the same arguments, ``timeit``), and the **overhead per
 call** = (step with the user function - compiled step - calls x own cost) / calls.

@@ -178,9 +178,9 @@ class Simulator:
         # room for the dense-output extra stages of an embedded pair (adaptive steps)
         extra = dense.extra_stages if (dense is not None and self.tableau.b_hat is not None) else 0
         wk = make_work(self.sd, len(self.method.b) + extra, solve, self._track)
-        wk.ext[0] = self._extToken
+        wk.ext[0] = external.handle(self._extToken) if self._extToken else 0
         if self._driveToken:
-            wk = wk._replace(drive=np.array([self._driveToken], np.int64))
+            wk = wk._replace(drive=np.array([external.handle(self._driveToken)], np.int64))
         self._mkEntry = None
         if getattr(self, "_ad", None) is not None:
             self._ad.pop("entry", None)

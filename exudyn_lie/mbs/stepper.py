@@ -21,8 +21,8 @@ coefficients are zero cannot change the step (e.g. DOPRI5's 7th, FSAL stage; its
 Two seams:
 
 * the **right-hand side outside the compiled code** (:mod:`.external`): when
-  ``sd.hasQext`` the stage calls the registered Python evaluator once (numba
-  ``objmode``), which fills the extra generalised forces ``wk.Qext`` at the stage state;
+  ``sd.hasQext`` the stage calls the registered Python evaluator once
+  (:func:`~.external.call`), which fills the extra generalised forces ``wk.Qext`` at the stage state;
   no Python stage loop.  An exception there ends the call with ``STATUS_EXTERNAL``.
 * the **step controller** (``ctl``): a namedtuple whose *type* is the controller.
   ``Control`` with ``CONTROL_FIXED`` (:func:`fixed_step_control`): fixed steps, every step
@@ -39,7 +39,7 @@ Two seams:
 from collections import namedtuple
 
 import numpy as np
-from numba import njit, objmode, types
+from numba import njit, types
 from numba.extending import overload
 
 from . import external
@@ -192,14 +192,8 @@ def mk_finish(sd, wk, tab, h, R, r, V):
 
 @njit(cache=True, _nrt=False)
 def call_evaluator(token, t):
-    """``external.evaluate(token, t)`` through ``objmode``, in a function of its own: at
-    every call numba's objmode call re-creates the pickle of the lifted block's dispatcher
-    (a bytes copy), which carries the IR of the enclosing function: 113 KB inside
-    ``external_forces``, a few KB here (zero user load on the heavy top: about 2 us less
-    per stage, ``python -m exudyn_lie bench --sections userfunctions``)."""
-    with objmode(fail="int64"):
-        fail = external.evaluate(token, t)
-    return fail
+    """``external.call(token, t)``: the evaluator whose :func:`~.external.handle` is ``token``."""
+    return external.call(token, t)
 
 
 @njit(cache=True, _nrt=False)

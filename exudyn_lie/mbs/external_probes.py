@@ -6,7 +6,7 @@ Python these cost far more than the user function itself (scalar arithmetic on
 the rotation matrices: about 0.9 us of a PD controller's 1.7 us per call, measured on the
 heavy top, ``python -m exudyn_lie bench --sections userfunctions``).  So the compiled stage
 computes them (:func:`probe_kinematics`, called by ``stepper.external_forces`` right before
-the one ``objmode`` call per stage) into ``Work.probe``, one row per *probe*, and the Python
+the one call of the Python side per stage) into ``Work.probe``, one row per *probe*, and the Python
 side only reads floats, calls the user function and adds the result.
 
 A row holds the probe's inputs (kind, bodies, constant frame columns; written when the

@@ -2,8 +2,9 @@
 
 A torsional spring with a ``springTorqueUserFunction`` reads its angle, rate and axis from
 ``Work.probe``, filled by the compiled stage before the one Python call per stage
-(``TorsionalSpringDamperUF.add_stage``).  Its reference is the same item evaluated in Python
-from the body states (``TorsionalSpringDamperUF.add``, the path taken without ``add_stage``):
+(``TorsionalSpringDamperUF.add_stage``), a spring-damper with a ``springForceUserFunction``
+its length, rate, direction and arms (``SpringDamperUF.add_stage``).  The reference is the
+same item evaluated in Python from the body states (``add``, the path taken without ``add_stage``):
 the two must integrate to the same bits (the compiled arithmetic is the Python item's, in its
 order), in every configuration of the markers, with the angle tracked over turns, next to
 other Python items acting on the same bodies, and after the spring's frames are changed
@@ -65,6 +66,36 @@ def spinning_pair(config):
     return mbs
 
 
+def uf_spring(mbs, t, itemNumber, deltaL, deltaL_t, stiffness, damping, force):
+    return stiffness * deltaL * (1.0 + deltaL * deltaL) + damping * deltaL_t + force
+
+
+def spring_pair(config):
+    """Body 0 hanging from a spherical joint off its centre of mass, body 1 free, under
+    gravity; Python items: a spring-damper with a ``springForceUserFunction`` between points
+    off the frame origins in the marker configuration ``config``, and a second one between
+    the ground and body 0."""
+    mbs = exu.SystemContainer().AddSystem()
+    g = mbs.AddObject(ii.ObjectGround())
+    iner = InertiaCuboid(1000, [0.1, 0.2, 0.3])
+    b0 = mbs.CreateRigidBody(inertia=iner, referencePosition=[0.3, 0, 0], referenceRotationMatrix=RotationMatrixX(0.2),
+                             initialVelocity=[0, 0.6, 0.3], initialAngularVelocity=[0.5, -1.0, 2.0],
+                             gravity=[0, 0, -9.81])
+    b1 = mbs.CreateRigidBody(inertia=iner, referencePosition=[0.2, 0.3, -0.8], initialVelocity=[0.1, 0, 0.3],
+                             initialAngularVelocity=[1.0, 0.5, -3.0], gravity=[0, 0, -9.81])
+    mbs.CreateSphericalJoint(itemNumbers=[g, b0], position=[0, 0, 0])
+    mg = mbs.AddMarker(ii.MarkerBodyPosition(bodyNumber=g, localPosition=[0.2, 0.4, 0.5]))
+    m0 = mbs.AddMarker(ii.MarkerBodyPosition(bodyNumber=b0, localPosition=[0.05, -0.1, 0.15]))
+    m1 = mbs.AddMarker(ii.MarkerBodyPosition(bodyNumber=b1, localPosition=[-0.05, 0.1, 0.1]))
+    markers = {"groundA": [mg, m1], "groundB": [m1, mg], "bodies": [m0, m1]}[config]
+    mbs.AddObject(ii.SpringDamper(markerNumbers=markers, stiffness=800.0, damping=8.0, referenceLength=0.9,
+                                  force=2.0, springForceUserFunction=uf_spring))
+    mbs.AddObject(ii.SpringDamper(markerNumbers=[mg, m0], stiffness=300.0, damping=3.0, referenceLength=0.5,
+                                  springForceUserFunction=uf_spring))
+    mbs.Assemble()
+    return mbs
+
+
 def integrate(mbs, steps=3000, h=1e-3):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
@@ -83,6 +114,16 @@ def test_probed_spring_integrates_as_the_python_item(config, monkeypatch):
         assert abs(items[0].prev) > 4 * np.pi          # tracked over more than two turns
     monkeypatch.delattr(pyforces.TorsionalSpringDamperUF, "add_stage")
     python, _ = integrate(spinning_pair(config))
+    assert np.all(np.isfinite(probed))
+    np.testing.assert_array_equal(probed, python)
+
+
+@pytest.mark.parametrize("config", ["groundA", "groundB", "bodies"])
+def test_probed_spring_damper_integrates_as_the_python_item(config, monkeypatch):
+    probed, items = integrate(spring_pair(config))
+    assert sum(getattr(it, "probeIndex", None) is not None for it in items) == 2
+    monkeypatch.delattr(pyforces.SpringDamperUF, "add_stage")
+    python, _ = integrate(spring_pair(config))
     assert np.all(np.isfinite(probed))
     np.testing.assert_array_equal(probed, python)
 

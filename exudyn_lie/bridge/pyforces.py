@@ -32,7 +32,8 @@ import math
 
 import numpy as np
 
-from ..mbs.external_probes import N_PROBE, P_PHI, P_PHID, P_Z, torsion_probe_row
+from ..mbs.external_probes import (N_PROBE, SPRING_ARM_A, SPRING_ARM_B, SPRING_E, SPRING_L, SPRING_LD, TORSION_PHI,
+                                   TORSION_PHID, TORSION_Z, spring_probe_row, torsion_probe_row)
 from ..mbs.node_coordinates import PARAM_KINDS, PARAM_RXYZ, node_parameter, param_code
 from ..mbs.rotation_parameters import TRACK_QUAT, TRACK_RXYZ, nearest_parameters
 from ..mbs.scene import GROUND
@@ -112,17 +113,41 @@ class SpringDamperUF(_Connector):
         # scalar arithmetic on floats: this runs once per stage, and numpy's per-call cost on
         # 3-vectors was most of it (heavy top + spring with a linear user law: 64.3 -> 22.2 us
         # per step, 4 calls, measured)
-        d = self.d
         pA, vA, aA = point_state(self.A, st)
         pB, vB, aB = point_state(self.B, st)
         d0, d1, d2 = pB[0] - pA[0], pB[1] - pA[1], pB[2] - pA[2]
         L = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
         e0, e1, e2 = d0 / L, d1 / L, d2 / L
         Ld = (vB[0] - vA[0]) * e0 + (vB[1] - vA[1]) * e1 + (vB[2] - vA[2]) * e2
-        f = float(_call(self.label, self.uf, self.mbs, t, self.o, L - d["referenceLength"],
-                        Ld - d.get("velocityOffset", 0.0), d["stiffness"], d["damping"], d["force"]))
+        f = self.force(t, L, Ld)
         force_at(self.A, aA, f * e0, f * e1, f * e2, F, T)
         force_at(self.B, aB, -f * e0, -f * e1, -f * e2, F, T)
+
+    def force(self, t, L, Ld):
+        """The user function's tension at length ``L`` and rate ``Ld``."""
+        d = self.d
+        return float(_call(self.label, self.uf, self.mbs, t, self.o, L - d["referenceLength"],
+                           Ld - d.get("velocityOffset", 0.0), d["stiffness"], d["damping"], d["force"]))
+
+    # ---- the stepper's seam: length, rate, direction and arms computed by the compiled stage
+    probeIndex = None        # the row of Work.probe (Combined.probe_rows)
+
+    def probe_row(self):
+        """The input row of its probe (mbs/external_probes.py): bodies and marker points."""
+        return spring_probe_row(self.A.body, self.B.body, self.A.pos, self.B.pos)
+
+    def add_stage(self, t, st, F, T, P, Q):
+        """:meth:`add` in the stepper's seam from its probe's outputs (``P``, ``Q``: flat
+        memoryviews of ``Work.probe`` and ``Work.Qext``, see
+        :meth:`TorsionalSpringDamperUF.add_stage`)."""
+        j = self.probeIndex * N_PROBE
+        f = self.force(t, P[j + SPRING_L], P[j + SPRING_LD])
+        e0, e1, e2 = P[j + SPRING_E], P[j + SPRING_E + 1], P[j + SPRING_E + 2]
+        a, b = self.A.body, self.B.body
+        if a != GROUND:
+            _force_flat(Q, 6 * a, P, j + SPRING_ARM_A, f * e0, f * e1, f * e2)
+        if b != GROUND:
+            _force_flat(Q, 6 * b, P, j + SPRING_ARM_B, -f * e0, -f * e1, -f * e2)
 
 
 def point_state(mf, st):
@@ -157,6 +182,18 @@ def force_at(mf, arm, f0, f1, f2, F, T):
     T[b, 0] += a1 * f2 - a2 * f1
     T[b, 1] += a2 * f0 - a0 * f2
     T[b, 2] += a0 * f1 - a1 * f0
+
+
+def _force_flat(Q, i, P, k, f0, f1, f2):
+    """:func:`force_at` on the flat ``Qext`` row at ``i`` (force, then torque), the arm at
+    ``P[k:k+3]``: the same sums."""
+    a0, a1, a2 = P[k], P[k + 1], P[k + 2]
+    Q[i] += f0
+    Q[i + 1] += f1
+    Q[i + 2] += f2
+    Q[i + 3] += a1 * f2 - a2 * f1
+    Q[i + 4] += a2 * f0 - a0 * f2
+    Q[i + 5] += a0 * f1 - a1 * f0
 
 
 class CartesianSpringDamperUF(_Connector):
@@ -270,12 +307,12 @@ class TorsionalSpringDamperUF(_Connector):
         here with 2D memoryviews, 0.54 us with flat ones; the user function's own 0.17 us
         included)."""
         j = self.probeIndex * N_PROBE
-        phi = P[j + P_PHI]
+        phi = P[j + TORSION_PHI]
         if self.track:                    # as in angle(): the branch nearest the last angle
             phi += 2 * math.pi * round((self.prev - phi) / (2 * math.pi))
             self.prev = phi
-        tau = self.torque(t, phi, P[j + P_PHID])
-        z0, z1, z2 = P[j + P_Z], P[j + P_Z + 1], P[j + P_Z + 2]
+        tau = self.torque(t, phi, P[j + TORSION_PHID])
+        z0, z1, z2 = P[j + TORSION_Z], P[j + TORSION_Z + 1], P[j + TORSION_Z + 2]
         a, b = self.A.body, self.B.body
         if a != GROUND:
             i = 6 * a + 3

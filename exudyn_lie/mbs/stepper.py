@@ -197,7 +197,7 @@ def call_evaluator(token, t):
 
 
 @njit(cache=True, _nrt=False)
-def external_forces(token, gid, t, Rs, Vs, Vw, Qext, ext, probe):
+def external_forces(token, gid, t, Rs, rs, Vs, Vw, Qext, ext, probe):
     """The right-hand side seam (:mod:`.external`), one Python call per stage.
 
     Before the call, compiled: the world velocities ``Vw = (omega, rdot)`` of the stage
@@ -212,7 +212,7 @@ def external_forces(token, gid, t, Rs, Vs, Vw, Qext, ext, probe):
         body_world_velocity(gid[i], Rs[i], Vs[i], Vw[i])
         for k in range(6):
             Qext[i, k] = 0.0
-    probe_kinematics(Rs, Vw, probe)
+    probe_kinematics(Rs, rs, Vw, probe)
     if call_evaluator(token, t):
         return STATUS_EXTERNAL
     for i in range(gid.shape[0]):
@@ -240,7 +240,7 @@ def stage_rhs(sd, wk, t, Vdot):
     if st != STATUS_OK:
         return st
     if sd.hasQext:
-        st = external_forces(wk.ext[0], sd.gid, t, wk.Rs, wk.Vs, wk.Vw, wk.Qext, wk.ext, wk.probe)
+        st = external_forces(wk.ext[0], sd.gid, t, wk.Rs, wk.rs, wk.Vs, wk.Vw, wk.Qext, wk.ext, wk.probe)
         if st != STATUS_OK:
             return st
     return rhs(sd, wk, t, wk.Rs, wk.rs, wk.Vs, wk.Qext, Vdot)

@@ -92,8 +92,21 @@ def spring_pair(config):
                                   force=2.0, springForceUserFunction=uf_spring))
     mbs.AddObject(ii.SpringDamper(markerNumbers=[mg, m0], stiffness=300.0, damping=3.0, referenceLength=0.5,
                                   springForceUserFunction=uf_spring))
+    # loads with a loadVectorUserFunction: a force off the frame origin, a mass-proportional one
+    r1 = mbs.AddMarker(ii.MarkerBodyRigid(bodyNumber=b1, localPosition=[0.04, -0.03, 0.1]))
+    mbs.AddLoad(ii.LoadForceVector(markerNumber=r1, loadVector=[1.0, 0, 0],
+                                   loadVectorUserFunction=lambda mbs, t, lv: [lv[0] * np.cos(5 * t), 0.5, -0.2 * t]))
+    mm = mbs.AddMarker(ii.MarkerBodyMass(bodyNumber=b0))
+    mbs.AddLoad(ii.LoadMassProportional(markerNumber=mm, loadVector=[0, 0, 0],
+                                        loadVectorUserFunction=lambda mbs, t, lv: [0.3 * np.sin(2 * t), 0.1, 0.0]))
     mbs.Assemble()
     return mbs
+
+
+def python_path(monkeypatch):
+    """From now on the items run as Python items (the stage adder then calls ``add``)."""
+    for cls in (pyforces.TorsionalSpringDamperUF, pyforces.SpringDamperUF, pyforces.LoadUF):
+        monkeypatch.delattr(cls, "add_stage")
 
 
 def integrate(mbs, steps=3000, h=1e-3):
@@ -112,7 +125,7 @@ def test_probed_spring_integrates_as_the_python_item(config, monkeypatch):
     assert sum(getattr(it, "probeIndex", None) is not None for it in items) == 2
     if config == "bodies":
         assert abs(items[0].prev) > 4 * np.pi          # tracked over more than two turns
-    monkeypatch.delattr(pyforces.TorsionalSpringDamperUF, "add_stage")
+    python_path(monkeypatch)
     python, _ = integrate(spinning_pair(config))
     assert np.all(np.isfinite(probed))
     np.testing.assert_array_equal(probed, python)
@@ -121,8 +134,8 @@ def test_probed_spring_integrates_as_the_python_item(config, monkeypatch):
 @pytest.mark.parametrize("config", ["groundA", "groundB", "bodies"])
 def test_probed_spring_damper_integrates_as_the_python_item(config, monkeypatch):
     probed, items = integrate(spring_pair(config))
-    assert sum(getattr(it, "probeIndex", None) is not None for it in items) == 2
-    monkeypatch.delattr(pyforces.SpringDamperUF, "add_stage")
+    assert sum(getattr(it, "probeIndex", None) is not None for it in items) == 4
+    python_path(monkeypatch)
     python, _ = integrate(spring_pair(config))
     assert np.all(np.isfinite(probed))
     np.testing.assert_array_equal(probed, python)
@@ -130,7 +143,8 @@ def test_probed_spring_damper_integrates_as_the_python_item(config, monkeypatch)
 
 def frames_moved(move):
     """A body spinning on a spherical joint, a torsional spring with a user function to the
-    ground whose marker-0 frame a pre-step function turns (``move``) during the solve."""
+    ground whose marker-0 frame a pre-step function turns (``move``) during the solve, and a
+    force with a user function whose load vector it sets."""
     mbs = exu.SystemContainer().AddSystem()
     g = mbs.CreateGround()
     b = mbs.CreateRigidBody(inertia=InertiaCuboid(1000, [0.1, 0.2, 0.3]), referencePosition=[0, 0, 0],
@@ -140,8 +154,12 @@ def frames_moved(move):
     mb = mbs.AddMarker(ii.MarkerBodyRigid(bodyNumber=b))
     tsd = mbs.AddObject(ii.TorsionalSpringDamper(markerNumbers=[mg, mb], stiffness=20.0, damping=0.5,
                                                  springTorqueUserFunction=uf_torque))
+    mf = mbs.AddMarker(ii.MarkerBodyRigid(bodyNumber=b, localPosition=[0.1, 0, 0.05]))
+    load = mbs.AddLoad(ii.LoadForceVector(markerNumber=mf, loadVector=[0, 0, 0],
+                                          loadVectorUserFunction=lambda mbs, t, lv: [lv[0], lv[1], 0.1]))
 
     def pre_step(mbs, t):
+        mbs.SetLoadParameter(load, "loadVector", [0.2 * np.sin(30 * t), 0.1, 0])
         if move:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore", DeprecationWarning)
@@ -165,5 +183,5 @@ def frames_moved(move):
 def test_frames_changed_during_a_solve_reach_the_probe(monkeypatch):
     probed = frames_moved(True)
     assert np.max(np.abs(probed - frames_moved(False))) > 1e-3      # the change matters
-    monkeypatch.delattr(pyforces.TorsionalSpringDamperUF, "add_stage")
+    python_path(monkeypatch)
     np.testing.assert_array_equal(probed, frames_moved(True))

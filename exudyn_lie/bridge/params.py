@@ -298,6 +298,8 @@ class ParameterWatch:
         if table == "py":
             item = sc.pyItems[k]
             item.lv, item.uf, item.mf, item.bodyFixed = lv, uf, mf, bodyFixed
+            if getattr(item, "probeIndex", None) is not None:     # its point, read by the compiled stage
+                self.solver.sim.wk.probe[item.probeIndex] = item.probe_row()
             return
         sd = self.solver.sim.sd
         # compile_scene's row: lvec[k] = [vector, point], lint[k] = [body, kind, bodyFixed]

@@ -32,8 +32,9 @@ import math
 
 import numpy as np
 
-from ..mbs.external_probes import (N_PROBE, SPRING_ARM_A, SPRING_ARM_B, SPRING_E, SPRING_L, SPRING_LD, TORSION_PHI,
-                                   TORSION_PHID, TORSION_Z, spring_probe_row, torsion_probe_row)
+from ..mbs.external_probes import (ARM_HAS, ARM_WORLD, N_PROBE, SPRING_ARM_A, SPRING_ARM_B, SPRING_E, SPRING_L, SPRING_LD, TORSION_PHI,
+                                   TORSION_PHID, TORSION_Z, arm_probe_row, spring_probe_row,
+                                   torsion_probe_row)
 from ..mbs.node_coordinates import PARAM_KINDS, PARAM_RXYZ, node_parameter, param_code
 from ..mbs.rotation_parameters import TRACK_QUAT, TRACK_RXYZ, nearest_parameters
 from ..mbs.scene import GROUND
@@ -432,20 +433,46 @@ class LoadUF(PyItem):
             v0, v1, v2 = float(v0), float(v1), float(v2)
         return v0, v1, v2
 
+    # ---- the stepper's seam: the world arm of the point of a force computed by the compiled stage
+    probeIndex = None        # the row of Work.probe (Combined.probe_rows)
+
+    def probe_row(self):
+        """The input row of its probe (mbs/external_probes.py): the point of a force (the
+        marker's, or the centre of mass for a mass-proportional load); None for a torque."""
+        if self.loadType == "TorqueVector":
+            return None
+        return arm_probe_row(self.mf.body, self.com if self.loadType == "MassProportional" else self.mf.pos)
+
     def add_stage(self, t, st, F, T, P, Q):
-        """:meth:`add` in the stepper's seam (:meth:`Combined.stage_adder`): a world torque
-        (LoadTorqueVector, not bodyFixed) added through the flat memoryview ``Q`` of
-        ``Work.Qext`` (numpy's item access cost more than the rest; zero user load of
-        ``bench --sections userfunctions``, one call, timeit: 0.50 us in :meth:`add`, 0.30 here); the other loads
-        as :meth:`add`."""
-        if self.bodyFixed or self.loadType != "TorqueVector":
+        """:meth:`add` in the stepper's seam (:meth:`Combined.stage_adder`): adds through the
+        flat memoryview ``Q`` of ``Work.Qext``, the arm of a force read from its probe in ``P``
+        (numpy's item access cost more than the rest; zero user load of ``bench --sections
+        userfunctions``, one call, timeit: 0.50 us in :meth:`add`, 0.30 here); a body-fixed
+        force or torque as :meth:`add`."""
+        lt = self.loadType
+        if self.bodyFixed and lt != "MassProportional":
             self.add(t, st, F, T)
             return
         v0, v1, v2 = self.vector(t)
-        i = 6 * self.mf.body + 3
+        i = 6 * self.mf.body
+        if lt == "TorqueVector":
+            Q[i + 3] += v0
+            Q[i + 4] += v1
+            Q[i + 5] += v2
+            return
+        if lt == "MassProportional":
+            m = self.mass
+            v0, v1, v2 = m * v0, m * v1, m * v2
+        # as _add_force: the force, then the torque of its arm unless the point is the origin
         Q[i] += v0
         Q[i + 1] += v1
         Q[i + 2] += v2
+        j = self.probeIndex * N_PROBE
+        if P[j + ARM_HAS]:
+            a0, a1, a2 = P[j + ARM_WORLD], P[j + ARM_WORLD + 1], P[j + ARM_WORLD + 2]
+            Q[i + 3] += a1 * v2 - a2 * v1
+            Q[i + 4] += a2 * v0 - a0 * v2
+            Q[i + 5] += a0 * v1 - a1 * v0
 
     def add(self, t, st, F, T):
         # scalar arithmetic: this runs once per stage, numpy's per-call cost on 3-vectors
@@ -513,9 +540,10 @@ class Combined:
         """The probes of its items (mbs/external_probes.py), numbered from ``first``."""
         rows = []
         for it in self.items:
-            if hasattr(it, "probe_row"):
+            row = it.probe_row() if hasattr(it, "probe_row") else None
+            if row is not None:
                 it.probeIndex = first + len(rows)
-                rows.append(it.probe_row())
+                rows.append(row)
         return rows
 
     def stage_adder(self, probe, Qext):
@@ -528,7 +556,8 @@ class Combined:
         steps = []
         for it in self.items:
             fast = getattr(it, "add_stage", None)
-            if hasattr(it, "probe_row") and not (it.probeIndex is not None and it.probeIndex < probe.shape[0]):
+            if hasattr(it, "probe_row") and it.probe_row() is not None \
+                    and not (it.probeIndex is not None and it.probeIndex < probe.shape[0]):
                 fast = None                 # its probe is not in this work set
             steps.append((it, fast))
         steps = tuple(steps)

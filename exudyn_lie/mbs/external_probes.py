@@ -27,7 +27,9 @@ the bit):
 * :data:`PROBE_SPRING`: a spring-damper between two points (``ObjectConnectorSpringDamper``),
   inputs the points in body coordinates; outputs the length ``L``, its rate ``(v_B - v_A) . e``,
   the unit vector ``e`` from A to B and the world arms ``R s`` of both points
-  (``SpringDamperUF.add``).
+  (``SpringDamperUF.add``);
+* :data:`PROBE_ARM`: a point of a body (a load's point of application), output its world
+  arm ``R s`` (``pyforces._add_force``).
 """
 import math
 
@@ -38,6 +40,7 @@ GROUND = -1
 
 PROBE_TORSION = 1
 PROBE_SPRING = 2
+PROBE_ARM = 3
 
 # the columns of a row: kind and bodies, then per kind its inputs and outputs
 P_KIND, P_BODY_A, P_BODY_B = 0, 1, 2
@@ -53,6 +56,9 @@ SPRING_LD = 10
 SPRING_E = 11
 SPRING_ARM_A = 14
 SPRING_ARM_B = 17
+ARM_POS = 3           # inputs: the point in body coordinates, 1.0 if it is not the frame origin
+ARM_HAS = 6
+ARM_WORLD = 7         # output: the world arm R s (3)
 N_PROBE = 20
 
 
@@ -73,6 +79,13 @@ def spring_probe_row(bodyA, bodyB, posA, posB):
     """The input row of a :data:`PROBE_SPRING` probe: the marker points ``posA``, ``posB``
     in body coordinates (world coordinates on the ground)."""
     return _row(PROBE_SPRING, bodyA, bodyB, posA, posB)
+
+
+def arm_probe_row(body, pos):
+    """The input row of a :data:`PROBE_ARM` probe: the point ``pos`` of ``body`` (body
+    coordinates)."""
+    pos = [float(c) for c in pos]
+    return _row(PROBE_ARM, body, GROUND, pos, [0.0 if pos == [0.0, 0.0, 0.0] else 1.0])
 
 
 def probe_table(scene):
@@ -123,6 +136,9 @@ def probe_kinematics(Rs, rs, Vw, probe):
             torsion_probe(Rs, Vw, p)
         elif kind == PROBE_SPRING:
             spring_probe(Rs, rs, Vw, p)
+        elif kind == PROBE_ARM:
+            b = int(p[P_BODY_A])
+            p[ARM_WORLD], p[ARM_WORLD + 1], p[ARM_WORLD + 2] = _world_column(Rs[b], p, ARM_POS)
 
 
 @njit(cache=True, inline="always", _nrt=False)

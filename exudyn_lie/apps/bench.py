@@ -26,7 +26,8 @@ Sections (``--sections``, default all):
   vectors per step) against the same model without it (:mod:`.bench_params`).
 * ``items``   a point mass against a rigid body per step (:mod:`.bench_items`).
 * ``userfunctions``  Python user functions: the heavy top with a zero user load, a PD
-  torque and a spring force, overhead per call against the compiled step (:mod:`.bench_userfunctions`).
+  torque, a spring force and a force at a point, overhead per call against the compiled step
+  (:mod:`.bench_userfunctions`).
 * ``topology``  chain, star, binary tree and ladder of N bodies: cost per step against N,
   fitted exponents (:mod:`.bench_topology`).
 * ``evaluated``  the path on which Exudyn evaluates the model (items the kernel does not read):

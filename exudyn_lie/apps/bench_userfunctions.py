@@ -12,7 +12,9 @@ compiled stepper (``Simulator.Advance``), three ways, interleaved inside every r
   (a controller as Exudyn's examples write it: scalar arithmetic on the arguments);
 * ``spring force``: plus a ``SpringDamper`` between a ground point and a point of the top
   whose ``springForceUserFunction`` is a hardening spring with damping
-  (``f = k u (1 + (u / u0)^2) + d udot + f0``).
+  (``f = k u (1 + (u / u0)^2) + d udot + f0``);
+* ``force``: plus a ``LoadForceVector`` at a point of the top (off its frame origin) whose
+  ``loadVectorUserFunction`` is a rotating force of growing amplitude.
 
 Each user function is called once per evaluated stage (4 per RK4 step) from the compiled
 stage through ``mbs/external.py`` (one call through the C API per stage, no array boxed);
@@ -27,6 +29,7 @@ counts the time the scheduler gives to others, which CPU time leaves out.
 """
 from __future__ import annotations
 
+import math
 import time
 import timeit
 import warnings
@@ -36,9 +39,9 @@ import numpy as np
 TARGET_OVERHEAD_US = 2.0
 CLOCK = time.thread_time
 H = 1e-4
-KINDS = ("compiled", "zero", "pd", "spring")
+KINDS = ("compiled", "zero", "pd", "spring", "force")
 TITLES = {"compiled": "compiled", "zero": "zero user load", "pd": "PD torque",
-          "spring": "spring force"}
+          "spring": "spring force", "force": "force at a point"}
 KP, KD, WREF, TAU_MAX = 50.0, 5.0, 0.5, 20.0
 U0 = 0.1
 
@@ -51,6 +54,12 @@ def pd_torque(mbs, t, itemNumber, rotation, angularVelocity, stiffness, damping,
     """PD control of the spin angle to the ramp ``WREF t``, saturated at ``TAU_MAX``."""
     tau = KP * (rotation - WREF * t) + KD * (angularVelocity - WREF)
     return max(-TAU_MAX, min(TAU_MAX, tau))
+
+
+def rotating_force(mbs, t, loadVector):
+    """A force turning about the vertical, its amplitude growing with t."""
+    a = loadVector[0] * (1.0 + t)
+    return [a * math.cos(3.0 * t), a * math.sin(3.0 * t), 0.0]
 
 
 def spring_force(mbs, t, itemNumber, deltaL, deltaL_t, stiffness, damping, force):
@@ -73,6 +82,10 @@ def build(kind):
         mB = mbs.AddMarker(exu.itemInterface.MarkerBodyRigid(bodyNumber=body, localPosition=[0, 0, 0]))
         mbs.AddObject(exu.itemInterface.TorsionalSpringDamper(markerNumbers=[mG, mB], stiffness=KP, damping=KD,
                                                               springTorqueUserFunction=pd_torque))
+    elif kind == "force":
+        mB = mbs.AddMarker(exu.itemInterface.MarkerBodyRigid(bodyNumber=body, localPosition=[0.02, 0.0, 0.2]))
+        mbs.AddLoad(exu.itemInterface.LoadForceVector(markerNumber=mB, loadVector=[0.5, 0, 0],
+                                                      loadVectorUserFunction=rotating_force))
     elif kind == "spring":
         mG = mbs.AddMarker(exu.itemInterface.MarkerBodyPosition(bodyNumber=info.ground, localPosition=[0.3, 0.2, 1.5]))
         mB = mbs.AddMarker(exu.itemInterface.MarkerBodyPosition(bodyNumber=body, localPosition=[0.0, 0.0, 0.2]))
@@ -97,6 +110,8 @@ def own_cost_us(kind, n=20000):
         f = lambda: zero_load(None, 0.1, [0.0, 0.0, 0.0])           # noqa: E731
     elif kind == "pd":
         f = lambda: pd_torque(None, 0.1, 3, 0.01, 0.4, KP, KD, 0.0)  # noqa: E731
+    elif kind == "force":
+        f = lambda: rotating_force(None, 0.1, [0.5, 0.0, 0.0])      # noqa: E731
     else:
         f = lambda: spring_force(None, 0.1, 3, 0.01, 0.4, 5.0, 0.1, 0.5)  # noqa: E731
     return min(timeit.repeat(f, number=n, repeat=5, timer=CLOCK)) / n * 1e6
@@ -140,7 +155,8 @@ def target_lines(res):
         return []
     L = []
     for k, title in (("zero", "zero user load"), ("pd", "PD-controller torque (springTorqueUserFunction)"),
-                     ("spring", "spring force (springForceUserFunction)")):
+                     ("spring", "spring force (springForceUserFunction)"),
+                     ("force", "force at a point (loadVectorUserFunction)")):
         if k not in res:
             continue
         d = res[k]

@@ -81,18 +81,19 @@ def call(typingctx, evaluator, t):
     def codegen(context, builder, signature, args):
         address, tval = args
         pyapi = context.get_python_api(builder)
-        gil = pyapi.gil_ensure()
-        targ = pyapi.float_from_double(tval)
-        res = pyapi.call_function_objargs(builder.inttoptr(address, pyapi.pyobj), [targ])
-        pyapi.decref(targ)
         out = cgutils.alloca_once_value(builder, ir.Constant(ir.IntType(64), 1))
-        with builder.if_else(cgutils.is_not_null(builder, res)) as (ok, failed):
-            with ok:
-                builder.store(pyapi.long_as_longlong(res), out)
-                pyapi.decref(res)
-            with failed:                  # the evaluator catches everything; this is boxing failing
-                pyapi.err_clear()
-        pyapi.gil_release(gil)
+        with builder.if_then(cgutils.is_not_null(builder, address)):      # no evaluator: 1, not a crash
+            gil = pyapi.gil_ensure()
+            targ = pyapi.float_from_double(tval)
+            res = pyapi.call_function_objargs(builder.inttoptr(address, pyapi.pyobj), [targ])
+            pyapi.decref(targ)
+            with builder.if_else(cgutils.is_not_null(builder, res)) as (ok, failed):
+                with ok:
+                    builder.store(pyapi.long_as_longlong(res), out)
+                    pyapi.decref(res)
+                with failed:              # the evaluator catches everything; this is boxing failing
+                    pyapi.err_clear()
+            pyapi.gil_release(gil)
         return builder.load(out)
     return sig, codegen
 

@@ -25,8 +25,9 @@ Sections (``--sections``, default all):
 * ``params``  parameters changed during a solve: serialRobotTest's PD controller (12 load
   vectors per step) against the same model without it (:mod:`.bench_params`).
 * ``items``   a point mass against a rigid body per step (:mod:`.bench_items`).
-* ``userfunctions``  Python user functions: the heavy top with a zero user load and with a PD
-  torque, overhead per call against the compiled step (:mod:`.bench_userfunctions`).
+* ``userfunctions``  Python user functions: the heavy top with a zero user load, a PD
+  torque, a spring force and a force at a point, overhead per call against the compiled step
+  (:mod:`.bench_userfunctions`).
 * ``topology``  chain, star, binary tree and ladder of N bodies: cost per step against N,
   fitted exponents (:mod:`.bench_topology`).
 * ``evaluated``  the path on which Exudyn evaluates the model (items the kernel does not read):

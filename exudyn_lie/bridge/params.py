@@ -300,6 +300,8 @@ class ParameterWatch:
         if table == "py":
             item = sc.pyItems[k]
             item.lv, item.uf, item.mf, item.bodyFixed = lv, uf, mf, bodyFixed
+            if getattr(item, "probeIndex", None) is not None:     # its point, read by the compiled stage
+                self.solver.sim.wk.probe[item.probeIndex] = item.probe_row()
             return
         sd = self.solver.sim.sd
         # compile_scene's row: lvec[k] = [vector, point], lint[k] = [body, kind, bodyFixed]
@@ -404,7 +406,9 @@ class ParameterWatch:
             raise BridgeError(f"{self.what('object', o, d)}: changed at t = {t:.6g} s so that it is no longer "
                               f"evaluated in Python; set its parameters before the solve")
         item = self.scene.pyItems[k]
-        keep = {key: getattr(item, key) for key in ("prev",) if hasattr(item, key)}
+        keep = {key: getattr(item, key) for key in ("prev", "probeIndex") if hasattr(item, key)}
         item.__dict__.update(scratch.pyItems[0].__dict__)
         item.__dict__.update(keep)
         item.active = bool(d.get("activeConnector", True))
+        if getattr(item, "probeIndex", None) is not None:     # its frames, read by the compiled stage
+            self.solver.sim.wk.probe[item.probeIndex] = item.probe_row()

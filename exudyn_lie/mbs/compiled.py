@@ -12,6 +12,7 @@ import numpy as np
 from .force_elements import compile_elements, lean_elements_only, scene_fields
 from .codes import GROUP_NAMES, J_NROW, J_ROW0, ROW_COORD, ROW_COORD_VEL, ROW_DIST, ROW_KIND, ROW_ROLL, ROW_ROT, ROW_TRANS_LOCAL, ROW_TRANS_WORLD
 from .rotation_parameters import TRACK_ANGLE, TRACK_NONE
+from .external_probes import N_PROBE, probe_table
 from .linalg import REL_PIVOT_TOL, rcm_order
 from .rolling_disc_penalty_forces import N_DISC, rolling_disc_penalty_row
 from .oblique_solve import oblique_plan
@@ -70,10 +71,12 @@ Work = namedtuple("Work", [
                                       #   step 0.6 us slower although it tracks nothing (measured interleaved)
     "disc",                           # penalty rolling discs (rolling_disc_penalty_forces.D_*): bodies, flags,
                                       #   parameters, data coordinates (updated after every accepted step)
+    "probe",                          # kinematics of the Python forces' items, computed before the external
+                                      #   call of each stage (mbs/external_probes.py); (0, N_PROBE) without them
 ])
 
 # the per-body tracking of a scene (compile_tracking), carried into every Work of its simulator
-Tracking = namedtuple("Tracking", ["bangle", "bframe", "btrack", "bparam", "nplanar", "disc"])
+Tracking = namedtuple("Tracking", ["bangle", "bframe", "btrack", "bparam", "nplanar", "disc", "probe"])
 N_SCRATCH3 = 20
 
 
@@ -454,7 +457,8 @@ def solve_plan(sd, solve="auto"):
 
 def compile_tracking(scene: Scene):
     """What :func:`make_work` carries per body and updates after every accepted step: the
-    angles of 2D bodies / rotors over turns and the nodes' rotation parameters."""
+    angles of 2D bodies / rotors over turns and the nodes' rotation parameters; and the
+    probes of the Python forces (kept, like these, by every Work of the simulator)."""
     def arr(rows, shape, dtype=float):
         a = np.array(rows, dtype)
         return a.reshape(shape) if a.size else np.zeros(tuple(0 if d == -1 else d for d in shape), dtype)
@@ -464,14 +468,17 @@ def compile_tracking(scene: Scene):
         btrack=arr([body_track(b) for b in scene.bodies], (-1,), np.int64),
         bparam=arr([np.zeros(4) if b.track is None else b.track[1] for b in scene.bodies], (-1, 4)),
         nplanar=int(sum(body_track(b) > 0 for b in scene.bodies)),
-        disc=None if scene_is_lean(scene) else arr([rolling_disc_penalty_row(e) + list(e.data0) for e in scene.rollingDiscPenalties], (-1, N_DISC)))
+        disc=None if scene_is_lean(scene) else arr([rolling_disc_penalty_row(e) + list(e.data0)
+                                                    for e in scene.rollingDiscPenalties], (-1, N_DISC)),
+        probe=probe_table(scene))
 
 
 def no_tracking(nb, lean=False):
     """Nothing tracked (bodies whose scene did not go through :func:`compile_tracking`); ``lean``:
     for a lean scene's SceneData (no penalty discs: ``disc`` None, mbs/presence.py)."""
     return Tracking(bangle=np.zeros(nb), bframe=np.zeros((nb, 3, 3)), btrack=np.zeros(nb, np.int64),
-                    bparam=np.zeros((nb, 4)), nplanar=0, disc=None if lean else np.zeros((0, N_DISC)))
+                    bparam=np.zeros((nb, 4)), nplanar=0, disc=None if lean else np.zeros((0, N_DISC)),
+                    probe=np.zeros((0, N_PROBE)))
 
 
 def with_redundant(sd, flag):
@@ -512,5 +519,5 @@ def make_work(sd, nstages, solve="auto", track=None):
         ext=np.zeros(2, np.int64), rdrive=constant_drives(sd), drive=None, Vw=np.zeros((nb, 6) if sd.hasQext else (0, 6)),
         tplan=plan, Tw=np.zeros(work_size(nb, m, plan)) if tree else None,
         bangle=track.bangle, bframe=track.bframe, btrack=track.btrack, bparam=track.bparam, nplanar=track.nplanar,
-        disc=track.disc,
+        disc=track.disc, probe=track.probe,
     )

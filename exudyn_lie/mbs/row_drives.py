@@ -20,7 +20,7 @@ value from ``h`` and adds the acceleration to ``eta``).  Constant parts are set 
 (``compiled.constant_drives``: a velocity-level row's constant offset); a row with an offset
 function is evaluated at every time the rows are evaluated at: once per stage
 (``stepper.stage_rhs``) and before a projection at a step's end, through the right-hand-side
-seam of :mod:`.external` (one ``objmode`` call to the registered evaluator, token in
+seam of :mod:`.external` (one call to the registered evaluator, its handle in
 ``Work.drive``, None without offset functions; no Python stage loop): :func:`update_row_drives`.
 
 **Derivatives of an offset function** (a Python function, e.g. Exudyn's user function, which
@@ -44,7 +44,7 @@ a power of two so that ``t +- d`` are exact for the times of a solve.  Relative 
 end time.  A kink in the offset (a ramp) is smoothed over ``+-2 d``.
 """
 import numpy as np
-from numba import njit, objmode, types
+from numba import njit, types
 from numba.extending import overload
 
 from . import external
@@ -60,16 +60,14 @@ def evaluate_row_drives(token, t):
     """One Python call through the seam of :mod:`.external`: the evaluator registered under
     ``token`` writes the row drives at ``t``.  Returns a status code (STATUS_EXTERNAL if an
     offset function raised)."""
-    with objmode(fail="int64"):
-        fail = external.evaluate(token, t)
-    return STATUS_EXTERNAL if fail else STATUS_OK
+    return STATUS_EXTERNAL if external.call(token, t) else STATUS_OK
 
 
 def update_row_drives(drive, t):
     """The row drives ``wk.rdrive`` at time ``t``: ``drive = wk.drive`` is None without
-    offset functions (compiled to nothing, as the tree solve's ``index1._is_tree``: the objmode
-    call present but not taken cost the heavy top about 0.1 us of 2.9 us per step, measured),
-    else ``[token]`` of the evaluator (:func:`evaluate_row_drives`)."""
+    offset functions (compiled to nothing, as the tree solve's ``index1._is_tree``: the call,
+    then through numba's objmode, present but not taken cost the heavy top about 0.1 us of
+    2.9 us per step, measured), else ``[handle]`` of the evaluator (:func:`evaluate_row_drives`)."""
     raise NotImplementedError("compiled only")
 
 

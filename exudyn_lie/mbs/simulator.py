@@ -179,9 +179,9 @@ class Simulator:
         # room for the dense-output extra stages of an embedded pair (adaptive steps)
         extra = dense.extra_stages if (dense is not None and self.tableau.b_hat is not None) else 0
         wk = make_work(self.sd, len(self.method.b) + extra, solve, self._track)
-        wk.ext[0] = self._extToken
+        wk.ext[0] = external.handle(self._extToken) if self._extToken else 0
         if self._driveToken:
-            wk = wk._replace(drive=np.array([self._driveToken], np.int64))
+            wk = wk._replace(drive=np.array([external.handle(self._driveToken)], np.int64))
         self._mkEntry = None
         if getattr(self, "_ad", None) is not None:
             self._ad.pop("entry", None)
@@ -527,10 +527,19 @@ class Simulator:
             v.flags.writeable = False
             return v
         st = BodyStates(self.t, ro(wk.Rs), ro(wk.rs), ro(wk.Vw[:, :3]), ro(wk.Vw[:, 3:]))
-        adders = tuple(getattr(pf.fn, "add_into", None) or self._add_returned(pf) for pf in self.scene.pythonForces)
+        adders = tuple(self._stage_adder(pf, wk) for pf in self.scene.pythonForces)
         views = (st, wk.Qext[:, :3], wk.Qext[:, 3:], adders)
         self._extViews = (wk, views)
         return views
+
+    def _stage_adder(self, pf, wk):
+        """The seam's ``add(t, st, F, T)`` of a Python force: its ``stage_adder(probe, Qext)``
+        if it reads kinematics the compiled stage computed (mbs/external_probes.py), else its
+        ``add_into``, else its returned ``(F, T)`` added."""
+        bind = getattr(pf.fn, "stage_adder", None)
+        if bind is not None:
+            return bind(wk.probe, wk.Qext)
+        return getattr(pf.fn, "add_into", None) or self._add_returned(pf)
 
     def _python_forces(self, t, R, r, V):
         """The generalised Python forces (nb, 6) at a state (tests, diagnostics): the same

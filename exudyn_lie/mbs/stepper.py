@@ -21,8 +21,8 @@ coefficients are zero cannot change the step (e.g. DOPRI5's 7th, FSAL stage; its
 Two seams:
 
 * the **right-hand side outside the compiled code** (:mod:`.external`): when
-  ``sd.hasQext`` the stage calls the registered Python evaluator once (numba
-  ``objmode``), which fills the extra generalised forces ``wk.Qext`` at the stage state;
+  ``sd.hasQext`` the stage calls the registered Python evaluator once
+  (:func:`~.external.call`), which fills the extra generalised forces ``wk.Qext`` at the stage state;
   no Python stage loop.  An exception there ends the call with ``STATUS_EXTERNAL``.
 * the **step controller** (``ctl``): a namedtuple whose *type* is the controller.
   ``Control`` with ``CONTROL_FIXED`` (:func:`fixed_step_control`): fixed steps, every step
@@ -39,10 +39,11 @@ Two seams:
 from collections import namedtuple
 
 import numpy as np
-from numba import njit, objmode, types
+from numba import njit, types
 from numba.extending import overload
 
 from . import external
+from .external_probes import probe_kinematics
 from .bodies import body_dexpinv_stage, body_world_velocity, exp_compose, add_point_force_origin, add_world_torque_row
 from .codes import (STAB_NONE, STAGE_ARG_MAX2, STATUS_BLOWUP, STATUS_EXTERNAL, STATUS_NONFINITE, STATUS_OK,
                     STATUS_STAGE_ARG)
@@ -191,22 +192,17 @@ def mk_finish(sd, wk, tab, h, R, r, V):
 
 @njit(cache=True, _nrt=False)
 def call_evaluator(token, t):
-    """``external.evaluate(token, t)`` through ``objmode``, in a function of its own: at
-    every call numba's objmode call re-creates the pickle of the lifted block's dispatcher
-    (a bytes copy), which carries the IR of the enclosing function: 113 KB inside
-    ``external_forces``, a few KB here (zero user load on the heavy top: about 2 us less
-    per stage, ``python -m exudyn_lie bench --sections userfunctions``)."""
-    with objmode(fail="int64"):
-        fail = external.evaluate(token, t)
-    return fail
+    """``external.call(token, t)``: the evaluator whose :func:`~.external.handle` is ``token``."""
+    return external.call(token, t)
 
 
 @njit(cache=True, _nrt=False)
-def external_forces(token, gid, t, Rs, Vs, Vw, Qext, ext):
+def external_forces(token, gid, t, Rs, rs, Vs, Vw, Qext, ext, probe):
     """The right-hand side seam (:mod:`.external`), one Python call per stage.
 
     Before the call, compiled: the world velocities ``Vw = (omega, rdot)`` of the stage
-    state and ``Qext = 0``.  The call passes only ``(token, t)`` (no array is boxed: the
+    state, ``Qext = 0`` and the kinematics the Python items read (``probe``,
+    :mod:`.external_probes`).  The call passes only ``(token, t)`` (no array is boxed: the
     evaluator holds views of ``wk.Rs, wk.rs, wk.Vw, wk.Qext``) and the evaluator adds the
     world forces at the frame origins and the world torques, ``Qext[i] = (F_i, T_i)``.
     After it, compiled: ``Qext[i]`` becomes the generalised force of ``(F_i, T_i)``
@@ -216,6 +212,7 @@ def external_forces(token, gid, t, Rs, Vs, Vw, Qext, ext):
         body_world_velocity(gid[i], Rs[i], Vs[i], Vw[i])
         for k in range(6):
             Qext[i, k] = 0.0
+    probe_kinematics(Rs, rs, Vw, probe)
     if call_evaluator(token, t):
         return STATUS_EXTERNAL
     for i in range(gid.shape[0]):
@@ -243,7 +240,7 @@ def stage_rhs(sd, wk, t, Vdot):
     if st != STATUS_OK:
         return st
     if sd.hasQext:
-        st = external_forces(wk.ext[0], sd.gid, t, wk.Rs, wk.Vs, wk.Vw, wk.Qext, wk.ext)
+        st = external_forces(wk.ext[0], sd.gid, t, wk.Rs, wk.rs, wk.Vs, wk.Vw, wk.Qext, wk.ext, wk.probe)
         if st != STATUS_OK:
             return st
     return rhs(sd, wk, t, wk.Rs, wk.rs, wk.Vs, wk.Qext, Vdot)

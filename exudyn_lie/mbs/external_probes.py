@@ -1,0 +1,184 @@
+"""Kinematics of Python-evaluated items, computed by the compiled stage before the external call.
+
+A Python force item (the bridge's connectors with a user function, ``bridge/pyforces.py``)
+needs a few scalars of the stage state: a torsional spring its angle and angular rate.  In
+Python these cost far more than the user function itself (scalar arithmetic on
+the rotation matrices: about 0.9 us of a PD controller's 1.7 us per call, measured on the
+heavy top, ``python -m exudyn_lie bench --sections userfunctions``).  So the compiled stage
+computes them (:func:`probe_kinematics`, called by ``stepper.external_forces`` right before
+the one call of the Python side per stage) into ``Work.probe``, one row per *probe*, and the Python
+side only reads floats, calls the user function and adds the result.
+
+A row holds the probe's inputs (kind, bodies, constant frame columns; written when the
+simulator is made and when the item's parameters change during a solve) and its outputs
+(written at every stage).  The Python force callable declares its probes through
+``fn.probe_rows()`` (:func:`probe_table`; it numbers its items in that order) and reads
+them through ``fn.stage_adder(probe, Qext)`` (``Simulator._external_views``).
+
+Kinds (the arithmetic is the Python item's, in its order, so the results are the same to
+the bit):
+
+* :data:`PROBE_TORSION`: a torsional spring about the z axis of frame ``A`` (Exudyn's
+  ``ObjectTorsionalSpringDamper``), inputs the x, z columns of ``A``'s marker frame in body
+  ``A`` coordinates and the x, y columns of ``B``'s in body ``B`` coordinates (for the ground:
+  in world coordinates); outputs the principal angle ``phi = atan2(-(x_A . y_B), x_A . x_B)``
+  of the relative rotation ``J_A^T J_B`` (world columns), ``phidot = z_A . (w_B - w_A)``
+  (world angular velocities) and the world ``z_A`` (``TorsionalSpringDamperUF.angle``);
+* :data:`PROBE_SPRING`: a spring-damper between two points (``ObjectConnectorSpringDamper``),
+  inputs the points in body coordinates; outputs the length ``L``, its rate ``(v_B - v_A) . e``,
+  the unit vector ``e`` from A to B and the world arms ``R s`` of both points
+  (``SpringDamperUF.add``);
+* :data:`PROBE_ARM`: a point of a body (a load's point of application), output its world
+  arm ``R s`` (``pyforces._add_force``).
+"""
+import math
+
+import numpy as np
+from numba import njit
+
+GROUND = -1
+
+PROBE_TORSION = 1
+PROBE_SPRING = 2
+PROBE_ARM = 3
+
+# the columns of a row: kind and bodies, then per kind its inputs and outputs
+P_KIND, P_BODY_A, P_BODY_B = 0, 1, 2
+TORSION_COLS_A = 3    # inputs: x_A (3), z_A (3) in body A coordinates
+TORSION_COLS_B = 9    # x_B (3), y_B (3) in body B coordinates
+TORSION_PHI = 15      # outputs: principal angle, rate, world z_A (3)
+TORSION_PHID = 16
+TORSION_Z = 17
+SPRING_POS_A = 3      # inputs: the marker points in body coordinates
+SPRING_POS_B = 6
+SPRING_L = 9          # outputs: length, its rate, world unit vector A -> B (3), world arms R s (3, 3)
+SPRING_LD = 10
+SPRING_E = 11
+SPRING_ARM_A = 14
+SPRING_ARM_B = 17
+ARM_POS = 3           # inputs: the point in body coordinates, 1.0 if it is not the frame origin
+ARM_HAS = 6
+ARM_WORLD = 7         # output: the world arm R s (3)
+N_PROBE = 20
+
+
+def _row(kind, bodyA, bodyB, *groups):
+    row = [float(kind), float(bodyA), float(bodyB)]
+    for g in groups:
+        row += [float(c) for c in g]
+    return row + [0.0] * (N_PROBE - len(row))
+
+
+def torsion_probe_row(bodyA, bodyB, colsA, colsB):
+    """The input row of a :data:`PROBE_TORSION` probe: ``colsA`` = (x_A, z_A), ``colsB`` =
+    (x_B, y_B) as six floats each (marker frame columns in body coordinates)."""
+    return _row(PROBE_TORSION, bodyA, bodyB, colsA, colsB)
+
+
+def spring_probe_row(bodyA, bodyB, posA, posB):
+    """The input row of a :data:`PROBE_SPRING` probe: the marker points ``posA``, ``posB``
+    in body coordinates (world coordinates on the ground)."""
+    return _row(PROBE_SPRING, bodyA, bodyB, posA, posB)
+
+
+def arm_probe_row(body, pos):
+    """The input row of a :data:`PROBE_ARM` probe: the point ``pos`` of ``body`` (body
+    coordinates)."""
+    pos = [float(c) for c in pos]
+    return _row(PROBE_ARM, body, GROUND, pos, [0.0 if pos == [0.0, 0.0, 0.0] else 1.0])
+
+
+def probe_table(scene):
+    """``Work.probe`` of a scene: the rows its Python forces declare (``fn.probe_rows()``,
+    optional), in their order; (0, N_PROBE) without probes."""
+    rows = []
+    for pf in scene.pythonForces:
+        declare = getattr(pf.fn, "probe_rows", None)
+        if declare is not None:
+            rows += declare(len(rows))
+    return np.array(rows, float).reshape(-1, N_PROBE)
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def _world_column(R, p, c):
+    """``R p[c:c+3]`` in the Python item's order of operations."""
+    return (R[0, 0] * p[c] + R[0, 1] * p[c + 1] + R[0, 2] * p[c + 2],
+            R[1, 0] * p[c] + R[1, 1] * p[c + 1] + R[1, 2] * p[c + 2],
+            R[2, 0] * p[c] + R[2, 1] * p[c + 1] + R[2, 2] * p[c + 2])
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def _point(Rs, rs, Vw, b, p, c):
+    """World position, velocity and arm ``R s`` (nine floats) of the body point ``s =
+    p[c:c+3]`` of body ``b`` (the ground: ``s`` itself, at rest, no arm), in the order of
+    operations of the Python items (``bridge.pyforces.point_state``)."""
+    s0, s1, s2 = p[c], p[c + 1], p[c + 2]
+    if b == GROUND:
+        return s0, s1, s2, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    R = Rs[b]
+    w0, w1, w2 = Vw[b, 0], Vw[b, 1], Vw[b, 2]
+    a0, a1, a2 = _world_column(R, p, c)
+    c0, c1, c2 = w1 * s2 - w2 * s1, w2 * s0 - w0 * s2, w0 * s1 - w1 * s0          # omega x s (body)
+    return (rs[b, 0] + a0, rs[b, 1] + a1, rs[b, 2] + a2,
+            Vw[b, 3] + R[0, 0] * c0 + R[0, 1] * c1 + R[0, 2] * c2,
+            Vw[b, 4] + R[1, 0] * c0 + R[1, 1] * c1 + R[1, 2] * c2,
+            Vw[b, 5] + R[2, 0] * c0 + R[2, 1] * c1 + R[2, 2] * c2, a0, a1, a2)
+
+
+@njit(cache=True, _nrt=False)
+def probe_kinematics(Rs, rs, Vw, probe):
+    """The outputs of every probe at the stage state: ``Rs, rs`` the body frames,
+    ``Vw = (omega body, world rdot)`` (``bodies.body_world_velocity``)."""
+    for k in range(probe.shape[0]):
+        p = probe[k]
+        kind = p[P_KIND]
+        if kind == PROBE_TORSION:
+            torsion_probe(Rs, Vw, p)
+        elif kind == PROBE_SPRING:
+            spring_probe(Rs, rs, Vw, p)
+        elif kind == PROBE_ARM:
+            b = int(p[P_BODY_A])
+            p[ARM_WORLD], p[ARM_WORLD + 1], p[ARM_WORLD + 2] = _world_column(Rs[b], p, ARM_POS)
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def torsion_probe(Rs, Vw, p):
+    """:data:`PROBE_TORSION`: as ``TorsionalSpringDamperUF.angle`` without the tracking."""
+    a, b = int(p[P_BODY_A]), int(p[P_BODY_B])
+    if a == GROUND:
+        x0, x1, x2 = p[TORSION_COLS_A], p[TORSION_COLS_A + 1], p[TORSION_COLS_A + 2]
+        z0, z1, z2 = p[TORSION_COLS_A + 3], p[TORSION_COLS_A + 4], p[TORSION_COLS_A + 5]
+        wa0, wa1, wa2 = 0.0, 0.0, 0.0
+    else:
+        x0, x1, x2 = _world_column(Rs[a], p, TORSION_COLS_A)
+        z0, z1, z2 = _world_column(Rs[a], p, TORSION_COLS_A + 3)
+        wa0, wa1, wa2 = _world_column(Rs[a], Vw[a], 0)
+    if b == GROUND:
+        c0, c1, c2 = p[TORSION_COLS_B], p[TORSION_COLS_B + 1], p[TORSION_COLS_B + 2]
+        s0, s1, s2 = p[TORSION_COLS_B + 3], p[TORSION_COLS_B + 4], p[TORSION_COLS_B + 5]
+        wb0, wb1, wb2 = 0.0, 0.0, 0.0
+    else:
+        c0, c1, c2 = _world_column(Rs[b], p, TORSION_COLS_B)
+        s0, s1, s2 = _world_column(Rs[b], p, TORSION_COLS_B + 3)
+        wb0, wb1, wb2 = _world_column(Rs[b], Vw[b], 0)
+    c = x0 * c0 + x1 * c1 + x2 * c2          # (J_A^T J_B)[0, 0]
+    s = x0 * s0 + x1 * s1 + x2 * s2          # (J_A^T J_B)[0, 1]
+    p[TORSION_PHI] = math.atan2(-s, c)
+    p[TORSION_PHID] = z0 * (wb0 - wa0) + z1 * (wb1 - wa1) + z2 * (wb2 - wa2)
+    p[TORSION_Z], p[TORSION_Z + 1], p[TORSION_Z + 2] = z0, z1, z2
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def spring_probe(Rs, rs, Vw, p):
+    """:data:`PROBE_SPRING`: as ``SpringDamperUF.add`` up to the user function: ``L = |p_B -
+    p_A|``, ``e = (p_B - p_A) / L``, ``Ldot = (v_B - v_A) . e`` and the arms."""
+    pA0, pA1, pA2, vA0, vA1, vA2, aA0, aA1, aA2 = _point(Rs, rs, Vw, int(p[P_BODY_A]), p, SPRING_POS_A)
+    pB0, pB1, pB2, vB0, vB1, vB2, aB0, aB1, aB2 = _point(Rs, rs, Vw, int(p[P_BODY_B]), p, SPRING_POS_B)
+    d0, d1, d2 = pB0 - pA0, pB1 - pA1, pB2 - pA2
+    L = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+    e0, e1, e2 = d0 / L, d1 / L, d2 / L
+    p[SPRING_L] = L
+    p[SPRING_LD] = (vB0 - vA0) * e0 + (vB1 - vA1) * e1 + (vB2 - vA2) * e2
+    p[SPRING_E], p[SPRING_E + 1], p[SPRING_E + 2] = e0, e1, e2
+    p[SPRING_ARM_A], p[SPRING_ARM_A + 1], p[SPRING_ARM_A + 2] = aA0, aA1, aA2
+    p[SPRING_ARM_B], p[SPRING_ARM_B + 1], p[SPRING_ARM_B + 2] = aB0, aB1, aB2

@@ -11,7 +11,7 @@ runs the same machine code as before.
 ``guarded(entry)`` makes ``g(table, *args)``: nothing when ``table`` is None, else
 ``entry(*args)``.  ``guarded(entry, rows=True)`` also skips the call when ``table`` has no
 rows; ``guarded(entry, result=k)`` returns argument ``k`` unchanged on ``None`` (the energy
-sums, ``e = g(table, ..., e)``).  The guard is a numba overload, inlined: the selection by
+sums, ``e = g(table, ..., e)``), ``guarded(entry, default=c)`` the constant ``c`` (a status).  The guard is a numba overload, inlined: the selection by
 type happens at compile time (numba prunes no ``if x is None`` on a tuple's field, only on a
 function's argument, and an overload's implementation is chosen from the argument types).
 """
@@ -21,11 +21,12 @@ from numba import types
 from numba.extending import overload
 
 
-def guarded(entry, rows=False, result=None):
-    """``g(table, *args)``: ``entry(*args)`` unless ``table`` is None (module docstring)."""
+def guarded(entry, rows=False, result=None, default=None):
+    """``g(table, *args)``: ``entry(*args)`` unless ``table`` is None (module docstring);
+    ``default``: the integer returned instead (a status code) when ``result`` is not given."""
     params = list(inspect.signature(getattr(entry, "py_func", entry)).parameters)
     args = ", ".join(params)
-    absent = "None" if result is None else params[result]
+    absent = params[result] if result is not None else ("None" if default is None else repr(int(default)))
     # explicit arguments: numba's inliner takes no *args
     src = f"""
 def g(table, {args}):

@@ -50,6 +50,7 @@ from .codes import (STAB_NONE, STAGE_ARG_MAX2, STATUS_BLOWUP, STATUS_EXTERNAL, S
 from .forces import update_contact_data, update_torsion_tracking
 from .rotation_parameters import record_tracked
 from .index1 import rhs
+from .presence import guarded
 from .projection import project_state
 from .row_drives import update_row_drives
 
@@ -231,6 +232,9 @@ def external_forces(token, gid, t, Rs, rs, Vs, Vw, Qext, ext, probe):
     return STATUS_OK
 
 
+_external_forces_if = guarded(external_forces, default=STATUS_OK)
+
+
 @njit(cache=True, inline="always", _nrt=False)
 def stage_rhs(sd, wk, t, Vdot):
     """``Vdot_j = F(t, g_j, V_j)`` at the stage state ``wk.Rs, wk.rs, wk.Vs``: the
@@ -239,10 +243,10 @@ def stage_rhs(sd, wk, t, Vdot):
     st = update_row_drives(wk.drive, t)      # no code without offset functions (wk.drive None)
     if st != STATUS_OK:
         return st
-    if sd.hasQext:
-        st = external_forces(wk.ext[0], sd.gid, t, wk.Rs, wk.rs, wk.Vs, wk.Vw, wk.Qext, wk.ext, wk.probe)
-        if st != STATUS_OK:
-            return st
+    # wk.probe is None without Python forces: then no code (mbs/presence.py)
+    st = _external_forces_if(wk.probe, wk.ext[0], sd.gid, t, wk.Rs, wk.rs, wk.Vs, wk.Vw, wk.Qext, wk.ext, wk.probe)
+    if st != STATUS_OK:
+        return st
     return rhs(sd, wk, t, wk.Rs, wk.rs, wk.Vs, wk.Qext, Vdot)
 
 

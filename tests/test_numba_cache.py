@@ -49,3 +49,51 @@ def test_other_packages_keep_numbas_locator(tmp_path):
     src.write_text("def f():\n    return 1\n")
     assert nc.PackageInTreeCacheLocator.from_function(None, str(src)) is None
     assert nc.PackageUserWideCacheLocator.from_function(None, str(src)) is None
+
+
+_LOAD_SCRIPT = r"""
+import sys
+import numpy as np
+from numba import njit
+from exudyn_lie import _numba_cache as nc
+from exudyn_lie.groups import so3
+
+x = np.array([0.3, -0.2, 0.7])
+R = np.zeros((3, 3))
+so3.exp_into(x, R)                       # run 1: compiled and saved; run 2: loaded from the cache
+loaded = bool(so3.exp_into.stats.cache_hits)
+print("loaded", loaded, "pending", len(nc._LazyBitcode.pending))
+
+
+@njit
+def twice(x, R):                         # a new compile linking the cached library in
+    so3.exp_into(x, R)
+    so3.exp_into(2.0 * x, R)
+    return R[0, 1]
+
+
+R2 = np.zeros((3, 3))
+so3.exp_into(2.0 * x, R2)
+print("linked", twice(x, R) == R2[0, 1], "pending", len(nc._LazyBitcode.pending))
+"""
+
+
+def test_cache_load_defers_bitcode_and_runtime(tmp_path):
+    """A function loaded from the cache (a second process) leaves its bitcode unparsed, and a
+    new compile that links it in parses the bitcode and gives the same numbers as the loaded
+    function."""
+    import subprocess
+    import sys
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"))
+    out = []
+    for _ in range(2):
+        p = subprocess.run([sys.executable, "-c", _LOAD_SCRIPT], env=env, capture_output=True, text=True,
+                           timeout=600, cwd=os.path.dirname(nc.PACKAGE_DIR))
+        assert p.returncode == 0, p.stderr[-2000:]
+        out.append(p.stdout.split())
+    first, second = out
+    assert first[first.index("loaded") + 1] == "False"
+    assert second[second.index("loaded") + 1] == "True"
+    assert second[second.index("pending") + 1] == "1"          # loaded, bitcode not parsed
+    assert second[second.index("linked") + 1] == "True"
+    assert second[-1] == "0"                                   # linking parsed it

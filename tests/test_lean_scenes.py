@@ -5,7 +5,9 @@ other features' code, and runs the same solution as when it is compiled full.
   distance row kinds; one item of any other kind makes the scene full;
 * the same scene compiled lean and full (``compiled.LEAN_SCENES``) gives bit-identical states
   and multipliers, with every row kind and force element of a lean scene present;
-* the lean stage's LLVM IR has none of the absent features' functions (the full one has them).
+* the lean stage's LLVM IR has none of the absent features' functions (the full one has them);
+* the same for two run-time switches made compile-time ones: the Python-force seam (only with
+  Python forces) and the projection after each step (only with stabilisation).
 """
 import numpy as np
 import pytest
@@ -135,3 +137,29 @@ def test_python_force_call_compiled_only_with_python_forces():
     assert "external_forces" in irs[True]
     np.testing.assert_array_equal(sims[True].R, sims[False].R)
     np.testing.assert_array_equal(sims[True].V, sims[False].V)
+
+
+def test_projection_compiled_only_with_stabilization():
+    """Fixed steps without stabilisation (``SceneData.stabilization`` None) compile no
+    projection (the step loop's guarded call, compiled here afresh, has none of its code);
+    with ``stabilization='velocity'`` it is compiled, and the steps are projected."""
+    from numba import njit
+    from exudyn_lie.mbs.projection import is_stabilized, project_state_if
+
+    @njit
+    def after_step(sd, wk, R, r, V):          # the fixed steps' projection in mk_steps
+        if is_stabilized(sd.stabilization):
+            return project_state_if(sd.stabilization, sd, wk, sd.stabilization, R, r, V)
+        return 0
+
+    irs, drift = {}, {}
+    for stab in (None, "velocity"):
+        sim = Simulator(lean_scene(), "RK4", "SE3", stabilization=stab, projectInitial=True)
+        assert (sim.sd.stabilization is None) == (stab is None)
+        sim.Advance(300, 2e-3)
+        drift[stab] = np.abs(sim._residuals_and_JV()[1]).max()
+        assert after_step(sim.sd, sim.wk, sim.R, sim.r, sim.V) == 0
+        irs[stab] = after_step.inspect_llvm(after_step.signatures[-1])
+    assert "projection7project" not in irs[None]
+    assert "projection7project" in irs["velocity"]
+    assert drift["velocity"] < 1e-12 < drift[None]

@@ -46,8 +46,9 @@ from numba.extending import overload
 
 from ..integrators import control as C
 from .bodies import exp_compose
-from .codes import STAB_NONE, STATUS_OK, STATUS_STEP_MIN
-from .projection import CT_N_PROJ, CT_POS, enforce_constraint_tolerance, project_error_estimate, project_state
+from .codes import STATUS_OK, STATUS_STEP_MIN
+from .projection import (CT_N_PROJ, CT_POS, enforce_constraint_tolerance, is_stabilized, project_error_estimate,
+                         project_state_if)
 from .row_drives import update_row_drives
 from .rotation_parameters import tracked_at
 from . import stepper
@@ -238,10 +239,10 @@ def adaptive_control(sd, wk, am, ctl, R, r, V, htry, ok, st, t):
         return ACT_RETRY, STATUS_OK
     projected = False
     st = STATUS_OK
-    if sd.stabilization != STAB_NONE or ctol[CT_POS] > 0.0:
+    if is_stabilized(sd.stabilization) or ctol[CT_POS] > 0.0:
         st = update_row_drives(wk.drive, t + htry)        # the rows' moving offsets at the step's end
-    if st == STATUS_OK and sd.stabilization != STAB_NONE:
-        st = project_state(sd, wk, sd.stabilization, R, r, V)
+    if st == STATUS_OK and is_stabilized(sd.stabilization):
+        st = project_state_if(sd.stabilization, sd, wk, sd.stabilization, R, r, V)
         projected = True
     elif st == STATUS_OK and ctol[CT_POS] > 0.0:
         st, projected = enforce_constraint_tolerance(sd, wk, ctol, R, r, V)

@@ -40,7 +40,8 @@ SceneData = namedtuple("SceneData", [
     "jint", "jpos", "jrot", "jpar",   # joints: [A, B, first row, rows]; [posA, posB]; [rotA, rotB]; [row parameters]
     "rint",                           # constraint rows: [kind, axis of A, axis of B, body A, body B]
     "nrows", "bandwidth", "redundant", "pivotTol",
-    "stabilization",                  # kernel.STAB_*: projection after every step
+    "stabilization",                  # kernel.STAB_*: projection after every step; None: none (no projection
+                                      #   compiled into the step loop, projection.project_state_if)
     "rowsAll",                        # None in a lean scene (scene_is_lean): the coordinate and rolling-disc
                                       #   row kinds are not compiled (mbs/presence.py); True otherwise
 ])
@@ -343,7 +344,7 @@ def compile_scene(scene: Scene, groups):
         jrot=arr([[j.rotA, j.rotB] for j in J], (-1, 2, 3, 3)),
         jpar=arr([joint_parameters(j) for j in J], (-1, N_JPAR)),
         rint=arr([list(x) for x in zip(rkind, rax, rbx, rA, rB)], (-1, 5), np.int64),
-        nrows=m, bandwidth=bw, redundant=False, pivotTol=REL_PIVOT_TOL, stabilization=0,
+        nrows=m, bandwidth=bw, redundant=False, pivotTol=REL_PIVOT_TOL, stabilization=None,
         rowsAll=None if lean else True,
     )
     return sd, np.array(rjoint, dtype=np.int64)

@@ -1,12 +1,14 @@
 """Constraint stabilisation on the group: position (Gauss-Newton) and velocity projection."""
 from collections import namedtuple
 
-from numba import njit
+from numba import njit, types
+from numba.extending import overload
 
 from .bodies import exp_compose
-from .codes import PROJ_FAIL, PROJ_MAX_ITER, PROJ_TOL, STAB_POSITION, STAB_VELOCITY, STATUS_OK, STATUS_PROJECTION
+from .codes import PROJ_FAIL, PROJ_MAX_ITER, PROJ_TOL, STAB_NONE, STAB_POSITION, STAB_VELOCITY, STATUS_OK, STATUS_PROJECTION
 from .constraints import joints_rows
 from .index1 import apply_correction, rows_times, schur_correct, solve_multipliers, tree_of
+from .presence import guarded
 
 
 # the arguments of project, by what they are (built by project_state from SceneData / Work)
@@ -86,6 +88,24 @@ def project_state(sd, wk, level, R, r, V):
                          wk.ytmp, wk.info, wk.tmp12, tree_of(sd, wk)),
                    Rows(wk.h, wk.Jr, wk.eta, wk.rdrive), Scratch(wk.Psi, wk.v3, wk.m3, wk.ident, wk.zero3, wk.zero6),
                    R, r, V)
+
+
+def is_stabilized(level):
+    """At compile time if possible: whether the steps are projected (``SceneData.stabilization``
+    None: never, so nothing of the projection is compiled into the step loop)."""
+    raise NotImplementedError("compiled only")
+
+
+@overload(is_stabilized, inline="always")
+def _is_stabilized(level):
+    if isinstance(level, types.NoneType):
+        return lambda level: False
+    return lambda level: level != STAB_NONE
+
+
+#: ``project_state(sd, wk, level, R, r, V)`` unless ``level`` (``sd.stabilization``) is None:
+#: without stabilisation the step loop compiles no projection (mbs/presence.py)
+project_state_if = guarded(project_state, default=STATUS_OK)
 
 
 # ---------------------------------------------------------------- constraint tolerance (adaptive steps)

@@ -151,7 +151,7 @@ class Simulator:
         self.verbose = verbose
         self.sd, self.rowJoint = compile_scene(scene, self.groups)
         self._track = compile_tracking(scene)
-        self.sd = self.sd._replace(stabilization={None: kernel.STAB_NONE, "velocity": kernel.STAB_VELOCITY,
+        self.sd = self.sd._replace(stabilization={None: None, "velocity": kernel.STAB_VELOCITY,
                                                   "position": kernel.STAB_POSITION}[self.stabilization])
         self.method = method_arrays(self.tableau)
         self.control = fixed_step_control()

@@ -45,13 +45,13 @@ from numba.extending import overload
 from . import external
 from .external_probes import probe_kinematics
 from .bodies import body_dexpinv_stage, body_world_velocity, exp_compose, add_point_force_origin, add_world_torque_row
-from .codes import (STAB_NONE, STAGE_ARG_MAX2, STATUS_BLOWUP, STATUS_EXTERNAL, STATUS_NONFINITE, STATUS_OK,
+from .codes import (STAGE_ARG_MAX2, STATUS_BLOWUP, STATUS_EXTERNAL, STATUS_NONFINITE, STATUS_OK,
                     STATUS_STAGE_ARG)
 from .forces import update_contact_data, update_torsion_tracking
 from .rotation_parameters import record_tracked
 from .index1 import rhs
 from .presence import guarded
-from .projection import project_state
+from .projection import is_stabilized, project_state_if
 from .row_drives import update_row_drives
 
 # A tableau as the stepper uses it: A, b, c, the indices of the evaluated stages and the
@@ -465,10 +465,10 @@ def mk_steps(sd, wk, tab, ctl, t0, h, nsteps, R, r, V, vmax, every, Ro, ro, Vo, 
             if st != STATUS_OK:
                 copy_state(wk.Rb, wk.rb, wk.Vb, R, r, V)
                 return st, n
-            if sd.stabilization != STAB_NONE:
+            if is_stabilized(sd.stabilization):
                 st = update_row_drives(wk.drive, t + hs)       # the rows' moving offsets at the step's end
                 if st == STATUS_OK:
-                    st = project_state(sd, wk, sd.stabilization, R, r, V)
+                    st = project_state_if(sd.stabilization, sd, wk, sd.stabilization, R, r, V)
                 if st != STATUS_OK:
                     copy_state(wk.Rb, wk.rb, wk.Vb, R, r, V)
                     return st, n

@@ -25,6 +25,8 @@ from .codes import BODY_TWIST
 from .bodies import body_dexpinv_stage, exp_compose
 from .rolling_disc_penalty_forces import D_DATA
 from .presence import is_present
+from .rotation_parameters import update_tracked_bodies
+from .constraints import joints_rows
 from .compiled import compile_scene, compile_tracking, make_work, resolve_groups, with_redundant
 from .linalg import REL_PIVOT_TOL, rows_in_null_space, schur_rank_and_null
 from .row_drives import RowDrives
@@ -75,12 +77,20 @@ class Result:
         return np.hypot(self.jointPositionViolation, self.jointRotationViolation)
 
 
+def joint_rows_at(sd, wk, R, r, V, h, Jr, eta):
+    """Residuals ``h``, Jacobian rows ``Jr`` and ``eta`` of every joint at the state (R, r, V):
+    ``kernel.all_rows`` without the energies, and without an entry taking the SceneData /
+    Work tuples (a first run compiles none for the initial checks)."""
+    joints_rows(sd.gid, sd.jint, sd.jpos, sd.jrot, sd.jpar, sd.rint, sd.rowsAll, wk.bparam, R, r, V, h, Jr, eta,
+                wk.rdrive, wk.v3, wk.ident, wk.zero3, wk.zero6)
+
+
 def constraint_jacobian(sd, wk, R, r, V):
     """Residuals h(g), the dense constraint Jacobian J (m, 6 nb) in the bodies' group
     velocity coordinates, and eta = -Jdot V, at the state (R, r, V)."""
     m = sd.nrows
-    kernel.all_rows(sd, wk, np.ascontiguousarray(R, dtype=float), np.ascontiguousarray(r, dtype=float),
-                    np.ascontiguousarray(V, dtype=float), wk.h, wk.Jr, wk.eta, np.zeros(3))
+    joint_rows_at(sd, wk, np.ascontiguousarray(R, dtype=float), np.ascontiguousarray(r, dtype=float),
+                  np.ascontiguousarray(V, dtype=float), wk.h, wk.Jr, wk.eta)
     J = np.zeros((m, 6 * sd.nb))
     for q in range(m):
         a, b = sd.rint[q, kernel.ROW_BODY_A], sd.rint[q, kernel.ROW_BODY_B]
@@ -97,8 +107,8 @@ def schur_complement(sd, wk, R, r, V):
     for SO3xR3 bodies, as in the kernel).  Assembled body by body from the row blocks:
     O(m^2) memory, no (m, 6 nb) Jacobian.  Used only on the rare singular paths."""
     m = sd.nrows
-    kernel.all_rows(sd, wk, np.ascontiguousarray(R, dtype=float), np.ascontiguousarray(r, dtype=float),
-                    np.ascontiguousarray(V, dtype=float), wk.h, wk.Jr, wk.eta, np.zeros(3))
+    joint_rows_at(sd, wk, np.ascontiguousarray(R, dtype=float), np.ascontiguousarray(r, dtype=float),
+                  np.ascontiguousarray(V, dtype=float), wk.h, wk.Jr, wk.eta)
     S = np.zeros((m, m))
     blocks = {}
     for q in range(m):
@@ -228,8 +238,12 @@ class Simulator:
         load that compiled entry point at all (its cache load and first-call typing are part
         of a warm first solve, issue 19)."""
         sd, wk = self.sd, self.wk
-        if is_present(sd.tint) or (sd.nangles or 0) > 0 or wk.nplanar > 0:
+        if is_present(sd.tint) or (sd.nangles or 0) > 0:
             kernel.update_torsion_tracking(sd, wk, self.R, self.r, self.V)
+        elif wk.nplanar > 0:
+            # its last part alone: the step loop's own callee, so a first run compiles no
+            # separate entry taking the SceneData / Work tuples for it (1.5 s)
+            update_tracked_bodies(wk.btrack, wk.bframe, wk.bangle, wk.bparam, self.R)
 
     def states(self):
         omega, vel = twist_to_world_velocity(self.gid, self.R, self.V)
@@ -325,7 +339,7 @@ class Simulator:
         ``w`` the velocity targets of the rows' drives, mbs/row_drives.py)."""
         sd, wk = self.sd, self.wk
         self._drives_at(self.t)
-        kernel.all_rows(sd, wk, self.R, self.r, self.V, wk.h, wk.Jr, wk.eta, np.zeros(3))
+        joint_rows_at(sd, wk, self.R, self.r, self.V, wk.h, wk.Jr, wk.eta)
         Vz = np.vstack([self.V, np.zeros((1, 6))])          # row -1: the ground
         a = sd.rint[:, kernel.ROW_BODY_A]
         b = sd.rint[:, kernel.ROW_BODY_B]

@@ -6,8 +6,8 @@ other features' code, and runs the same solution as when it is compiled full.
 * the same scene compiled lean and full (``compiled.LEAN_SCENES``) gives bit-identical states
   and multipliers, with every row kind and force element of a lean scene present;
 * the lean stage's LLVM IR has none of the absent features' functions (the full one has them);
-* the same for two run-time switches made compile-time ones: the Python-force seam (only with
-  Python forces) and the projection after each step (only with stabilisation).
+* the same for a run-time switch made a compile-time one: the projection after each step
+  (only with stabilisation).
 """
 import numpy as np
 import pytest
@@ -107,36 +107,6 @@ def test_lean_stage_has_no_code_of_absent_features(monkeypatch):
         assert name not in irs[True], name
         assert name in irs[False], name
     assert "spring_forces" in irs[True]
-
-
-def test_python_force_call_compiled_only_with_python_forces():
-    """The stage calls the Python forces through the external seam only when the scene has
-    them (``Work.probe`` None otherwise): without, its IR has no ``external_forces``; with a
-    Python force that adds nothing, it has, and the states equal those of the scene without it."""
-    from numba import njit
-    from exudyn_lie.mbs import stepper
-
-    @njit
-    def stage(sd, wk, Vdot):
-        return stepper.stage_rhs(sd, wk, 0.0, Vdot)
-
-    sims, irs = {}, {}
-    for with_py in (False, True):
-        sc = lean_scene()
-        if with_py:
-            sc.AddPythonForce(lambda t, state: (np.zeros((3, 3)), np.zeros((3, 3))), name="nothing")
-        sim = Simulator(sc, "RK4", "SE3", projectInitial=True)
-        assert (sim.wk.probe is None) == (not with_py)
-        wk = sim.wk
-        wk.Rs[:], wk.rs[:], wk.Vs[:] = sim.R, sim.r, sim.V
-        assert stage(sim.sd, wk, np.zeros((sim.sd.nb, 6))) == 0
-        irs[with_py] = stage.inspect_llvm(stage.signatures[-1])
-        sim.Advance(100, 1e-3)
-        sims[with_py] = sim
-    assert "external_forces" not in irs[False]
-    assert "external_forces" in irs[True]
-    np.testing.assert_array_equal(sims[True].R, sims[False].R)
-    np.testing.assert_array_equal(sims[True].V, sims[False].V)
 
 
 def test_projection_compiled_only_with_stabilization():

@@ -133,3 +133,29 @@ def test_projection_compiled_only_with_stabilization():
     assert "projection7project" not in irs[None]
     assert "projection7project" in irs["velocity"]
     assert drift["velocity"] < 1e-12 < drift[None]
+
+
+def test_python_force_without_probes_has_no_probe_table():
+    """A Python force that reads no compiled kinematics leaves ``Work.probe`` None (the
+    external call then compiles without the probes' code) and adds its force as before: a
+    constant Python force equals the same compiled load to round-off."""
+    F = np.array([0.0, 0.0, 1.5])
+
+    def push(t, state):
+        out = np.zeros((3, 3))
+        out[2] = F
+        return out, np.zeros((3, 3))
+
+    sims = {}
+    for py in (False, True):
+        sc = lean_scene()
+        if py:
+            sc.AddPythonForce(push, name="push")
+        else:
+            sc.AddForce(2, F)
+        sim = Simulator(sc, "RK4", "SE3", projectInitial=True)
+        if py:
+            assert sim.wk.probe is None
+        sim.Advance(200, 1e-3)
+        sims[py] = sim
+    np.testing.assert_allclose(sims[True].r, sims[False].r, rtol=0, atol=1e-13)

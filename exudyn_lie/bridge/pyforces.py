@@ -552,12 +552,14 @@ class Combined:
         ``probe`` (the kinematics the compiled stage computed, mbs/external_probes.py) and
         ``Q`` of ``Qext`` (rows (F, T) of six); the others run as in :meth:`add_into`.  In the
         items' order, so the sums are :meth:`add_into`'s to the bit."""
-        P, Q = _flat(probe), _flat(Qext)
+        # probe None: no item of the scene reads one (compiled.make_work)
+        P, Q = (None if probe is None else _flat(probe)), _flat(Qext)
+        nprobe = 0 if probe is None else probe.shape[0]
         steps = []
         for it in self.items:
             fast = getattr(it, "add_stage", None)
             if hasattr(it, "probe_row") and it.probe_row() is not None \
-                    and not (it.probeIndex is not None and it.probeIndex < probe.shape[0]):
+                    and not (it.probeIndex is not None and it.probeIndex < nprobe):
                 fast = None                 # its probe is not in this work set
             steps.append((it, fast))
         steps = tuple(steps)

@@ -73,7 +73,7 @@ Work = namedtuple("Work", [
     "disc",                           # penalty rolling discs (rolling_disc_penalty_forces.D_*): bodies, flags,
                                       #   parameters, data coordinates (updated after every accepted step)
     "probe",                          # kinematics of the Python forces' items, computed before the external
-                                      #   call of each stage (mbs/external_probes.py); (0, N_PROBE) without them
+                                      #   call of each stage (mbs/external_probes.py); None without them
 ])
 
 # the per-body tracking of a scene (compile_tracking), carried into every Work of its simulator
@@ -520,5 +520,7 @@ def make_work(sd, nstages, solve="auto", track=None):
         ext=np.zeros(2, np.int64), rdrive=constant_drives(sd), drive=None, Vw=np.zeros((nb, 6) if sd.hasQext else (0, 6)),
         tplan=plan, Tw=np.zeros(work_size(nb, m, plan)) if tree else None,
         bangle=track.bangle, bframe=track.bframe, btrack=track.btrack, bparam=track.bparam, nplanar=track.nplanar,
-        disc=track.disc, probe=track.probe,
+        # None without probes: external_forces then compiles without probe_kinematics (about 2 s of
+        # a first run; the call of external_forces itself stays, see stepper.stage_rhs)
+        disc=track.disc, probe=track.probe if track.probe.shape[0] > 0 else None,
     )

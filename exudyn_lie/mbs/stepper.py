@@ -50,6 +50,7 @@ from .codes import (STAGE_ARG_MAX2, STATUS_BLOWUP, STATUS_EXTERNAL, STATUS_NONFI
 from .forces import update_contact_data, update_torsion_tracking
 from .rotation_parameters import record_tracked
 from .index1 import rhs
+from .presence import guarded
 from .projection import is_stabilized, project_state_if
 from .row_drives import update_row_drives
 
@@ -196,6 +197,9 @@ def call_evaluator(token, t):
     return external.call(token, t)
 
 
+_probe_kinematics_if = guarded(probe_kinematics)
+
+
 @njit(cache=True, _nrt=False)
 def external_forces(token, gid, t, Rs, rs, Vs, Vw, Qext, ext, probe):
     """The right-hand side seam (:mod:`.external`), one Python call per stage.
@@ -212,7 +216,7 @@ def external_forces(token, gid, t, Rs, rs, Vs, Vw, Qext, ext, probe):
         body_world_velocity(gid[i], Rs[i], Vs[i], Vw[i])
         for k in range(6):
             Qext[i, k] = 0.0
-    probe_kinematics(Rs, rs, Vw, probe)
+    _probe_kinematics_if(probe, Rs, rs, Vw, probe)      # probe None: no item reads any (no code)
     if call_evaluator(token, t):
         return STATUS_EXTERNAL
     for i in range(gid.shape[0]):

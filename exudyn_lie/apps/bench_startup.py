@@ -154,7 +154,7 @@ def target_lines(res):
         c = d.get("cold")
         if c:
             target, kind = cold_target(c["load"][0], cores)
-            L.append(f"| start-up: first run ever, empty numba cache ({path} path) <= {target:g} s wall on a {kind} "
+            L.append(f"| start-up: first run ever, empty numba cache ({path} path) <= {target:g} s wall on {'an' if kind == 'idle' else 'a'} {kind} "
                      f"machine (<= {COLD_TARGET_IDLE_S:g} s idle, <= {COLD_TARGET_LOADED_S:g} s loaded) | "
                      f"{c['wall']:.3g} s wall, load average {c['load'][0]:.2f} at the start / "
                      f"{c.get('loadEnd', [np.nan])[0]:.2f} at the end on {cores} cores"

@@ -9,11 +9,11 @@ import contextlib
 import os
 import sys
 
-#: Seconds a cold start compiles when this machine has not compiled the solver before: 17 s
-#: (paper, kernel path) to 36 s (SolveDynamic on a busy machine) on a 2-core Intel Xeon,
-#: measured with an empty cache (README, set-up).  After one cold start the notice gives
-#: the compile time measured then on this machine (:data:`MEASURED_FILE`).
-COLD_COMPILE_SECONDS = 30
+#: Seconds a cold start compiles when this machine has not compiled the solver before: 16 s
+#: (kernel path) to 19 s (SolveDynamic) on an idle 2-core AMD EPYC, measured with an empty
+#: cache (``python -m exudyn_lie bench --sections startup --quick --cold``, README).  After one
+#: cold start the notice gives the compile time measured then on this machine (:data:`MEASURED_FILE`).
+COLD_COMPILE_SECONDS = 20
 #: numba's compile seconds of the last cold start on this machine (beside numba's cache)
 MEASURED_FILE = os.path.join(os.path.dirname(os.path.abspath(__file__)), "__pycache__", "cold_compile_seconds.txt")
 

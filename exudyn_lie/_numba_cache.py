@@ -17,6 +17,7 @@ compiled function is defined.
 import hashlib
 import os
 import re
+import weakref
 
 from numba.core import caching, codegen, dispatcher
 
@@ -185,7 +186,7 @@ class _LazyBitcode:
         lib._exl_bitcode = bitcode
         lib._finalize_final_module()
         codegen._engine._defined_symbols.add(entry)
-        cls.pending.append(lib)
+        cls.pending.append(weakref.ref(lib))      # a library that is gone needs no parse
         return lib
 
     @classmethod
@@ -199,7 +200,9 @@ class _LazyBitcode:
     @classmethod
     def parse_all(cls):
         while cls.pending:
-            cls.parse(cls.pending.pop())
+            lib = cls.pending.pop()()
+            if lib is not None:
+                cls.parse(lib)
 
 
 def _is_symbol_defined(self, name):

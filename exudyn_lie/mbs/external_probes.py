@@ -142,25 +142,23 @@ def probe_kinematics(Rs, rs, Vw, probe):
 
 
 @njit(cache=True, inline="always", _nrt=False)
+def _frame_side(Rs, Vw, p, b, col):
+    """World columns ``p[col:col+3]`` and ``p[col+3:col+6]`` of one side's joint frame and the
+    side's angular velocity (nine floats; the ground: stored world columns, at rest)."""
+    if b == GROUND:
+        return p[col], p[col + 1], p[col + 2], p[col + 3], p[col + 4], p[col + 5], 0.0, 0.0, 0.0
+    u0, u1, u2 = _world_column(Rs[b], p, col)
+    v0, v1, v2 = _world_column(Rs[b], p, col + 3)
+    w0, w1, w2 = _world_column(Rs[b], Vw[b], 0)
+    return u0, u1, u2, v0, v1, v2, w0, w1, w2
+
+
+@njit(cache=True, inline="always", _nrt=False)
 def torsion_probe(Rs, Vw, p):
     """:data:`PROBE_TORSION`: as ``TorsionalSpringDamperUF.angle`` without the tracking."""
     a, b = int(p[P_BODY_A]), int(p[P_BODY_B])
-    if a == GROUND:
-        x0, x1, x2 = p[TORSION_COLS_A], p[TORSION_COLS_A + 1], p[TORSION_COLS_A + 2]
-        z0, z1, z2 = p[TORSION_COLS_A + 3], p[TORSION_COLS_A + 4], p[TORSION_COLS_A + 5]
-        wa0, wa1, wa2 = 0.0, 0.0, 0.0
-    else:
-        x0, x1, x2 = _world_column(Rs[a], p, TORSION_COLS_A)
-        z0, z1, z2 = _world_column(Rs[a], p, TORSION_COLS_A + 3)
-        wa0, wa1, wa2 = _world_column(Rs[a], Vw[a], 0)
-    if b == GROUND:
-        c0, c1, c2 = p[TORSION_COLS_B], p[TORSION_COLS_B + 1], p[TORSION_COLS_B + 2]
-        s0, s1, s2 = p[TORSION_COLS_B + 3], p[TORSION_COLS_B + 4], p[TORSION_COLS_B + 5]
-        wb0, wb1, wb2 = 0.0, 0.0, 0.0
-    else:
-        c0, c1, c2 = _world_column(Rs[b], p, TORSION_COLS_B)
-        s0, s1, s2 = _world_column(Rs[b], p, TORSION_COLS_B + 3)
-        wb0, wb1, wb2 = _world_column(Rs[b], Vw[b], 0)
+    x0, x1, x2, z0, z1, z2, wa0, wa1, wa2 = _frame_side(Rs, Vw, p, a, TORSION_COLS_A)
+    c0, c1, c2, s0, s1, s2, wb0, wb1, wb2 = _frame_side(Rs, Vw, p, b, TORSION_COLS_B)
     c = x0 * c0 + x1 * c1 + x2 * c2          # (J_A^T J_B)[0, 0]
     s = x0 * s0 + x1 * s1 + x2 * s2          # (J_A^T J_B)[0, 1]
     p[TORSION_PHI] = math.atan2(-s, c)

@@ -229,3 +229,13 @@ def test_ep_read_rejects_non_unit_parameters():
     kind = EPNode([5], [np.arange(7)], [np.array([0, 0, 0, 1.1, 0, 0, 0])])
     with pytest.raises(BridgeError, match="NodeRigidBodyEP 5.*norm 1.1"):
         kind.read(np.zeros(7), np.zeros(7))
+
+
+def test_write_back_compiles_only_the_row_writers_of_its_nodes():
+    """present_writers marks the row writers the nodes' codes need (the others are None, so
+    the write-back compiles none of their code), and the per-node path has all of them."""
+    from exudyn_lie.bridge import nodes
+    p = nodes.present_writers([nodes.CODE_EP, nodes.CODE_POINT, nodes.CODE_EP])
+    assert [x is not None for x in p] == [c == nodes.CODE_EP for c in nodes.WRITER_CODES]
+    assert all(x is not None for x in nodes.ALL_WRITERS)
+    assert all(x is None for x in nodes.present_writers([nodes.CODE_POINT, nodes.CODE_1D]))

@@ -16,7 +16,7 @@ import numpy as np
 from ..mbs import kernel, stepper
 from ..mbs.entry import entry_point
 from ..mbs.rotation_parameters import record_tracked
-from .nodes import CODE_1D_ROT, CODE_2D, NCOORD_MAX, write_rows
+from .nodes import CODE_1D_ROT, CODE_2D, NCOORD_MAX, present_writers, write_rows
 
 CHUNK_SECONDS = 0.05        # aimed wall time of one chunk (progress, responsiveness)
 CHUNK_DOUBLES = 1 << 22     # at most this many doubles of chunk buffers (32 MiB)
@@ -85,7 +85,7 @@ class OutputChunks:
         To = t0 + ((np.arange(self.maxRows) + 1) * nsub) * h        # the rows' times (the last: t0 + done h)
         a2 = (rows, sim.sd.gid, self.Ro, self.ro, self.Vo, self.Vdo, self.lamo, self.doacc, nt.code, nt.body,
               nt.idx, nt.nq, nt.qref, nt.prev, self.Q, self.Qt, self.Qtt, nt.flags, jrow, jae, self.AE, To,
-              self.Po, nt.scratch)
+              self.Po, nt.scratch, nt.present)
         nflag = _call(self._ep, "write", write_rows, a2)
         sim.t = t0 + done * h           # on a failure: the last accepted step
         self.tStart, self.rows, self.next = t0, rows, 0
@@ -166,7 +166,7 @@ class AdaptiveOutputChunks(OutputChunks):
         jrow, jae = self.jac
         a2 = (rows, sim.sd.gid, self.Ro, self.ro, self.Vo, self.Vdo, self.lamo, self.doacc, nt.code, nt.body,
               nt.idx, nt.nq, nt.qref, nt.prev, self.Q, self.Qt, self.Qtt, nt.flags, jrow, jae, self.AE,
-              np.ascontiguousarray(tout, dtype=float), self.Po, nt.scratch)
+              np.ascontiguousarray(tout, dtype=float), self.Po, nt.scratch, nt.present)
         nflag = _call(self._ep, "write", write_rows, a2)
         self.tStart, self.rows, self.next = tPrev, rows, 0
         self.done += rows
@@ -205,6 +205,7 @@ class NodeTable:
             self.prev[i:i + n, 2][angles] = t0             # nodes.continued_angle: time of prev
             self.kindOfRow += [(kind, k) for k in range(n)]
             i += n
+        self.present = present_writers(self.code)     # only these row writers are compiled
 
     def write(self, sim, Vdot, lam, doacc, q, qt, qtt, multipliers):
         """Node coordinates of the simulator's state (and with ``doacc`` accelerations and
@@ -217,7 +218,8 @@ class NodeTable:
         record_tracked(sim.wk.btrack, sim.wk.bangle, sim.wk.bparam, self.tracked[0])
         return write_rows(1, sd.gid, sim.R[None], sim.r[None], sim.V[None], Vdot[None], lam[None], bool(doacc),
                           self.code, self.body, self.idx, self.nq, self.qref, self.prev, q[None], qt[None], qtt[None],
-                          self.flags, jrow, jae, ae[None], np.array([float(sim.t)]), self.tracked, self.scratch)
+                          self.flags, jrow, jae, ae[None], np.array([float(sim.t)]), self.tracked, self.scratch,
+                          self.present)
 
     def warn_flags(self):
         for i in np.nonzero(self.flags)[0]:

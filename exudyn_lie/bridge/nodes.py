@@ -27,6 +27,7 @@ import numpy as np
 from numba import njit
 
 from ..mbs.codes import uses_body_twist
+from ..mbs.presence import guarded
 from ..mbs.rotation_parameters import TRACK_QUAT, TRACK_RXYZ, nearest_quat, nearest_rxyz, quat_of, quat_rotvec
 from ..userwarn import warn_user
 from . import items
@@ -183,24 +184,46 @@ def continued_angle(a, omz, prev, first, t, tracked):
     return out
 
 
+#: the row writers in the order of :func:`present_writers`' tuple (CODE_ROTVEC, CODE_EP, CODE_RXYZ, CODE_2D)
+WRITER_CODES = (CODE_ROTVEC, CODE_EP, CODE_RXYZ, CODE_2D)
+_rotvec_row_if = guarded(rotvec_row, default=0)
+_ep_row_if = guarded(ep_row, default=0)
+_rxyz_row_if = guarded(rxyz_row, default=0)
+_planar_row_if = guarded(planar_row, default=0)
+
+
+def present_writers(codes):
+    """The ``present`` argument of :func:`write_row` for nodes of the compiled writer codes
+    ``codes``: per row writer of :data:`WRITER_CODES` an empty array if some node needs it,
+    else None, so that the write-back compiles only the writers the scene uses (its type
+    differs per combination; mbs/presence.py)."""
+    used = set(int(c) for c in codes)
+    return tuple(np.zeros(0) if c in used else None for c in WRITER_CODES)
+
+
+#: every row writer (the per-node Python path, NodeKind.write)
+ALL_WRITERS = present_writers(WRITER_CODES)
+
+
 @njit(cache=True)
-def write_row(code, R, omega, omegad, prev, first, p, p_t, p_tt, t, tracked, tmp):
+def write_row(code, R, omega, omegad, prev, first, p, p_t, p_tt, t, tracked, tmp, present):
+    """Rotation parameters of one node by its ``code``; ``present``: :func:`present_writers`."""
     if code == CODE_POINT or code == CODE_POINT2D or code == CODE_1D or code == CODE_1D_ROT:
         return 0                         # no rotation parameters
     if code == CODE_2D:
-        return planar_row(R, omega, omegad, prev, first, p, p_t, p_tt, t, tracked)
+        return _planar_row_if(present[3], R, omega, omegad, prev, first, p, p_t, p_tt, t, tracked)
     if code == CODE_ROTVEC:
-        return rotvec_row(R, omega, omegad, prev, first, p, p_t, p_tt, tmp)
+        return _rotvec_row_if(present[0], R, omega, omegad, prev, first, p, p_t, p_tt, tmp)
     elif code == CODE_EP:
-        return ep_row(R, omega, omegad, prev, first, p, p_t, p_tt, tmp)
-    return rxyz_row(R, omega, omegad, prev, first, p, p_t, p_tt)
+        return _ep_row_if(present[1], R, omega, omegad, prev, first, p, p_t, p_tt, tmp)
+    return _rxyz_row_if(present[2], R, omega, omegad, prev, first, p, p_t, p_tt)
 
 
 # ---------------------------------------------------------------------------- all nodes at once
 # (kept in this file: numba's cache is invalidated only by changes of the defining file)
 @njit(cache=True)
 def write_nodes(gid, R, r, V, Vdot, doacc, code, body, idx, nq, qref, prev, first, q, qt, qtt, flags, t, tracked, exact,
-                scratch):
+                scratch, present):
     """Node coordinates from the body states (R, r, V) and accelerations Vdot (in each
     body's group velocity coordinates: SE3 v body-fixed, SO3xR3 v = rdot).  With ``exact``,
     ``tracked`` (nb, 4) holds what the kernel tracked at this state step by step
@@ -251,7 +274,7 @@ def write_nodes(gid, R, r, V, Vdot, doacc, code, body, idx, nq, qref, prev, firs
             for k in range(4):
                 prev[i, k] = tracked[b, k]     # the row writer's nearest branch is then this one
         f = write_row(code[i], Rb, om, omd, prev[i], first, p, pt, ptt, t, tracked[b, 0] if exact else math.nan,
-                      scratch[7])
+                      scratch[7], present)
         if f:
             flags[i] = 1                 # kept until the warning is given (warn_flags)
             nflag += 1
@@ -305,29 +328,30 @@ def write_multipliers(lam, jrow, jae, ae):
 
 @njit(cache=True)
 def write_all(gid, R, r, V, Vdot, lam, doacc, code, body, idx, nq, qref, prev, q, qt, qtt, flags, jrow, jae, ae, t,
-              tracked, exact, scratch):
+              tracked, exact, scratch, present):
     """write_nodes + write_multipliers of one state (at time ``t``; ``exact``: ``tracked`` holds
     the kernel's tracked values at it, write_nodes)."""
     if doacc:
         write_multipliers(lam, jrow, jae, ae)
     return write_nodes(gid, R, r, V, Vdot, doacc, code, body, idx, nq, qref, prev, False, q, qt, qtt, flags, t,
-                       tracked, exact, scratch)
+                       tracked, exact, scratch, present)
 
 
 @njit(cache=True)
 def write_rows(nrows, gid, Rs, rs, Vs, Vdots, lams, doacc, code, body, idx, nq, qref, prev, Q, Qt, Qtt, flags, jrow,
-               jae, AE, To, Po, scratch):
+               jae, AE, To, Po, scratch, present):
     """:func:`write_all` of the states ``Rs[o], rs[o], Vs[o]`` at times ``To[o]`` (accelerations
     ``Vdots[o]``, multipliers ``lams[o]``) into rows ``o < nrows`` of ``Q, Qt, Qtt, AE``, in order,
     with the angles and rotation parameters the kernel tracked at each state in ``Po[o]``
     (mbs.rotation_parameters; rows beyond ``Po``'s: continuous from the previous row).  The single compiled entry of
     the write-back: every path uses it, one state being one row.  Returns the number of
-    flagged (node, row) pairs.  ``scratch``: (8, 4) working array (:func:`write_nodes`)."""
+    flagged (node, row) pairs.  ``scratch``: (8, 4) working array (:func:`write_nodes`);
+    ``present``: the row writers compiled (:func:`present_writers` of the nodes' codes)."""
     nflag = 0
     for o in range(nrows):
         nflag += write_all(gid, Rs[o], rs[o], Vs[o], Vdots[o], lams[o], doacc, code, body, idx, nq, qref, prev,
                            Q[o], Qt[o], Qtt[o], flags, jrow, jae, AE[o], To[o], Po[min(o, Po.shape[0] - 1)],
-                           o < Po.shape[0], scratch)
+                           o < Po.shape[0], scratch, present)
     return nflag
 
 
@@ -419,7 +443,7 @@ class NodeKind:
             flag = write_row(self.code, np.ascontiguousarray(R[i], dtype=float),
                              np.ascontiguousarray(omega[i], dtype=float),
                              zero if omegad is None else np.ascontiguousarray(omegad[i], dtype=float),
-                             self.prev[i], self.first, p, p_t, p_tt, 0.0, math.nan, tmp)
+                             self.prev[i], self.first, p, p_t, p_tt, 0.0, math.nan, tmp, ALL_WRITERS)
             ix = self.idx[i]
             q[ix[:3]] = np.asarray(r[i]) - self.qref[i, :3]
             q[ix[3:]] = p - self.qref[i, 3:]

@@ -243,11 +243,12 @@ def stage_rhs(sd, wk, t, Vdot):
     st = update_row_drives(wk.drive, t)      # no code without offset functions (wk.drive None)
     if st != STATUS_OK:
         return st
-    # A run-time branch, compiled in every scene (2.3 s of a first run), on purpose: compiled
-    # out (presence.guarded on a None probe table), the heavy top's step became 0.2-0.3 us
-    # slower and the double pendulum's 0.3-0.4 us (1.13-1.35 -> 1.45-1.62 us and 2.56-2.62 ->
-    # 2.94-3.09 us, three runs interleaved, states bit-identical): LLVM lays out the stage
-    # loop differently without the call.
+    # A run-time branch, compiled in every scene (about 0.4 s of a first run; the probes inside
+    # compile only when read), on purpose: compiled out (presence.guarded), the heavy top's step
+    # became 0.2-0.3 us slower and the double pendulum's 0.3-0.4 us (1.13-1.35 -> 1.45-1.62 us
+    # and 2.56-2.62 -> 2.94-3.09 us: the minimum over many short Simulator.Advance runs, three
+    # runs interleaved, states bit-identical): LLVM lays out the stage loop differently
+    # without the call.
     if sd.hasQext:
         st = external_forces(wk.ext[0], sd.gid, t, wk.Rs, wk.rs, wk.Vs, wk.Vw, wk.Qext, wk.ext, wk.probe)
         if st != STATUS_OK:

@@ -140,8 +140,8 @@ def _load_package_overload(self, sig, target_context):
 
     numba keeps a cached library's bitcode beside its object code, for linking it into a
     later compile, and parses it at every load: for the large stage loop most of a warm
-    first solve (heavy top, a fresh process: first solve minus second 0.069-0.072 s before,
-    0.025 s after, measured three times interleaved).  Here it is parsed when something asks
+    first solve (heavy top through the kernel, first solve minus second: 0.067 s before, 0.038 s
+    after, ``python -m exudyn_lie bench --sections startup --quick``).  Here it is parsed when something asks
     for it (:class:`_LazyBitcode`).  The NRT runtime is initialised as before: every
     CPython wrapper names its symbols (``NRT_adapt_ndarray_from_python``, ...)."""
     from numba.core.runtime import rtsys

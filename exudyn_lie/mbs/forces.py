@@ -352,26 +352,14 @@ def torsional_element_energy(sd, wk, R, r, V, e):
 
 
 @njit(cache=True, inline="always", _nrt=False)
-def _rolling_disc_penalty_data(gid, disc, R, r, V, v3, ident, zero3, zero6):
-    if disc.shape[0] > 0:
-        update_rolling_disc_penalty_data(gid, disc, R, r, V, v3, ident, zero3, zero6)
-
-
-@njit(cache=True, inline="always", _nrt=False)
-def _torsion_angles(gid, tint, trot, tphi, R, r, V, m3, ident, zero3, zero6):
-    if tint.shape[0] > 0:
-        torsion_angles(gid, tint, trot, tphi, R, r, V, m3, ident, zero3, zero6)
-
-
-@njit(cache=True, inline="always", _nrt=False)
 def _coordinate_angles(nangles, jint, jrot, jpar, rint, kint, krot, kpar, R):
-    if nangles > 0:
+    if nangles > 0:                 # a count, not a table: the guard's rows check does not apply
         update_coordinate_angles(jint, jrot, jpar, rint, kint, krot, kpar, R)
 
 
-# none of them in a lean scene (their tables None, mbs/presence.py)
-rolling_disc_penalty_data_if = guarded(_rolling_disc_penalty_data)
-torsion_angles_if = guarded(_torsion_angles)
+# none of them in a lean scene (their tables None, mbs/presence.py); in a full one only with rows
+rolling_disc_penalty_data_if = guarded(update_rolling_disc_penalty_data, rows=True)
+torsion_angles_if = guarded(torsion_angles, rows=True)
 coordinate_angles_if = guarded(_coordinate_angles)
 
 

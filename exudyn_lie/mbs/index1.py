@@ -96,8 +96,9 @@ def apply_correction(rint, W, lam, X, tree):
 # Both dispatchers are forceinlined: as calls, the chosen solve's ~17 arguments (most of them
 # arrays, passed as their unpacked fields) were copied to the stack for every stage, about 120
 # words, and the copies stalled on 4K aliasing (perf, per instruction address, heavy top).
-# Inlined, the heavy top's step went from about 1.7 to 1.1-1.3 us together with the lean scenes
-# (bench --sections perstep --quick, interleaved; states bit-identical).
+# Inlined, together with the lean scenes, the heavy top's step went from 1.74-1.90 to 1.38-1.57 us
+# (bench --sections perstep --quick, twice interleaved with the previous release; states
+# bit-identical).
 @overload(apply_correction, jit_options={"forceinline": True})
 def _apply_correction(rint, W, lam, X, tree):
     if _is_tree(tree):

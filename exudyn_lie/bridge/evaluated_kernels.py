@@ -20,7 +20,7 @@ from numba import njit
 
 from ..groups import so3
 from ..mbs.codes import uses_body_twist
-from ..mbs.linalg import REL_PIVOT_TOL, band_cholesky_inplace, band_cholesky_solve_inplace, pivoted_cholesky_solve
+from ..mbs.linalg import REL_PIVOT_TOL, band_ldl_inplace, band_ldl_solve_inplace, pivoted_cholesky_solve
 from ..mbs.stepper import finish, stage_k, stage_state
 from .nodes import rotvec_row
 
@@ -449,9 +449,9 @@ def schur_band_solve(M, f, Cq, eta, blk, blkPtr, blkOff, blockOf, pos, bw, MinvB
             x[pos[r]] = 0.0
             empty = True
         dmax = max(dmax, Band[pos[r], 0])
-    if band_cholesky_inplace(Band, m, bw, REL_PIVOT_TOL * dmax) >= 0:
+    if band_ldl_inplace(Band, m, bw, REL_PIVOT_TOL * dmax) >= 0:
         return 2
-    band_cholesky_solve_inplace(Band, m, bw, x)
+    band_ldl_solve_inplace(Band, m, bw, x)
     for r in range(m):
         lam[r] = x[pos[r]]
     # a = a0 - M^-1 Cq^T lam, block by block

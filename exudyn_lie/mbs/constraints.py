@@ -9,7 +9,7 @@ from numba import njit
 
 from .bodies import _cross, _matTvec, _side, body_axis, body_point, translation_dual
 from .codes import (J_BODY_A, J_BODY_B, J_NROW, J_ROW0, ROW_AX, ROW_BX, ROW_COORD, ROW_COORD_VEL, ROW_DIST, ROW_KIND,
-                    ROW_ROLL, ROW_ROT, ROW_TRANS_LOCAL)
+                    ROW_ROLL, ROW_ROT, ROW_TRANS_LOCAL, ROW_TRANS_WORLD, uses_body_twist)
 from .coordinate_rows import coordinate_row
 from .distance_rows import distance_row
 from .node_coordinates import PARAM_BASE, node_parameter_terms
@@ -113,6 +113,33 @@ def joint_rows(j, gid, jint, jpos, jrot, jpar, rint, rowsAll, bparam, R, r, V, h
                 Jr[q, 6] = c0
                 Jr[q, 7] = c1
                 Jr[q, 8] = c2
+        elif kind == ROW_TRANS_WORLD:
+            # a = e_ax: the general branch below with its zeros left out (adot = 0, abias = 0,
+            # R^T a = row ax of R); the same values to the bit, in about half the time
+            h[q] = d[rax]
+            eta[q] = -bd[rax]
+            if a >= 0:
+                c0, c1, c2 = _cross(RA[rax, 0], RA[rax, 1], RA[rax, 2], sA[0], sA[1], sA[2])
+                Jr[q, 0] = c0
+                Jr[q, 1] = c1
+                Jr[q, 2] = c2
+                if uses_body_twist(gA):     # v_A: -T_A^T a (translation_dual)
+                    Jr[q, 3] = -RA[rax, 0]
+                    Jr[q, 4] = -RA[rax, 1]
+                    Jr[q, 5] = -RA[rax, 2]
+                else:
+                    Jr[q, 3 + rax] = -1.0
+            if b >= 0:
+                c0, c1, c2 = _cross(sB[0], sB[1], sB[2], RB[rax, 0], RB[rax, 1], RB[rax, 2])
+                Jr[q, 6] = c0
+                Jr[q, 7] = c1
+                Jr[q, 8] = c2
+                if uses_body_twist(gB):
+                    Jr[q, 9] = RB[rax, 0]
+                    Jr[q, 10] = RB[rax, 1]
+                    Jr[q, 11] = RB[rax, 2]
+                else:
+                    Jr[q, 9 + rax] = 1.0
         else:
             if kind == ROW_TRANS_LOCAL:
                 for k in range(3):

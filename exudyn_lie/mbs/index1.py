@@ -12,7 +12,7 @@ from .bodies import apply_minv
 from .codes import ROW_BODY_A, ROW_BODY_B, STATUS_OK, STATUS_SINGULAR
 from .constraints import joints_rows
 from .force_elements import compute_forces
-from .linalg import band_cholesky_inplace, band_cholesky_solve_inplace, pivoted_cholesky_solve
+from .linalg import band_ldl_inplace, band_ldl_solve_inplace, pivoted_cholesky_solve
 from .oblique_solve import force_direction_rows, lu_solve_inplace
 from .tree_solve import tree_correction, tree_solve
 
@@ -171,11 +171,11 @@ def schur_solve(gid, Minv, rint, bw, redundant, pivotTol, R, Jr, W, lam, Sb, Sd,
             Sb[q, q - l] = _row_dot(rint, q, l, Jr, W)
         if Sb[q, 0] > dmax:
             dmax = Sb[q, 0]
-    fail = band_cholesky_inplace(Sb, m, bw, pivotTol * dmax)
+    fail = band_ldl_inplace(Sb, m, bw, pivotTol * dmax)
     if fail >= 0:
         info[0] = fail
         return STATUS_SINGULAR
-    band_cholesky_solve_inplace(Sb, m, bw, lam)
+    band_ldl_solve_inplace(Sb, m, bw, lam)
     return STATUS_OK
 
 

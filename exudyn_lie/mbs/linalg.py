@@ -2,7 +2,8 @@
 
 The Schur complement ``S = J M^-1 J^T`` of a multibody system is banded once its
 constraint rows are ordered along the joint graph (reverse Cuthill-McKee, done at
-compile time), so a band Cholesky costs ``O(m b^2)`` instead of ``O(m^3)``.  A
+compile time), so a band Cholesky costs ``O(m b^2)`` instead of ``O(m^3)``; it is computed
+in its square-root-free form ``L D L^T`` (:func:`band_ldl_inplace`).  A
 redundant constraint set (e.g. a planar four-bar closed by four revolute joints) makes
 ``S`` only positive *semi*-definite; the rank-revealing path is a Cholesky with
 diagonal (complete) pivoting that drops the dependent rows.
@@ -41,52 +42,58 @@ REL_PIVOT_TOL = 1e-10
 
 
 @njit(cache=True, forceinline=True, _nrt=False)
-def band_cholesky_inplace(B, m, bw, tol):
-    """Factor S = L L^T in band storage (overwrites B with L).
+def band_ldl_inplace(B, m, bw, tol):
+    """Factor ``S = L D L^T`` (unit lower L; the square-root-free Cholesky) in band storage:
+    B's strict band becomes L, ``B[i, 0]`` becomes ``1 / D[i]``.
 
-    Returns -1 on success, otherwise the row index whose pivot was <= tol."""
-    for i in range(m):
-        j0 = i - bw
-        if j0 < 0:
-            j0 = 0
-        for j in range(j0, i + 1):
-            # S[i, j] - sum_k L[i, k] L[j, k], k from max(i-bw, j-bw, 0) to j-1
-            s = B[i, i - j]
-            k0 = i - bw
-            if j - bw > k0:
-                k0 = j - bw
-            if k0 < 0:
-                k0 = 0
-            for k in range(k0, j):
-                s -= B[i, i - k] * B[j, j - k]
-            if j == i:
-                if s <= tol:
-                    return i
-                B[i, 0] = np.sqrt(s)
-            else:
-                B[i, i - j] = s / B[j, 0]
+    Right-looking: once column j is final, every entry of the trailing band it updates is
+    independent of the others, so the dependency chain per column is one division and one
+    multiply-subtract.  (The row-oriented L L^T before it chained every entry of a row on the
+    previous one and paid a square root and a division per column: twice the time for S of
+    size 3 to 30, measured in isolation.)  The pivot ``D[i]`` is the square of L L^T's, so the
+    rank rule reads the same quantity.
+
+    Returns -1 on success, otherwise the row index whose pivot ``D[i]`` was <= tol."""
+    for j in range(m):
+        d = B[j, 0]
+        if d <= tol:
+            return j
+        rd = 1.0 / d
+        B[j, 0] = rd
+        i1 = j + bw
+        if i1 > m - 1:
+            i1 = m - 1
+        for i in range(j + 1, i1 + 1):
+            # S[i, l] -= L[i, j] D[j] L[l, j] = S[i, j] L[l, j] (S[i, j] the entry before scaling)
+            sij = B[i, i - j]
+            lij = sij * rd
+            B[i, i - j] = lij
+            for l in range(j + 1, i):
+                B[i, i - l] -= sij * B[l, l - j]
+            B[i, 0] -= sij * lij
     return -1
 
 
 @njit(cache=True, forceinline=True, _nrt=False)
-def band_cholesky_solve_inplace(B, m, bw, x):
-    """Solve L L^T x = x in place with the band factor from band_cholesky_inplace."""
-    for i in range(m):
-        s = x[i]
-        k0 = i - bw
-        if k0 < 0:
-            k0 = 0
-        for k in range(k0, i):
-            s -= B[i, i - k] * x[k]
-        x[i] = s / B[i, 0]
-    for i in range(m - 1, -1, -1):
-        s = x[i]
-        k1 = i + bw
-        if k1 > m - 1:
-            k1 = m - 1
-        for k in range(i + 1, k1 + 1):
-            s -= B[k, k - i] * x[k]
-        x[i] = s / B[i, 0]
+def band_ldl_solve_inplace(B, m, bw, x):
+    """Solve ``L D L^T x = x`` in place with the factor from :func:`band_ldl_inplace`
+    (both triangular sweeps right-looking, as the factorisation)."""
+    for j in range(m):
+        xj = x[j]
+        i1 = j + bw
+        if i1 > m - 1:
+            i1 = m - 1
+        for i in range(j + 1, i1 + 1):
+            x[i] -= B[i, i - j] * xj
+    for j in range(m):
+        x[j] *= B[j, 0]
+    for k in range(m - 1, 0, -1):
+        xk = x[k]
+        i0 = k - bw
+        if i0 < 0:
+            i0 = 0
+        for i in range(i0, k):
+            x[i] -= B[k, k - i] * xk
 
 
 @njit(cache=True, _nrt=False)

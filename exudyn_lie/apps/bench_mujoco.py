@@ -270,7 +270,9 @@ def distance(Ra, ra, Rb, rb):
 def agreement(T=AGREE_T, h=AGREE_H, model="heavytop"):
     """MuJoCo RK4 against exudyn_lie MK-RK4 SE3 on the same model and step: the final
     distance, and for scale the distance of both to a fine RK6 run (the discretisation
-    error)."""
+    error) and the round-off floor (``roundoff``: the largest distance of the package's own
+    run to itself with each initial angular velocity component moved by one ulp, up or down:
+    two round-off-exact implementations of one algorithm can differ by about that much)."""
     mbs, info = build_info(model)
     n = int(round(T / h))
     sim = exl_simulator(mbs)
@@ -286,8 +288,15 @@ def agreement(T=AGREE_T, h=AGREE_H, model="heavytop"):
     nref = 10 * n
     ref.Advance(nref, T / nref)
     er, eR = distance(R, r, ref.R, ref.r)
+    floor = 0.0
+    for direction in (np.inf, -np.inf):
+        ulp = exl_simulator(mbs)
+        ulp.SetInitialState()
+        ulp.V[:, :3] = np.nextafter(ulp.V[:, :3], direction)
+        ulp.Advance(n, h)
+        floor = max(floor, *distance(ulp.R, ulp.r, sim.R, sim.r))
     return dict(model=model, T=T, h=h, steps=n, dr=dr, dR=dR, tol=AGREE_TOL, ok=bool(max(dr, dR) <= AGREE_TOL),
-                mujocoTime=float(run.d.time), discretisation=max(er, eR))
+                mujocoTime=float(run.d.time), discretisation=max(er, eR), roundoff=floor)
 
 
 # --------------------------------------------------------------------------- timing
@@ -473,7 +482,7 @@ def run_section(cfg, log):
     ag = agreement()
     res["agreement"] = ag
     log(f"MuJoCo RK4 vs MK-RK4 SE3: |dr| = {ag['dr']:.2g} m, |dR| = {ag['dR']:.2g} rad (tolerance {AGREE_TOL:g}; "
-        f"discretisation error {ag['discretisation']:.2g})")
+        f"discretisation error {ag['discretisation']:.2g}; round-off floor {ag['roundoff']:.2g})")
     for name in names:
         res["xml"][name] = mjcf_from_info(build_info(name)[1], PERSTEP_H[0])
     if not ag["ok"]:
@@ -513,7 +522,8 @@ def target_lines(res):
     ag = res["agreement"]
     L = [f"| MuJoCo peer, heavytop: MuJoCo {res['version']} RK4 = exudyn_lie MK-RK4 SE3 to round-off ({ag['T']:g} s, "
          f"h = {ag['h']:g}, tolerance {ag['tol']:g}) | |dr| = {ag['dr']:.2g} m, |dR| = {ag['dR']:.2g} rad "
-         f"(either run is {ag['discretisation']:.2g} from RK6 at h/10) | {'yes' if ag['ok'] else 'no'} |"]
+         f"(either run is {ag['discretisation']:.2g} from RK6 at h/10; one ulp in the initial angular velocity moves "
+         f"the package's own run by {ag['roundoff']:.2g}) | {'yes' if ag['ok'] else 'no'} |"]
     if "failed" in res:
         return L + [f"| MuJoCo peer, per-step targets against MuJoCo | not measured: {res['failed']} | no |"]
     for name, dh in res["perstep"].items():
@@ -554,7 +564,10 @@ def report_lines(res, figure=None):
           f"Agreement (checked before any timing): heavy top, {ag['T']:g} s at h = {ag['h']:g} s "
           f"({ag['steps']} steps): |r_MuJoCo - r_exl| = {ag['dr']:.2g} m, rotation {ag['dR']:.2g} rad "
           f"(tolerance {ag['tol']:g}); for scale, the distance of either run to RK6 at h/10 is "
-          f"{ag['discretisation']:.2g}. " + ("**Agreement failed.**" if not ag["ok"] else ""), ""]
+          f"{ag['discretisation']:.2g}, and the round-off floor (the package's own run with each initial angular "
+          f"velocity component moved by one ulp, up or down, against itself) is {ag['roundoff']:.2g}: the two "
+          f"implementations agree to round-off when their distance is of that order. "
+          + ("**Agreement failed.**" if not ag["ok"] else ""), ""]
     if "failed" in res:
         return L + [res["failed"], ""]
     L += [f"Cost per step: CPU time of the process (`time.process_time`: on a shared machine a run longer than "

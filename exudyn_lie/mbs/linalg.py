@@ -49,9 +49,8 @@ def band_ldl_inplace(B, m, bw, tol):
     Right-looking: once column j is final, every entry of the trailing band it updates is
     independent of the others, so the dependency chain per column is one division and one
     multiply-subtract.  (The row-oriented L L^T before it chained every entry of a row on the
-    previous one and paid a square root and a division per column: twice the time for S of
-    size 3 to 30, measured in isolation.)  The pivot ``D[i]`` is the square of L L^T's, so the
-    rank rule reads the same quantity.
+    previous one and paid a square root and a division per column.)  The pivot ``D[i]`` is the
+    square of L L^T's, so the rank rule reads the same quantity.
 
     Returns -1 on success, otherwise the row index whose pivot ``D[i]`` was <= tol."""
     for j in range(m):

@@ -68,7 +68,13 @@ def test_long_runs_orthonormal_and_projected_variants(suite):
         if key != ("heavy top", "SO3xR3", None):
             assert d["dE"] < 1e-4, key
     assert cr.data[("heavy top", "SO3xR3", "position")]["viol"] <= 1e-12
-    assert cr.data[("heavy top", "SE3", None)]["viol"] <= 1e-11
+    # SE3 is exact for the top (lemma 1): only round-off accumulates, six orders below the drift of
+    # SO3xR3, for which the top's motion is no subgroup; the run and its neighbours from initial
+    # data 1e-12 away alike.  (A fixed 1e-11 stood here: that lies inside the round-off spread
+    # itself, which the neighbours show; a lost exactness is orders above either.)
+    se3 = cr.data[("heavy top", "SE3", None)]
+    assert len(se3["violNeighbours"]) >= 4 and min(se3["violNeighbours"]) > 0.0
+    assert max([se3["viol"]] + se3["violNeighbours"]) <= 1e-6 * cr.data[("heavy top", "SO3xR3", None)]["viol"], se3
     # SO3xR3 drifts without stabilisation (the paper's point), the projections remove it
     assert cr.data[("heavy top", "SO3xR3", None)]["viol"] > 1e-8
 

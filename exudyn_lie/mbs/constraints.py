@@ -115,7 +115,11 @@ def joint_rows(j, gid, jint, jpos, jrot, jpar, rint, rowsAll, bparam, R, r, V, h
                 Jr[q, 8] = c2
         elif kind == ROW_TRANS_WORLD:
             # a = e_ax: the general branch below with its zeros left out (adot = 0, abias = 0,
-            # R^T a = row ax of R); the same values to the bit, in about half the time
+            # R^T a = row ax of R); the same values to the bit, in about half the time.  A branch of
+            # its own on purpose: folded into the general branch (R^T a read as a row of R there,
+            # the sums shortened), states bit-identical, the step got slower: heavy top 1.00-1.06 ->
+            # 1.25-1.36 us, double pendulum 2.15-2.18 -> 2.26-2.39 us (bench --sections perstep
+            # --quick --models heavytop,doublependulum, twice interleaved)
             h[q] = d[rax]
             eta[q] = -bd[rax]
             if a >= 0:

@@ -15,6 +15,9 @@ import os
 import warnings
 
 from exudyn_lie import models
+from exudyn_lie.apps.claims import EXACT_PER_STEP, EXACT_TOL, n_steps
+from exudyn_lie.apps.report import parse_cell
+
 DTS = (1e-2, 1e-3)
 GROUPS = ("SE3", "SO3xR3")
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
@@ -61,3 +64,26 @@ def all_claims():
         for k, c in enumerate(info.claims):
             out.append((name, k, c))
     return out
+
+
+def roundoff_bound(info, dt):
+    """The largest table value that is round-off in a run of ``info`` at step ``dt``: the
+    bound of the paper's exactness verdicts (``claims.exact_tol``) with L = 1 m, i.e.
+    1e-12 at dt >= 1e-3 and 1e-15 per step below.  Below it a value is the sum of
+    roundings, which differ from CPU to CPU (FMA contraction and vector widths of the
+    compiled code), so its digits are no property of the method."""
+    if dt >= 1e-3 * (1.0 - 1e-9):
+        return EXACT_TOL
+    return max(EXACT_TOL, EXACT_PER_STEP * n_steps(info, dt))
+
+
+def cells_agree(a, b, bound):
+    """Two printed table cells agree: the same text, or both successful values at or
+    below the round-off ``bound`` (whose digits depend on the CPU's rounding)."""
+    try:
+        pa, pb = parse_cell(a), parse_cell(b)
+    except ValueError:
+        return False
+    if a == b:
+        return True
+    return not pa[1] and not pb[1] and pa[0] <= bound and pb[0] <= bound

@@ -6,16 +6,18 @@ README.md`` (the full run) and not edited by hand.
   checked on, and the heavy top's E(0)) equal those of a fresh evaluation of the quick
   command's runs (``_paper_support.lie_runs``, judged by ``exudyn_lie.apps.paper.evaluate``);
 * its Table 1 (MK-RK4 maxima) equals the runs of the quick command (the same runs) at
-  dt = 1e-2 and 1e-3, cell by cell as printed;
+  dt = 1e-2 and 1e-3, cell by cell as printed above round-off (``cells_agree``);
 * (slow) the command itself, ``--out <tmp> --readme <copy of README.md>``, writes
   REPRODUCTION.md with a valid header and one figure per model, and the block it writes
   equals the README's block exactly: the verdicts and Tables 1-3 at every step size,
   dt = 1e-4 included.
 
-The comparisons are exact: the runs are deterministic (compiled code, fixed steps, one
-process per model), so a fresh run on the machine that wrote the README reproduces every
-printed digit.  On a CPU with other rounding in compiled code the round-off cells and
-the chaotic pendulums at dt = 1e-2 can differ: regenerate the block there.
+The comparisons are exact above round-off: the runs are deterministic (compiled code,
+fixed steps, one process per model), so a fresh run reproduces every printed digit of a
+value above round-off.  A value at round-off level (``_paper_support.roundoff_bound``:
+1e-12 at dt >= 1e-3, 1e-15 per step below, the bound of the paper's exactness verdicts)
+is a sum of roundings that differ between CPUs, so such cells only have to be at
+round-off on both sides.
 """
 import functools
 import os
@@ -25,17 +27,12 @@ import sys
 import numpy as np
 import pytest
 
-from _paper_support import DTS, README, ROOT, lie_runs
+from _paper_support import DTS, README, ROOT, cells_agree, lie_runs, roundoff_bound
 from exudyn_lie.apps.generated import check_hash, read_block, replace_block, with_header
 from exudyn_lie.apps.report import (cell, measure_rows, parse_cell, parse_tables, parse_verdict_summary,
                                         verdict_summary)
 from exudyn_lie.apps import versions
 from exudyn_lie.apps.paper import README_BLOCK, Context, evaluate
-
-
-def same(a, b):
-    """Two table cells agree: the same text (and so the same parsed value and failure)."""
-    return a == b and parse_cell(a) is not None
 
 
 def readme_tables():
@@ -109,9 +106,18 @@ def test_failed_runs_cannot_be_read_as_values():
     assert cell(rd, 0.0) == "0" and parse_cell("0") == (0.0, False, None)
 
 
+def test_cells_agree_above_roundoff_only():
+    assert cells_agree("1.23e-03", "1.23e-03", 1e-12)
+    assert not cells_agree("1.23e-03", "1.24e-03", 1e-12)           # above round-off: every digit
+    assert cells_agree("2.83e-15", "6.94e-15", 1e-12)               # both round-off
+    assert not cells_agree("2.83e-15", "6.94e-12", 1e-12)           # one side above the bound
+    assert not cells_agree("failed at t=0.02 (max 2.50e-15 before)", "2.50e-15", 1e-12)  # a failed run
+    assert not cells_agree("x", "x", 1e-12)                         # not a cell at all
+
+
 def test_readme_table1_matches_the_runs():
     cells = parse_tables(readme_tables())
-    n = exact = 0
+    n = above = 0
     for name, (info, runs) in lie_runs().items():
         for label, meas, get in measure_rows(info):
             for g in ("SE3", "SO3xR3"):
@@ -119,10 +125,12 @@ def test_readme_table1_matches_the_runs():
                     key = ("T1", name, label, meas, f"{g} dt={dt:g}")
                     assert key in cells, f"{key} missing from the README's Table 1"
                     mine = cell(runs[(g, dt)], get(runs[(g, dt)]))
-                    assert same(cells[key], mine), (key, cells[key], mine)
+                    bound = roundoff_bound(info, dt)
+                    assert cells_agree(cells[key], mine, bound), (key, cells[key], mine)
                     n += 1
-                    exact += cells[key] == mine
-    assert n > 100 and exact == n
+                    above += parse_cell(mine)[0] > bound
+    # most cells are above round-off, and those were compared digit by digit
+    assert n > 100 and above > n // 2, (n, above)
 
 
 @pytest.mark.slow
@@ -150,7 +158,10 @@ def test_full_command_regenerates_the_readme_block_exactly(tmp_path):
     old_body, new_body = readme_tables(), new[2]
     if old_body != new_body:
         old_cells, new_cells = parse_tables(old_body), parse_tables(new_body)
+        infos = {name: models.build(name)[1] for name in models.MODELS}
         diff = [(k, old_cells.get(k), new_cells.get(k)) for k in sorted(set(old_cells) | set(new_cells))
-                if old_cells.get(k) != new_cells.get(k)]
-        raise AssertionError(f"the README block differs from a fresh run; first differences: {diff[:10]}")
+                if k not in old_cells or k not in new_cells
+                or not cells_agree(old_cells[k], new_cells[k],
+                                   roundoff_bound(infos[k[1]], float(k[4].rsplit("dt=", 1)[1])))]
+        assert not diff, f"the README block differs from a fresh run above round-off; first differences: {diff[:10]}"
     assert parse_verdict_summary(text) == parse_verdict_summary(old_body)

@@ -311,14 +311,13 @@ def test_full_rank_system_becoming_singular_mid_run_names_the_joints(group):
 @pytest.mark.parametrize("group", ["SE3", "SO3xR3"])
 def test_near_singular_start_one_rank_rule(group):
     """The set-up check and the time loop apply one rule (exudyn_lie/mbs/linalg.py): a
-    Cholesky pivot of J M^-1 J^T at or below 1e-10 x its largest diagonal.  Pivot ratio
-    50 x0^2 here: x0 = 1e-6 (ratio 5e-11) is numerically singular, so construction says
-    so (naming planeA and planeB, rank 2 of 3) and switches to the rank-revealing solve,
-    and the run -- moving away from x = 0 -- goes through; before, construction passed
-    (an SVD of the unweighted J with another tolerance found full rank) and the run
-    failed at its first stage.  x0 = 1e-5 (ratio 5e-9) is regular: no warning, band
-    path, and the run goes through too."""
-    for x0, singular in ((1e-6, True), (1e-5, False), (0.0, True)):
+    Cholesky pivot of J M^-1 J^T at or below 1e-12 x its row's diagonal.  The smallest
+    eigenvalue of the Jacobi-scaled S is about 25 x0^2 here: x0 = 1e-7 (2.5e-13) is
+    numerically singular, so construction says so (naming planeA and planeB, rank 2 of 3)
+    and switches to the rank-revealing solve, and the run -- moving away from x = 0 -- goes
+    through; x0 = 1e-6 (2.5e-11) is regular: no warning, band path, and the run goes
+    through too."""
+    for x0, singular in ((1e-7, True), (1e-6, False), (0.0, True)):
         with warnings.catch_warnings(record=True) as rec:
             warnings.simplefilter("always")
             sim = Simulator(sliding_plane_pair(x0), "RK4", group)

@@ -14,7 +14,7 @@ from exudyn_lie.mbs.linalg import REL_PIVOT_TOL, band_ldl_inplace, band_ldl_solv
 
 @njit(cache=False)
 def _factor_and_solve(B, m, bw, tol, x):
-    fail = band_ldl_inplace(B, m, bw, tol)
+    fail = band_ldl_inplace(B, m, bw, tol, np.zeros(m))
     if fail < 0:
         band_ldl_solve_inplace(B, m, bw, x)
     return fail
@@ -61,10 +61,52 @@ def test_band_ldl_solves_and_factors_like_numpy(m, bw, rng):
 
 def test_band_ldl_reports_the_first_pivot_below_the_rule(rng):
     """A rank-deficient S (row 3 a copy of row 1 in J): the factorisation stops at row 3,
-    the row whose pivot falls below REL_PIVOT_TOL * max(diag S), as the time loop reports it."""
+    the row whose pivot falls below REL_PIVOT_TOL * S_33, as the time loop reports it."""
     J = rng.standard_normal((5, 8))
     J[3] = J[1]
     S = J @ J.T
     B = _band(S, 4)
-    tol = REL_PIVOT_TOL * np.max(np.diag(S))
-    assert _factor_and_solve(B, 5, 4, tol, np.ones(5)) == 3
+    assert _factor_and_solve(B, 5, 4, REL_PIVOT_TOL, np.ones(5)) == 3
+
+
+def _scaled_rows(rng, scales, dependent=None):
+    """S = J J^T for rows of J of the given scales; ``dependent = (i, k)``: row i a multiple
+    of row k."""
+    J = rng.standard_normal((len(scales), 9))
+    if dependent is not None:
+        J[dependent[0]] = J[dependent[1]]
+    J *= np.asarray(scales, float)[:, None]
+    return J @ J.T
+
+
+@pytest.mark.parametrize("scale", [1e-12, 1e-6, 1.0, 1e6])
+def test_rank_rule_ignores_the_scale_of_independent_rows(rng, scale):
+    """Rows of very different sizes (a body of tiny inertia beside a point mass on a rail:
+    Exudyn's slider-crank example) are independent whatever their scale: the band
+    factorisation, the rank-revealing solve and the set-up check keep every row."""
+    from exudyn_lie.mbs.linalg import pivoted_cholesky_solve, schur_rank_and_null
+    m = 5
+    S = _scaled_rows(rng, [1e6, 1.0, scale, 1e6, 1.0])
+    x = np.ones(m)
+    assert _factor_and_solve(_band(S, m - 1), m, m - 1, REL_PIVOT_TOL, x) == -1
+    assert np.linalg.norm(S @ x - 1.0) <= 1e-9 * np.linalg.norm(S, 2) * np.linalg.norm(x)
+    y = np.ones(m)
+    assert pivoted_cholesky_solve(S.copy(), m, y, np.zeros(m, np.int64), np.zeros(m), REL_PIVOT_TOL) == m
+    assert np.allclose(y, x, rtol=1e-6, atol=0)
+    rank, null = schur_rank_and_null(S)
+    assert rank == m and null.shape[1] == 0
+
+
+@pytest.mark.parametrize("scale", [1e-12, 1.0, 1e6])
+def test_rank_rule_finds_a_dependent_row_of_any_scale(rng, scale):
+    """A row that repeats another (scaled) is dependent, also when it is 1e12 times smaller
+    or larger than the rest: every path finds it and names it."""
+    from exudyn_lie.mbs.linalg import pivoted_cholesky_solve, rows_in_null_space, schur_rank_and_null
+    m = 5
+    S = _scaled_rows(rng, [1.0, 1e6, 1.0, scale, 1.0], dependent=(3, 0))
+    assert _factor_and_solve(_band(S, m - 1), m, m - 1, REL_PIVOT_TOL, np.ones(m)) == 3
+    y = np.ones(m)
+    assert pivoted_cholesky_solve(S.copy(), m, y, np.zeros(m, np.int64), np.zeros(m), REL_PIVOT_TOL) == m - 1
+    rank, null = schur_rank_and_null(S)
+    assert rank == m - 1 and null.shape[1] == 1
+    assert rows_in_null_space(null) == [0, 3]

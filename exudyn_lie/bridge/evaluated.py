@@ -50,10 +50,12 @@ import numpy as np
 
 from ..errors import ConstraintError, SimulationError
 from .evaluated_kernels import block_kkt_solve, schur_band_solve, write_exudyn_state, write_moved_positions
+from ..mbs.linalg import REL_PIVOT_TOL
 from ..mbs.row_drives import offset_and_derivatives
 from .reader import BridgeError, _userfunction
 
 EPS_CBRT = float(np.finfo(float).eps) ** (1.0 / 3.0)
+EPS_SIXTH = float(np.finfo(float).eps) ** (1.0 / 6.0)
 
 #: node types whose coordinates are Lie group elements (velocities are not the coordinates' rates)
 LIE_GROUP_NODES = ("RigidBodyRotVecLG",)
@@ -145,6 +147,54 @@ def coordinate_constraint_rows(mbs):
     return np.array(vel, np.int64), moving
 
 
+def position_derived_rows(mbs):
+    """The AE rows whose velocity-level equation in Exudyn is not the time derivative of the
+    position-level one, so that ``g_v`` and ``eta`` must come from the position level:
+    ``(rows, every)``.
+
+    * ``ObjectJointGeneric`` with an ``offsetUserFunction``: its velocity-level equation
+      (CObjectJointGeneric::ComputeAlgebraicEquations, ``velocityLevel``) leaves the offset
+      out altogether, its translation and its rotation (``A0all`` without the offset's
+      RotXYZ), so it holds the joint at the offset's value at t = 0 at velocity level while
+      Exudyn's index-3 solve holds the moving offset;
+    * ``every``: the model has a GenericJoint with ``offsetUserFunction_t``, for which
+      Exudyn's velocity-level call raises ``offsetUserFunction_t not implemented for
+      velocity level constraints`` for the whole system: every row's ``g_v`` and ``eta``
+      then come from the position level (velocity-level rows are refused: they have none).
+    """
+    sd = mbs.systemData
+    rows, every = [], False
+    for o in range(sd.NumberOfObjects()):
+        d = mbs.GetObject(o)
+        if d["objectType"] != "JointGeneric" or not d.get("activeConnector", True):
+            continue
+        what = _describe_object(mbs, o, d)
+        if _userfunction(d, "offsetUserFunction_t", what) is not None:
+            every = True
+        if _userfunction(d, "offsetUserFunction", what) is not None:
+            rows += [int(r) for r in sd.GetObjectLTGAE(o)]
+    if every:
+        vel = [o for o in range(sd.NumberOfObjects()) if mbs.GetObject(o).get("velocityLevel", False) is True
+               and mbs.GetObject(o).get("activeConnector", True)]
+        if vel:
+            raise BridgeError(f"{_describe_object(mbs, vel[0])} is a velocity-level constraint, and the model has an "
+                              f"ObjectJointGeneric with offsetUserFunction_t, for which Exudyn cannot evaluate the "
+                              f"velocity-level equations; exudyn_lie cannot integrate the two together: remove "
+                              f"offsetUserFunction_t (the position-level offsetUserFunction is enough) or solve with "
+                              f"exudyn.SolveDynamic")
+        rows = list(range(int(sd.AEsize())))
+    return np.array(sorted(set(rows)), np.int64), every
+
+
+def node_rows(mbs):
+    """The AE rows of the nodes' own equations (a NodeRigidBodyEP's ``|p|^2 = 1``)."""
+    sd = mbs.systemData
+    out = []
+    for n in range(sd.NumberOfNodes()):
+        out += [int(r) for r in sd.GetNodeLTGAE(n)]
+    return np.array(out, np.int64)
+
+
 def _rotvec_coordinate_marker(mbs, d):
     """True if a marker of the item is a MarkerNodeCoordinate on a rotation coordinate (3..5)
     of a NodeRigidBodyRotVecLG."""
@@ -186,6 +236,12 @@ class Layout:
         self.vecIdx = np.nonzero(~inLG)[0].astype(np.int64)
         self.nodeIdx = [np.asarray(sd.GetNodeLTGODE2(n), np.int64) for n in range(sd.NumberOfNodes())
                         if len(sd.GetNodeLTGODE2(n))]
+        # Euler parameters of NodeRigidBodyEP nodes (coordinates 3..6 of the node) and their
+        # reference values: the total parameters ref + q lie on the unit sphere
+        ep = [n for n in range(sd.NumberOfNodes()) if mbs.GetNode(n)["nodeType"] == "RigidBodyEP"]
+        self.epIdx = np.array([np.asarray(sd.GetNodeLTGODE2(n), np.int64)[3:7] for n in ep], np.int64).reshape(-1, 4)
+        self.epRef = np.array([np.asarray(mbs.GetNode(n)["referenceCoordinates"], float)[3:7] for n in ep],
+                              float).reshape(-1, 4)
 
     def blocks(self, M):
         """Connected components of the pattern of M joined with each node's coordinates:
@@ -248,6 +304,13 @@ class EvaluatedModel:
         self._etaBuf = np.zeros(m)
         self._vmax = 0.0
         self.velocityRows, self._movingRows = coordinate_constraint_rows(mbs)
+        # rows whose g_v and eta come from the position level (position_derived_rows)
+        self.positionRows, self._allPosition = position_derived_rows(mbs)
+        self._velocityLevel = not self._allPosition
+        # of those, the nodes' own rows: differentiated along the straight line in their
+        # coordinates (_onto_unit_sphere says why the others are not)
+        nr = np.isin(self.positionRows, node_rows(mbs))
+        self._posObjectRows, self._posNodeRows = self.positionRows[~nr], self.positionRows[nr]
         # C_qdot of velocity-level rows: the ODE2_t factor (position-level rows have no ODE2_t part)
         self._factorODE2_t = 1.0 if len(self.velocityRows) else 0.0
         self._perm = np.zeros(m, np.int64)
@@ -326,14 +389,77 @@ class EvaluatedModel:
             self._lamlam = J[self.n + self.n1:, self.n + self.n1:]
         return M, f, Cq
 
-    def velocity_constraints(self, t):
-        """``g_v(q, v, t)`` (Exudyn's velocity-level AE residual) at the state in mbs."""
+    def position_constraints(self, t):
+        """``g(q, t)``, Exudyn's position-level AE residual at the state in mbs."""
         self._setTime(t)
-        self._ae(self.mbs, True)
-        gv = self._residual()[self.n + self.n1:].copy()
-        for r, fn, label in self._movingRows:          # - cdot(t): coordinate_constraint_rows
-            gv[r] -= offset_and_derivatives(fn, t, label)[1]
+        self._ae(self.mbs, False)
+        return self._residual()[self.n + self.n1:].copy()
+
+    def velocity_constraints(self, t, R=None, r=None, prev=None, qv=None):
+        """``g_v(q, v, t)`` at the state in mbs: Exudyn's velocity-level AE residual, with the
+        moving offsets' rates (coordinate_constraint_rows) and, for the position-derived rows
+        (``R, r, prev, qv``: the state's Lie group and vector parts, needed for them), the
+        central difference of the position level along the motion."""
+        m = self.m
+        if self._velocityLevel:
+            self._setTime(t)
+            self._ae(self.mbs, True)
+            gv = self._residual()[self.n + self.n1:].copy()
+        else:
+            gv = np.zeros(m)
+        for row, fn, label in self._movingRows:          # - cdot(t): coordinate_constraint_rows
+            gv[row] -= offset_and_derivatives(fn, t, label)[1]
+        if len(self.positionRows):
+            if R is None:
+                raise SimulationError("internal: velocity_constraints needs the state for position-derived rows")
+            eps = EPS_CBRT / max(1.0, self._vmax)
+            gp, _, gm = self._position_along_motion(t, R, r, prev, qv, eps, False, False)
+            P = self.positionRows
+            gv[P] = (gp[P] - gm[P]) * (0.5 / eps)
         return gv
+
+    def _onto_unit_sphere(self, q):
+        """Normalise the Euler parameters of EP nodes in ``q`` (Current = total - reference).
+
+        The path along which the position-derived rows are differentiated must keep every
+        node's own algebraic equation: Exudyn's C_q of an EP node acts through ``G(p)``, with
+        ``G p = 0``, so it sees only the tangential part of an acceleration, and the normal
+        part ``-|pdot|^2 p`` is fixed by the node's row ``|p|^2 = 1``.  On the straight line
+        ``p + s pdot`` the second difference would add ``g_p (|pdot|^2 p)``, an acceleration
+        the solve cannot see; on ``(p + s pdot) / |p + s pdot|`` it is the node's own."""
+        L = self.L
+        for k in range(L.epIdx.shape[0]):
+            idx = L.epIdx[k]
+            p = L.epRef[k] + q[idx]
+            q[idx] = p / np.sqrt(p @ p) - L.epRef[k]
+
+    def _position_along_motion(self, t, R, r, prev, qv, eps, centre, sphere=True):
+        """Exudyn's position-level residuals at the state moved by ``+eps`` and ``-eps`` along
+        the motion (and at the state itself if ``centre``); mbs is restored.  ``sphere``: the
+        EP nodes' parameters are kept on the unit sphere (:meth:`_onto_unit_sphere`)."""
+        L, q, mbs, ae, res, setTime = self.L, self.q, self.mbs, self._ae, self._residual, self._setTime
+        o = self.n + self.n1
+        self._qsave[:] = q
+        g0 = None
+        if centre:
+            setTime(t)
+            ae(mbs, False)
+            g0 = res()[o:].copy()
+        write_moved_positions(R, r, L.lgIdx, L.lgRef, prev, q, self.qt, L.vecIdx, qv, eps, self._ER, self._rv)
+        if sphere:
+            self._onto_unit_sphere(q)
+        setTime(t + eps)
+        ae(mbs, False)
+        gp = res()[o:].copy()
+        write_moved_positions(R, r, L.lgIdx, L.lgRef, prev, q, self.qt, L.vecIdx, qv, -eps, self._ER, self._rv)
+        if sphere:
+            self._onto_unit_sphere(q)
+        setTime(t - eps)
+        ae(mbs, False)
+        gm = res()[o:].copy()
+        q[:] = self._qsave
+        setTime(t)
+        return gp, g0, gm
 
     def eta_step(self):
         """The central-difference step (module docstring): ``cbrt(eps) / max(1, max|v|)``."""
@@ -344,23 +470,46 @@ class EvaluatedModel:
         at the state last written (``R, r``: its Lie group part, ``qv`` its vector part).
         ``restore=False`` (the stage loop) leaves mbs at the last moved configuration and
         time: nothing reads them before the next stage writes its state."""
+        P = self.positionRows
+        if len(P):
+            # the position-derived rows (position_derived_rows): eta = -d2/ds2 g(q(s), t + s)
+            # along the motion at fixed velocities, by second central differences at steps e
+            # and 2 e extrapolated (Richardson: the e^2 term cancels); the step balances the
+            # truncation (~ e^4 |g^(6)|) and the rounding (~ 4 eps_mach |g| / e^2), whose terms
+            # are positions (the rows are differences of positions, not of small numbers):
+            # e = eps_mach^(1/6) tau, about eps_mach^(2/3) ~ 4e-11 relative
+            e = EPS_SIXTH / max(1.0, self._vmax)
+            etaP = np.zeros(self.m)
+            for rows, sphere in ((self._posObjectRows, True), (self._posNodeRows, False)):
+                if len(rows):
+                    gp, g0, gm = self._position_along_motion(t, R, r, prev, qv, e, True, sphere)
+                    gp2, _, gm2 = self._position_along_motion(t, R, r, prev, qv, 2.0 * e, False, sphere)
+                    d1 = (gp[rows] + gm[rows] - 2.0 * g0[rows]) / (e * e)
+                    d2 = (gp2[rows] + gm2[rows] - 2.0 * g0[rows]) / (4.0 * e * e)
+                    etaP[rows] = -(4.0 * d1 - d2) / 3.0
+            etaP = etaP[P]
         if eps is None:
             eps = EPS_CBRT / max(1.0, self._vmax)
         L, q, mbs, ae, res, setTime = self.L, self.q, self.mbs, self._ae, self._residual, self._setTime
-        if restore:
-            self._qsave[:] = q
-        write_moved_positions(R, r, L.lgIdx, L.lgRef, prev, q, self.qt, L.vecIdx, qv, eps, self._ER, self._rv)
-        setTime(t + eps)
-        ae(mbs, True)
-        gp = res()
-        write_moved_positions(R, r, L.lgIdx, L.lgRef, prev, q, self.qt, L.vecIdx, qv, -eps, self._ER, self._rv)
-        setTime(t - eps)
-        ae(mbs, True)
-        gm = res()
-        o = self.n + self.n1
         out = self._etaBuf
-        np.subtract(gm[o:], gp[o:], out=out)
-        out *= 0.5 / eps
+        if self._velocityLevel:
+            if restore:
+                self._qsave[:] = q
+            write_moved_positions(R, r, L.lgIdx, L.lgRef, prev, q, self.qt, L.vecIdx, qv, eps, self._ER, self._rv)
+            setTime(t + eps)
+            ae(mbs, True)
+            gp = res()
+            write_moved_positions(R, r, L.lgIdx, L.lgRef, prev, q, self.qt, L.vecIdx, qv, -eps, self._ER, self._rv)
+            setTime(t - eps)
+            ae(mbs, True)
+            gm = res()
+            o = self.n + self.n1
+            np.subtract(gm[o:], gp[o:], out=out)
+            out *= 0.5 / eps
+        else:
+            out[:] = 0.0
+        if len(P):
+            out[P] = etaP
         for row, fn, label in self._movingRows:        # + cddot(t): coordinate_constraint_rows
             out[row] += offset_and_derivatives(fn, t, label)[2]
         if restore:
@@ -379,7 +528,7 @@ class EvaluatedModel:
         eps = self.eta_step()
         e1 = self.eta(t, R, r, prev, qv)
         e2 = self.eta(t, R, r, prev, qv, 2.0 * eps)
-        gv = self.velocity_constraints(t)
+        gv = self.velocity_constraints(t, R, r, prev, qv)
         _, _, Cq = self.mass_force_jacobian(t)
         terms = np.abs(np.asarray(Cq)) @ np.abs(self.qt) + np.abs(gv)
         return e1, np.abs(e2 - e1) / 3.0 + 4.0 * np.finfo(float).eps * terms / eps
@@ -483,7 +632,7 @@ class EvaluatedModel:
             st = schur_band_solve(M, f, Cq, eta, self.blk, self.blkPtr, self.blkOff, self.blockOf, self._pos,
                                   self._bw, self._MinvB, self._W, self.a, self.lam, self._nzIdx, self._nzCnt,
                                   self._rowBlk, self._rowBlkCnt, self._bRowPtr, self._bRows, self._cnt, self._Y,
-                                  self._band, self._x, self._T)
+                                  self._band, self._x, self._T, self._yw)
             if st != 3:
                 break
             self._order_rows(Cq)          # rows act on other blocks now: a new order
@@ -529,8 +678,8 @@ class EvaluatedModel:
                 st = block_kkt_solve(M, f, Cq, eta, *args, True, self._perm, self._yw)
             if st == 2:
                 raise ConstraintError("singular constraint Jacobian: the constraints became linearly dependent "
-                                      "(a singular configuration; a Cholesky pivot of J M^-1 J^T fell to 1e-10 x "
-                                      "its largest diagonal or below); check the joint frames")
+                                      f"(a singular configuration; a Cholesky pivot of J M^-1 J^T fell to {REL_PIVOT_TOL:g} x "
+                                      f"its row's diagonal or below); check the joint frames")
             if st == 1:
                 self.dense = True
                 if self.verbose:

@@ -96,7 +96,7 @@ def project_initial(model, stepper, t, projectInitial):
                                   f"{np.max(np.abs(g)):.3g}); they may not be satisfiable")
         fixed.append(f"positions of objects {_names(mbs, bad)} (max |g| = {g0:.3g})")
     # velocities: C_q v (+ C_t) = g_v
-    gv = model.velocity_constraints(t)
+    gv = model.velocity_constraints(t, stepper.R, stepper.r, stepper.prev, stepper.qv)
     vscale = max(1.0, float(np.max(np.abs(model.qt))) if model.n else 1.0)
     bad = np.nonzero(np.abs(gv) > INITIAL_TOL * vscale)[0]
     if len(bad):

@@ -288,15 +288,12 @@ def block_kkt_solve(M, f, Cq, eta, blk, blkPtr, Minv, X, S, lam, a, nzIdx, nzCnt
 @njit(cache=True)
 def cholesky_solve_inplace(S, m, x):
     """``S x = rhs`` (x holds rhs on entry) by Cholesky in place; False if a pivot is
-    ``<= REL_PIVOT_TOL max(diag S)`` (the kernel's rank rule, mbs/linalg.py)."""
-    dmax = 0.0
-    for i in range(m):
-        dmax = max(dmax, S[i, i])
+    ``<= REL_PIVOT_TOL S_cc``, its own diagonal (the kernel's rank rule, mbs/linalg.py)."""
     for c in range(m):
         d = S[c, c]
         for k in range(c):
             d -= S[c, k] * S[c, k]
-        if d <= REL_PIVOT_TOL * dmax:
+        if d <= REL_PIVOT_TOL * S[c, c]:
             return False
         d = math.sqrt(d)
         S[c, c] = d
@@ -337,7 +334,7 @@ def invert_blocks(M, blk, blkPtr, blkOff, MinvB, W):
 
 @njit(cache=True)
 def schur_band_solve(M, f, Cq, eta, blk, blkPtr, blkOff, blockOf, pos, bw, MinvB, W, a, lam, nzIdx, nzCnt,
-                     rowBlk, rowBlkCnt, bRowPtr, bRows, cnt, Y, Band, x, T):
+                     rowBlk, rowBlkCnt, bRowPtr, bRows, cnt, Y, Band, x, T, d0):
     """Index-1 accelerations ``[M Cq^T; Cq 0][a; lam] = [f; eta]`` (eq. index1) in time
     linear in the number of bodies for tree-like mechanisms, with Exudyn's dense M and C_q:
 
@@ -441,15 +438,13 @@ def schur_band_solve(M, f, Cq, eta, blk, blkPtr, blkOff, blockOf, pos, bw, MinvB
                 for i in range(s):
                     acc += Cq[r, blk[p0 + i]] * Y[q2, i]
                 Band[pr, pr - pc] += acc
-    dmax = 0.0
     empty = False
     for r in range(m):
         if nzCnt[r] == 0:                # lam = 0 for a row without coordinates
             Band[pos[r], 0] = 1.0
             x[pos[r]] = 0.0
             empty = True
-        dmax = max(dmax, Band[pos[r], 0])
-    if band_ldl_inplace(Band, m, bw, REL_PIVOT_TOL * dmax) >= 0:
+    if band_ldl_inplace(Band, m, bw, REL_PIVOT_TOL, d0) >= 0:
         return 2
     band_ldl_solve_inplace(Band, m, bw, x)
     for r in range(m):

@@ -31,6 +31,7 @@ from .evaluated import EvaluatedModel, Layout, check_model
 from .evaluated_stepper import EvaluatedStepper
 from .evaluated_initial import project_initial
 from .evaluated_stiffness import check_step
+from .constraint_check import ConsistencyAccount, ConstraintCheck, check_tolerance
 from .reader import BridgeError, RIGID_NODE_TYPES, UNHONOURED_MBS_FUNCTIONS, check_system_level
 from .settings import check_settings
 from .solver import loop_settings
@@ -193,8 +194,12 @@ class EvaluatedSolver:
 
     # ------------------------------------------------------------------ solve
     def Solve(self, simulationSettings=None, updateInitialValues=False, storeSolver=True, showProgress=True,
-              substeps=None, accelerations=None):
+              substeps=None, accelerations=None, constraintCheck=True):
+        """As :meth:`LieGroupSolver.Solve <exudyn_lie.bridge.solver.LieGroupSolver.Solve>`; the
+        run-time check of the constraints (:mod:`.constraint_check`) judges Exudyn's residuals
+        by the velocity-level equations integrated here."""
         import exudyn as exu
+        tolCheck = check_tolerance(constraintCheck)
         mbs = self.mbs
         ticTotal = time.perf_counter()
         ss = exu.SimulationSettings() if simulationSettings is None else simulationSettings
@@ -289,6 +294,13 @@ class EvaluatedSolver:
                       f"and the Jacobian, the solve)")
             stepper.write()                      # the initial state and time, for Exudyn's initial outputs
             sd.SetTime(t0)
+            check = account = None
+            if tolCheck is not None and layout.nAE:
+                dependent = range(sd.NumberOfObjects()) if model.pivoted else None
+                check = ConstraintCheck(mbs, solver, tolCheck, dependent)
+                account = ConsistencyAccount(check)
+                account.step(t0, model.velocity_constraints(t0, stepper.R, stepper.r, stepper.prev, stepper.qv))
+                self.constraintCheck = check
             written = [q.copy(), qt.copy()]
             steps = [t0, t0]
             snap = [stepper.snapshot()]
@@ -328,6 +340,12 @@ class EvaluatedSolver:
                     written[0][:] = q
                     written[1][:] = qt
                     integ[0] += time.perf_counter() - tic
+                    if check is not None:
+                        if model.pivoted and check.dependent is None:
+                            check.dependent = set(range(sd.NumberOfObjects()))
+                        account.step(t1, model.velocity_constraints(t1, stepper.R, stepper.r, stepper.prev,
+                                                                    stepper.qv))
+                        check.check(t1, account.explain)
                     return True
                 except BaseException as e:      # noqa: BLE001 - re-raised after Exudyn unwinds
                     self._hookError = e

@@ -47,6 +47,7 @@ from ..mbs.compiled import auto_groups
 from ..mbs.rolling_disc_penalty_forces import D_DATA
 from ..mbs.simulator import Simulator
 from ..userwarn import warn_user
+from .constraint_check import ConstraintCheck, check_tolerance, kernel_explanation
 from .fast import CHUNK_ROWS, AdaptiveOutputChunks, NodeTable, OutputChunks
 from .params import ParameterWatch
 from .settings import check_settings
@@ -620,9 +621,13 @@ class LieGroupSolver:
         return False
 
     def Solve(self, simulationSettings=None, updateInitialValues=False, storeSolver=True, showProgress=True,
-              substeps=None, accelerations=None, refresh=True):
+              substeps=None, accelerations=None, refresh=True, constraintCheck=True):
         """Solve from ``startTime`` to ``endTime`` in ``numberOfSteps`` steps of the
         simulation settings, inside Exudyn's time loop; returns True.
+
+        ``constraintCheck`` (default True): Exudyn's own residuals of the constraints at
+        every output, judged against the kernel's (:mod:`.constraint_check`); a float is
+        the tolerance, False switches the check off.
 
         ``accelerations``: write ``q_tt`` and the joint multipliers every output step
         (None: only if a sensor, the solution or restart file or a user function can read
@@ -639,10 +644,39 @@ class LieGroupSolver:
         'lieGroupSolver']`` are set for the run (as by ``exudyn.SolveDynamic``); if Exudyn's
         ``InitializeSolver`` fails (e.g. a solution file that cannot be opened) the previous
         entries are put back."""
+        self._constraintCheck = check_tolerance(constraintCheck)
         with compile_timer() as ct:
             ok = self._solve(simulationSettings, updateInitialValues, storeSolver, showProgress, substeps,
                              accelerations, refresh, ct)
         return ok
+
+    def _make_constraint_check(self, solver):
+        """The run-time check (:mod:`.constraint_check`) with the kernel's rows of each item,
+        or None when it is off or the model has no constraint."""
+        tol = getattr(self, "_constraintCheck", True)
+        if tol is None or not self.mbs.systemData.AEsize():
+            return None
+        sim, sc = self.sim, self.scene
+        objectOf = {sc.joints[ji.sceneJoint].name: ji.objectIndex for ji in sc.joints_info
+                    if ji.sceneJoint is not None}
+        dependent = [objectOf[n] for n in sim.redundantJoints if n in objectOf] if sim.sd.redundant else None
+        check = ConstraintCheck(self.mbs, solver, tol, dependent)
+        sceneJoint = {ji.objectIndex: ji.sceneJoint for ji in sc.joints_info}
+        rows = []
+        for kind, i, _ in check.items:
+            j = sceneJoint.get(i) if kind == "object" else None
+            rows.append(None if j is None else np.nonzero(sim.rowJoint == j)[0])
+        at, explain = kernel_explanation(sim, rows)
+        ch = self._chunks
+
+        def at_output(t):
+            o = ch.next - 1
+            if o < 0:
+                return
+            at(ch.Ro[o], ch.ro[o], ch.Vo[o], t)
+            check.check(t, explain)
+        self.constraintCheck = check
+        return at_output
 
     def _solve(self, simulationSettings, updateInitialValues, storeSolver, showProgress, substeps,
                accelerations, refresh, ct):
@@ -723,6 +757,7 @@ class LieGroupSolver:
                 sim.SetAdaptive(**adaptive)
                 self._chunks = AdaptiveOutputChunks(sim, self._nodes, vmax, bufs, jac, k, h, needAcc, tEnd,
                                                     maxRows=maxRows)
+            checkOutput = self._make_constraint_check(solver)
             # the hook, per Exudyn step (kept lean: it runs per output)
             sdat = self.mbs.systemData
             cur = exu.ConfigurationType.Current
@@ -766,6 +801,8 @@ class LieGroupSolver:
                         params.apply(t1)             # refused: changed inside the step
                     if not live:
                         push(needAcc)
+                    if checkOutput is not None:
+                        checkOutput(t1)
                     if watch:
                         self._written = (self._q.copy(), self._qt.copy())
                     if showProgress and perf() > state["nextProgress"]:
@@ -806,6 +843,8 @@ class LieGroupSolver:
                     count[0] += 1
                     steps[0] = steps[1]
                     steps[1] = t1
+                    if checkOutput is not None:
+                        checkOutput(t1)
                     if showProgress and perf() > state["nextProgress"]:
                         self._progress(state, t1)
                     return True
@@ -984,7 +1023,7 @@ def _check_index2_rotvec_constraints(mbs, typeName, settings):
 def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialValues=False, storeSolver=True,
                  showHints=False, showCausingItems=True, autoAssemble=True, *, method=None, liegroup="auto",
                  stabilization=None, projectInitial=True, verbose=False, showProgress=True, substeps=None,
-                 accelerations=None, constraintTolerance=None, evaluation="auto"):
+                 accelerations=None, constraintTolerance=None, evaluation="auto", constraintCheck=True):
     """Drop-in for ``exudyn.SolveDynamic``: integrate ``mbs`` with an explicit Munthe-Kaas
     Lie group method inside Exudyn's time loop; returns True.
 
@@ -1008,7 +1047,13 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
     constraint manifold's tangent space (Simbody's scheme; docs/ADAPTIVE.md),
     ``evaluation`` ('auto': the compiled kernel when it has every item of the model,
     else Exudyn evaluates the whole model, :mod:`.evaluated_solve`, with one warning naming
-    the items; 'compiled' / 'exudyn' force a path).
+    the items; 'compiled' / 'exudyn' force a path), ``constraintCheck`` (default True:
+    Exudyn's own position-level residuals of the constraints at every output, with a
+    tolerance of 1e-5 times the model's size; a residual above it that the integrator's own
+    account does not explain stops the run with a ConstraintError naming the item, one it
+    explains, the drift of an unstabilised method, is reported once per item as a warning;
+    a float sets the tolerance in the rows' units, False switches the check off;
+    :mod:`.constraint_check`).
 
     Honours ``timeIntegration.startTime / endTime / numberOfSteps``, sensors (stored and
     files), the solution and restart files, pre/post-step user functions,
@@ -1022,6 +1067,7 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
     ``autoAssemble`` and an mbs that is not assembled, the model is checked from its item
     dictionaries (what ``mbs.Assemble()`` will set) and only then assembled."""
     import exudyn as exu
+    check_tolerance(constraintCheck)
     settings = exu.SimulationSettings() if simulationSettings is None else simulationSettings
     # solverType (argument, else the setting, as Exudyn reads them) -> the tableau (bridge/solvertype.py)
     method, typeName, replaced = resolve_solver_type(solverType, settings.timeIntegration.solverType, method,
@@ -1046,7 +1092,8 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
                 warn_user("exudyn_lie.SolveDynamic: mbs is not assembled; calling mbs.Assemble()")
                 mbs.Assemble()
             return path.Solve(simulationSettings, updateInitialValues=updateInitialValues, storeSolver=storeSolver,
-                              showProgress=showProgress, substeps=substeps, accelerations=accelerations)
+                              showProgress=showProgress, substeps=substeps, accelerations=accelerations,
+                              constraintCheck=constraintCheck)
     solver = LieGroupSolver(mbs, method=method, liegroup=liegroup, stabilization=stabilization,
                             projectInitial=projectInitial, verbose=verbose, constraintTolerance=constraintTolerance,
                             _configuration="items" if assemble else "initial")
@@ -1062,4 +1109,5 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
         warn_user("exudyn_lie.SolveDynamic: mbs is not assembled; calling mbs.Assemble()")
         mbs.Assemble()
     return solver.Solve(simulationSettings, updateInitialValues=updateInitialValues, storeSolver=storeSolver,
-                        showProgress=showProgress, substeps=substeps, accelerations=accelerations, refresh=assemble)
+                        showProgress=showProgress, substeps=substeps, accelerations=accelerations, refresh=assemble,
+                        constraintCheck=constraintCheck)

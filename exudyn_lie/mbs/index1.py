@@ -165,7 +165,6 @@ def schur_solve(gid, Minv, rint, bw, redundant, pivotTol, R, Jr, W, lam, Sb, Sd,
                 Sd[l, q] = v
         info[1] = pivoted_cholesky_solve(Sd, m, lam, perm, ytmp, pivotTol)
         return STATUS_OK
-    dmax = 0.0
     for q in range(m):
         l0 = q - bw
         if l0 < 0:
@@ -178,9 +177,7 @@ def schur_solve(gid, Minv, rint, bw, redundant, pivotTol, R, Jr, W, lam, Sb, Sd,
         bq = rint[q, ROW_BODY_B]
         for l in range(l0, q + 1):
             Sb[q, q - l] = _bodies_dot(aq, bq, rint[l, ROW_BODY_A], rint[l, ROW_BODY_B], q, l, Jr, W)
-        if Sb[q, 0] > dmax:
-            dmax = Sb[q, 0]
-    fail = band_ldl_inplace(Sb, m, bw, pivotTol * dmax)
+    fail = band_ldl_inplace(Sb, m, bw, pivotTol, ytmp)
     if fail >= 0:
         info[0] = fail
         return STATUS_SINGULAR

@@ -14,7 +14,15 @@ The rank rule (one rule for the set-up check, the time loop and the error messag
 ---------------------------------------------------------------------------------
 The constraints are numerically dependent at a state when a Cholesky pivot of
 ``S = J M^-1 J^T`` (the mass-weighted Schur complement, in the bodies' group velocity
-coordinates) is ``<= REL_PIVOT_TOL * max(diag S)``:
+coordinates) is ``<= REL_PIVOT_TOL * S_ii``, its own row's diagonal: the pivot is what is
+left of ``S_ii`` once the rows before it are eliminated, so the rule asks whether row i
+is (nearly) a combination of them, whatever the scale of the other rows.  This is the rule
+``pivot <= REL_PIVOT_TOL`` on the Jacobi-scaled ``D^-1/2 S D^-1/2`` (D = diag S; unit
+diagonal, entries of size at most 1), which the row scaling of a model cannot change.  A
+rule relative to ``max(diag S)`` is not: a body with a tiny inertia (scaled by 1e-10 in
+Exudyn's slider-crank example) makes its rotation rows 1e11 times larger than a point
+mass's rail row, and that rail row, independent of every other row, was taken for
+redundant and dropped.
 
 * the time loop's band Cholesky (no pivoting) applies it to its pivots and stops with
   ``STATUS_SINGULAR`` (the Simulator raises ConstraintError naming the joints);
@@ -27,24 +35,31 @@ coordinates) is ``<= REL_PIVOT_TOL * max(diag S)``:
   reject at its first stage never passes construction, and a start that passes runs
   the band path with every pivot above the threshold.
 
-Every Cholesky pivot of an SPD matrix is ``>= lambda_min(S)``, so a band pivot meeting
-the rule implies ``lambda_min(S) <= REL_PIVOT_TOL * max(diag S)``: the eigenvectors of S
-with eigenvalues below that bound, which name the joints involved, always exist.
+Every Cholesky pivot of an SPD matrix is ``>= lambda_min``, so a band pivot meeting the
+rule implies ``lambda_min(D^-1/2 S D^-1/2) <= REL_PIVOT_TOL``: the eigenvectors of the scaled
+S with eigenvalues below that bound, which name the joints involved, always exist.
 """
 import numpy as np
 from numba import njit
 
-# a pivot below REL_PIVOT_TOL * (largest diagonal of S) is treated as zero: with
-# entries of S computed to ~1e-16 relative, 1e-10 leaves a wide margin for
-# ill-conditioned but regular systems while catching genuine rank loss.  (S is J M^-1 J^T,
-# so this is sigma_min / sigma_max ~ 1e-5 for the mass-weighted J M^-1/2.)
-REL_PIVOT_TOL = 1e-10
+# a pivot below REL_PIVOT_TOL * (its row's diagonal of S) is treated as zero.  The terms
+# subtracted from S_ii are each at most S_ii (Cauchy-Schwarz), so a dependent row's pivot
+# is round-off, about m eps S_ii (2e-14 for 100 rows): 1e-12 is 50 times above that.  It
+# stays below regular but ill-conditioned mechanisms: the ratio is the squared sine of the
+# angle between row i of J M^-1/2 and the rows before it, which a body of tiny inertia
+# makes small.  Exudyn's slider-crank example (crank and rod inertias scaled by 1e-10) has
+# pivots down to 1.3e-10 S_ii and a smallest eigenvalue of the scaled S of 3e-11 over its
+# run: a rule at 1e-10 stopped it at t = 0.29 s as "singular".  A redundant joint whose
+# dependency a position drift d (relative to the mechanism's size) breaks has a pivot of
+# about d^2 S_ii: still found for d up to 1e-6.
+REL_PIVOT_TOL = 1e-12
 
 
 @njit(cache=True, forceinline=True, _nrt=False)
-def band_ldl_inplace(B, m, bw, tol):
+def band_ldl_inplace(B, m, bw, rel_tol, d0):
     """Factor ``S = L D L^T`` (unit lower L; the square-root-free Cholesky) in band storage:
-    B's strict band becomes L, ``B[i, 0]`` becomes ``1 / D[i]``.
+    B's strict band becomes L, ``B[i, 0]`` becomes ``1 / D[i]``.  ``d0`` (length >= m) is
+    scratch: it keeps the diagonal of S for the rank rule (module docstring).
 
     Right-looking: once column j is final, every entry of the trailing band it updates is
     independent of the others, so the dependency chain per column is one division and one
@@ -52,10 +67,13 @@ def band_ldl_inplace(B, m, bw, tol):
     previous one and paid a square root and a division per column.)  The pivot ``D[i]`` is the
     square of L L^T's, so the rank rule reads the same quantity.
 
-    Returns -1 on success, otherwise the row index whose pivot ``D[i]`` was <= tol."""
+    Returns -1 on success, otherwise the row index whose pivot ``D[i]`` was
+    ``<= rel_tol * S_ii`` (a row without coordinates, ``S_ii = 0``, fails too)."""
+    for j in range(m):
+        d0[j] = B[j, 0]
     for j in range(m):
         d = B[j, 0]
-        if d <= tol:
+        if d <= rel_tol * d0[j]:
             return j
         rd = 1.0 / d
         B[j, 0] = rd
@@ -99,31 +117,31 @@ def band_ldl_solve_inplace(B, m, bw, x):
 def pivoted_cholesky_solve(S, m, x, perm, y, rel_tol):
     """Rank-revealing solve of the PSD system S y = x (S overwritten).
 
-    Cholesky with complete (diagonal) pivoting; stops when the largest remaining
-    diagonal drops below ``rel_tol * max(diag S)``.  Rows beyond the numerical rank
-    are redundant: their multipliers are set to zero, which gives one valid set of
-    Lagrange multipliers (the accelerations do not depend on the choice as long as
+    Cholesky with complete (diagonal) pivoting on the Jacobi-scaled S (module docstring):
+    the pivot is the row with the largest remaining diagonal relative to its own diagonal
+    of S, and the factorisation stops when that ratio is ``<= rel_tol``.  Rows beyond the
+    numerical rank are redundant: their multipliers are set to zero, which gives one valid
+    set of Lagrange multipliers (the accelerations do not depend on the choice as long as
     the redundant equations are consistent).  ``perm`` (int) and ``y`` (float) are
-    length-m workspaces.  Returns the numerical rank.
+    length-m workspaces (``y`` holds diag S during the factorisation).  Returns the
+    numerical rank.
     """
     for i in range(m):
         perm[i] = i
-    dmax = 0.0
-    for i in range(m):
-        if S[i, i] > dmax:
-            dmax = S[i, i]
-    tol = rel_tol * dmax
+        y[i] = S[i, i]
     rank = m
     for k in range(m):
-        # choose the pivot: largest remaining diagonal
+        # choose the pivot: largest remaining diagonal relative to its row's diagonal
         p = k
-        best = S[perm[k], perm[k]]
-        for i in range(k + 1, m):
-            d = S[perm[i], perm[i]]
-            if d > best:
-                best = d
+        best = -1.0
+        for i in range(k, m):
+            pi = perm[i]
+            d0 = y[pi]
+            ratio = S[pi, pi] / d0 if d0 > 0.0 else 0.0
+            if ratio > best:
+                best = ratio
                 p = i
-        if best <= tol:
+        if best <= rel_tol:
             rank = k
             break
         tmp = perm[k]
@@ -168,19 +186,20 @@ def schur_rank_and_null(S, rel_tol=REL_PIVOT_TOL, forced=False):
 
     Returns ``(rank, null)``: ``rank`` from the complete-pivoted Cholesky with the
     kernel's tolerance, ``null`` (m, k) orthonormal vectors spanning the numerical null
-    space of S (of J^T): the eigenvectors with eigenvalues ``<= rel_tol * max(diag S)``,
-    at least ``m - rank`` of them.  ``forced``: the band Cholesky met the rule at this
+    space of the Jacobi-scaled S (whose support names the same rows as S's): the
+    eigenvectors with eigenvalues ``<= rel_tol``, at least ``m - rank`` of them.  ``forced``: the band Cholesky met the rule at this
     state, so at least one null vector is returned (the smallest eigenvalue's)."""
     S = np.array(S, dtype=float)
     m = S.shape[0]
     if m == 0:
         return 0, np.zeros((0, 0))
     S = 0.5 * (S + S.T)
-    dmax = float(np.max(np.diag(S)))
     rank = int(pivoted_cholesky_solve(np.ascontiguousarray(S.copy()), m, np.zeros(m), np.zeros(m, np.int64),
                                       np.zeros(m), float(rel_tol)))
-    w, U = np.linalg.eigh(S)
-    k = max(int(np.sum(w <= rel_tol * dmax)), m - rank, 1 if forced else 0)
+    d = np.diag(S).copy()
+    s = np.where(d > 0.0, 1.0 / np.sqrt(np.where(d > 0.0, d, 1.0)), 0.0)
+    w, U = np.linalg.eigh(s[:, None] * S * s[None, :])     # the scaled S of the rank rule
+    k = max(int(np.sum(w <= rel_tol)), m - rank, 1 if forced else 0)
     return rank, U[:, :k]
 
 

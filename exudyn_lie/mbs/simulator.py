@@ -292,8 +292,8 @@ class Simulator:
         """``(rank, rows)``: the numerical rank of the constraints at the state (R, r, V)
         and the rows taking part in their linear dependencies, by the one rank rule of
         the kernel (:mod:`exudyn_lie.mbs.linalg`): Cholesky pivots of ``S = J M^-1 J^T``
-        at or below ``REL_PIVOT_TOL * max(diag S)``; the rows are the support of the
-        numerical null space of S (= that of J^T).  ``forced``: the kernel's band
+        at or below ``REL_PIVOT_TOL`` times their row's diagonal; the rows are the support
+        of the numerical null space of the Jacobi-scaled S (= that of J^T).  ``forced``: the kernel's band
         Cholesky met the rule at this state (then at least one dependency is named)."""
         if self.sd.nrows == 0:
             return 0, []
@@ -306,7 +306,7 @@ class Simulator:
 
         One rule decides, the kernel's (:mod:`exudyn_lie.mbs.linalg`): the time loop's own
         band Cholesky of ``S = J M^-1 J^T`` at the initial state (O(m b^2)).  If a pivot
-        falls to ``<= REL_PIVOT_TOL * max(diag S)`` the time loop would stop at its first
+        falls to ``<= REL_PIVOT_TOL * S_ii`` (its row's diagonal) the time loop would stop at its first
         stage, so the simulator switches to the rank-revealing (complete-pivoted
         Cholesky) solve, which applies the same tolerance, and warns: "redundant" with
         the rank when the pivoted factorisation drops rows, "ill-conditioned" when only
@@ -323,24 +323,32 @@ class Simulator:
         self.wk = self._make_work()
         self._update_tracking()
         names = ", ".join(self.redundantJoints)
-        rule = (f"Cholesky pivots of J M^-1 J^T at or below {REL_PIVOT_TOL:g} x its largest diagonal at the "
+        rule = (f"Cholesky pivots of J M^-1 J^T at or below {REL_PIVOT_TOL:g} x their row's diagonal at the "
                 f"initial state")
         if rank < m:
             msg = (f"exudyn_lie: redundant constraints among joints {names} (numerical rank {rank} of {m} "
                    f"rows: {rule}); using the rank-revealing (pivoted Cholesky) solve")
         else:
             msg = (f"exudyn_lie: ill-conditioned constraints among joints {names} (a band Cholesky pivot of "
-                   f"J M^-1 J^T at or below {REL_PIVOT_TOL:g} x its largest diagonal at the initial state, "
+                   f"J M^-1 J^T at or below {REL_PIVOT_TOL:g} x its row's diagonal at the initial state, "
                    f"full rank with pivoting); using the pivoted Cholesky solve")
         warn_user(msg)
 
     def _residuals_and_JV(self):
         """h(g, t) and J V - w(t) at the current state and time, row by row (no dense Jacobian;
         ``w`` the velocity targets of the rows' drives, mbs/row_drives.py)."""
+        return self.RowResiduals(self.R, self.r, self.V, self.t)
+
+    def RowResiduals(self, R, r, V, t):
+        """``(h, J V - w)``: every constraint row's position residual and velocity residual
+        at the state ``(R, r, V)`` and time ``t`` (``w`` the velocity targets of the rows'
+        moving offsets), in the kernel's row order (``rowJoint`` gives each row's joint)."""
         sd, wk = self.sd, self.wk
-        self._drives_at(self.t)
-        joint_rows_at(sd, wk, self.R, self.r, self.V, wk.h, wk.Jr, wk.eta)
-        Vz = np.vstack([self.V, np.zeros((1, 6))])          # row -1: the ground
+        self._drives_at(t)
+        joint_rows_at(sd, wk, np.ascontiguousarray(R, dtype=float), np.ascontiguousarray(r, dtype=float),
+                      np.ascontiguousarray(V, dtype=float), wk.h, wk.Jr, wk.eta)
+        V = np.asarray(V, dtype=float)
+        Vz = np.vstack([V, np.zeros((1, 6))])          # row -1: the ground
         a = sd.rint[:, kernel.ROW_BODY_A]
         b = sd.rint[:, kernel.ROW_BODY_B]
         JV = np.einsum("qk,qk->q", wk.Jr[:, :6], Vz[a]) + np.einsum("qk,qk->q", wk.Jr[:, 6:], Vz[b])
@@ -596,7 +604,7 @@ class Simulator:
             raise ConstraintError(
                 f"singular constraint Jacobian at t = {self.t:.6g} s: the constraints of joints "
                 f"{', '.join(names)} are linearly dependent (a Cholesky pivot of J M^-1 J^T fell to "
-                f"{REL_PIVOT_TOL:g} x its largest diagonal or below: a singular configuration, or redundant "
+                f"{REL_PIVOT_TOL:g} x its row's diagonal or below: a singular configuration, or redundant "
                 f"joints); remove the redundant constraint axes (e.g. make one joint spherical) or "
                 f"check the joint frames")
         if st == kernel.STATUS_STAGE_ARG:

@@ -29,8 +29,8 @@ child edges.  Leaves first (forward pass), each subtree is condensed into its ro
 
 The backward pass (root first) recovers ``y`` and ``lam`` edge by edge.  Cost per body:
 a few 6x6 products and factorisations of blocks of the size of one joint, independent of
-the number of bodies.  A pivot at or below ``pivotTol`` times the largest diagonal of its
-block returns ``STATUS_SINGULAR`` (row in ``info[0]``), as the band Cholesky does.
+the number of bodies.  A pivot at or below ``pivotTol`` times its own row's diagonal in
+its block returns ``STATUS_SINGULAR`` (row in ``info[0]``), as the band Cholesky does.
 
 The plan (which body is whose parent, the rows of each edge, offsets of the factor
 blocks) is made once by :func:`tree_plan` when the scene is compiled; the stage does no
@@ -152,19 +152,15 @@ def work_size(nb, m, plan):
 @njit(cache=True, _nrt=False)
 def _chol(L, off, n, rel_tol):
     """Cholesky of the n x n block stored row-major at ``L[off:]`` (in place, lower).
-    Returns -1, or the index of the first pivot <= rel_tol * max diagonal."""
-    dmax = 0.0
-    for i in range(n):
-        if L[off + i * n + i] > dmax:
-            dmax = L[off + i * n + i]
-    tol = rel_tol * dmax
+    Returns -1, or the index of the first pivot ``<= rel_tol`` times its own diagonal entry
+    (the rank rule of mbs/linalg.py; row i's diagonal is still unchanged when it is reached)."""
     for i in range(n):
         for j in range(i + 1):
             s = L[off + i * n + j]
             for k in range(j):
                 s -= L[off + i * n + k] * L[off + j * n + k]
             if j == i:
-                if s <= tol:
+                if s <= rel_tol * L[off + i * n + i]:
                     return i
                 L[off + i * n + i] = np.sqrt(s)
             else:

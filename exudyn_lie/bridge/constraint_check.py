@@ -1,0 +1,270 @@
+"""The run-time check of the constraints, independent of the integrator: at every output,
+Exudyn's own position-level residuals of the algebraic equations
+(``ComputeAlgebraicEquations``) at the state written into mbs.
+
+A constraint that does not hold is the most visible symptom of integrating another model
+than the user's, and Exudyn computes it from its own item definitions, whatever exudyn_lie
+made of them.  Explicit index-1 integration without stabilisation lets the constraints
+drift, though (the paper's subject: on SO3xR3 a revolute joint drifts, on SE3 it holds), so a
+residual above the tolerance is judged by whether the integrator's own account explains it:
+
+* the compiled path: the kernel's residuals of the same joint at the same state
+  (``Simulator.RowResiduals``).  If the kernel sees its rows of the joint drift as much (at
+  least :data:`EXPLAINED` of Exudyn's residual), the drift is the method's: a warning names
+  the item and the size, once per item.  If the kernel holds its rows while Exudyn's residual
+  of the item is large, the kernel integrates another constraint than Exudyn's: a
+  :class:`~exudyn_lie.errors.ConstraintError` stops the run.
+* the Exudyn-evaluated path (the integrator's rows are Exudyn's own, so they cannot be
+  compared with themselves): the residual must change as the velocity-level equations the
+  integrator uses say, ``g(t1) - g(t0) = (t1 - t0) (g_v(t0) + g_v(t1)) / 2`` up to the
+  trapezoid's error, summed over the run per item.  A velocity level that leaves out a
+  moving offset (Exudyn's GenericJoint with ``offsetUserFunction``, a ``ConnectorCoordinate``
+  offset moved by a pre-step function) lets the residual grow by steps the velocity level
+  does not see: more than half of the growth unexplained stops the run.
+* with the rank-revealing solve (redundant constraints), every row that the solve drops must
+  be implied by the rows it keeps: among the items taking part in the dependency, one item's
+  residual above the tolerance and :data:`NOT_IMPLIED` times larger than every other's stops
+  the run (its rows were not redundant).
+
+The tolerance is ``constraintCheck`` of ``exl.SolveDynamic``: ``True`` (the default)
+``DEFAULT_RELATIVE`` times the model's size (the diagonal of the box around its nodes and
+markers at the start, at least 1 mm), a float in the rows' own units (m for positions), or
+``False`` for no check.  1e-5 of the model's size is far above round-off and invisible in a
+plot, so a residual below it needs no judgement.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..errors import ConstraintError
+from ..userwarn import warn_user
+
+#: default tolerance as a fraction of the model's size
+DEFAULT_RELATIVE = 1e-5
+#: the integrator's own residual of an item must be at least this fraction of Exudyn's to explain it
+EXPLAINED = 0.1
+#: a dropped row whose residual exceeds every other dependent item's this many times is not implied
+NOT_IMPLIED = 100.0
+#: on the evaluated path: the share of the residual's growth the velocity level must explain
+UNEXPLAINED_SHARE = 0.5
+
+VELOCITY_LEVEL_TYPES = ("JointRollingDisc", "JointRollingDisc2D")
+
+
+def check_tolerance(constraintCheck):
+    """Validate the keyword; returns None (off), True (default) or a positive float."""
+    if constraintCheck is None or constraintCheck is False:
+        return None
+    if constraintCheck is True:
+        return True
+    try:
+        v = float(constraintCheck)
+    except (TypeError, ValueError):
+        v = float("nan")
+    if not v > 0.0 or not np.isfinite(v):
+        raise ValueError(f"constraintCheck must be True, False or a positive tolerance, got {constraintCheck!r}")
+    return v
+
+
+def model_size(mbs):
+    """The diagonal of the box around the nodes' and markers' positions at the current state
+    (at least 1 mm)."""
+    import exudyn as exu
+    pts = []
+    sd = mbs.systemData
+    for n in range(sd.NumberOfNodes()):
+        try:
+            pts.append(np.asarray(mbs.GetNodeOutput(n, exu.OutputVariableType.Position,
+                                                    configuration=exu.ConfigurationType.Current), float)[:3])
+        except Exception:                # noqa: BLE001 - a node without a position
+            pass
+    for k in range(sd.NumberOfMarkers()):
+        try:
+            pts.append(np.asarray(mbs.GetMarkerOutput(k, exu.OutputVariableType.Position,
+                                                      configuration=exu.ConfigurationType.Current), float)[:3])
+        except Exception:                # noqa: BLE001 - a marker without a position
+            pass
+    pts = [p for p in pts if p.shape == (3,) and np.all(np.isfinite(p))]
+    if not pts:
+        return 1.0
+    P = np.array(pts)
+    return max(float(np.linalg.norm(P.max(axis=0) - P.min(axis=0))), 1e-3)
+
+
+def _label(mbs, kind, i):
+    if kind == "node":
+        d = mbs.GetNode(i)
+        return f"node {i} ('{d.get('name', '')}') Node{d['nodeType']}"
+    d = mbs.GetObject(i)
+    return f"object {i} ('{d.get('name', '')}') Object{d['objectType']}"
+
+
+class ConstraintCheck:
+    """Exudyn's position-level residuals at every output (module docstring).
+
+    ``solver`` is the run's initialised ``MainSolverImplicitSecondOrder``.  ``items`` come out
+    as ``(kind, index, AE rows)`` for every active position-level constraint with coordinates
+    (an item's rows that constrain no coordinate, Exudyn's equations ``lambda = 0`` of free
+    axes, are left out).  ``dependent``: the items of a redundant set (rank-revealing solve),
+    None without one."""
+
+    def __init__(self, mbs, solver, tolerance, dependent=None):
+        self.mbs, self.solver = mbs, solver
+        sd = mbs.systemData
+        self.n, self.n1, self.m = int(sd.ODE2Size()), int(sd.ODE1Size()), int(sd.AEsize())
+        self.tol = DEFAULT_RELATIVE * model_size(mbs) if tolerance is True else float(tolerance)
+        active = self._rows_with_coordinates()
+        items = []
+        for n in range(sd.NumberOfNodes()):
+            rows = [int(r) for r in sd.GetNodeLTGAE(n) if active[int(r)]]
+            if rows:
+                items.append(("node", n, np.array(rows, np.int64)))
+        for o in range(sd.NumberOfObjects()):
+            d = mbs.GetObject(o)
+            if not d.get("activeConnector", True) or d.get("velocityLevel", False) is True \
+                    or d["objectType"] in VELOCITY_LEVEL_TYPES:
+                continue
+            rows = [int(r) for r in sd.GetObjectLTGAE(o) if active[int(r)]]
+            if rows:
+                items.append(("object", o, np.array(rows, np.int64)))
+        self.items = items
+        self.rows = np.concatenate([it[2] for it in items]) if items else np.zeros(0, np.int64)
+        # item of each checked row, for the per-item maxima
+        self._itemOfRow = np.concatenate([np.full(len(it[2]), k) for k, it in enumerate(items)]) \
+            if items else np.zeros(0, np.int64)
+        self.dependent = None if dependent is None else set(dependent)
+        self.warned = set()
+        self.largest = 0.0
+        self.checks = 0
+        self._o = self.n + self.n1
+
+    def _rows_with_coordinates(self):
+        """Which AE rows constrain ODE2 or ODE1 coordinates at the current state."""
+        s, mbs = self.solver, self.mbs
+        nsys = self.n + self.n1 + self.m
+        if self.m == 0:
+            return np.zeros(0, bool)
+        s.SetSystemJacobian(np.zeros((nsys, nsys)))
+        s.ComputeJacobianAE(mbs)
+        J = np.asarray(s.GetSystemJacobian())[self.n + self.n1:, :self.n + self.n1]
+        return np.any(J != 0.0, axis=1)
+
+    def residuals(self, t):
+        """Per checked item, the largest |g| of its rows at the state in mbs at time ``t``."""
+        sd = self.mbs.systemData
+        t0 = sd.GetTime()
+        sd.SetTime(t)
+        self.solver.ComputeAlgebraicEquations(self.mbs, False)
+        sd.SetTime(t0)
+        g = np.abs(np.asarray(self.solver.GetSystemResidual())[self._o:][self.rows])
+        out = np.zeros(len(self.items))
+        np.maximum.at(out, self._itemOfRow, g)
+        return out
+
+    def check(self, t, explain):
+        """Check the state in mbs at time ``t``.  ``explain(k, g)``: None if the integrator's
+        own account explains item k's residual ``g``, else the sentence that says why not."""
+        if not self.items:
+            return
+        self.checks += 1
+        G = self.residuals(t)
+        gmax = float(G.max())
+        self.largest = max(self.largest, gmax)
+        if gmax <= self.tol:
+            return
+        for k in np.nonzero(G > self.tol)[0]:
+            kind, i, _ = self.items[k]
+            if kind == "object" and not self.mbs.GetObjectParameter(i, "activeConnector"):
+                continue                  # switched off during the run: its rows are lambda = 0
+            why = explain(int(k), float(G[k]))
+            if why is not None:
+                raise ConstraintError(
+                    f"the constraints of {_label(self.mbs, kind, i)} do not hold at t = {t:.6g} s: Exudyn's "
+                    f"residual is {G[k]:.3g} (tolerance {self.tol:.3g}), and {why}: exudyn_lie integrates another "
+                    f"model than Exudyn defines. Please report this with the script; constraintCheck=False runs it "
+                    f"anyway")
+            self._redundancy(t, G, k)
+            if (kind, i) not in self.warned:
+                self.warned.add((kind, i))
+                warn_user(f"exudyn_lie: the constraints of {_label(self.mbs, kind, i)} drift: Exudyn's residual is "
+                          f"{G[k]:.3g} at t = {t:.6g} s (tolerance {self.tol:.3g}), and exudyn_lie's own account "
+                          f"of the constraints explains it: the drift of explicit integration without "
+                          f"constraint stabilisation (reported once per item); stabilization='position' or a "
+                          f"smaller step holds it")
+
+    def _redundancy(self, t, G, k):
+        dep = self.dependent
+        if dep is None or self.items[k][1] not in dep:
+            return
+        others = [G[j] for j in range(len(self.items)) if j != k and self.items[j][1] in dep]
+        if others and G[k] > NOT_IMPLIED * max(max(others), 1e-300):
+            kind, i, _ = self.items[k]
+            raise ConstraintError(
+                f"the constraints of {_label(self.mbs, kind, i)} were taken for redundant, but they do not hold at "
+                f"t = {t:.6g} s: Exudyn's residual is {G[k]:.3g}, the other constraints of the dependency at most "
+                f"{max(others):.3g}, so they are not implied by them. The rank-revealing solve dropped rows that "
+                f"were not redundant; please report this with the script")
+
+
+class ConsistencyAccount:
+    """The evaluated path's explanation (module docstring): per item, the summed growth of
+    Exudyn's residual and the part of it the velocity-level equations do not explain."""
+
+    def __init__(self, check: ConstraintCheck):
+        self.c = check
+        ni = len(check.items)
+        self.growth, self.unexplained = np.zeros(ni), np.zeros(ni)
+        self.t = self.g = self.gv = None
+
+    def _signed(self, t, gv):
+        c = self.c
+        sd = c.mbs.systemData
+        t0 = sd.GetTime()
+        sd.SetTime(t)
+        c.solver.ComputeAlgebraicEquations(c.mbs, False)
+        sd.SetTime(t0)
+        return np.asarray(c.solver.GetSystemResidual())[c._o:][c.rows].copy(), np.asarray(gv)[c.rows]
+
+    def step(self, t, gv):
+        """Account the interval from the last call to ``t``; ``gv`` the velocity-level
+        residuals (all AE rows) the integrator uses, at the state in mbs."""
+        g, v = self._signed(t, gv)
+        if self.t is not None and t > self.t:
+            dt = t - self.t
+            dg = g - self.g
+            miss = np.abs(dg - 0.5 * dt * (self.gv + v))
+            np.add.at(self.growth, self.c._itemOfRow, np.abs(dg))
+            np.add.at(self.unexplained, self.c._itemOfRow, miss)
+        self.t, self.g, self.gv = t, g, v
+
+    def explain(self, k, g):
+        """None if the velocity level explains item k's growth, else why not."""
+        if self.unexplained[k] > UNEXPLAINED_SHARE * self.growth[k]:
+            return (f"of its growth over the run ({self.growth[k]:.3g}), {self.unexplained[k]:.3g} is not what "
+                    f"the velocity-level equations that exudyn_lie integrates predict (a moving offset or another "
+                    f"time-dependent term that they leave out)")
+        return None
+
+
+def kernel_explanation(sim, jointRows):
+    """The compiled path's explanation (module docstring): ``explain(k, g)`` at the kernel
+    state ``(R, r, V, t)`` set by :meth:`at`; ``jointRows[k]`` the kernel rows of checked item
+    k (None: no compiled rows to compare, e.g. a node's own equation)."""
+    state = {}
+
+    def at(R, r, V, t):
+        state["s"] = (R, r, V, t)
+        state.pop("h", None)
+
+    def explain(k, g):
+        rows = jointRows[k]
+        if rows is None or not len(rows):
+            return None
+        if "h" not in state:
+            state["h"] = np.abs(sim.RowResiduals(*state["s"])[0])
+        own = float(state["h"][rows].max())
+        if own >= EXPLAINED * g:
+            return None
+        return f"exudyn_lie's own rows of it are at {own:.3g}"
+
+    return at, explain

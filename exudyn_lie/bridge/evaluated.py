@@ -147,6 +147,78 @@ def coordinate_constraint_rows(mbs):
     return np.array(vel, np.int64), moving
 
 
+def parameter_offset_rows(mbs):
+    """``[(object, AE rows, label)]`` of the active position-level ObjectConnectorCoordinates
+    whose ``offset`` parameter a user function may move during the run (those without an
+    ``offsetUserFunction``, which replaces it): see :class:`ParameterOffsets`."""
+    sd = mbs.systemData
+    out = []
+    for o in range(sd.NumberOfObjects()):
+        d = mbs.GetObject(o)
+        if d["objectType"] != "ConnectorCoordinate" or not d.get("activeConnector", True) \
+                or d.get("velocityLevel", False):
+            continue
+        if _userfunction(d, "offsetUserFunction", _describe_object(mbs, o, d)) is not None:
+            continue
+        out.append((o, [int(r) for r in sd.GetObjectLTGAE(o)], f"the offset of {_describe_object(mbs, o, d)}"))
+    return out
+
+
+class ParameterOffsets:
+    """ObjectConnectorCoordinate offsets moved by a user function during the run (a pre-step
+    function's ``mbs.SetObjectParameter(o, 'offset', ...)``, as Exudyn's reeving-system crane
+    does).  Exudyn evaluates the new offset at the position level, but its velocity level
+    does not know it moves: eta from it would hold the coordinate at its old velocity.
+
+    Exudyn's index-3 solve holds the offset set before step n at the step's end ``t_(n+1)``.
+    So the offset is recorded per step at that time, and a moved offset becomes a moving row
+    (the mechanism of ``offsetUserFunction``, :func:`coordinate_constraint_rows`) whose
+    function is the quadratic through the last three records: its rate and acceleration
+    enter ``g_v`` and ``eta``, and at ``t_(n+1)`` it is the value Exudyn's own solve holds."""
+
+    def __init__(self, mbs, t0):
+        self.mbs = mbs
+        self.items = parameter_offset_rows(mbs)
+        self.hist = {o: [(t0, float(mbs.GetObjectParameter(o, "offset")))] for o, _, _ in self.items}
+        self.moved = set()
+
+    def record(self, tEnd):
+        """Read the offsets set for the step ending at ``tEnd``; returns the moving rows
+        ``[(AE row, function, label)]`` of the offsets that have moved so far."""
+        moving = []
+        for o, rows, label in self.items:
+            h = self.hist[o]
+            v = float(self.mbs.GetObjectParameter(o, "offset"))
+            if tEnd > h[-1][0]:
+                h.append((tEnd, v))
+                del h[:-3]
+            else:
+                h[-1] = (h[-1][0], v)      # the same step again (discontinuous iteration)
+            if any(x[1] != h[0][1] for x in h):
+                self.moved.add(o)
+            if o in self.moved:
+                fn = _quadratic_through(h)
+                moving += [(r, fn, label) for r in rows]
+        return moving
+
+
+def _quadratic_through(points):
+    """The polynomial of degree len(points) - 1 <= 2 through ``[(t, value)]``, as a function of t."""
+    ts = [p[0] for p in points]
+    vs = [p[1] for p in points]
+
+    def fn(t):
+        s = 0.0
+        for i, (ti, vi) in enumerate(zip(ts, vs)):
+            w = 1.0
+            for j, tj in enumerate(ts):
+                if j != i:
+                    w *= (t - tj) / (ti - tj)
+            s += w * vi
+        return s
+    return fn
+
+
 def position_derived_rows(mbs):
     """The AE rows whose velocity-level equation in Exudyn is not the time derivative of the
     position-level one, so that ``g_v`` and ``eta`` must come from the position level:
@@ -303,7 +375,8 @@ class EvaluatedModel:
         self._eta0 = np.zeros(0)
         self._etaBuf = np.zeros(m)
         self._vmax = 0.0
-        self.velocityRows, self._movingRows = coordinate_constraint_rows(mbs)
+        self.velocityRows, self._functionRows = coordinate_constraint_rows(mbs)
+        self._movingRows = list(self._functionRows)
         # rows whose g_v and eta come from the position level (position_derived_rows)
         self.positionRows, self._allPosition = position_derived_rows(mbs)
         self._velocityLevel = not self._allPosition
@@ -388,6 +461,10 @@ class EvaluatedModel:
                                   "constraints on ODE2 coordinates only; solve with exudyn.SolveDynamic")
             self._lamlam = J[self.n + self.n1:, self.n + self.n1:]
         return M, f, Cq
+
+    def set_parameter_offsets(self, moving):
+        """The moving rows of offsets changed by user functions (:class:`ParameterOffsets`)."""
+        self._movingRows = self._functionRows + moving
 
     def position_constraints(self, t):
         """``g(q, t)``, Exudyn's position-level AE residual at the state in mbs."""

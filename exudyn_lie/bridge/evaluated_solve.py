@@ -27,7 +27,7 @@ import time
 import numpy as np
 
 from ..userwarn import warn_user
-from .evaluated import EvaluatedModel, Layout, check_model
+from .evaluated import EvaluatedModel, Layout, ParameterOffsets, check_model
 from .evaluated_stepper import EvaluatedStepper
 from .evaluated_initial import project_initial
 from .evaluated_stiffness import check_step
@@ -294,12 +294,14 @@ class EvaluatedSolver:
                       f"and the Jacobian, the solve)")
             stepper.write()                      # the initial state and time, for Exudyn's initial outputs
             sd.SetTime(t0)
+            offsets = ParameterOffsets(mbs, t0)
             check = account = None
             if tolCheck is not None and layout.nAE:
                 dependent = range(sd.NumberOfObjects()) if model.pivoted else None
                 check = ConstraintCheck(mbs, solver, tolCheck, dependent)
                 account = ConsistencyAccount(check)
-                account.step(t0, model.velocity_constraints(t0, stepper.R, stepper.r, stepper.prev, stepper.qv))
+                account.step(t0, model.velocity_constraints(t0, stepper.R, stepper.r, stepper.prev, stepper.qv),
+                             np.max(np.abs(qt)) if qt.size else 0.0)
                 self.constraintCheck = check
             written = [q.copy(), qt.copy()]
             steps = [t0, t0]
@@ -319,6 +321,8 @@ class EvaluatedSolver:
                         snap[0] = stepper.snapshot()
                         steps[0], steps[1] = steps[1], t1
                     stepper.start = snap[0]
+                    if offsets.items:
+                        model.set_parameter_offsets(offsets.record(t1))
                     tic = time.perf_counter()
                     hh = (t1 - steps[0]) / k
                     if abs(hh - h) > 1e-9 * h:
@@ -344,7 +348,7 @@ class EvaluatedSolver:
                         if model.pivoted and check.dependent is None:
                             check.dependent = set(range(sd.NumberOfObjects()))
                         account.step(t1, model.velocity_constraints(t1, stepper.R, stepper.r, stepper.prev,
-                                                                    stepper.qv))
+                                                                    stepper.qv), np.max(np.abs(qt)) if qt.size else 0.0)
                         check.check(t1, account.explain)
                     return True
                 except BaseException as e:      # noqa: BLE001 - re-raised after Exudyn unwinds

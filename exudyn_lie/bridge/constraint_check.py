@@ -140,6 +140,7 @@ class ConstraintCheck:
         self._itemOfRow = np.concatenate([np.full(len(it[2]), k) for k, it in enumerate(items)]) \
             if items else np.zeros(0, np.int64)
         self.dependent = None if dependent is None else set(dependent)
+        self._allRows = len(self.rows) == self.m and np.array_equal(self.rows, np.arange(self.m))
         self.warned = set()
         self.largest = 0.0
         self.checks = 0
@@ -156,14 +157,22 @@ class ConstraintCheck:
         J = np.asarray(s.GetSystemJacobian())[self.n + self.n1:, :self.n + self.n1]
         return np.any(J != 0.0, axis=1)
 
-    def residuals(self, t):
-        """Per checked item, the largest |g| of its rows at the state in mbs at time ``t``."""
+    def _abs_rows(self, t):
+        """|g| of the checked rows at the state in mbs at time ``t``."""
         sd = self.mbs.systemData
         t0 = sd.GetTime()
-        sd.SetTime(t)
+        if t0 != t:
+            sd.SetTime(t)
         self.solver.ComputeAlgebraicEquations(self.mbs, False)
-        sd.SetTime(t0)
-        g = np.abs(np.asarray(self.solver.GetSystemResidual())[self._o:][self.rows])
+        if t0 != t:
+            sd.SetTime(t0)
+        g = self.solver.GetSystemResidual()[self._o:]
+        return np.abs(g if self._allRows else g[self.rows])
+
+    def residuals(self, t, g=None):
+        """Per checked item, the largest |g| of its rows at the state in mbs at time ``t``."""
+        if g is None:
+            g = self._abs_rows(t)
         out = np.zeros(len(self.items))
         np.maximum.at(out, self._itemOfRow, g)
         return out
@@ -174,11 +183,13 @@ class ConstraintCheck:
         if not self.items:
             return
         self.checks += 1
-        G = self.residuals(t)
-        gmax = float(G.max())
-        self.largest = max(self.largest, gmax)
+        g = self._abs_rows(t)
+        gmax = float(g.max())
+        if gmax > self.largest:
+            self.largest = gmax
         if gmax <= self.tol:
             return
+        G = self.residuals(t, g)
         for k in np.nonzero(G > self.tol)[0]:
             kind, i, _ = self.items[k]
             if kind == "object" and not self.mbs.GetObjectParameter(i, "activeConnector"):
@@ -263,12 +274,13 @@ class ConsistencyAccount:
 
 def kernel_explanation(sim, jointRows):
     """The compiled path's explanation (module docstring): ``explain(k, g)`` at the kernel
-    state ``(R, r, V, t)`` set by :meth:`at`; ``jointRows[k]`` the kernel rows of checked item
-    k (None: no compiled rows to compare, e.g. a node's own equation)."""
+    state of output row ``o`` of the output chunk ``ch`` (its ``Ro, ro, Vo``) at time ``t``,
+    set by ``at(ch, o, t)``; ``jointRows[k]`` the kernel rows of checked item k (None: no
+    compiled rows to compare, e.g. a node's own equation)."""
     state = {}
 
-    def at(R, r, V, t):
-        state["s"] = (R, r, V, t)
+    def at(ch, o, t):
+        state["s"] = (ch, o, t)
         state.pop("h", None)
 
     def explain(k, g):
@@ -276,7 +288,8 @@ def kernel_explanation(sim, jointRows):
         if rows is None or not len(rows):
             return None
         if "h" not in state:
-            state["h"] = np.abs(sim.RowResiduals(*state["s"])[0])
+            ch, o, t = state["s"]
+            state["h"] = np.abs(sim.RowResiduals(ch.Ro[o], ch.ro[o], ch.Vo[o], t)[0])
         own = float(state["h"][rows].max())
         if own >= EXPLAINED * g:
             return None

@@ -671,10 +671,9 @@ class LieGroupSolver:
 
         def at_output(t):
             o = ch.next - 1
-            if o < 0:
-                return
-            at(ch.Ro[o], ch.ro[o], ch.Vo[o], t)
-            check.check(t, explain)
+            if o >= 0:
+                at(ch, o, t)
+                check.check(t, explain)
         self.constraintCheck = check
         return at_output
 

@@ -180,8 +180,8 @@ class ConstraintCheck:
     def check(self, t, explain):
         """Check the state in mbs at time ``t``.  ``explain(k, g)``: None if the integrator's
         own account explains item k's residual ``g``, else the sentence that says why not."""
-        if not self.items:
-            return
+        if not self.items or not self.mbs.systemIsConsistent:
+            return                        # items modified by a user function, until Exudyn assembles again
         self.checks += 1
         g = self._abs_rows(t)
         gmax = float(g.max())
@@ -249,6 +249,8 @@ class ConsistencyAccount:
         """Account the interval from the last call to ``t``; ``gv`` the velocity-level
         residuals (all AE rows) the integrator uses, at the state in mbs; ``vmax`` its
         largest velocity coordinate."""
+        if not self.c.mbs.systemIsConsistent:
+            return
         g, v = self._signed(t, gv)
         self.vscale = max(self.vscale, float(vmax))
         if self.t0 is None:

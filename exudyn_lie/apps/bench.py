@@ -62,7 +62,7 @@ NATIVE_CONSTRAINED = ("GeneralizedAlpha", "GeneralizedAlpha-mN", "TrapezoidalInd
 NATIVE_FREE = ("RK44", "RK67", "DOPRI5")
 EPS_LEVELS = (1e-4, 1e-5, 1e-6, 1e-7, 1e-8)
 SECTIONS = ("wp", "perstep", "scaling", "startup", "overhead", "groups", "mujoco", "params", "items",
-            "userfunctions", "topology", "adaptive", "planar", "evaluated")
+            "userfunctions", "topology", "adaptive", "planar", "evaluated", "check")
 TARGET_RATIO = 10.0
 # absolute per-step targets (MK-RK4, SE3, median step, this 2-core machine)
 KERNEL_STEP_TARGETS_US = {"heavytop": 3.0, "doublependulum": 6.0}
@@ -955,6 +955,13 @@ def main(argv=None):
         # 11 rounds in the quick run too: a run is a few ms, and the shares are differences of
         # medians (3 rounds gave 1.9-9.4 % for the same code in three runs)
         out["overhead"] = bridge_overhead(T=2.0 if cfg.quick else 8.0, repeats=11)
+    if "check" in cfg.sections:
+        from .bench_micro import constraint_check_cost
+        log("run-time constraint check (SolveDynamic, output every 0.01 s, h = 1e-3 s): check on / off")
+        out["check"] = constraint_check_cost(T=2.0 if cfg.quick else 8.0, repeats=7 if cfg.quick else 11)
+        for name, d in out["check"].items():
+            log(f"constraint check {name:26s}: on {1e3 * d['on']:.3g} ms, off {1e3 * d['off']:.3g} ms, "
+                f"share {100 * d['share']:.1f} % ({d['perOutputUs']:.2g} us per output)")
     if "groups" in cfg.sections:
         from .bench_micro import group_maps
         log("group maps (SE3 exp + dexpinv)")

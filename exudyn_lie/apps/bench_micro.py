@@ -175,3 +175,43 @@ def bridge_overhead(T=8.0, h=1e-3, periods=(0.01, 0.1), repeats=11):
     if os.path.exists(path):
         os.remove(path)
     return out
+
+
+def constraint_check_cost(T=2.0, h=1e-3, period=0.01, repeats=11, models_=("heavy_top", "spherical_double_pendulum",
+                                                                          "planar_four_bar")):
+    """The run-time check of the constraints (``SolveDynamic(constraintCheck=...)``,
+    bridge/constraint_check.py) at Exudyn's default output period of 0.01 s (a position
+    sensor, no file), h = 1e-3 s, ``T`` s: per paper model the medians of ``repeats`` whole
+    ``exl.SolveDynamic`` calls with the check on and off, interleaved round by round, and the
+    check's share of the run ``(on - off) / off``.  The paper's models drift (no
+    stabilisation), so the check also judges residuals above its tolerance at some outputs."""
+    import warnings
+
+    import exudyn as exu
+
+    import exudyn_lie as exl
+    from exudyn_lie import models
+
+    def one(name, check):
+        mbs, info = models.build(name)
+        mbs.AddSensor(exu.itemInterface.SensorBody(bodyNumber=info.bodies[0].objectIndex, storeInternal=True,
+                                                   outputVariableType=exu.OutputVariableType.Position))
+        mbs.Assemble()
+        ss = _settings(T, h, period, False, "")
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)
+            t = time.perf_counter()
+            exl.SolveDynamic(mbs, ss, liegroup="SE3", showProgress=False, constraintCheck=check)
+            return time.perf_counter() - t
+
+    out = {}
+    for name in models_:
+        one(name, True), one(name, False)                   # compile / warm up
+        on, off = [], []
+        for _ in range(repeats):
+            on.append(one(name, True))
+            off.append(one(name, False))
+        a, b = float(np.median(on)), float(np.median(off))
+        out[name] = dict(on=a, off=b, share=(a - b) / b, outputs=int(round(T / period)), perOutputUs=1e6 * (a - b) /
+                         int(round(T / period)))
+    return out

@@ -187,6 +187,8 @@ class ConstraintCheck:
         gmax = float(g.max())
         if gmax > self.largest:
             self.largest = gmax
+        if self.dependent is not None:
+            self._velocity_redundancy(t)
         if gmax <= self.tol:
             return
         G = self.residuals(t, g)
@@ -210,7 +212,27 @@ class ConstraintCheck:
                           f"constraint stabilisation (reported once per item); stabilization='position' or a "
                           f"smaller step holds it")
 
-    def _redundancy(self, t, G, k):
+    def _velocity_redundancy(self, t):
+        """The rule of :meth:`_redundancy` on Exudyn's velocity-level residuals (tolerance:
+        the position tolerance per second)."""
+        sd = self.mbs.systemData
+        t0 = sd.GetTime()
+        sd.SetTime(t)
+        try:
+            self.solver.ComputeAlgebraicEquations(self.mbs, True)
+        except Exception:                  # noqa: BLE001 - an item without a velocity level
+            return
+        finally:
+            sd.SetTime(t0)
+        gv = np.abs(np.asarray(self.solver.GetSystemResidual())[self._o:][self.rows])
+        if gv.max() <= self.tol:
+            return
+        Gv = np.zeros(len(self.items))
+        np.maximum.at(Gv, self._itemOfRow, gv)
+        for k in np.nonzero(Gv > self.tol)[0]:
+            self._redundancy(t, Gv, k, "velocity-level ")
+
+    def _redundancy(self, t, G, k, level=""):
         dep = self.dependent
         if dep is None or self.items[k][1] not in dep:
             return
@@ -219,7 +241,7 @@ class ConstraintCheck:
             kind, i, _ = self.items[k]
             raise ConstraintError(
                 f"the constraints of {_label(self.mbs, kind, i)} were taken for redundant, but they do not hold at "
-                f"t = {t:.6g} s: Exudyn's residual is {G[k]:.3g}, the other constraints of the dependency at most "
+                f"t = {t:.6g} s: Exudyn's {level}residual is {G[k]:.3g}, the other constraints of the dependency at most "
                 f"{max(others):.3g}, so they are not implied by them. The rank-revealing solve dropped rows that "
                 f"were not redundant; please report this with the script")
 

@@ -96,8 +96,7 @@ _JOINT = {
                                "acceleration in the index-1 formulation)"),
     "rotationMarker1": (FIXED, "the joint frame on marker 1"),
 }
-_COMPILED_ROW = (FIXED, "compiled into a constraint row (issue 16's items); a change during "
-                        "a run is not re-read yet")
+_COMPILED_ROW = (FIXED, "compiled into a constraint row; a change during a run is not re-read")
 _UF_LIVE = (LIVE, "another Python function: live; switching between no function and a function stops the solve "
                   "(compiled item vs Python item)")
 _MASS = (FIXED, "compiled mass matrix")
@@ -166,7 +165,10 @@ register("object", "JointPrismatic2D", "joint", "joint rows (planar)", {
     "normalMarker1": (FIXED, "the joint's constraint rows (its normal on marker 1)"),
     "constrainRotation": (REFUSED, "False is refused (the rotation row is compiled)")})
 register("object", "ConnectorCoordinate", "joint", "a coordinate row (mbs/coordinate_rows.py)", {
-    "markerNumbers": (FIXED, "the constrained coordinates"), "offset": _COMPILED_ROW, "factor1": _COMPILED_ROW,
+    "markerNumbers": (FIXED, "the constrained coordinates"), "factor1": _COMPILED_ROW,
+    "offset": (FIXED, "compiled into the constraint row; an offset moved during the run (by a pre-step "
+                      "function, say) is honoured when Exudyn evaluates the model: "
+                      "exl.SolveDynamic(..., evaluation='exudyn')"),
     "activeConnector": (FIXED, "the constraint row is compiled (an inactive one has none)"),
     "velocityLevel": (FIXED, "the kind of the compiled constraint row (position or velocity level)"),
     # a moving offset enters the row's right-hand side with its time derivatives (mbs/row_drives.py);

@@ -302,6 +302,7 @@ class EvaluatedSolver:
                 account = ConsistencyAccount(check)
                 account.step(t0, model.velocity_constraints(t0, stepper.R, stepper.r, stepper.prev, stepper.qv),
                              np.max(np.abs(qt)) if qt.size else 0.0)
+                check.start()
                 self.constraintCheck = check
             written = [q.copy(), qt.copy()]
             steps = [t0, t0]
@@ -349,7 +350,7 @@ class EvaluatedSolver:
                             check.dependent = set(range(sd.NumberOfObjects()))
                         account.step(t1, model.velocity_constraints(t1, stepper.R, stepper.r, stepper.prev,
                                                                     stepper.qv), np.max(np.abs(qt)) if qt.size else 0.0)
-                        check.check(t1, account.explain)
+                        check.at_output(t1, account.explain, t1 >= tEnd - 1e-9 * max(1.0, abs(tEnd)))
                     return True
                 except BaseException as e:      # noqa: BLE001 - re-raised after Exudyn unwinds
                     self._hookError = e

@@ -313,3 +313,19 @@ def test_offset_moved_by_a_pre_step_function_is_followed():
         assert abs(mbs.GetNodeOutput(nT, O.Position)[0] - 0.4) < 1e-5          # the trolley arrived
         err.append(float(np.max(np.abs(np.array(mbs.GetNodeOutput(nP, O.Coordinates)) - ref))))
     assert err[0] < 1e-3 and err[0] / err[1] > 3.0, err
+
+
+def test_checked_items_are_joints_and_node_equations():
+    """The check watches each constraint once: the joints, and each EP node's own equation as
+    the node's (Exudyn lists it under the body too); a free axis' equation (lambda = 0) is not
+    watched.  Its tolerance is 1e-5 of the model's size (here the box of 0 ... 2 m)."""
+    from exudyn_lie.bridge.constraint_check import ConstraintCheck
+    mbs, o = pendulum_pair()
+    assert exl.SolveDynamic(mbs, generic_settings(10, 0.01), showProgress=False) is True
+    check = mbs.sys["lieGroupSolver"].constraintCheck
+    kinds = {(k, mbs.GetObject(i)["objectType"] if k == "object" else mbs.GetNode(i)["nodeType"])
+             for k, i, _ in check.items}
+    assert kinds == {("object", "JointGeneric"), ("node", "RigidBodyEP")}
+    assert len(check.items) == 4 and all(len(rows) == (3 if k == "object" else 1) for k, _, rows in check.items)
+    assert 1e-5 * 1.9 < check.tol < 1e-5 * 2.3
+    assert isinstance(check, ConstraintCheck) and check.checks >= 1

@@ -135,19 +135,24 @@ class ConstraintCheck:
         self.n, self.n1, self.m = int(sd.ODE2Size()), int(sd.ODE1Size()), int(sd.AEsize())
         self.tol = DEFAULT_RELATIVE * model_size(mbs) if tolerance is True else float(tolerance)
         active = self._rows_with_coordinates()
-        items = []
+        items, nodeRows = [], set()
         for n in range(sd.NumberOfNodes()):
             rows = [int(r) for r in sd.GetNodeLTGAE(n) if active[int(r)]]
+            nodeRows.update(int(r) for r in sd.GetNodeLTGAE(n))
             if rows:
                 items.append(("node", n, np.array(rows, np.int64)))
+        self._switchable = set()          # objects with an activeConnector flag
         for o in range(sd.NumberOfObjects()):
             d = mbs.GetObject(o)
             if not d.get("activeConnector", True) or d.get("velocityLevel", False) is True \
                     or d["objectType"] in VELOCITY_LEVEL_TYPES:
                 continue
-            rows = [int(r) for r in sd.GetObjectLTGAE(o) if active[int(r)]]
+            # a body's LTG AE lists its node's equations (an EP node's |p| = 1): the node's item
+            rows = [int(r) for r in sd.GetObjectLTGAE(o) if active[int(r)] and int(r) not in nodeRows]
             if rows:
                 items.append(("object", o, np.array(rows, np.int64)))
+                if "activeConnector" in d:
+                    self._switchable.add(o)
         self.items = items
         self.rows = np.concatenate([it[2] for it in items]) if items else np.zeros(0, np.int64)
         # item of each checked row, for the per-item maxima
@@ -234,7 +239,7 @@ class ConstraintCheck:
         for k in np.nonzero(G > self._level)[0]:
             self._level[k] = REJUDGE * G[k]
             kind, i, _ = self.items[k]
-            if kind == "object" and not self.mbs.GetObjectParameter(i, "activeConnector"):
+            if kind == "object" and i in self._switchable and not self.mbs.GetObjectParameter(i, "activeConnector"):
                 continue                  # switched off during the run: its rows are lambda = 0
             why = explain(int(k), float(G[k]))
             if why is not None:

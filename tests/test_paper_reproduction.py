@@ -12,12 +12,11 @@ README.md`` (the full run) and not edited by hand.
   equals the README's block exactly: the verdicts and Tables 1-3 at every step size,
   dt = 1e-4 included.
 
-The comparisons are exact above round-off: the runs are deterministic (compiled code,
-fixed steps, one process per model), so a fresh run reproduces every printed digit of a
-value above round-off.  A value at round-off level (``_paper_support.roundoff_bound``:
-1e-12 at dt >= 1e-3, 1e-15 per step below, the bound of the paper's exactness verdicts)
-is a sum of roundings that differ between CPUs, so such cells only have to be at
-round-off on both sides.
+The comparisons are exact up to round-off: the runs are deterministic (compiled code,
+fixed steps, one process per model), but the sum of roundings in a value differs between
+CPUs and compiled code, so two cells agree when their text is the same or their values
+differ by at most the round-off bound (``_paper_support.roundoff_bound``: 1e-12 at dt >=
+1e-3, 1e-15 per step below, the bound of the paper's exactness verdicts).
 """
 import functools
 import os
@@ -111,6 +110,8 @@ def test_cells_agree_above_roundoff_only():
     assert not cells_agree("1.23e-03", "1.24e-03", 1e-12)           # above round-off: every digit
     assert cells_agree("2.83e-15", "6.94e-15", 1e-12)               # both round-off
     assert not cells_agree("2.83e-15", "6.94e-12", 1e-12)           # one side above the bound
+    assert cells_agree("8.01e-11", "8.00e-11", 1e-11)               # apart by less than the round-off
+    assert not cells_agree("8.10e-09", "8.00e-09", 1e-11)
     assert not cells_agree("failed at t=0.02 (max 2.50e-15 before)", "2.50e-15", 1e-12)  # a failed run
     assert not cells_agree("x", "x", 1e-12)                         # not a cell at all
 

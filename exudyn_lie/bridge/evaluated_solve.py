@@ -323,7 +323,8 @@ class EvaluatedSolver:
                         steps[0], steps[1] = steps[1], t1
                     stepper.start = snap[0]
                     if offsets.items:
-                        model.set_parameter_offsets(offsets.record(t1))
+                        stepper.write()               # the step's start state into mbs
+                        model.set_parameter_offsets(offsets.record(steps[0], t1, model.raw_residuals))
                     tic = time.perf_counter()
                     hh = (t1 - steps[0]) / k
                     if abs(hh - h) > 1e-9 * h:

@@ -1,6 +1,6 @@
 """The child process of ``python -m exudyn_lie corpus``: run ONE Exudyn script, unedited.
 
-    python corpus_child.py MODE SCRIPT EVENTS [FACTOR]    (MODE: native | exl | fine)
+    python corpus_child.py MODE SCRIPT EVENTS [FACTOR]    (MODE: native | exl | fine | exlfine)
 
 Started by :mod:`exudyn_lie.apps.corpus` (by its file path, so that a native run imports
 nothing of exudyn_lie), in a fresh interpreter per run.  Before the script runs:
@@ -18,7 +18,9 @@ nothing of exudyn_lie), in a fresh interpreter per run.  Before the script runs:
   passes the same arguments to Exudyn's own function (native) or to
   :func:`exudyn_lie.SolveDynamic` (exl); mode fine: Exudyn's own function with
   ``timeIntegration.numberOfSteps`` multiplied by FACTOR during the call (a native
-  reference at a finer step).  Static and eigenvalue solves stay Exudyn's.
+  reference at a finer step); mode exlfine: :func:`exudyn_lie.SolveDynamic` with the steps
+  multiplied so (does exudyn_lie converge to the native reference?).  Static and
+  eigenvalue solves stay Exudyn's.
 
 The script runs with ``runpy.run_path(SCRIPT, run_name='__main__')``, ``sys.argv = [SCRIPT]``
 and its folder first on ``sys.path``, as ``python SCRIPT`` would.  Events go to EVENTS as
@@ -243,9 +245,9 @@ def install_solve_wrappers(exu, mode, emit, factor=1):
     """Replace every reachable SolveDynamic by a logging wrapper (see the module doc)."""
     import exudyn.solver
     original = exudyn.solver.SolveDynamic
-    if mode == "exl":
+    if mode in ("exl", "exlfine"):
         import exudyn_lie
-        target = exudyn_lie.SolveDynamic
+        target = exudyn_lie.SolveDynamic if mode == "exl" else _finer(exudyn_lie.SolveDynamic, factor)
     elif mode == "fine":
         target = _finer(original, factor)
     else:
@@ -269,7 +271,8 @@ def install_solve_wrappers(exu, mode, emit, factor=1):
         try:
             result = target(mbs, *args, **kwargs)
         except BaseException as e:
-            emit("solve_error", n=n, seconds=time.perf_counter() - tic, exl=exl_kind(e) if mode == "exl" else None,
+            emit("solve_error", n=n, seconds=time.perf_counter() - tic,
+                 exl=exl_kind(e) if mode in ("exl", "exlfine") else None,
                  **describe(e))
             raise
         finally:

@@ -329,3 +329,14 @@ def test_checked_items_are_joints_and_node_equations():
     assert len(check.items) == 4 and all(len(rows) == (3 if k == "object" else 1) for k, _, rows in check.items)
     assert 1e-5 * 1.9 < check.tol < 1e-5 * 2.3
     assert isinstance(check, ConstraintCheck) and check.checks >= 1
+
+
+def test_offset_moved_on_the_compiled_path_stops_and_names_the_evaluated_path():
+    """The compiled kernel holds a coordinate row's offset fixed: a pre-step function that
+    moves it stops the run when it does, naming the item, the time and the path that honours
+    it (no answer of another model)."""
+    from exudyn_lie.bridge.reader import BridgeError
+    mbs, nT, nP, ss = trolley(1000)
+    with pytest.raises(BridgeError, match=r"object 1 .*ObjectConnectorCoordinate: parameter 'offset' changed during "
+                                          r"the solve at t = 0\.1 s.*evaluation='exudyn'"):
+        exl.SolveDynamic(mbs, ss, showProgress=False)

@@ -173,15 +173,25 @@ class ConstraintCheck:
         self._o = self.n + self.n1
 
     def _rows_with_coordinates(self):
-        """Which AE rows constrain ODE2 or ODE1 coordinates at the current state."""
+        """Which AE rows are equations of the coordinates: those whose residual does not move
+        when every multiplier moves by 1 (Exudyn writes the equation ``lambda = 0`` of a free
+        axis or an inactive connector as the multiplier itself).  Two residual evaluations,
+        no Jacobian (a dense one would grow with the square of the coordinates)."""
         s, mbs = self.solver, self.mbs
-        nsys = self.n + self.n1 + self.m
         if self.m == 0:
             return np.zeros(0, bool)
-        s.SetSystemJacobian(np.zeros((nsys, nsys)))
-        s.ComputeJacobianAE(mbs)
-        J = np.asarray(s.GetSystemJacobian())[self.n + self.n1:, :self.n + self.n1]
-        return np.any(J != 0.0, axis=1)
+        import exudyn as exu
+        sd, cur, o = mbs.systemData, exu.ConfigurationType.Current, self.n + self.n1
+        lam = np.array(sd.GetAECoordinates(configuration=cur), float)
+        s.ComputeAlgebraicEquations(mbs, False)
+        g0 = np.array(s.GetSystemResidual()[o:], float)
+        sd.SetAECoordinates(lam + 1.0, configuration=cur)
+        try:
+            s.ComputeAlgebraicEquations(mbs, False)
+            g1 = np.array(s.GetSystemResidual()[o:], float)
+        finally:
+            sd.SetAECoordinates(lam, configuration=cur)
+        return g1 == g0
 
     def _abs_rows(self, t):
         """|g| of the checked rows at the state in mbs at time ``t``."""

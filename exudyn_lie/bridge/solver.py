@@ -625,9 +625,9 @@ class LieGroupSolver:
         """Solve from ``startTime`` to ``endTime`` in ``numberOfSteps`` steps of the
         simulation settings, inside Exudyn's time loop; returns True.
 
-        ``constraintCheck`` (default True): Exudyn's own residuals of the constraints at
-        every output, judged against the kernel's (:mod:`.constraint_check`); a float is
-        the tolerance, False switches the check off.
+        ``constraintCheck`` (default True): Exudyn's own residuals of the constraints at the
+        outputs (within a time budget), judged against the kernel's (:mod:`.constraint_check`);
+        a float is the tolerance, False switches the check off.
 
         ``accelerations``: write ``q_tt`` and the joint multipliers every output step
         (None: only if a sensor, the solution or restart file or a user function can read
@@ -1056,8 +1056,8 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
     ``evaluation`` ('auto': the compiled kernel when it has every item of the model,
     else Exudyn evaluates the whole model, :mod:`.evaluated_solve`, with one warning naming
     the items; 'compiled' / 'exudyn' force a path), ``constraintCheck`` (default True:
-    Exudyn's own position-level residuals of the constraints at every output, with a
-    tolerance of 1e-5 times the model's size; a residual above it that the integrator's own
+    Exudyn's own position-level residuals of the constraints at the outputs, within 3 % of
+    the run's time and always at the last, with a tolerance of 1e-5 times the model's size; a residual above it that the integrator's own
     account does not explain stops the run with a ConstraintError naming the item, one it
     explains, the drift of an unstabilised method, is reported once per item as a warning;
     a float sets the tolerance in the rows' units, False switches the check off;

@@ -340,3 +340,18 @@ def test_offset_moved_on_the_compiled_path_stops_and_names_the_evaluated_path():
     with pytest.raises(BridgeError, match=r"object 1 .*ObjectConnectorCoordinate: parameter 'offset' changed during "
                                           r"the solve at t = 0\.1 s.*evaluation='exudyn'"):
         exl.SolveDynamic(mbs, ss, showProgress=False)
+
+
+def test_check_stops_a_joint_marker_moved_on_the_evaluated_path():
+    """A pre-step function moves the marker of a joint (its localPosition on the ground).
+    Exudyn's position level sees the joint point move, its velocity level does not, and the
+    evaluated path does not honour it (docs/EVALUATED.md, audit): the check stops the run at
+    the first step, naming the joint, instead of returning a pendulum on the old point."""
+    mbs, o = pendulum_pair()
+
+    def PreStepUserFunction(mbs, t):
+        mbs.SetMarkerParameter(0, "localPosition", [0, 0.2 * t, 0])
+        return True
+    mbs.SetPreStepUserFunction(PreStepUserFunction)
+    with pytest.raises(ConstraintError, match=r"object 2 .*ObjectJointGeneric do not hold at t = 0\.001 s"):
+        exl.SolveDynamic(mbs, generic_settings(1000, 1.0), showProgress=False, evaluation="exudyn")

@@ -1,4 +1,4 @@
-"""The run-time check of the constraints, independent of the integrator: at every output,
+"""The run-time check of the constraints, independent of the integrator: at the outputs,
 Exudyn's own position-level residuals of the algebraic equations
 (``ComputeAlgebraicEquations``) at the state written into mbs.
 
@@ -121,7 +121,7 @@ def _label(mbs, kind, i):
 
 
 class ConstraintCheck:
-    """Exudyn's position-level residuals at every output (module docstring).
+    """Exudyn's position-level residuals at the outputs (module docstring).
 
     ``solver`` is the run's initialised ``MainSolverImplicitSecondOrder``.  ``items`` come out
     as ``(kind, index, AE rows)`` for every active position-level constraint with coordinates

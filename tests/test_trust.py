@@ -80,15 +80,26 @@ def slider_crank():
     return mbs, n3, n4, sensor
 
 
-def slider_settings(steps, T=0.5):
+def settings(steps, T, sensorPeriod=None):
+    """The scripts' settings: ``steps`` steps to ``T``, no solution file, generalized-alpha's
+    spectral radius 0.6 (both scripts set it)."""
     ss = exu.SimulationSettings()
     ss.timeIntegration.endTime = T
     ss.timeIntegration.numberOfSteps = steps
     ss.timeIntegration.verboseMode = 0
     ss.solution.file.write = False
-    ss.solution.sensors.writePeriod = T / 100
+    if sensorPeriod is not None:
+        ss.solution.sensors.writePeriod = sensorPeriod
     ss.timeIntegration.generalizedAlpha.spectralRadius = 0.6
     return ss
+
+
+def slider_settings(steps, T=0.5):
+    return settings(steps, T, T / 100)
+
+
+def generic_settings(steps, T=1.0):
+    return settings(steps, T)
 
 
 @pytest.fixture(scope="module")
@@ -161,16 +172,6 @@ def generic_joint_chain(withRate=False):
         mLast = mbs.AddMarker(MarkerBodyRigid(bodyNumber=o, localPosition=[sx, 0, 0]))
     mbs.Assemble()
     return mbs, o
-
-
-def generic_settings(steps, T=1.0):
-    ss = exu.SimulationSettings()
-    ss.timeIntegration.endTime = T
-    ss.timeIntegration.numberOfSteps = steps
-    ss.timeIntegration.verboseMode = 0
-    ss.solution.file.write = False
-    ss.timeIntegration.generalizedAlpha.spectralRadius = 0.6
-    return ss
 
 
 @pytest.fixture(scope="module")

@@ -93,18 +93,13 @@ def model_size(mbs):
     import exudyn as exu
     pts = []
     sd = mbs.systemData
-    for n in range(sd.NumberOfNodes()):
-        try:
-            pts.append(np.asarray(mbs.GetNodeOutput(n, exu.OutputVariableType.Position,
-                                                    configuration=exu.ConfigurationType.Current), float)[:3])
-        except Exception:                # noqa: BLE001 - a node without a position
-            pass
-    for k in range(sd.NumberOfMarkers()):
-        try:
-            pts.append(np.asarray(mbs.GetMarkerOutput(k, exu.OutputVariableType.Position,
-                                                      configuration=exu.ConfigurationType.Current), float)[:3])
-        except Exception:                # noqa: BLE001 - a marker without a position
-            pass
+    for output, count in ((mbs.GetNodeOutput, sd.NumberOfNodes()), (mbs.GetMarkerOutput, sd.NumberOfMarkers())):
+        for i in range(count):
+            try:
+                pts.append(np.asarray(output(i, exu.OutputVariableType.Position,
+                                             configuration=exu.ConfigurationType.Current), float)[:3])
+            except Exception:            # noqa: BLE001 - an item without a position
+                pass
     pts = [p for p in pts if p.shape == (3,) and np.all(np.isfinite(p))]
     if not pts:
         return 1.0
@@ -133,7 +128,8 @@ class ConstraintCheck:
         self.mbs, self.solver = mbs, solver
         sd = mbs.systemData
         self.n, self.n1, self.m = int(sd.ODE2Size()), int(sd.ODE1Size()), int(sd.AEsize())
-        self.tol = DEFAULT_RELATIVE * model_size(mbs) if tolerance is True else float(tolerance)
+        self.size = model_size(mbs)
+        self.tol = DEFAULT_RELATIVE * self.size if tolerance is True else float(tolerance)
         active = self._rows_with_coordinates()
         items, nodeRows = [], set()
         for n in range(sd.NumberOfNodes()):
@@ -168,7 +164,6 @@ class ConstraintCheck:
         self.skipped = 0
         self._allRows = len(self.rows) == self.m and np.array_equal(self.rows, np.arange(self.m))
         self.warned = set()
-        self.largest = 0.0
         self.checks = 0
         self._o = self.n + self.n1
 
@@ -193,8 +188,8 @@ class ConstraintCheck:
             sd.SetAECoordinates(lam, configuration=cur)
         return g1 == g0
 
-    def _abs_rows(self, t):
-        """|g| of the checked rows at the state in mbs at time ``t``."""
+    def row_residuals(self, t):
+        """g of the checked rows (a new array) at the state in mbs at time ``t``."""
         sd = self.mbs.systemData
         t0 = sd.GetTime()
         if t0 != t:
@@ -203,12 +198,12 @@ class ConstraintCheck:
         if t0 != t:
             sd.SetTime(t0)
         g = self.solver.GetSystemResidual()[self._o:]
-        return np.abs(g if self._allRows else g[self.rows])
+        return g if self._allRows else g[self.rows]
 
     def residuals(self, t, g=None):
         """Per checked item, the largest |g| of its rows at the state in mbs at time ``t``."""
         if g is None:
-            g = self._abs_rows(t)
+            g = np.abs(self.row_residuals(t))
         return np.maximum.reduceat(g, self._starts)       # each item's rows are contiguous
 
     def start(self):
@@ -224,12 +219,16 @@ class ConstraintCheck:
         self.skipped += 1
         return False
 
+    def timed_check(self, t, explain):
+        """:meth:`check`, its time counted in the budget."""
+        now = time.perf_counter()
+        self.check(t, explain)
+        self.spent += time.perf_counter() - now
+
     def at_output(self, t, explain, last=False):
-        """:meth:`check` if it is :meth:`due`, its time counted in the budget."""
+        """:meth:`timed_check` if it is :meth:`due`."""
         if self.due(last):
-            now = time.perf_counter()
-            self.check(t, explain)
-            self.spent += time.perf_counter() - now
+            self.timed_check(t, explain)
 
     def check(self, t, explain):
         """Check the state in mbs at time ``t``.  ``explain(k, g)``: None if the integrator's
@@ -237,10 +236,8 @@ class ConstraintCheck:
         if not self.items or not self.mbs.systemIsConsistent:
             return                        # items modified by a user function, until Exudyn assembles again
         self.checks += 1
-        g = self._abs_rows(t)
+        g = np.abs(self.row_residuals(t))
         gmax = float(g.max())
-        if gmax > self.largest:
-            self.largest = gmax
         if self.dependent is not None:
             self._velocity_redundancy(t)
         if gmax <= self.tol:
@@ -310,17 +307,8 @@ class ConsistencyAccount:
         ni = len(check.items)
         self.growth, self.unexplained = np.zeros(ni), np.zeros(ni)
         self.t = self.g = self.gv = self.t0 = None
-        self.size = max(1.0, model_size(check.mbs))
+        self.size = max(1.0, check.size)
         self.vscale = 0.0
-
-    def _signed(self, t, gv):
-        c = self.c
-        sd = c.mbs.systemData
-        t0 = sd.GetTime()
-        sd.SetTime(t)
-        c.solver.ComputeAlgebraicEquations(c.mbs, False)
-        sd.SetTime(t0)
-        return np.asarray(c.solver.GetSystemResidual())[c._o:][c.rows].copy(), np.asarray(gv)[c.rows]
 
     def step(self, t, gv, vmax):
         """Account the interval from the last call to ``t``; ``gv`` the velocity-level
@@ -328,7 +316,7 @@ class ConsistencyAccount:
         largest velocity coordinate."""
         if not self.c.mbs.systemIsConsistent:
             return
-        g, v = self._signed(t, gv)
+        g, v = self.c.row_residuals(t), np.asarray(gv)[self.c.rows]
         self.vscale = max(self.vscale, float(vmax))
         if self.t0 is None:
             self.t0 = t

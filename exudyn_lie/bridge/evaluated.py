@@ -242,23 +242,6 @@ def _cubic_hermite(t0, x0, v0, t1, x1, v1):
     return fn
 
 
-def _quadratic_through(points):
-    """The polynomial of degree len(points) - 1 <= 2 through ``[(t, value)]``, as a function of t."""
-    ts = [p[0] for p in points]
-    vs = [p[1] for p in points]
-
-    def fn(t):
-        s = 0.0
-        for i, (ti, vi) in enumerate(zip(ts, vs)):
-            w = 1.0
-            for j, tj in enumerate(ts):
-                if j != i:
-                    w *= (t - tj) / (ti - tj)
-            s += w * vi
-        return s
-    return fn
-
-
 def position_derived_rows(mbs):
     """The AE rows whose velocity-level equation in Exudyn is not the time derivative of the
     position-level one, so that ``g_v`` and ``eta`` must come from the position level:
@@ -519,12 +502,6 @@ class EvaluatedModel:
         """The moving rows of offsets changed by user functions (:class:`ParameterOffsets`)."""
         self._movingRows = self._functionRows + moving
 
-    def position_constraints(self, t):
-        """``g(q, t)``, Exudyn's position-level AE residual at the state in mbs."""
-        self._setTime(t)
-        self._ae(self.mbs, False)
-        return self._residual()[self.n + self.n1:].copy()
-
     def velocity_constraints(self, t, R=None, r=None, prev=None, qv=None):
         """``g_v(q, v, t)`` at the state in mbs: Exudyn's velocity-level AE residual, with the
         moving offsets' rates (coordinate_constraint_rows) and, for the position-derived rows
@@ -610,9 +587,11 @@ class EvaluatedModel:
             # e = eps_mach^(1/6) tau, about eps_mach^(2/3) ~ 4e-11 relative
             e = EPS_SIXTH / max(1.0, self._vmax)
             etaP = np.zeros(self.m)
+            g0 = None                           # the residual at the state: the same for both paths
             for rows, sphere in ((self._posObjectRows, True), (self._posNodeRows, False)):
                 if len(rows):
-                    gp, g0, gm = self._position_along_motion(t, R, r, prev, qv, e, True, sphere)
+                    gp, c, gm = self._position_along_motion(t, R, r, prev, qv, e, g0 is None, sphere)
+                    g0 = c if g0 is None else g0
                     gp2, _, gm2 = self._position_along_motion(t, R, r, prev, qv, 2.0 * e, False, sphere)
                     d1 = (gp[rows] + gm[rows] - 2.0 * g0[rows]) / (e * e)
                     d2 = (gp2[rows] + gm2[rows] - 2.0 * g0[rows]) / (4.0 * e * e)

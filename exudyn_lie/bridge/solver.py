@@ -47,7 +47,7 @@ from ..mbs.compiled import auto_groups
 from ..mbs.rolling_disc_penalty_forces import D_DATA
 from ..mbs.simulator import Simulator
 from ..userwarn import warn_user
-from .constraint_check import BUDGET, ConstraintCheck, check_tolerance, kernel_explanation
+from .constraint_check import ConstraintCheck, check_tolerance, kernel_explanation
 from .fast import CHUNK_ROWS, AdaptiveOutputChunks, NodeTable, OutputChunks
 from .params import ParameterWatch
 from .settings import check_settings
@@ -669,20 +669,11 @@ class LieGroupSolver:
         at, explain = kernel_explanation(sim, rows)
         ch = self._chunks
 
-        perf = time.perf_counter
-        spent = [0.0]
-
         def at_output(t, last):
-            # the budget test first and inline: a skipped output costs one clock reading
-            now = perf()
-            if not last and spent[0] > BUDGET * (now - t0):
-                return
-            o = ch.next - 1
-            if o >= 0:
-                at(ch, o, t)
-                check.check(t, explain)
-            spent[0] += perf() - now
-        t0 = perf()
+            if check.due(last) and ch.next > 0:
+                at(ch, ch.next - 1, t)              # the kernel state of the row just written
+                check.timed_check(t, explain)
+        check.start()
         self.constraintCheck = check
         return at_output
 

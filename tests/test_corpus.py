@@ -90,6 +90,8 @@ def corpus_run(tmp_path_factory):
     for n in STEPS:
         (src / f"pendulumRevolute{n}.py").write_text(PENDULUM.format(steps=n))
     (src / "velocityLevelSlider.py").write_text(DISC)
+    # an Example: no testResult (the corpus compares the final states)
+    (src / "pendulumExample.py").write_text(PENDULUM.format(steps=STEPS[0]).split("p = mbs.GetObjectOutputBody")[0])
     (src / "brokenScript.py").write_text(BROKEN)
     out = src / "results"
     lines = []
@@ -100,7 +102,7 @@ def corpus_run(tmp_path_factory):
 
 def test_every_script_reports_one_progress_line(corpus_run):
     records, lines, _ = corpus_run
-    assert len(lines) == len(records) == len(STEPS) + 2
+    assert len(lines) == len(records) == len(STEPS) + 3
     assert all(any(name in line for line in lines) for name in records)
 
 
@@ -175,13 +177,44 @@ def test_report_files(corpus_run):
     assert [r["name"] for r in data["scripts"]] == ["brokenScript.py"]
     assert data["summary"]["native"]["error"] == 1
     s = corpus.summarize(list(records.values()))
-    assert s["scripts"] == len(STEPS) + 2 and s["base"] == len(STEPS) + 1
-    assert s["exl"]["ok"] == len(STEPS) and s["exl"]["refused"] == 1 and s["exl"]["crashed"] == 0
+    assert s["scripts"] == len(STEPS) + 3 and s["base"] == len(STEPS) + 2
+    assert s["exl"]["ok"] == len(STEPS) + 1 and s["exl"]["refused"] == 1 and s["exl"]["crashed"] == 0
     assert s["firstRefusal"] == {"ObjectConnectorCoordinateVector: velocityLevel=True": 1}
     assert s["fineReferences"] == len(STEPS) and s["exlCloserToFine"] == len(STEPS)
     text = corpus.render(list(records.values()), s, "test", 0.0, 120)
     assert "| `ObjectConnectorCoordinateVector: velocityLevel=True` | 1 |" in text
     assert "`brokenScript.py`" in (out / "corpus.md").read_text()
+
+
+def test_scripts_without_test_result_are_compared_by_their_final_states(corpus_run):
+    """Exudyn's Examples set no testResult: the corpus compares the final ODE2 coordinates of
+    every solve (relative to the state's largest entry) against the fine native run.  The
+    pendulum example: exudyn_lie at the script's step is closer to native at 10x the steps
+    than native at the script's step (RK4 against generalized-alpha's 2nd order), and it is
+    not a run to look at."""
+    r = corpus_run[0]["pendulumExample.py"]
+    assert r["testResult"] == [None, None] and r["relDiff"] is None
+    assert r["exlStatus"] == "ok" and r["fine"]["status"] == "ok"
+    assert 0 < r["stateDiffFine"] < r["stateDiffNativeFine"] < 1e-2
+    assert r["stateDiff"] == pytest.approx(r["stateDiffNativeFine"], rel=0.5)
+    assert not corpus.suspect(r)
+    s = corpus.summarize(list(corpus_run[0].values()))
+    assert s["statePairs"] == len(STEPS) + 1 and s["suspects"] == []
+
+
+def test_state_difference_and_suspects():
+    """The state comparison pairs solves by number, skips failed ones and states of another
+    size, and takes the worst pair; a run is one to look at only when it is off by more than
+    1e-3 and by more than 10x native's own difference."""
+    a = _run(solves=[dict(n=1, status="ok", state=[1.0, 2.0]), dict(n=2, status="ok", state=[0.0, 4.0])])
+    b = _run(solves=[dict(n=1, status="ok", state=[1.0, 2.2]), dict(n=2, status="ok", state=[0.0, 4.0, 1.0])])
+    assert corpus.state_difference(a, b) == pytest.approx(0.2 / 2.2)
+    b["solves"][0]["status"] = "error"
+    assert corpus.state_difference(a, b) is None
+    assert corpus.suspect(dict(stateDiffFine=2e-3, stateDiffNativeFine=1e-4))
+    assert not corpus.suspect(dict(stateDiffFine=2e-3, stateDiffNativeFine=3e-4))
+    assert not corpus.suspect(dict(stateDiffFine=5e-4, stateDiffNativeFine=1e-9))
+    assert not corpus.suspect(dict(stateDiffFine=None, stateDiffNativeFine=None))
 
 
 def _run(status="ok", solves=(), error=None, in_solve=False):

@@ -293,14 +293,16 @@ def trolley(nSteps):
     return mbs, nT, nP, ss
 
 
-def test_offset_moved_by_a_pre_step_function_is_followed():
-    """On the evaluated path the trolley follows the offset that the pre-step function moves
-    (Exudyn calls it with the step's end time and its index-3 solve holds the offset there).
-    Against native at 1e-5 s: 8e-9 rad at the script's step of 1e-3 s (native itself at that
-    step: 3.5e-6) and 1.1e-10 at 2.5e-4 s (below the reference's own error).  Before, the
-    velocity level did not know the offset moved and the trolley stayed where it was; with a
-    rate from the last three offsets alone, its jumps from step to step stayed in the
-    velocity (first order: 6.7e-4 rad at 1e-3 s)."""
+@pytest.mark.parametrize("evaluation", ["compiled", "exudyn"])
+def test_offset_moved_by_a_pre_step_function_is_followed(evaluation):
+    """On both paths the trolley follows the offset that the pre-step function moves (Exudyn
+    calls it with the step's end time and its index-3 solve holds the offset there).  Against
+    native at 1e-5 s: 8e-9 rad (evaluated) and 1.1e-8 (compiled) at the script's step of
+    1e-3 s, where native itself at that step is 3.5e-6 off, and 1.1e-10 / 1.6e-10 at 2.5e-4 s
+    (below the reference's own error).  Before, the velocity level did not know the offset
+    moved and the trolley stayed where it was (the compiled path stopped); with a rate from
+    the last three offsets alone, its jumps from step to step stayed in the velocity (first
+    order: 6.7e-4 rad at 1e-3 s)."""
     mbs, nT, nP, ss = trolley(100000)
     mbs.SolveDynamic(ss)
     ref = np.array(mbs.GetNodeOutput(nP, O.Coordinates))
@@ -309,8 +311,10 @@ def test_offset_moved_by_a_pre_step_function_is_followed():
         mbs, nT, nP, ss = trolley(steps)
         with warnings.catch_warnings(record=True) as rec:
             warnings.simplefilter("always")
-            assert exl.SolveDynamic(mbs, ss, showProgress=False, evaluation="exudyn") is True
+            assert exl.SolveDynamic(mbs, ss, showProgress=False, evaluation=evaluation) is True
         assert not any("drift" in str(w.message) for w in rec)
+        compiled = type(mbs.sys["lieGroupSolver"]).__name__ == "LieGroupSolver"
+        assert compiled == (evaluation == "compiled")
         assert abs(mbs.GetNodeOutput(nT, O.Position)[0] - 0.4) < 1e-9          # the trolley arrived
         err.append(float(np.max(np.abs(np.array(mbs.GetNodeOutput(nP, O.Coordinates)) - ref))))
     assert err[0] < 1e-7 and err[1] < 1e-8, err
@@ -332,15 +336,28 @@ def test_checked_items_are_joints_and_node_equations():
     assert isinstance(check, ConstraintCheck) and check.checks >= 1
 
 
-def test_offset_moved_on_the_compiled_path_stops_and_names_the_evaluated_path():
-    """The compiled kernel holds a coordinate row's offset fixed: a pre-step function that
-    moves it stops the run when it does, naming the item, the time and the path that honours
-    it (no answer of another model)."""
+def test_offset_of_a_velocity_level_row_moved_on_the_compiled_path_stops():
+    """A velocity-level row's offset is its velocity target, which the compiled row holds
+    fixed: a pre-step function that moves it stops the run when it does, naming the item and
+    the time (no answer of another model)."""
     from exudyn_lie.bridge.reader import BridgeError
-    mbs, nT, nP, ss = trolley(1000)
-    with pytest.raises(BridgeError, match=r"object 1 .*ObjectConnectorCoordinate: parameter 'offset' changed during "
-                                          r"the solve at t = 0\.1 s.*evaluation='exudyn'"):
-        exl.SolveDynamic(mbs, ss, showProgress=False)
+    SC = exu.SystemContainer()
+    mbs = SC.AddSystem()
+    nGround = mbs.AddNode(NodePointGround(referenceCoordinates=[0, 0, 0]))
+    mGround = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=nGround, coordinate=0))
+    nT = mbs.AddNode(Point2D(referenceCoordinates=[0, 0]))
+    mbs.AddObject(MassPoint2D(physicsMass=2.0, nodeNumber=nT))
+    mX = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=nT, coordinate=0))
+    cc = mbs.AddObject(CoordinateConstraint(markerNumbers=[mGround, mX], offset=0, velocityLevel=True))
+
+    def PreStepUserFunction(mbs, t):
+        mbs.SetObjectParameter(cc, "offset", 0.0 if t < 0.1 else 1.0)
+        return True
+    mbs.SetPreStepUserFunction(PreStepUserFunction)
+    mbs.Assemble()
+    with pytest.raises(BridgeError, match=r"object 1 .*ObjectConnectorCoordinate.*parameter 'offset' changed during "
+                                          r"the solve at t = 0\.099 s.*position-level row"):
+        exl.SolveDynamic(mbs, generic_settings(1000, 1.0), showProgress=False)
 
 
 def test_check_stops_a_joint_marker_moved_on_the_evaluated_path():

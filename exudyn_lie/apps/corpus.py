@@ -203,6 +203,7 @@ def run_record(mode, events, timed_out, rc, wall, log):
             s = open_solves.pop(ev["n"], None)
             if s is not None:
                 s["seconds"] = ev.get("seconds")
+                s["state"] = ev.get("state")
                 s["status"] = "ok" if kind == "solve_end" else "error"
                 if kind == "solve_error":
                     s["exl"] = ev.get("exl")
@@ -287,6 +288,32 @@ def relative_difference(a, b):
     return abs(a - b) / max(abs(a), abs(b))
 
 
+def state_difference(a, b):
+    """The largest difference of the final states of the solves of two runs (records),
+    paired by their number, relative to the larger state's largest entry: ``max |a - b| /
+    max(|a|_inf, |b|_inf)``; None without a pair of finished solves of equal size.  The
+    comparison for scripts that set no testResult (most Examples)."""
+    if not a or not b:
+        return None
+    sb = {s["n"]: s.get("state") for s in b["solves"] if s["status"] == "ok"}
+    worst = None
+    for s in a["solves"]:
+        x, y = s.get("state") if s["status"] == "ok" else None, sb.get(s["n"])
+        if not x or not y or len(x) != len(y):
+            continue
+        scale = max(max(abs(v) for v in x), max(abs(v) for v in y))
+        d = 0.0 if scale == 0 else max(abs(u - v) for u, v in zip(x, y)) / scale
+        worst = d if worst is None else max(worst, d)
+    return worst
+
+
+def suspect(rec):
+    """exudyn_lie's final state is far from the fine native one while native's is near it:
+    a run to look at (another model, or a chaotic motion; the note of each says which)."""
+    d, dn = rec.get("stateDiffFine"), rec.get("stateDiffNativeFine")
+    return d is not None and dn is not None and d > 1e-3 and d > 10 * dn
+
+
 def refusal_key(reason):
     """The first unsupported thing named in a refusal: an item type ('ObjectMassPoint2D'), an
     item type with its option ('ObjectConnectorCoordinate: velocityLevel=True'), 'solverType=...', else the message up to its first ';' with numbers as '#'."""
@@ -315,15 +342,18 @@ def classify(name, script, native, exl):
     te = exl["testResult"] if exl else None
     rec = dict(name=name, script=script, dynamic=dynamic, native=native, exl=exl, exlStatus=status,
                exlReason=reason, testResult=[tn, te], relDiff=relative_difference(tn, te),
+               stateDiff=state_difference(native, exl) if status == "ok" else None,
                inventory=native["inventory"])
     rec["firstRefusal"] = refusal_key(reason) if status == "refused" else None
     rec["fine"] = rec["fineFactor"] = rec["testResultFine"] = rec["relDiffFine"] = rec["relDiffNativeFine"] = None
+    rec["stateDiffFine"] = rec["stateDiffNativeFine"] = None
     return rec
 
 
 def wants_fine_reference(rec):
-    """A native run at a finer step is worth it where exudyn_lie ran and both set a number."""
-    return rec["exlStatus"] == "ok" and rec["relDiff"] is not None
+    """A native run at a finer step is worth it where exudyn_lie ran and both set a number
+    or both gave a final state."""
+    return rec["exlStatus"] == "ok" and (rec["relDiff"] is not None or rec.get("stateDiff") is not None)
 
 
 def add_fine_reference(rec, fine, factor):
@@ -334,6 +364,9 @@ def add_fine_reference(rec, fine, factor):
     rec["testResultFine"] = tf
     rec["relDiffFine"] = relative_difference(rec["testResult"][1], tf)
     rec["relDiffNativeFine"] = relative_difference(rec["testResult"][0], tf)
+    if fine["status"] == "ok":
+        rec["stateDiffFine"] = state_difference(rec["exl"], fine)
+        rec["stateDiffNativeFine"] = state_difference(rec["native"], fine)
 
 
 def unsupported_types(inventory):
@@ -400,7 +433,12 @@ def summarize(records):
         testResultPairs=len(pairs), relDiffBuckets=_buckets(pairs),
         fineReferences=len(fine), fineBuckets=_buckets([r["relDiffFine"] for r in fine]),
         exlCloserToFine=sum(r["relDiffFine"] <= r["relDiffNativeFine"] for r in fine),
-        fineFailed=sum(1 for r in base if r.get("fine") and r["relDiffFine"] is None),
+        fineFailed=sum(1 for r in base if r.get("fine") and r["fine"]["status"] != "ok"),
+        statePairs=sum(1 for r in base if r.get("stateDiffFine") is not None),
+        stateBuckets=_buckets([r["stateDiffFine"] for r in base if r.get("stateDiffFine") is not None]),
+        stateCloserToFine=sum(r["stateDiffFine"] <= r["stateDiffNativeFine"] for r in base
+                              if r.get("stateDiffFine") is not None and r.get("stateDiffNativeFine") is not None),
+        suspects=[r["name"] for r in base if suspect(r)],
         firstRefusal=_count([r["firstRefusal"] for r in base if r["firstRefusal"]]),
         unsupportedItems=(dict(sorted(items.items(), key=lambda kv: (-kv[1][0], kv[0])))
                           if lists_available else None),
@@ -460,6 +498,14 @@ def render(records, summary, command, wall, timeout, fine=None):
                  + "; exudyn_lie's relative difference " + ", ".join(f"{k}: {n}" for k, n in s["fineBuckets"].items())
                  + f"; exudyn_lie at the script's step closer to it than native at the script's step: "
                  f"{s['exlCloserToFine']}")
+    if s["statePairs"]:
+        L.append(f"* final states (every script, testResult or not) against the native run with {fine}x the "
+                 f"steps: {s['statePairs']} scripts; exudyn_lie's largest difference relative to the state's "
+                 f"largest entry " + ", ".join(f"{k}: {n}" for k, n in s["stateBuckets"].items())
+                 + f"; exudyn_lie closer to it than native at the script's step: {s['stateCloserToFine']}")
+        L.append(f"* **to look at** (exudyn_lie off the fine state by more than 1e-3 and by more than 10x "
+                 f"native's difference): {len(s['suspects'])}" + (": " + ", ".join(f"`{n}`" for n in s["suspects"])
+                                                                  if s["suspects"] else ""))
     if s["exlOnNativeFailures"]:
         L.append("* exudyn_lie on scripts whose native run failed after reaching `SolveDynamic` (not counted "
                  "above): " + ", ".join(f"{k} {n}" for k, n in s["exlOnNativeFailures"].items()))
@@ -494,8 +540,9 @@ def render(records, summary, command, wall, timeout, fine=None):
         L += [f"| {_cell(k, 200)} | {n} |" for k, n in s["nativeErrors"].items()]
     L += ["", "## All scripts", "",
           "| script | native | s | SolveDynamic | exudyn_lie | s | testResult native | testResult exudyn_lie "
-          "| rel. diff | testResult native, fine step | rel. diff exudyn_lie vs fine | reason |",
-          "|---|---|---|---|---|---|---|---|---|---|---|---|"]
+          "| rel. diff | testResult native, fine step | rel. diff exudyn_lie vs fine "
+          "| final state vs fine: exudyn_lie, native | reason |",
+          "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in records:
         e = r["exl"]
         L.append("| " + " | ".join([
@@ -503,8 +550,15 @@ def render(records, summary, command, wall, timeout, fine=None):
             r["exlStatus"] or "", f"{e['wall']:.1f}" if e else "", _fmt_num(r["testResult"][0]),
             _fmt_num(r["testResult"][1]), f"{r['relDiff']:.2e}" if r["relDiff"] is not None else "",
             _fine_cell(r), f"{r['relDiffFine']:.2e}" if r.get("relDiffFine") is not None else "",
-            _cell(r["exlReason"], 120)]) + " |")
+            _state_cell(r), _cell(r["exlReason"], 120)]) + " |")
     return "\n".join(L) + "\n"
+
+
+def _state_cell(r):
+    d, dn = r.get("stateDiffFine"), r.get("stateDiffNativeFine")
+    if d is None:
+        return ""
+    return f"{d:.1e}, {dn:.1e}" + (" **look**" if suspect(r) else "")
 
 
 def _fine_cell(r):
@@ -525,6 +579,8 @@ def progress_line(i, total, r):
             tr += f"; native x{r['fineFactor']} {_fmt_num(r['testResultFine'])}: exl rel {r['relDiffFine']:.1e}"
         elif r.get("fine"):
             tr += f"; native x{r['fineFactor']} {r['fine']['status']}"
+    if r.get("stateDiffFine") is not None:
+        tr += f" | state vs x{r['fineFactor']}: exl {r['stateDiffFine']:.1e}, native {r['stateDiffNativeFine']:.1e}"
     exl = ""
     if r["exl"] is not None:
         exl = f" | exl {r['exlStatus']} {r['exl']['wall']:.1f} s" + (f": {r['exlReason']}" if r["exlReason"] else "")

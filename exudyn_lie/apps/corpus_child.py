@@ -241,6 +241,26 @@ def _finer(original, factor):
     return solve
 
 
+STATE_ENTRIES = 2000
+
+
+def final_state(mbs):
+    """The ODE2 and ODE1 coordinates at the end of a solve, for comparing runs of scripts
+    that set no testResult (at most ``STATE_ENTRIES`` of them, evenly spaced); None if
+    Exudyn cannot give them."""
+    try:
+        import exudyn as exu
+        sd = mbs.systemData
+        cur = exu.ConfigurationType.Current
+        x = list(sd.GetODE2Coordinates(configuration=cur)) + list(sd.GetODE1Coordinates(configuration=cur))
+    except Exception:                            # noqa: BLE001 - information only
+        return None
+    if len(x) > STATE_ENTRIES:
+        step = len(x) / STATE_ENTRIES
+        x = [x[int(k * step)] for k in range(STATE_ENTRIES)]
+    return [float(v) for v in x]
+
+
 def install_solve_wrappers(exu, mode, emit, factor=1):
     """Replace every reachable SolveDynamic by a logging wrapper (see the module doc)."""
     import exudyn.solver
@@ -277,7 +297,8 @@ def install_solve_wrappers(exu, mode, emit, factor=1):
             raise
         finally:
             state["depth"] -= 1
-        emit("solve_end", n=n, seconds=time.perf_counter() - tic, returned=repr(result)[:40])
+        emit("solve_end", n=n, seconds=time.perf_counter() - tic, returned=repr(result)[:40],
+             state=final_state(mbs))
         return result
 
     SolveDynamic.__doc__ = original.__doc__

@@ -52,6 +52,7 @@ from ..errors import ConstraintError, SimulationError
 from .evaluated_kernels import block_kkt_solve, schur_band_solve, write_exudyn_state, write_moved_positions
 from ..mbs.linalg import REL_PIVOT_TOL
 from ..mbs.row_drives import offset_and_derivatives
+from .moving_offsets import offset_objects
 from .reader import BridgeError, _userfunction
 
 EPS_CBRT = float(np.finfo(float).eps) ** (1.0 / 3.0)
@@ -148,98 +149,11 @@ def coordinate_constraint_rows(mbs):
 
 
 def parameter_offset_rows(mbs):
-    """``[(object, AE rows, label)]`` of the active position-level ObjectConnectorCoordinates
-    whose ``offset`` parameter a user function may move during the run (those without an
-    ``offsetUserFunction``, which replaces it): see :class:`ParameterOffsets`."""
+    """``[(object, AE rows, label)]`` of the ObjectConnectorCoordinates whose ``offset`` a
+    user function may move during the run (bridge/moving_offsets.py)."""
     sd = mbs.systemData
-    out = []
-    for o in range(sd.NumberOfObjects()):
-        d = mbs.GetObject(o)
-        if d["objectType"] != "ConnectorCoordinate" or not d.get("activeConnector", True) \
-                or d.get("velocityLevel", False):
-            continue
-        if _userfunction(d, "offsetUserFunction", _describe_object(mbs, o, d)) is not None:
-            continue
-        out.append((o, [int(r) for r in sd.GetObjectLTGAE(o)], f"the offset of {_describe_object(mbs, o, d)}"))
-    return out
-
-
-class ParameterOffsets:
-    """ObjectConnectorCoordinate offsets moved by a user function during the run (a pre-step
-    function's ``mbs.SetObjectParameter(o, 'offset', ...)``, as Exudyn's reeving-system crane
-    does).  Exudyn evaluates the new offset at the position level, but its velocity level
-    does not know it moves: eta from it would hold the coordinate at its old velocity.
-
-    Exudyn calls the pre-step function with the step's end time ``t1`` and its index-3 solve
-    holds the offset set there at ``t1``.  A moved offset makes its row a moving row (the
-    mechanism of ``offsetUserFunction``, :func:`coordinate_constraint_rows`: the function's
-    rate and acceleration enter ``g_v`` and ``eta``) whose function on the step ``[t0, t1]`` is
-    the cubic that starts at the constrained coordinate's actual value and rate at ``t0``
-    (Exudyn's residuals there) and ends at the new offset at ``t1`` with the rate of the
-    quadratic through the last three offsets.  Starting from the actual state, the row has
-    no residual for the index-1 solve to keep: without it, the rate's jumps from step to step
-    stayed in the velocity and the coordinate drifted by first order in h (2.7 cm of the
-    reeving crane's 13.5 m carriage travel at its step of 1 ms)."""
-
-    def __init__(self, mbs, t0):
-        self.mbs = mbs
-        self.items = parameter_offset_rows(mbs)
-        self.hist = {o: [(t0, float(mbs.GetObjectParameter(o, "offset")))] for o, _, _ in self.items}
-        self.moved = set()
-
-    def record(self, tStart, tEnd, residuals):
-        """Read the offsets set for the step from ``tStart`` to ``tEnd``; returns the moving
-        rows ``[(AE row, function, label)]`` of the offsets that have moved so far.
-        ``residuals()`` gives Exudyn's position- and velocity-level AE residuals at the step's
-        start state (asked for only when an offset has moved)."""
-        moving = []
-        res = None
-        for o, rows, label in self.items:
-            h = self.hist[o]
-            v = float(self.mbs.GetObjectParameter(o, "offset"))
-            if tEnd > h[-1][0]:
-                h.append((tEnd, v))
-                del h[:-3]
-            else:
-                h[-1] = (h[-1][0], v)      # the same step again (discontinuous iteration)
-            if any(x[1] != h[0][1] for x in h):
-                self.moved.add(o)
-            if o in self.moved:
-                if res is None:
-                    res = residuals()
-                g, gv = res
-                slope = _derivative_at(h, tEnd)
-                for r in rows:
-                    # the row is q - offset = g: the coordinate's value is g + offset, its rate g_v
-                    fn = _cubic_hermite(tStart, g[r] + v, gv[r], tEnd, v, slope)
-                    moving.append((r, fn, label))
-        return moving
-
-
-def _derivative_at(points, t):
-    """The derivative at ``t`` of the polynomial of degree <= 2 through ``[(t, value)]``."""
-    if len(points) < 2:
-        return 0.0
-    if len(points) == 2:
-        (ta, va), (tb, vb) = points
-        return (vb - va) / (tb - ta)
-    (ta, va), (tb, vb), (tc, vc) = points
-    return (va * (2 * t - tb - tc) / ((ta - tb) * (ta - tc)) + vb * (2 * t - ta - tc) / ((tb - ta) * (tb - tc))
-            + vc * (2 * t - ta - tb) / ((tc - ta) * (tc - tb)))
-
-
-def _cubic_hermite(t0, x0, v0, t1, x1, v1):
-    """The cubic through ``(t0, x0)``, ``(t1, x1)`` with the rates ``v0``, ``v1``, as a function of t."""
-    hh = t1 - t0
-
-    def fn(t):
-        s = (t - t0) / hh
-        h00 = (1 + 2 * s) * (1 - s) ** 2
-        h10 = s * (1 - s) ** 2
-        h01 = s * s * (3 - 2 * s)
-        h11 = s * s * (s - 1)
-        return h00 * x0 + h10 * hh * v0 + h01 * x1 + h11 * hh * v1
-    return fn
+    return [(o, [int(r) for r in sd.GetObjectLTGAE(o)], label)
+            for o, label in offset_objects(mbs, lambda o, d: _describe_object(mbs, o, d))]
 
 
 def position_derived_rows(mbs):
@@ -499,7 +413,7 @@ class EvaluatedModel:
         return g, self._residual()[o:].copy()
 
     def set_parameter_offsets(self, moving):
-        """The moving rows of offsets changed by user functions (:class:`ParameterOffsets`)."""
+        """The moving rows of offsets changed by user functions (bridge/moving_offsets.py)."""
         self._movingRows = self._functionRows + moving
 
     def velocity_constraints(self, t, R=None, r=None, prev=None, qv=None):

@@ -27,7 +27,8 @@ import time
 import numpy as np
 
 from ..userwarn import warn_user
-from .evaluated import EvaluatedModel, Layout, ParameterOffsets, check_model
+from .evaluated import EvaluatedModel, Layout, check_model, parameter_offset_rows
+from .moving_offsets import ParameterOffsets
 from .evaluated_stepper import EvaluatedStepper
 from .evaluated_initial import project_initial
 from .evaluated_stiffness import check_step
@@ -294,7 +295,12 @@ class EvaluatedSolver:
                       f"and the Jacobian, the solve)")
             stepper.write()                      # the initial state and time, for Exudyn's initial outputs
             sd.SetTime(t0)
-            offsets = ParameterOffsets(mbs, t0)
+            offsets = ParameterOffsets(mbs, t0, parameter_offset_rows(mbs))
+
+            def actual_coordinates():
+                # Exudyn's residual g = x - offset holds the new offset already: x = g + offset
+                g, gv = model.raw_residuals()
+                return lambda r, v: (g[r] + v, gv[r])
             check = account = None
             if tolCheck is not None and layout.nAE:
                 dependent = range(sd.NumberOfObjects()) if model.pivoted else None
@@ -322,9 +328,9 @@ class EvaluatedSolver:
                         snap[0] = stepper.snapshot()
                         steps[0], steps[1] = steps[1], t1
                     stepper.start = snap[0]
-                    if offsets.items:
+                    if offsets:
                         stepper.write()               # the step's start state into mbs
-                        model.set_parameter_offsets(offsets.record(steps[0], t1, model.raw_residuals))
+                        model.set_parameter_offsets(offsets.record(steps[0], t1, actual_coordinates))
                     tic = time.perf_counter()
                     hh = (t1 - steps[0]) / k
                     if abs(hh - h) > 1e-9 * h:

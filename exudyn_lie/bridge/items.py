@@ -166,9 +166,8 @@ register("object", "JointPrismatic2D", "joint", "joint rows (planar)", {
     "constrainRotation": (REFUSED, "False is refused (the rotation row is compiled)")})
 register("object", "ConnectorCoordinate", "joint", "a coordinate row (mbs/coordinate_rows.py)", {
     "markerNumbers": (FIXED, "the constrained coordinates"), "factor1": _COMPILED_ROW,
-    "offset": (FIXED, "compiled into the constraint row; an offset moved during the run (by a pre-step "
-                      "function, say) is honoured when Exudyn evaluates the model: "
-                      "exl.SolveDynamic(..., evaluation='exudyn')"),
+    "offset": (LIVE, "moved by a pre- or post-step function, the row follows it over the step "
+                     "(bridge/moving_offsets.py); a velocity-level row's offset is fixed"),
     "activeConnector": (FIXED, "the constraint row is compiled (an inactive one has none)"),
     "velocityLevel": (FIXED, "the kind of the compiled constraint row (position or velocity level)"),
     # a moving offset enters the row's right-hand side with its time derivatives (mbs/row_drives.py);

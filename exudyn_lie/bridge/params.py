@@ -136,8 +136,11 @@ class ParameterWatch:
                        "load": sd.NumberOfLoads()}
         self.markerUsers = {}        # marker -> [("load", l) | ("object", o)]
         self.markersOn = {}          # ("object", ground o) / ("node", ground node n) -> [markers]
+        self.fixedOffsets = {}       # ConnectorCoordinate -> its offset, held by a compiled row
         for o in range(self.nItems["object"]):
             d = self.snap[("object", o)] = mbs.GetObject(o)
+            if d["objectType"] == "ConnectorCoordinate" and o not in self.scene.movableOffsets:
+                self.fixedOffsets[o] = d.get("offset", 0.0)
             for m in d.get("markerNumbers", []):
                 self.markerUsers.setdefault(int(m), []).append(("object", o))
         for l in range(self.nItems["load"]):
@@ -271,8 +274,22 @@ class ParameterWatch:
                 self._load(i, d, t)
             elif ITEMS[("object", d["objectType"])].role == "connector":
                 self._connector(i, d, t)
+            elif ITEMS[("object", d["objectType"])].role == "joint":
+                self._joint_offset(i, d, t)
             # other objects (ground, bodies, joints) have no live field besides the above
             self.updates += 1
+
+    def _joint_offset(self, o, d, t):
+        """A joint's live field is a ConnectorCoordinate's ``offset``, which its row reads at
+        every step when a step function may move it (bridge/moving_offsets.py); another
+        row (a velocity-level one, or one read without a step function) holds it fixed."""
+        if o not in self.fixedOffsets or not d.get("activeConnector", True) \
+                or _same(d.get("offset", 0.0), self.fixedOffsets[o]):
+            return
+        raise BridgeError(
+            f"{self.what('object', o, d)}: parameter 'offset' changed during the solve at t = {t:.6g} s; exudyn_lie "
+            f"follows a moved offset only on a position-level row and when it is moved by a pre- or post-step "
+            f"function (mbs.SetPreStepUserFunction); set it there, or solve with exudyn.SolveDynamic")
 
     def _load(self, l, d, t):
         sc, rd = self.scene, self.reader

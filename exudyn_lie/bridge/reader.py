@@ -55,6 +55,7 @@ from ..mbs.force_elements import ELEMENTS
 from ..mbs.kernel import ROW_ROT
 from ..mbs.scene import GROUND, AngleCoordinate, NodeParameterCoordinate, Scene, SceneError, frame_with_axis
 from . import items, pyforces
+from .moving_offsets import MovableOffset
 from ..mbs.node_coordinates import PARAM_KINDS
 from .nodes import NODE_KINDS
 
@@ -179,6 +180,9 @@ class ExudynScene(Scene):
         # a re-read during a solve (_Reader.reread_connector): the turns folded into each compiled
         # torsional spring's offset when it was first read (object -> turns0), kept by the re-read
         self.keptTurns = {}
+        # object -> MovableOffset: the ConnectorCoordinate rows whose offset a pre- or post-step
+        # function may move (bridge/moving_offsets.py)
+        self.movableOffsets = {}
 
     def body_of_object(self, obj):
         try:
@@ -764,10 +768,14 @@ class _Reader:
             sc.aeZero.extend(aeAll.tolist())
             return
         offset = float(d.get("offset", 0.0))
-        # the references fold into the constant of a position-level row (rates have none); a
-        # user function replaces the offset
-        constant = (0.0 if velocityLevel else f * refB - refA) + (0.0 if uf is not None else offset)
         moving = None if uf is None else pyforces.OffsetUserFunction(self.mbs, o, d, uf, key)
+        if moving is None and not velocityLevel and (self.mbs.GetPreStepUserFunction()
+                                                     or self.mbs.GetPostStepUserFunction()):
+            # a step function may move the offset (Exudyn's reeving crane): a moving row
+            moving = sc.movableOffsets[o] = MovableOffset(offset, f"the offset of {what}")
+        # the references fold into the constant of a position-level row (rates have none); a
+        # moving offset replaces the offset
+        constant = (0.0 if velocityLevel else f * refB - refA) + (0.0 if moving is not None else offset)
         try:
             j = sc.AddCoordinateConstraint(A, ka, B, kb, factor=f, name=d.get("name", "") or f"object{o}",
                                            constant=constant, velocityLevel=velocityLevel, offset=moving)

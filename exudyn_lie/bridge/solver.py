@@ -49,6 +49,7 @@ from ..mbs.simulator import Simulator
 from ..userwarn import warn_user
 from .constraint_check import ConstraintCheck, check_tolerance, kernel_explanation
 from .fast import CHUNK_ROWS, AdaptiveOutputChunks, NodeTable, OutputChunks
+from .moving_offsets import ParameterOffsets
 from .params import ParameterWatch
 from .settings import check_settings
 from .solvertype import resolve_solver_type
@@ -450,6 +451,30 @@ class LieGroupSolver:
             self._restart_from_mbs(t)
         self._params.apply(t)
 
+    def _parameter_offsets(self, t0):
+        """``(ParameterOffsets, actual)`` of the rows whose offset a step function may move
+        (bridge/moving_offsets.py; ``(None, None)`` without): each row's "label" is its
+        MovableOffset, which takes the step's curve."""
+        sc, sim = self.scene, self.sim
+        if not sc.movableOffsets:
+            return None, None
+        objects = []
+        for ji in sc.joints_info:
+            drive = sc.movableOffsets.get(ji.objectIndex)
+            if drive is not None:
+                objects.append((ji.objectIndex, [int(q) for q in np.flatnonzero(sim.rowJoint == ji.sceneJoint)], drive))
+        rowDrive = {rows[0]: drive for _, rows, drive in objects}
+
+        def actual():
+            # the row is h = x - c(t) with the offset c the step ran with: x = h + c, xdot = (J V - cdot) + cdot
+            h, gv = sim.RowResiduals(sim.R, sim.r, sim.V, sim.t)
+
+            def at(q, v):
+                c, cd, _ = rowDrive[q].value_rate_acceleration(sim.t)
+                return h[q] + c, gv[q] + cd
+            return at
+        return ParameterOffsets(self.mbs, t0, objects), actual
+
     def _reread_current(self, t):
         """A pre-step user function changed the coordinates: continue from them."""
         sd = self.mbs.systemData
@@ -768,6 +793,7 @@ class LieGroupSolver:
             nExudyn = nsteps // k
             count = [0]
             params = self._params = ParameterWatch(self)
+            offsets, actual = self._parameter_offsets(t0)
             marks = params.marks                 # non-empty: a user function changed parameters
             steps = [t0, t0]                     # start and end time of the current Exudyn step
 
@@ -791,6 +817,9 @@ class LieGroupSolver:
                             self._restart_from_mbs(steps[0])     # a user function changed the state
                     if marks or params.late:
                         self._apply_parameters(steps[0])
+                    if offsets:
+                        for _, curve, drive in offsets.record(steps[0], t1, actual):
+                            drive.curve = curve
                     params.busy = True               # force user functions run inside: changes refused
                     try:
                         nextOutput(t1, nExudyn - count[0] + 1)

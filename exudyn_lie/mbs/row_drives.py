@@ -84,8 +84,13 @@ def _update_row_drives(drive, t):
 
 
 def offset_and_derivatives(fn, t, label):
-    """``(c(t), cdot(t), cddot(t))`` of an offset function by the central differences of the
-    module text; raises for an exception or a non-finite value, naming ``label``."""
+    """``(c(t), cdot(t), cddot(t))`` of an offset function: its own
+    ``value_rate_acceleration(t)`` if it has one (a curve whose derivatives are known), else
+    the central differences of the module text; raises for an exception or a non-finite
+    value, naming ``label``."""
+    exact = getattr(fn, "value_rate_acceleration", None)
+    if exact is not None:
+        return exact(t)
     d = DRIVE_STEP
     c = np.empty(5)
     for k in range(5):

@@ -10,10 +10,9 @@ limit:
    ``exu.SolveDynamic``, ``SolveDynamic`` from ``exudyn.solver``) passed with the same
    arguments to ``exudyn_lie.SolveDynamic``.  Only when the native run reached a dynamic
    solve: otherwise the two runs would be the same;
-3. **fine** (``--fine K``, default 10; 0: not): where exudyn_lie ran and both runs set
-   ``testResult``, natively with ``numberOfSteps`` times K in every ``SolveDynamic``: the
-   reference for both, since Exudyn's generalized-alpha at the script's step is only
-   second order.
+3. **fine** (``--fine K``, default 10; 0: not): where exudyn_lie ran, natively with
+   ``numberOfSteps`` times K in every ``SolveDynamic``: the reference for both, since
+   Exudyn's generalized-alpha at the script's step is only second order.
 
 The working directory of the runs is a copy of the script's folder (under ``OUT/cwd``), so
 data files are found and files the script writes to relative paths do not land in its
@@ -29,7 +28,11 @@ after ``exudyn_lie.SolveDynamic`` returned that the native run does not have: a 
 drop-in gap of exudyn_lie); ``timeout``; ``native error`` (the exl run failed with the
 same error, class and first line, as the native run, e.g. in the script's own user
 function).  ``exudynTestGlobals.testResult`` of the runs and the relative differences
-``|a - b| / max(|a|, |b|)`` of exl against native and against the fine native run.
+``|a - b| / max(|a|, |b|)`` of exl against native and against the fine native run; for
+every script, testResult or not (Exudyn's Examples set none), the final states of the solves
+(ODE2 and ODE1 coordinates) against the fine native run, relative to the state's largest
+entry, and the runs to look at: exl off the fine state by more than 1e-3 and by more than
+10 times native's own difference.
 
 Writes ``corpus.md`` and ``corpus.json`` to ``--out`` (default ``./corpus_results``), the
 output of every run to ``OUT/logs``; one progress line per script.
@@ -660,7 +663,7 @@ def main(argv=None):
     ap.add_argument("--jobs", type=int, default=1, help="scripts run in parallel (default 1)")
     ap.add_argument("--match", default=None, metavar="GLOB", help="only file names matching GLOB, e.g. 'rigid*'")
     ap.add_argument("--fine", type=int, default=10, metavar="K",
-                    help="where exudyn_lie ran and both runs set testResult, also run natively with K times "
+                    help="where exudyn_lie ran and both runs set testResult or gave a final state, also run natively with K times "
                          "numberOfSteps as the reference (default 10; 0: not)")
     args = ap.parse_args(argv)
     try:

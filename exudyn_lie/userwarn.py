@@ -6,8 +6,15 @@ import warnings
 _PACKAGE = os.path.dirname(os.path.realpath(__file__)) + os.sep
 
 
+_INSIDE = {}     # code file name -> inside the package (realpath costs about 10 us a call)
+
+
 def _inside_package(frame):
-    return os.path.realpath(frame.f_code.co_filename).startswith(_PACKAGE)
+    name = frame.f_code.co_filename
+    inside = _INSIDE.get(name)
+    if inside is None:
+        inside = _INSIDE[name] = os.path.realpath(name).startswith(_PACKAGE)
+    return inside
 
 
 def warn_user(message, category=RuntimeWarning):

@@ -35,13 +35,18 @@ Cost.  The check reads Exudyn's residuals once per output (about 2 us) and judge
 only when its residual first exceeds the tolerance and again whenever it has doubled since
 (a drifting run judges each item a few times, not at every output).  On the cheapest runs
 (the heavy top, about 27 us per output period of ten steps) even that would be 10 % of the
-run, so the check keeps to a time budget of :data:`BUDGET` of the run's wall time: an output
-is skipped while the check has used more, so cheap runs are checked at every few outputs,
-costly ones (the Exudyn-evaluated path) at every output, and the last output always.
+run, so the check keeps to a time budget of :data:`BUDGET` of the solve's wall time, its own
+set-up (about 0.2 ms: the items, the model's size, two residual evaluations) included: an
+output is skipped while the check has used more (the outputs to skip are counted from the
+run's rate so far, so a skipped output costs a decrement), so cheap runs are checked at every
+few outputs, costly ones (the Exudyn-evaluated path) at every output, and the first and the
+last output always.  One judgement can cost more than a read, so the budget is set below the 5 % a user
+would notice.
 
 The tolerance is ``constraintCheck`` of ``exl.SolveDynamic``: ``True`` (the default)
 ``DEFAULT_RELATIVE`` times the model's size (the diagonal of the box around its nodes and
-markers at the start, at least 1 mm), a float in the rows' own units (m for positions), or
+markers, at least 1 mm, read at the first output whose residual exceeds the smallest such
+tolerance, 1e-8: most runs that hold their constraints never need it), a float in the rows' own units (m for positions), or
 ``False`` for no check.  1e-5 of the model's size is far above round-off and invisible in a
 plot, so a residual below it needs no judgement.
 """
@@ -61,7 +66,7 @@ EXPLAINED = 0.1
 #: a dropped row whose residual exceeds every other dependent item's this many times is not implied
 NOT_IMPLIED = 100.0
 #: the check's share of the run's wall time (module docstring, "Cost")
-BUDGET = 0.03
+BUDGET = 0.02
 #: an item is judged again when its residual has grown by this factor since it was last judged
 REJUDGE = 2.0
 #: on the evaluated path: the share of the residual's growth the velocity level must explain
@@ -87,23 +92,35 @@ def check_tolerance(constraintCheck):
     return v
 
 
+_NO_POSITION = set()    # marker types whose Position output Exudyn refuses
+
+
 def model_size(mbs):
     """The diagonal of the box around the nodes' and markers' positions at the current state
     (at least 1 mm)."""
     import exudyn as exu
     pts = []
     sd = mbs.systemData
-    for output, count in ((mbs.GetNodeOutput, sd.NumberOfNodes()), (mbs.GetMarkerOutput, sd.NumberOfMarkers())):
+    P, C = exu.OutputVariableType.Position, exu.ConfigurationType.Current
+    for kind, output, count in (("node", mbs.GetNodeOutput, sd.NumberOfNodes()),
+                                ("marker", mbs.GetMarkerOutput, sd.NumberOfMarkers())):
         for i in range(count):
+            # Exudyn raises for an item type without a position (a BodyMass marker), which
+            # costs ten times a position: each type is asked once per process
+            itemType = None
+            if kind == "marker":
+                itemType = mbs.GetMarker(i)["markerType"]
+                if itemType in _NO_POSITION:
+                    continue
             try:
-                pts.append(np.asarray(output(i, exu.OutputVariableType.Position,
-                                             configuration=exu.ConfigurationType.Current), float)[:3])
+                pts.append(np.asarray(output(i, P, configuration=C), float)[:3])
             except Exception:            # noqa: BLE001 - an item without a position
-                pass
-    pts = [p for p in pts if p.shape == (3,) and np.all(np.isfinite(p))]
-    if not pts:
+                if itemType is not None:
+                    _NO_POSITION.add(itemType)
+    P = np.array([p for p in pts if p.shape == (3,)]).reshape(-1, 3)
+    P = P[np.isfinite(P).all(axis=1)]
+    if not len(P):
         return 1.0
-    P = np.array(pts)
     return max(float(np.linalg.norm(P.max(axis=0) - P.min(axis=0))), 1e-3)
 
 
@@ -128,8 +145,11 @@ class ConstraintCheck:
         self.mbs, self.solver = mbs, solver
         sd = mbs.systemData
         self.n, self.n1, self.m = int(sd.ODE2Size()), int(sd.ODE1Size()), int(sd.AEsize())
-        self.size = model_size(mbs)
-        self.tol = DEFAULT_RELATIVE * self.size if tolerance is True else float(tolerance)
+        self._size = None
+        self._tol = None if tolerance is True else float(tolerance)
+        # no residual below the smallest tolerance (the model's size at least 1 mm) is judged,
+        # so the size is read only when a residual first exceeds it
+        self._floor = DEFAULT_RELATIVE * 1e-3 if tolerance is True else self._tol
         active = self._rows_with_coordinates()
         items, nodeRows = [], set()
         for n in range(sd.NumberOfNodes()):
@@ -157,7 +177,7 @@ class ConstraintCheck:
         self.dependent = None if dependent is None else set(dependent)
         # the residual above which each item is judged (again): the tolerance, then REJUDGE x
         # the residual at its last judgement
-        self._level = np.full(len(items), self.tol)
+        self._level = None
         self._starts = np.cumsum([0] + [len(it[2]) for it in items[:-1]]).astype(np.int64)
         self._t0 = None
         self.spent = 0.0
@@ -166,6 +186,20 @@ class ConstraintCheck:
         self.warned = set()
         self.checks = 0
         self._o = self.n + self.n1
+
+    @property
+    def size(self):
+        """The model's size (:func:`model_size`), read when first asked for."""
+        if self._size is None:
+            self._size = model_size(self.mbs)
+        return self._size
+
+    @property
+    def tol(self):
+        """The tolerance in the rows' units (module docstring)."""
+        if self._tol is None:
+            self._tol = DEFAULT_RELATIVE * self.size
+        return self._tol
 
     def _rows_with_coordinates(self):
         """Which AE rows are equations of the coordinates: those whose residual does not move
@@ -206,22 +240,39 @@ class ConstraintCheck:
             g = np.abs(self.row_residuals(t))
         return np.maximum.reduceat(g, self._starts)       # each item's rows are contiguous
 
-    def start(self):
-        """The run's time loop starts: the time budget counts from now."""
-        self._t0 = time.perf_counter()
-        self.spent = 0.0
+    def start(self, since, setupFrom):
+        """The run's time loop starts.  The budget is a share of the time since ``since`` (the
+        solve's start), and the check's own set-up since ``setupFrom`` counts against it."""
+        self._t0 = since
+        self._loop = time.perf_counter()
+        self.spent = self._loop - setupFrom
+        self._seen = 0                    # outputs so far
+        self._wait = 0                    # outputs to skip before the budget is asked again
 
     def due(self, last=False):
         """Whether an output is checked within the time budget (module docstring, "Cost");
         ``last``: the run's last output, always checked."""
-        if last or self.spent <= BUDGET * (time.perf_counter() - self._t0):
+        self._seen += 1
+        if last or self._seen == 1:       # a model made wrong shows at once: the first output always
             return True
+        if self._wait:
+            self._wait -= 1
+            self.skipped += 1
+            return False
+        now = time.perf_counter()
+        if self.spent <= BUDGET * (now - self._t0):
+            return True
+        # skip the outputs the run takes until its time reaches spent / BUDGET, at its rate so far
+        perOutput = (now - self._loop) / self._seen
+        self._wait = int((self.spent / BUDGET - (now - self._t0)) / perOutput) if perOutput > 0 else 0
         self.skipped += 1
         return False
 
-    def timed_check(self, t, explain):
-        """:meth:`check`, its time counted in the budget."""
+    def timed_check(self, t, explain, prepare=None):
+        """:meth:`check` (after ``prepare()``, if given), its time counted in the budget."""
         now = time.perf_counter()
+        if prepare is not None:
+            prepare()
         self.check(t, explain)
         self.spent += time.perf_counter() - now
 
@@ -240,8 +291,10 @@ class ConstraintCheck:
         gmax = float(g.max())
         if self.dependent is not None:
             self._velocity_redundancy(t)
-        if gmax <= self.tol:
+        if gmax <= self._floor or gmax <= self.tol:
             return
+        if self._level is None:
+            self._level = np.full(len(self.items), self.tol)
         G = self.residuals(t, g)
         for k in np.nonzero(G > self._level)[0]:
             self._level[k] = REJUDGE * G[k]

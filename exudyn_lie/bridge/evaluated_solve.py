@@ -303,12 +303,13 @@ class EvaluatedSolver:
                 return lambda r, v: (g[r] + v, gv[r])
             check = account = None
             if tolCheck is not None and layout.nAE:
+                ticCheck = time.perf_counter()
                 dependent = range(sd.NumberOfObjects()) if model.pivoted else None
                 check = ConstraintCheck(mbs, solver, tolCheck, dependent)
                 account = ConsistencyAccount(check)
                 account.step(t0, model.velocity_constraints(t0, stepper.R, stepper.r, stepper.prev, stepper.qv),
                              np.max(np.abs(qt)) if qt.size else 0.0)
-                check.start()
+                check.start(ticTotal, ticCheck)
                 self.constraintCheck = check
             written = [q.copy(), qt.copy()]
             steps = [t0, t0]

@@ -83,13 +83,9 @@ def check_tolerance(constraintCheck):
         return None
     if constraintCheck is True:
         return True
-    try:
-        v = float(constraintCheck)
-    except (TypeError, ValueError):
-        v = float("nan")
-    if not v > 0.0 or not np.isfinite(v):
-        raise ValueError(f"constraintCheck must be True, False or a positive tolerance, got {constraintCheck!r}")
-    return v
+    from .settings import positive_float
+    return positive_float(constraintCheck, ValueError(f"constraintCheck must be True, False or a positive "
+                                                      f"tolerance, got {constraintCheck!r}"))
 
 
 _NO_POSITION = set()    # marker types whose Position output Exudyn refuses

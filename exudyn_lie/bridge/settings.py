@@ -87,3 +87,15 @@ def check_settings(ss):
         raise BridgeError("simulationSettings.solution.restart.continueIfAvailable = True: exudyn_lie does not "
                           "continue from a restart file (its state would be overwritten by the initial values); "
                           "set it to False, or continue with exudyn.SolveDynamic")
+
+
+def positive_float(value, error):
+    """``value`` as a finite positive float (a keyword of ``exl.SolveDynamic``), else raise
+    ``error`` (the keyword's own message, already formatted)."""
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        v = float("nan")
+    if not (v > 0.0 and v < float("inf")):
+        raise error
+    return v

@@ -51,7 +51,7 @@ from .constraint_check import ConstraintCheck, check_tolerance, kernel_explanati
 from .fast import CHUNK_ROWS, AdaptiveOutputChunks, NodeTable, OutputChunks
 from .moving_offsets import ParameterOffsets
 from .params import ParameterWatch
-from .settings import check_settings
+from .settings import check_settings, positive_float
 from .solvertype import resolve_solver_type
 from .reader import BridgeError, ExudynScene, SceneFromExudyn
 
@@ -567,12 +567,8 @@ class LieGroupSolver:
         no joints), checked: None or a positive number, not together with ``stabilization``."""
         if ct is None:
             return None
-        try:
-            ct = float(ct)
-        except (TypeError, ValueError):
-            ct = float("nan")
-        if not (np.isfinite(ct) and ct > 0):
-            raise BridgeError(f"constraintTolerance must be a positive number (or None: off), got {ct!r}")
+        ct = positive_float(ct, BridgeError(f"constraintTolerance must be a positive number (or None: off), "
+                                            f"got {ct!r}"))
         if stabilization not in (None, "none"):
             raise BridgeError(f"constraintTolerance projects when the constraint drift exceeds it, stabilization="
                               f"{stabilization!r} after every step: give one of them")

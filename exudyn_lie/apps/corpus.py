@@ -123,6 +123,7 @@ def child_env(mode):
     env["EXUDYN_SUPPRESS_UI_WINDOW_OPEN"] = "1"
     env["PYTHONUNBUFFERED"] = "1"
     if mode == "exl":      # the native run imports nothing of exudyn_lie
+        env["EXUDYN_LIE_TRACEBACK"] = "1"      # the report names where in exudyn_lie an error arose
         env["PYTHONPATH"] = PACKAGE_PARENT + (os.pathsep + env["PYTHONPATH"] if env.get("PYTHONPATH") else "")
     return env
 

@@ -191,6 +191,8 @@ class ExudynScene(Scene):
             return None
 
     def describe_body(self, i):
+        if i == GROUND:
+            return "the ground"
         o, n = self.bodyObject[i], self.bodyNode[i]
         name = self.bodies[i].name
         return f"object {o} ('{name}', node {n} {self.nodeTypes[n]})"

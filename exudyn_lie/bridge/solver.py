@@ -41,10 +41,12 @@ import numpy as np
 
 from .. import __version__
 from ..compiling import compile_timer
+from ..errors import SimulationError, raised_at_boundary
 from ..integrators.mk_adaptive import resolve_pair
 from ..integrators.tableau import ButcherTableau, method_names
 from ..mbs.compiled import auto_groups
 from ..mbs.rolling_disc_penalty_forces import D_DATA
+from ..mbs.scene import SceneError
 from ..mbs.simulator import Simulator
 from ..userwarn import warn_user
 from .constraint_check import ConstraintCheck, check_tolerance, kernel_explanation
@@ -1045,6 +1047,7 @@ def _check_index2_rotvec_constraints(mbs, typeName, settings):
                               f"(index-3) model: use Exudyn's default index-3 setting, or solve with exudyn.SolveDynamic")
 
 
+@raised_at_boundary((SceneError, SimulationError))
 def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialValues=False, storeSolver=True,
                  showHints=False, showCausingItems=True, autoAssemble=True, *, method=None, liegroup="auto",
                  stabilization=None, projectInitial=True, verbose=False, showProgress=True, substeps=None,

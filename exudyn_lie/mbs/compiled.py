@@ -206,7 +206,7 @@ def resolve_groups(scene: Scene, liegroup):
     out = []
     for i, (b, g) in enumerate(zip(scene.bodies, _rigid_groups(scene, liegroup))):
         if g == "R3" and not b.isPoint:
-            raise SceneError(f"liegroup for body {i} ({b.name}): R3 is the group of point masses; use 'SE3', "
+            raise SceneError(f"liegroup for {scene.describe_body(i)}: R3 is the group of point masses; use 'SE3', "
                              f"'SO3xR3' or 'auto' for a rigid body")
         out.append("R3" if b.isPoint else g)
     return out
@@ -226,7 +226,7 @@ def _rigid_groups(scene: Scene, liegroup):
                 out.append("R3")
                 continue
             if i not in liegroup:
-                raise SceneError(f"liegroup mapping has no entry for body {i} ({scene.bodies[i].name}); "
+                raise SceneError(f"liegroup mapping has no entry for {scene.describe_body(i)}; "
                                  f"give one of 'SE3', 'SO3xR3' for every body")
             out.append(_group_key(liegroup[i], f"liegroup[{i}]"))
         extra = set(liegroup) - set(range(nb))
@@ -251,7 +251,7 @@ def _planar_subgroups(scene, names):
         if b.planar:
             out.append(PLANAR_GROUP[space])
         elif g in _SPACE_OF:
-            raise SceneError(f"liegroup[{i}] = {g!r} is a planar group but body {i} ({b.name}) is a 3D body; "
+            raise SceneError(f"liegroup[{i}] = {g!r} is a planar group but {scene.describe_body(i)} is a 3D body; "
                              f"use {space!r}")
         else:
             out.append(g)

@@ -460,6 +460,10 @@ class Scene:
                                 label, angle0=a, freeAxes=(2,), angleFrame=F))
         return idx
 
+    def describe_body(self, i):
+        """Body ``i`` as errors name it (a scene read from Exudyn names Exudyn's object and node)."""
+        return "the ground" if i == GROUND else f"body {i} ('{self.bodies[i].name}')"
+
     def _check_body(self, b, what, allow_ground=True):
         if b == GROUND and allow_ground:
             return
@@ -483,8 +487,7 @@ class Scene:
         self._check_body(bodyA, label)
         self._check_body(bodyB, label)
         if bodyA == bodyB:
-            raise SceneError(f"{label}: both sides of the joint are on the same "
-                             f"{'ground' if bodyA == GROUND else f'body {bodyA}'}; "
+            raise SceneError(f"{label}: both sides of the joint are on {self.describe_body(bodyA)}; "
                              f"a joint must connect two different bodies")
         ax = tuple(int(a) for a in constrainedAxes)
         if len(ax) != 6 or any(a not in (0, 1) for a in ax):
@@ -741,7 +744,7 @@ class Scene:
                 quat_of(np.asarray(b.R0, float), p)
             b.track = (code, p)
         elif int(b.track[0]) != code:
-            raise SceneError(f"{label}: body {body} ({b.name}) tracks other rotation parameters than "
+            raise SceneError(f"{label}: {self.describe_body(body)} tracks other rotation parameters than "
                              f"{axis.kind}'s")
         return param_code(kind, axis.index)
 

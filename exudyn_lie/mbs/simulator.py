@@ -213,10 +213,10 @@ class Simulator:
                 raise SceneError(f"initial state {name} must have shape {shape}, got {x.shape}")
             if not np.all(np.isfinite(x)):
                 bad = int(np.argwhere(~np.isfinite(x.reshape(nb, -1)))[0][0])
-                raise SceneError(f"initial state {name} of body {bad} ({sc.bodies[bad].name}) is not finite")
+                raise SceneError(f"initial state {name} of {sc.describe_body(bad)} is not finite")
         for i in range(nb):
             if np.linalg.norm(R[i].T @ R[i] - np.eye(3)) > 1e-8 or np.linalg.det(R[i]) <= 0:
-                raise SceneError(f"initial state R of body {i} ({sc.bodies[i].name}) is not a proper "
+                raise SceneError(f"initial state R of {sc.describe_body(i)} is not a proper "
                                  f"rotation matrix (R^T R != I or det <= 0)")
         if not np.isfinite(t0):
             raise SceneError(f"initial time t0 = {t0} is not finite")
@@ -614,7 +614,7 @@ class Simulator:
             # stability-based suggestion if that is smaller
             sugg = min(self.suggest_step(h), h * np.pi / psi) if psi > 0 else self.suggest_step(h)
             raise StepSizeError(
-                f"the rotation of body {i} ({self.scene.bodies[i].name}) in an MK stage, |Psi| = {psi:.4g} rad, "
+                f"the rotation of {self.scene.describe_body(i)} in an MK stage, |Psi| = {psi:.4g} rad, "
                 f"is beyond {kernel.STAGE_ARG_MAX:.4g} = 2 pi - {2 * np.pi - kernel.STAGE_ARG_MAX:.2g} (dexp^-1 of "
                 f"the stage equation is singular "
                 f"at 2 pi) at t = {self.t:.6g} s with step size {h:.3g} s (method {self.tableau.name}); the "

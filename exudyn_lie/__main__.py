@@ -1,10 +1,11 @@
-"""Command line: ``python -m exudyn_lie {paper,bench,stress,corpus,items} [options]``.
+"""Command line: ``python -m exudyn_lie {paper,bench,stress,corpus,items,warmup} [options]``.
 
 * ``paper``  - reproduce the paper's comparison (SE3 vs SO3xR3 constraint satisfaction);
 * ``bench``  - work-precision and per-step benchmarks against Exudyn's native solvers;
 * ``stress`` - numerical stability stress suite;
 * ``corpus`` - run Exudyn scripts natively and through ``exudyn_lie.SolveDynamic``, unedited;
-* ``items``  - the Exudyn item types the bridge reads (from their registrations).
+* ``items``  - the Exudyn item types the bridge reads (from their registrations);
+* ``warmup`` - compile the solver for the kinds of model real scripts need, with progress.
 
 ``--version`` prints the versions of exudyn_lie, exudyn, numpy and numba.
 
@@ -19,6 +20,8 @@ COMMANDS = {
     "bench": ("exudyn_lie.apps.bench", "work-precision / per-step benchmarks, write BENCHMARKS.md"),
     "stress": ("exudyn_lie.apps.stress", "numerical stability stress suite, write STRESS.md"),
     "items": ("exudyn_lie.apps.items", "list the Exudyn item types the bridge reads (--readme: the README block)"),
+    "warmup": ("exudyn_lie.apps.warmup", "compile the solver for the kinds of model real scripts need, with "
+                                         "progress (once per machine)"),
     "corpus": ("exudyn_lie.apps.corpus", "run Exudyn scripts natively and through exudyn_lie.SolveDynamic, "
                                          "write corpus.md"),
 }

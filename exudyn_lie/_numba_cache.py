@@ -112,7 +112,45 @@ class PackageUserWideCacheLocator(_PackageKeyMixin, caching.UserWideCacheLocator
     """numba's user-wide locator with the package source key in the stamp."""
 
 
-LOCATORS = (PackageUserProvidedCacheLocator, PackageInTreeCacheLocator, PackageUserWideCacheLocator)
+def shared_cache_root():
+    """The cache shared by every copy of the package on this machine (a checkout and an
+    installed copy): ``EXUDYN_LIE_CACHE_DIR``, else ``$XDG_CACHE_HOME/exudyn_lie`` (default
+    ``~/.cache/exudyn_lie``)."""
+    root = os.environ.get("EXUDYN_LIE_CACHE_DIR")
+    if not root:
+        base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+        root = os.path.join(base, "exudyn_lie")
+    return root
+
+
+def shared_cache_dir():
+    """This version's part of :func:`shared_cache_root`: one folder per :func:`package_key`,
+    so copies of the same sources share it and other versions do not touch it."""
+    return os.path.join(shared_cache_root(), package_key()[:16])
+
+
+class PackageSharedCacheLocator(_PackageKeyMixin, caching._SourceFileBackedLocatorMixin, caching._CacheLocator):
+    """The package's functions cached in :func:`shared_cache_dir`, under their module's folder
+    relative to the package.  numba's own stamp is the source file's time and size, which
+    differ between a checkout and an installed copy of the same sources; the package key
+    (the hash of every compiled source's contents) is the whole stamp here.  Without a
+    writable cache root, the in-tree locator takes over."""
+
+    def __init__(self, py_func, py_file):
+        self._py_file = py_file
+        self._lineno = py_func.__code__.co_firstlineno
+        rel = os.path.relpath(os.path.dirname(os.path.abspath(py_file)), PACKAGE_DIR)
+        self._cache_path = os.path.normpath(os.path.join(shared_cache_dir(), "numba", rel))
+
+    def get_cache_path(self):
+        return self._cache_path
+
+    def get_source_stamp(self):
+        return ("any copy of the sources", package_key())
+
+
+LOCATORS = (PackageUserProvidedCacheLocator, PackageSharedCacheLocator, PackageInTreeCacheLocator,
+            PackageUserWideCacheLocator)
 
 _numba_load_overload = caching.Cache.load_overload
 
@@ -253,8 +291,9 @@ def enable_caching(self):
 
 
 def install():
-    """Put the package's locators in front of numba's (idempotent), in numba's order of
-    preference: NUMBA_CACHE_DIR if set, else ``__pycache__``, else the user-wide cache."""
+    """Put the package's locators in front of numba's (idempotent): NUMBA_CACHE_DIR if set,
+    else the cache every copy of the package shares (:func:`shared_cache_dir`), else
+    ``__pycache__``, else numba's user-wide cache."""
     classes = caching.CacheImpl._locator_classes
     for cls in LOCATORS:
         if cls in classes:

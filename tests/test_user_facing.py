@@ -177,3 +177,44 @@ def test_no_warnings_from_a_plain_solve():
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         assert exl.SolveDynamic(mbs, ss, showProgress=False)
+
+
+def test_every_long_compile_announces_itself_with_its_measured_time(tmp_path, monkeypatch):
+    """A compile of a package function that is still running after NOTICE_AFTER says so
+    (a variant never compiled here: no estimate yet); its duration is kept per variant, and
+    the next compile of the same variant announces itself at once with that time.  Compiles
+    of other packages' functions say nothing."""
+    import time
+    from types import SimpleNamespace
+
+    from exudyn_lie import compiling
+    monkeypatch.setattr(compiling, "HISTORY_FILE", str(tmp_path / "compile_seconds.json"))
+    monkeypatch.setattr(compiling, "NOTICE_AFTER", 0.05)
+    monkeypatch.setattr(compiling, "_coldInProgress", False)
+
+    def kernel_like():
+        pass
+    kernel_like.__module__ = "exudyn_lie.mbs.probe"
+    disp = SimpleNamespace(py_func=kernel_like)
+    buf = io.StringIO()
+    notices = compiling.CompileNotices(stream=buf)
+    notices.on_start({"dispatcher": disp, "args": ("float64",)})
+    time.sleep(0.3)                                    # the compile runs longer than NOTICE_AFTER
+    notices.on_end({})
+    first = buf.getvalue().splitlines()
+    assert len(first) == 2 and "kernel_like" in first[0] and "no estimate yet" in first[0], first
+    assert first[1].startswith("exudyn_lie: compiled in ")
+    key = compiling.variant_key(disp, ("float64",))
+    assert 0.3 <= compiling.load_history()[key] < 5
+    buf.truncate(0)
+    buf.seek(0)
+    notices.on_start({"dispatcher": disp, "args": ("float64",)})
+    assert "about 0 s (measured here before)" in buf.getvalue()        # at once, before the compile
+    notices.on_end({})
+    other = SimpleNamespace(py_func=len)                               # builtins: not the package's
+    buf.truncate(0)
+    buf.seek(0)
+    notices.on_start({"dispatcher": other, "args": ()})
+    time.sleep(0.2)
+    notices.on_end({})
+    assert buf.getvalue() == ""

@@ -32,7 +32,7 @@ def test_refusal_names_exudyns_items_and_ends_at_the_users_call():
         exl.SolveDynamic(mbs, exu.SimulationSettings(), showProgress=False)
     msg = str(info.value)
     assert "object 2 " in msg and "ObjectJointGeneric" in msg
-    assert "on object 1 ('object1', node 0 RigidBodyEP)" in msg and "body 0" not in msg
+    assert "on the same body, object 1 ('object1', node 0 RigidBodyEP)" in msg and "body 0" not in msg
     frames = traceback.extract_tb(info.value.__traceback__)
     assert [f.name for f in frames] == ["test_refusal_names_exudyns_items_and_ends_at_the_users_call", "entry"]
     assert info.value.__suppress_context__

@@ -43,6 +43,9 @@ def _rel(a, b):
 
 
 def _both_paths(build, T, h, **kw):
+    """The final state on both paths; the unstabilised method on both (the evaluated path
+    does not project, the compiled path's default projects)."""
+    kw.setdefault("stabilization", None)
     out = {}
     for ev in ("compiled", "exudyn"):
         mbs = build()

@@ -1,5 +1,5 @@
-"""The README's reproduction tables are written by ``python -m exudyn_lie paper --readme
-README.md`` (the full run) and not edited by hand.
+"""The reproduction tables of docs/PAPER.md are written by ``python -m exudyn_lie paper --readme
+docs/PAPER.md`` (the full run) and not edited by hand.
 
 * the block names the command and holds the SHA-256 of its text (checked);
 * its verdict counts (overall and per result of the paper, with the models each is
@@ -7,7 +7,7 @@ README.md`` (the full run) and not edited by hand.
   command's runs (``_paper_support.lie_runs``, judged by ``exudyn_lie.apps.paper.evaluate``);
 * its Table 1 (MK-RK4 maxima) equals the runs of the quick command (the same runs) at
   dt = 1e-2 and 1e-3, cell by cell as printed above round-off (``cells_agree``);
-* (slow) the command itself, ``--out <tmp> --readme <copy of README.md>``, writes
+* (slow) the command itself, ``--out <tmp> --readme <copy of docs/PAPER.md>``, writes
   REPRODUCTION.md with a valid header and one figure per model, and the block it writes
   equals the README's block exactly: the verdicts and Tables 1-3 at every step size,
   dt = 1e-4 included.
@@ -38,9 +38,9 @@ def readme_tables():
     """The body of the README's generated block (checked for edits)."""
     with open(README, encoding="utf-8") as f:
         block = read_block(f.read(), README_BLOCK)
-    assert block is not None, "README.md has no generated paper block: run `python -m exudyn_lie paper --readme README.md`"
+    assert block is not None, "docs/PAPER.md has no generated paper block: run `python -m exudyn_lie paper --readme docs/PAPER.md`"
     cmd, ok, body = block
-    assert cmd.startswith("python -m exudyn_lie paper") and "--readme README.md" in cmd, cmd
+    assert cmd.startswith("python -m exudyn_lie paper") and "--readme docs/PAPER.md" in cmd, cmd
     assert "--quick" not in cmd, "the README's tables must come from the full run (dt down to 1e-4)"
     assert ok, "the README's paper block was edited after generation (hash mismatch): regenerate it"
     return body
@@ -139,7 +139,7 @@ def test_full_command_regenerates_the_readme_block_exactly(tmp_path):
     """The README's block is what the full command writes: run it into a copy of the
     README and compare the two blocks text for text (verdicts, Tables 1-3, dt = 1e-4 too)."""
     out = tmp_path / "paper"
-    copy = tmp_path / "README.md"
+    copy = tmp_path / "PAPER.md"
     with open(README, encoding="utf-8") as f:
         copy.write_text(f.read(), encoding="utf-8")
     env = dict(os.environ)

@@ -7,7 +7,7 @@ from exudyn_lie.apps import items as items_cmd
 from exudyn_lie.apps.generated import read_block
 from exudyn_lie.bridge import evaluated_dispatch, items, nodes, params, reader
 
-README = os.path.join(os.path.dirname(__file__), "..", "README.md")
+README = os.path.join(os.path.dirname(__file__), "..", "docs", "USING.md")
 
 
 def _readme():

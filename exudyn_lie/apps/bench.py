@@ -62,7 +62,8 @@ NATIVE_CONSTRAINED = ("GeneralizedAlpha", "GeneralizedAlpha-mN", "TrapezoidalInd
 NATIVE_FREE = ("RK44", "RK67", "DOPRI5")
 EPS_LEVELS = (1e-4, 1e-5, 1e-6, 1e-7, 1e-8)
 SECTIONS = ("wp", "perstep", "scaling", "startup", "overhead", "groups", "mujoco", "params", "items",
-            "userfunctions", "topology", "adaptive", "planar", "evaluated", "check")
+            "userfunctions", "topology", "adaptive", "planar", "evaluated", "check",
+            "stabilization")
 TARGET_RATIO = 10.0
 # absolute per-step targets (MK-RK4, SE3, median step, this 2-core machine)
 KERNEL_STEP_TARGETS_US = {"heavytop": 3.0, "doublependulum": 6.0}
@@ -128,7 +129,7 @@ def parse_args(argv):
                    "bench_figures/; default ./bench_results)")
     p.add_argument("--no-progress", action="store_true", help="no progress lines")
     p.add_argument("--readme", default=None, metavar="FILE", help="also write the summary (targets, work-precision "
-                   "ratios) into the generated block of FILE (the repository's README.md)")
+                   "ratios) into the generated block of FILE (the repository's docs/BENCH.md)")
     return p.parse_args(argv)
 
 
@@ -505,7 +506,7 @@ Profile before optimising; this records what was measured and changed (or propos
 
 
 def targets_lines(cfg, out):
-    """The table of speed targets (shared by BENCHMARKS.md and the README)."""
+    """The table of speed targets (shared by BENCHMARKS.md and docs/BENCH.md)."""
     L = []
     A = L.append
     summ = out.get("wpSummary", {})
@@ -955,6 +956,15 @@ def main(argv=None):
         # 11 rounds in the quick run too: a run is a few ms, and the shares are differences of
         # medians (3 rounds gave 1.9-9.4 % for the same code in three runs)
         out["overhead"] = bridge_overhead(T=2.0 if cfg.quick else 8.0, repeats=11)
+    if "stabilization" in cfg.sections:
+        from .bench_stabilization import stabilization_cost
+        log("holding the joints (SolveDynamic's default stabilization='position' against None; output every "
+            "0.01 s, h = 1e-3 s)")
+        out["stabilization"] = stabilization_cost(T=2.0 if cfg.quick else 8.0, repeats=7 if cfg.quick else 11)
+        for name, d in out["stabilization"].items():
+            log(f"stabilization {name:26s}: default {1e3 * d['on']:.3g} ms, None {1e3 * d['off']:.3g} ms, "
+                f"+{100 * d['share']:.0f} %; largest joint violation at t = {d['T']:g} s: {d['violationOn']:.1e} "
+                f"against {d['violationOff']:.1e}")
     if "check" in cfg.sections:
         from .bench_micro import constraint_check_cost
         log("run-time constraint check (SolveDynamic, output every 0.01 s, h = 1e-3 s): check on / off")

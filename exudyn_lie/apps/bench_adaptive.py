@@ -271,7 +271,8 @@ def native_comparison(tols):
                         mbs.SolveDynamic(ss, solverType=getattr(exu.DynamicSolverType, solver))
                         steps = mbs.sys["dynamicSolver"].it.currentStepIndex
                     else:
-                        exl.SolveDynamic(mbs, ss, method=solver, liegroup="SE3", showProgress=False)
+                        exl.SolveDynamic(mbs, ss, method=solver, liegroup="SE3", showProgress=False,
+                                         stabilization=None)
                         steps = mbs.sys["lieGroupSolver"].timing["accepted"]
                 except Exception as e:                      # noqa: BLE001
                     steps, msg = 0, str(e).splitlines()[0]
@@ -355,7 +356,8 @@ def ga_comparison(names, tols, steps=GA_STEPS):
                             ti.absoluteTolerance = ti.relativeTolerance = v
                             with warnings.catch_warnings():
                                 warnings.simplefilter("ignore")      # the redundant loop, announced above
-                                exl.SolveDynamic(mbs, ss, method="DOPRI5", liegroup="SE3", showProgress=False)
+                                exl.SolveDynamic(mbs, ss, method="DOPRI5", liegroup="SE3", showProgress=False,
+                                                 stabilization=None)
                             nst = int(mbs.sys["lieGroupSolver"].timing["accepted"])
                     except Exception as e:                   # noqa: BLE001 - reported as it is
                         msg = str(e).splitlines()[0] if str(e) else type(e).__name__

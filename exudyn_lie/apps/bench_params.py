@@ -111,7 +111,7 @@ def parameter_updates(T=0.2, h=1e-3, repeats=7):
         if v == "native":
             mbs.SolveDynamic(ss)
         else:
-            exl.SolveDynamic(mbs, ss, showProgress=False, substeps=1)
+            exl.SolveDynamic(mbs, ss, showProgress=False, substeps=1, stabilization=None)
         return time.perf_counter() - tic
 
     for _ in range(repeats):

@@ -1,8 +1,8 @@
-"""``python -m exudyn_lie items [--readme README.md]``: the list of the Exudyn item types the
+"""``python -m exudyn_lie items [--readme docs/USING.md]``: the list of the Exudyn item types the
 bridge reads, generated from their registrations (:mod:`exudyn_lie.bridge.items`).
 
 Without options it prints the table; ``--readme PATH`` writes it as the generated block
-``items`` of PATH (``tests/test_readme_items.py`` checks that README.md's block equals the
+``items`` of PATH (``tests/test_readme_items.py`` checks that docs/USING.md's block equals the
 registrations)."""
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ import argparse
 
 from .generated import update_file_block
 
-COMMAND = "python -m exudyn_lie items --readme README.md"
+COMMAND = "python -m exudyn_lie items --readme docs/USING.md"
 BLOCK = "items"
 
 

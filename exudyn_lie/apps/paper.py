@@ -17,7 +17,7 @@ cross-check.  Then it writes to ``--out`` (default ``./paper_results``):
 
 Options: ``--quick`` (dt = 1e-2 and 1e-3 only), ``--out DIR``, ``--jobs N`` (worker
 processes, default 2), ``--models a,b`` (a subset), ``--no-figures``, ``--no-native``,
-``--readme README.md`` (also rewrite the README's generated summary block).
+``--readme docs/PAPER.md`` (also rewrite that file's generated summary block).
 """
 from __future__ import annotations
 
@@ -208,7 +208,7 @@ def parse_args(argv):
     ap.add_argument("--no-native", action="store_true", help="skip Exudyn's native solvers")
     ap.add_argument("--readme", default=None, metavar="FILE",
                     help="also write the summary (verdicts, Tables 1-3) into the generated block of FILE "
-                         "(the repository's README.md)")
+                         "(the repository's docs/PAPER.md)")
     return ap.parse_args(argv)
 
 

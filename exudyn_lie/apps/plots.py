@@ -27,14 +27,14 @@ import numpy as np
 DPI = 150
 MAXPOINTS = 1500
 STYLE = {        # label, colour, line style, width
-    "SE3": ("MK-RK4 SE(3)", "tab:blue", "-", 1.4),
-    "SO3xR3": ("MK-RK4 SO(3)xR3", "tab:orange", "--", 1.4),
+    "SE3": ("MK-RK4 on $SE(3)$", "tab:blue", "-", 1.4),
+    "SO3xR3": (r"MK-RK4 on $SO(3)\times\mathbb{R}^3$", "tab:orange", "--", 1.4),
     "GeneralizedAlpha": ("Exudyn generalized-alpha", "black", "-", 0.8),
     "TrapezoidalIndex2": ("Exudyn trapezoidal index 2", "tab:green", ":", 1.6),
     "RK44": ("Exudyn RK44", "tab:purple", "-.", 1.1),
     "DOPRI5": ("Exudyn DOPRI5", "tab:brown", ":", 1.6),
 }
-SHORT = {"SE3": "SE(3)", "SO3xR3": "SO(3)xR3", "GeneralizedAlpha": "gen.-alpha",
+SHORT = {"SE3": "$SE(3)$", "SO3xR3": r"$SO(3)\times\mathbb{R}^3$", "GeneralizedAlpha": "gen.-alpha",
          "TrapezoidalIndex2": "trapezoidal", "RK44": "RK44", "DOPRI5": "DOPRI5"}
 
 
@@ -68,10 +68,11 @@ def _rows(info):
             rows.append(("rotation violation [-]", f"{j.name} ({j.kind}), rotation rows",
                          (lambda rd, j=j: rd.rotation.get(j.name))))
     if info.exact is not None:
-        rows.append(("COM drift |x_c - x_c,exact| [m]", "COM drift from the exact solution",
+        rows.append((r"$|x_c - x_{c,\mathrm{exact}}|$ [m]", "COM drift from the exact solution",
                      lambda rd: rd.comDrift))
-        rows.append(("eps_r = ||log(R_exact^T R)|| [rad]", "orientation error", lambda rd: rd.orientation))
-    rows.append(("energy drift |E(t) - E(0)| [J]", "total energy", lambda rd: np.abs(rd.energy_drift())))
+        rows.append((r"$\varepsilon_r = \|\log(R_\mathrm{exact}^T R)\|$ [rad]", "orientation error",
+                     lambda rd: rd.orientation))
+    rows.append((r"$|E(t) - E(0)|$ [J]", "energy drift", lambda rd: np.abs(rd.energy_drift())))
     return rows
 
 
@@ -166,13 +167,13 @@ def plot_model(info, runs, dts, outdir, solvers=("SE3", "SO3xR3"), natives=()):
             if ri == 0:                         # where runs stopped: once per column
                 stop = _stopped(runs, order, dt)
                 notes += ["stopped: " + ", ".join(stop)] if stop else []
-            ax.set_title(f"{title}, dt = {dt:g} s" + "".join("\n" + n for n in notes), fontsize=8.5)
+            ax.set_title(f"{title}, $\\Delta t$ = {dt:g} s" + "".join("\n" + n for n in notes), fontsize=10)
             ax.grid(True, which="major", alpha=0.3)
-            ax.tick_params(labelsize=8)
+            ax.tick_params(labelsize=9)
             if ci == 0:
-                ax.set_ylabel(ylabel, fontsize=8.5)
+                ax.set_ylabel(ylabel, fontsize=10)
             if ri == nr - 1:
-                ax.set_xlabel("t [s]", fontsize=8.5)
+                ax.set_xlabel("$t$ [s]", fontsize=10)
         row = axes[ri, 0]
         if any(a.get_lines() for a in axes[ri]):
             row.yaxis.set_major_locator(LogLocator(base=10, numticks=7))
@@ -182,14 +183,21 @@ def plot_model(info, runs, dts, outdir, solvers=("SE3", "SO3xR3"), natives=()):
                 a.set_yscale("linear")
                 a.set_ylim(-1, 1)
                 a.set_yticks([0])
-    title = f"{info.title}: MK-RK4 on SE(3) and SO(3)xR3 and Exudyn's own solvers"
+    title = f"{info.title}: MK-RK4 on $SE(3)$ and $SO(3)\\times\\mathbb{{R}}^3$ and Exudyn's own solvers"
     if zero_rows:
         title += "\nexactly 0 for every solver and step size (not drawn): " + _names(zero_rows)
-    fig.suptitle(title, fontsize=10, y=1 - 0.1 / h)
+    fig.suptitle(title, fontsize=12, y=1 - 0.1 / h)
+    ticks = any(line.get_marker() == "|" for a in axes.flat for line in a.get_lines())
+    crosses = any(line.get_marker() == "x" for a in axes.flat for line in a.get_lines())
+    if ticks or crosses:          # the reading aids, explained in the figure itself
+        fig.text(0.5, 0.08 / h, "   ".join(
+            (["|  on a panel's lower edge: a sample exactly 0 (a log axis cannot show 0)"] if ticks else [])
+            + (["x: the run stopped there"] if crosses else [])), ha="center", va="bottom", fontsize=9,
+            color="0.25")
     legend = [handles[s] for s in order if s in handles]
     fig.legend(legend, [STYLE[s][0] for s in order if s in handles], loc="upper center", ncol=len(legend),
-               fontsize=8.5, frameon=False, bbox_to_anchor=(0.5, 1 - (0.45 + 0.2 * bool(zero_rows)) / h))
-    fig.subplots_adjust(left=0.8 / (4.6 * nc + 0.9), right=0.985, bottom=0.55 / h, top=1 - (1.1 + 0.2 * bool(zero_rows)) / h,
+               fontsize=10, frameon=False, bbox_to_anchor=(0.5, 1 - (0.45 + 0.2 * bool(zero_rows)) / h))
+    fig.subplots_adjust(left=0.9 / (4.6 * nc + 0.9), right=0.985, bottom=0.75 / h, top=1 - (1.1 + 0.2 * bool(zero_rows)) / h,
                         hspace=0.42 + 0.12 * (nr > 4), wspace=0.08)
     path = os.path.join(outdir, f"{info.name}.png")
     fig.savefig(path, dpi=DPI)

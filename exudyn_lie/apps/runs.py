@@ -264,7 +264,8 @@ def run_solve_dynamic(info, group, stepSize, endTime=None, keep_states=False, me
     with warnings.catch_warnings(), contextlib.redirect_stdout(io.StringIO()):
         warnings.simplefilter("ignore", RuntimeWarning)
         try:
-            exl.SolveDynamic(mbs, s, method=method, liegroup=group, showProgress=False, projectInitial=False)
+            exl.SolveDynamic(mbs, s, method=method, liegroup=group, showProgress=False, projectInitial=False,
+                             stabilization=None)
         except Exception as e:       # SimulationError (blow-up), ConstraintError, Exudyn's SolverError
             ok, msg = False, f"{type(e).__name__}: {str(e).strip().splitlines()[0] if str(e).strip() else ''}"
     wall = time.perf_counter() - tic

@@ -19,7 +19,7 @@ number from this run) plus PNG figures to ``--out`` (default ``./stress_results`
 * ``badinput``    bad input gives a clear error and leaves the scene / mbs unchanged.
 
 Options: ``--quick`` (the subset the tests run), ``--out DIR``, ``--cases a,b`` (subset),
-``--readme README.md`` (also rewrite the README's generated summary block).
+``--readme docs/STRESS.md`` (also rewrite that file's generated summary block).
 Exit status 0 when no check FAILs, 1 otherwise.
 """
 from __future__ import annotations
@@ -141,7 +141,7 @@ def main(argv=None):
     ap.add_argument("--out", default="stress_results", help="output directory (default ./stress_results)")
     ap.add_argument("--cases", default="", help=f"comma-separated subset of {','.join(CASE_ORDER)}")
     ap.add_argument("--readme", default=None, metavar="FILE",
-                    help="also write the summary table into the generated block of FILE (the repository's README.md)")
+                    help="also write the summary table into the generated block of FILE (the repository's docs/STRESS.md)")
     args = ap.parse_args(argv)
     if args.readme and not Path(args.readme).exists():
         print(f"exudyn_lie stress: --readme {args.readme}: no such file", file=sys.stderr)

@@ -1050,7 +1050,7 @@ def _check_index2_rotvec_constraints(mbs, typeName, settings):
 @raised_at_boundary((SceneError, SimulationError))
 def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialValues=False, storeSolver=True,
                  showHints=False, showCausingItems=True, autoAssemble=True, *, method=None, liegroup="auto",
-                 stabilization=None, projectInitial=True, verbose=False, showProgress=True, substeps=None,
+                 stabilization="auto", projectInitial=True, verbose=False, showProgress=True, substeps=None,
                  accelerations=None, constraintTolerance=None, evaluation="auto", constraintCheck=True):
     """Drop-in for ``exudyn.SolveDynamic``: integrate ``mbs`` with an explicit Munthe-Kaas
     Lie group method inside Exudyn's time loop; returns True.
@@ -1065,7 +1065,11 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
     :class:`~exudyn_lie.integrators.ButcherTableau` of the user's own; it must agree with an
     explicit solverType),
     ``liegroup`` ('SE3', 'SO3xR3', 'auto' or {rigid-body object index: group}),
-    ``stabilization``, ``projectInitial`` (default True: an inconsistent initial state is
+    ``stabilization`` (default 'auto': 'position' on the compiled path, so that joints hold
+    to round-off as Exudyn's generalized-alpha holds them to its Newton tolerance, at 10-40 %
+    of the run's time; None with ``constraintTolerance``, which projects by its own rule, and
+    on the Exudyn-evaluated path, which does not project; None: the paper's unstabilised
+    methods; 'velocity'), ``projectInitial`` (default True: an inconsistent initial state is
     projected onto the constraints with a warning; False: ConstraintError), ``verbose``
     (print the group per body, the plan and the time spent), ``showProgress`` (a progress line every 2 s on runs longer than 2 s),
     ``substeps`` (internal steps per Exudyn step; default: one Exudyn step per output
@@ -1096,6 +1100,7 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
     dictionaries (what ``mbs.Assemble()`` will set) and only then assembled."""
     import exudyn as exu
     check_tolerance(constraintCheck)
+    auto = stabilization == "auto"
     settings = exu.SimulationSettings() if simulationSettings is None else simulationSettings
     # solverType (argument, else the setting, as Exudyn reads them) -> the tableau (bridge/solvertype.py)
     method, typeName, replaced = resolve_solver_type(solverType, settings.timeIntegration.solverType, method,
@@ -1106,7 +1111,7 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
     if evaluation != "compiled":
         from .evaluated_dispatch import evaluated_path
         path = evaluated_path(mbs, evaluation, assemble, method=method, liegroup=liegroup,
-                              stabilization=stabilization, projectInitial=projectInitial, verbose=verbose,
+                              stabilization=None if auto else stabilization, projectInitial=projectInitial, verbose=verbose,
                               settings=settings, substeps=substeps, check_liegroup=_group_name)
         if path is not None:
             if constraintTolerance is not None:
@@ -1122,6 +1127,8 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
             return path.Solve(simulationSettings, updateInitialValues=updateInitialValues, storeSolver=storeSolver,
                               showProgress=showProgress, substeps=substeps, accelerations=accelerations,
                               constraintCheck=constraintCheck)
+    if auto:      # the drop-in holds joints as native does (README, "Options that matter")
+        stabilization = None if constraintTolerance is not None else "position"
     solver = LieGroupSolver(mbs, method=method, liegroup=liegroup, stabilization=stabilization,
                             projectInitial=projectInitial, verbose=verbose, constraintTolerance=constraintTolerance,
                             _configuration="items" if assemble else "initial")

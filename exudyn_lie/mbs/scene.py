@@ -487,7 +487,7 @@ class Scene:
         self._check_body(bodyA, label)
         self._check_body(bodyB, label)
         if bodyA == bodyB:
-            raise SceneError(f"{label}: both sides of the joint are on {self.describe_body(bodyA)}; "
+            raise SceneError(f"{label}: both sides of the joint are on the same body, {self.describe_body(bodyA)}; "
                              f"a joint must connect two different bodies")
         ax = tuple(int(a) for a in constrainedAxes)
         if len(ax) != 6 or any(a not in (0, 1) for a in ax):

@@ -15,9 +15,10 @@ claims, and every choice made where the paper leaves a gap).
 import importlib
 
 from ._common import (GROUND, BodyData, Claim, JointData, ModelInfo, NativeResult,  # noqa: F401
-                      SpringData, check_initial_consistency, native_solvers_for, run_native)
+                      SpringData, check_initial_consistency, native_solvers_for, run_native,
+                      run_native_default_steps)
 
-__all__ = ["MODELS", "build", "module", "run_native", "native_solvers_for", "check_initial_consistency",
+__all__ = ["MODELS", "build", "module", "run_native", "run_native_default_steps", "native_solvers_for", "check_initial_consistency",
            "ModelInfo", "BodyData", "JointData", "SpringData", "Claim", "NativeResult", "GROUND"]
 
 MODELS = [

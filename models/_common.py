@@ -407,3 +407,29 @@ def run_native(info, solver, stepSize, endTime=None, outputPeriod=None):
     if ok and times[-1] < endTime - 0.5 * stepSize:
         ok, msg = False, f"stopped at t = {times[-1]:.4g} s"
     return NativeResult(solver, stepSize, times, R, r, om, ve, cpu, ok, msg)
+
+
+def run_native_default_steps(info, solver, stepSize, endTime=None):
+    """The fixed-step native run of :func:`run_native` again with Exudyn's default step
+    control (``adaptiveStep = True``: after a failed Newton iteration the step is reduced
+    and later recovers): ``(ok, time reached [s], steps taken, message)``."""
+    endTime = info.endTime if endTime is None else float(endTime)
+    mbs = info.mbs
+    mbs.Assemble()
+    s = native_settings(solver, stepSize, endTime, max(stepSize, 1e-2), info.redundantConstraints)
+    s.timeIntegration.adaptiveStep = True
+    stype = getattr(exu.DynamicSolverType, NATIVE_SOLVERS[solver])
+    ok, msg = True, ""
+    try:
+        if mbs.SolveDynamic(s, solverType=stype) is False:
+            ok, msg = False, "SolveDynamic returned False"
+    except Exception as e:  # Exudyn raises when even the reduced step fails
+        ok, msg = False, _native_failure(mbs, e)
+    solver_ = mbs.sys.get("dynamicSolver")
+    it = solver_.it if solver_ is not None else None
+    reached = float(it.currentTime) if it is not None else float("nan")
+    steps = int(it.currentStepIndex) if it is not None else -1
+    if ok and reached < endTime - 0.5 * stepSize:
+        ok, msg = False, f"stopped at t = {reached:.4g} s"
+    return ok, reached, steps, msg
+

@@ -157,7 +157,7 @@ def plot_model(info, runs, dts, outdir, solvers=("SE3", "SO3xR3"), natives=()):
     for row in _rows(info):                     # rows exactly 0 everywhere: named, not drawn
         (zero_rows if _all_zero(runs, order, dts, row[2]) else rows).append(row)
     nr, nc = len(rows), len(dts)
-    h = 2.3 * nr + 1.3 + 0.2 * bool(zero_rows)
+    h = 2.4 * nr + 1.7 + 0.2 * bool(zero_rows)
     fig, axes = plt.subplots(nr, nc, figsize=(4.6 * nc + 0.9, h), squeeze=False, sharex=True, sharey="row")
     handles = {}
     for ri, (ylabel, title, get) in enumerate(rows):
@@ -197,7 +197,7 @@ def plot_model(info, runs, dts, outdir, solvers=("SE3", "SO3xR3"), natives=()):
     legend = [handles[s] for s in order if s in handles]
     fig.legend(legend, [STYLE[s][0] for s in order if s in handles], loc="upper center", ncol=len(legend),
                fontsize=10, frameon=False, bbox_to_anchor=(0.5, 1 - (0.45 + 0.2 * bool(zero_rows)) / h))
-    fig.subplots_adjust(left=0.9 / (4.6 * nc + 0.9), right=0.985, bottom=0.75 / h, top=1 - (1.1 + 0.2 * bool(zero_rows)) / h,
+    fig.subplots_adjust(left=0.9 / (4.6 * nc + 0.9), right=0.985, bottom=0.75 / h, top=1 - (1.55 + 0.2 * bool(zero_rows)) / h,
                         hspace=0.42 + 0.12 * (nr > 4), wspace=0.08)
     path = os.path.join(outdir, f"{info.name}.png")
     fig.savefig(path, dpi=DPI)

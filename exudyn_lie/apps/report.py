@@ -466,32 +466,60 @@ def kind_text(kind):
     return KIND_TEXT.get(kind, kind.replace("_", " "))
 
 
+def _energy_growth(rd):
+    """(largest |E - E(0)| over the first tenth of the run, over the last tenth before it
+    stopped) [J]; None without energy data."""
+    e = np.abs(rd.energy_drift())
+    t = np.asarray(rd.times, float)[:len(e)]
+    if len(e) < 10:
+        return None
+    tEnd = t[-1]
+    early, late = e[(t > 0) & (t <= 0.1 * tEnd)], e[t >= 0.9 * tEnd]
+    if not len(early) or not len(late):
+        return None
+    return float(early.max()), float(late.max())
+
+
 def native_failures(infos, results):
-    """Why Exudyn's runs stopped: its own error message and the step, per failed run."""
+    """Why Exudyn's runs stopped: its own error message and the step, per failed run, what
+    the run did before (rotation per step, energy drift), and the same run with Exudyn's
+    default step control."""
+    from exudyn_lie import models
     rows, small = [], []
     for info in infos:
         wmax = max((float(np.linalg.norm(b.omega0)) for b in info.bodies), default=0.0)
         for (s, dt), rd in sorted(results[info.name].items(), key=lambda kv: (kv[0][0], -kv[0][1])):
             if rd.native and not rd.ok:
-                rows.append(f"| {info.name} | {s} | {dt:g} | {wmax * dt:.2g} | {rd.message} |")
+                g = _energy_growth(rd)
+                growth = f"{g[0]:.2g} -> {g[1]:.2g}" if g else "(too few steps)"
+                ok, reached, steps, msg = models.run_native_default_steps(info, s, dt)
+                adaptive = (f"runs to the end: {steps} steps ({info.endTime / dt:.0f} planned)" if ok else
+                            f"stops at t = {reached:.3g} s after {steps} steps")
+                done = int(round(float(rd.times[-1]) / dt)) if len(rd.times) else 0
+                rows.append(f"| {info.name} | {s} | {dt:g} | {done} | {wmax * dt:.2g} | {growth} | {rd.message} | "
+                            f"{adaptive} |")
                 if dt < max(d for (_, d) in results[info.name]):
                     small.append(f"{info.name} {s} dt = {dt:g}")
     if not rows:
         return []
     return ["## Why Exudyn's runs stop", "",
-            "Exudyn's implicit solvers solve a nonlinear system by Newton's method in every step. The runs use a "
-            "fixed step (`adaptiveStep = False`, `automaticStepSize = False`), so that every solver takes the "
-            "same steps as MK-RK4. When Newton's iteration, started from the previous step, does not converge, "
-            "Exudyn would reduce the step; it may not, and it stops the run with the message in the table "
-            "(the solver's `GetErrorString()`, the step it failed in, and the Newton iterations of the whole "
-            "run). With Exudyn's default adaptive step these runs would go on with smaller steps. The failures "
-            "come at the largest step, where a body turns by up to |omega_0| h rad in one step (the column "
-            "below, from the largest initial angular velocity of the model): the Newton iteration's starting "
-            "point is then far from the solution. The models and settings are the same as at the smaller steps, "
-            "where the same solvers run through"
+            "Exudyn's implicit solvers solve a nonlinear system by Newton's method in every step. The runs above "
+            "use a fixed step (`adaptiveStep = False`, `automaticStepSize = False`), so that every solver takes "
+            "the same steps as MK-RK4; when Newton's iteration does not converge, Exudyn stops the run with the "
+            "message in the table (the solver's `GetErrorString()`, the step it failed in, and the Newton "
+            "iterations of the whole run). Two patterns, from the runs' own data: a run that fails within a few "
+            "steps takes large rotations per step (the column from the largest initial angular velocity of the "
+            "model), so that Newton's starting point, the previous step, is far from the solution; a run that "
+            "fails after many steps has first gone unstable: its energy drift grows by orders of magnitude over "
+            "the run (largest |E - E(0)| over the first tenth of the run against the last tenth before the "
+            "failure), and Newton fails once the motion has left the physical one. The last column runs the same "
+            "model and step with Exudyn's default step control (`adaptiveStep = True`: the step is reduced after "
+            "a failed Newton iteration and recovers later). The models and settings are the same as at the "
+            "smaller steps, where the same solvers run through"
             + (f" (except {', '.join(small)})." if small else "."), "",
-            "| model | Exudyn solver | dt [s] | largest \\|omega_0\\| dt [rad] | why it stopped |",
-            "|---|---|---|---|---|"] + rows + [""]
+            "| model | Exudyn solver | dt [s] | steps done | largest \\|omega_0\\| dt [rad] | energy drift [J]: first "
+            "tenth -> last tenth | why it stopped | with Exudyn's default step control |",
+            "|---|---|---|---|---|---|---|---|"] + rows + [""]
 
 
 def odd_observations(verdicts, dts, infos):

@@ -113,9 +113,10 @@ def offset_objects(mbs, describe):
 
 
 class ParameterOffsets:
-    """The offsets of ``objects`` (``[(object, rows, label)]``; ``rows`` the object's rows in
-    the path's own numbering), read once per step: :meth:`record` gives the curves of those
-    that have moved so far."""
+    """The offsets of ``objects`` (``[(object, rows, tag)]``; ``rows`` the object's rows in
+    the path's own numbering; ``tag`` the caller's: a label on the evaluated path, the row's
+    :class:`MovableOffset` on the compiled one), read once per step: :meth:`record` gives the
+    curves of those that have moved so far."""
 
     def __init__(self, mbs, t0, objects):
         self.mbs = mbs
@@ -128,12 +129,12 @@ class ParameterOffsets:
 
     def record(self, tStart, tEnd, actual):
         """Read the offsets set for the step from ``tStart`` to ``tEnd``; returns
-        ``[(row, OffsetCurve, label)]`` of the offsets that have moved so far.  ``actual()``
+        ``[(row, OffsetCurve, tag)]`` of the offsets that have moved so far.  ``actual()``
         (called only when one has moved) gives a function ``(row, new offset) -> (value,
         rate)`` of the constrained coordinate combination at the step's start."""
         moving = []
         at = None
-        for o, rows, label in self.objects:
+        for o, rows, tag in self.objects:
             h = self.hist[o]
             v = float(self.mbs.GetObjectParameter(o, "offset"))
             if tEnd > h[-1][0]:
@@ -149,5 +150,5 @@ class ParameterOffsets:
                 slope = rate_at(h, tEnd)
                 for r in rows:
                     x0, v0 = at(r, v)
-                    moving.append((r, OffsetCurve(tStart, x0, v0, tEnd, v, slope), label))
+                    moving.append((r, OffsetCurve(tStart, x0, v0, tEnd, v, slope), tag))
         return moving

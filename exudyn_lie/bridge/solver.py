@@ -455,7 +455,7 @@ class LieGroupSolver:
 
     def _parameter_offsets(self, t0):
         """``(ParameterOffsets, actual)`` of the rows whose offset a step function may move
-        (bridge/moving_offsets.py; ``(None, None)`` without): each row's "label" is its
+        (bridge/moving_offsets.py; ``(None, None)`` without): each row's tag is its
         MovableOffset, which takes the step's curve."""
         sc, sim = self.scene, self.sim
         if not sc.movableOffsets:
@@ -1066,8 +1066,8 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
     explicit solverType),
     ``liegroup`` ('SE3', 'SO3xR3', 'auto' or {rigid-body object index: group}),
     ``stabilization`` (default 'auto': 'position' on the compiled path, so that joints hold
-    to round-off as Exudyn's generalized-alpha holds them to its Newton tolerance, at 10-40 %
-    of the run's time; None with ``constraintTolerance``, which projects by its own rule, and
+    to round-off as Exudyn's generalized-alpha holds them to its Newton tolerance; its cost:
+    ``bench --sections stabilization``; None with ``constraintTolerance``, which projects by its own rule, and
     on the Exudyn-evaluated path, which does not project; None: the paper's unstabilised
     methods; 'velocity'), ``projectInitial`` (default True: an inconsistent initial state is
     projected onto the constraints with a warning; False: ConstraintError), ``verbose``

@@ -184,11 +184,30 @@ def _rolling_joint(m):
     mbs.AddObject(ObjectJointRollingDisc(markerNumbers=[mG, mD], discRadius=0.1, constrainedAxes=[1, 1, 1]))
 
 
+def _sliding_joint(m):
+    """An ObjectJointSliding2D along the cable (Exudyn's ANCFslidingJoint2D example): with its
+    default classical formulation Exudyn has no velocity-level equation (it raised
+    NotImplementedFeatureError from inside the solve before)."""
+    from exudyn.utilities import MarkerBodyCable2DCoordinates, NodeGenericData, ObjectJointSliding2D
+    mbs = m.mbs
+    els = [i for i in range(mbs.systemData.NumberOfObjects()) if mbs.GetObject(i)["objectType"] == "ANCFCable2D"]
+    body = next(i for i in range(mbs.systemData.NumberOfObjects()) if mbs.GetObject(i)["objectType"] == "RigidBody")
+    L = mbs.GetObject(els[0])["length"]
+    cm = [mbs.AddMarker(MarkerBodyCable2DCoordinates(bodyNumber=e)) for e in els]
+    nd = mbs.AddNode(NodeGenericData(initialCoordinates=[0, 0.0], numberOfDataCoordinates=2))
+    mbs.AddObject(ObjectJointSliding2D(name="slider", markerNumbers=[mbs.AddMarker(MarkerBodyRigid(bodyNumber=body)),
+                                                                     cm[0]],
+                                       slidingMarkerNumbers=cm, slidingMarkerOffsets=[i * L for i in range(len(els))],
+                                       nodeNumber=nd))
+
+
 BAD = {
     "GeneralContact": ("generic_ode2", _general_contact, {}, r"GeneralContact"),
     "non-finite initial coordinate of the foreign item's node": ("generic_ode2", _nan_node, {},
                                                                  r"node \d+ .*NodeGenericODE2.*not finite"),
     "nonholonomic joint": ("generic_ode2", _rolling_joint, {}, r"ObjectJointRollingDisc.*velocity level"),
+    "sliding joint, classical formulation": ("cable2d_pendulum", _sliding_joint, {},
+                                             r"object \d+ \('slider'\) ObjectJointSliding2D: useClassicalFormulation"),
     "evaluation='compiled' with a foreign item": ("generic_ode2", lambda m: None, dict(evaluation="compiled"),
                                                   r"ObjectGenericODE2 is not supported"),
     "unknown evaluation": ("generic_ode2", lambda m: None, dict(evaluation="python"), r"evaluation must be"),

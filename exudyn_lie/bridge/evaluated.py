@@ -114,6 +114,12 @@ def check_model(mbs):
                               f"NodeRigidBodyRotVecLG is not supported when Exudyn evaluates the model (the model has "
                               f"items the compiled kernel does not have, or evaluation='exudyn'); solve with "
                               f"exudyn.SolveDynamic, or use a NodeRigidBodyEP / Rxyz node")
+        if t == "JointSliding2D" and d.get("activeConnector", True) and d.get("useClassicalFormulation", True):
+            # Exudyn's ComputeAlgebraicEquations raises 'velocityLevel not possible for
+            # useClassicalFormulation': this path takes eta from the velocity level
+            raise BridgeError(f"{_describe_object(mbs, o, d)}: useClassicalFormulation=True (Exudyn's default) has no "
+                              f"velocity-level equation in Exudyn, which exudyn_lie's index-1 solve needs for the "
+                              f"acceleration term; solve this model with exudyn.SolveDynamic")
         if d.get("velocityLevel", False) is True and d.get("activeConnector", True) and t != "ConnectorCoordinate":
             raise BridgeError(f"{_describe_object(mbs, o, d)}: velocityLevel=True is not supported by exudyn_lie (its "
                               f"index-1 solve needs position-level constraints); use velocityLevel=False or solve "

@@ -177,6 +177,28 @@ def bridge_overhead(T=8.0, h=1e-3, periods=(0.01, 0.1), repeats=11):
     return out
 
 
+def timed_paper_solve(name, T, h, period, **kw):
+    """One whole ``exl.SolveDynamic(**kw)`` of the paper model ``name`` at Exudyn's output
+    period ``period`` with a position sensor on its first body (no file), step ``h``, ``T`` s:
+    ``(seconds, mbs, info)`` (the benches of what the drop-in's options cost)."""
+    import warnings
+
+    import exudyn as exu
+
+    import exudyn_lie as exl
+    from exudyn_lie import models
+    mbs, info = models.build(name)
+    mbs.AddSensor(exu.itemInterface.SensorBody(bodyNumber=info.bodies[0].objectIndex, storeInternal=True,
+                                               outputVariableType=exu.OutputVariableType.Position))
+    mbs.Assemble()
+    ss = _settings(T, h, period, False, "")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        t = time.perf_counter()
+        exl.SolveDynamic(mbs, ss, showProgress=False, **kw)
+        return time.perf_counter() - t, mbs, info
+
+
 def constraint_check_cost(T=2.0, h=1e-3, period=0.01, repeats=11, models_=("heavy_top", "spherical_double_pendulum",
                                                                           "planar_four_bar")):
     """The run-time check of the constraints (``SolveDynamic(constraintCheck=...)``,
@@ -185,24 +207,8 @@ def constraint_check_cost(T=2.0, h=1e-3, period=0.01, repeats=11, models_=("heav
     ``exl.SolveDynamic`` calls with the check on and off, interleaved round by round, and the
     check's share of the run ``(on - off) / off``.  The paper's models drift (no
     stabilisation), so the check also judges residuals above its tolerance at some outputs."""
-    import warnings
-
-    import exudyn as exu
-
-    import exudyn_lie as exl
-    from exudyn_lie import models
-
     def one(name, check):
-        mbs, info = models.build(name)
-        mbs.AddSensor(exu.itemInterface.SensorBody(bodyNumber=info.bodies[0].objectIndex, storeInternal=True,
-                                                   outputVariableType=exu.OutputVariableType.Position))
-        mbs.Assemble()
-        ss = _settings(T, h, period, False, "")
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", RuntimeWarning)
-            t = time.perf_counter()
-            exl.SolveDynamic(mbs, ss, liegroup="SE3", showProgress=False, constraintCheck=check, stabilization=None)
-            return time.perf_counter() - t
+        return timed_paper_solve(name, T, h, period, liegroup="SE3", constraintCheck=check, stabilization=None)[0]
 
     out = {}
     for name in models_:

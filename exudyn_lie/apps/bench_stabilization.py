@@ -10,9 +10,6 @@ violation at the end of each (position and rotation rows of the model's joints,
 ``models.geometry.joint_violations``)."""
 from __future__ import annotations
 
-import time
-import warnings
-
 import numpy as np
 
 MODELS = ("heavy_top", "spherical_double_pendulum", "planar_four_bar", "cardan_shaft")
@@ -28,23 +25,10 @@ def _final_violation(mbs, info):
 
 
 def stabilization_cost(T=2.0, h=1e-3, period=0.01, repeats=7, models_=MODELS):
-    import exudyn as exu
-
-    import exudyn_lie as exl
-    from exudyn_lie import models
-    from .bench_micro import _settings
+    from .bench_micro import timed_paper_solve
 
     def one(name, stabilization):
-        mbs, info = models.build(name)
-        mbs.AddSensor(exu.itemInterface.SensorBody(bodyNumber=info.bodies[0].objectIndex, storeInternal=True,
-                                                   outputVariableType=exu.OutputVariableType.Position))
-        mbs.Assemble()
-        ss = _settings(T, h, period, False, "")
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", RuntimeWarning)
-            t = time.perf_counter()
-            exl.SolveDynamic(mbs, ss, showProgress=False, stabilization=stabilization)
-            t = time.perf_counter() - t
+        t, mbs, info = timed_paper_solve(name, T, h, period, stabilization=stabilization)
         return t, _final_violation(mbs, info)
 
     out = {}

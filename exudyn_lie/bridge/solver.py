@@ -59,7 +59,7 @@ from .reader import BridgeError, ExudynScene, SceneFromExudyn
 
 GROUP_ALIASES = {"se3": "SE3", "so3xr3": "SO3xR3", "so3r3": "SO3xR3", "auto": "auto"}
 MAX_SUBSTEPS = 1000          # at most this many internal steps per Exudyn step (progress, renderer)
-PROGRESS_FIRST = 2.0         # seconds before the first progress line
+PROGRESS_FIRST = 2.0         # seconds before the first progress check (it measures the rate, prints nothing)
 PROGRESS_EVERY = 2.0         # seconds between progress lines
 
 
@@ -991,13 +991,13 @@ class LieGroupSolver:
         frac = (t - state["t0"]) / (state["tEnd"] - state["t0"])
         el = now - state["tic"]
         # the rate is measured from the first progress check on (the first step may include
-        # numba's one-off compilation, which says nothing about the remaining time)
+        # numba's one-off compilation, which says nothing about the remaining time), and that
+        # check prints nothing: a short run whose first step compiled is not a long run
         if "rate0" not in state:
             state["rate0"] = (now, t)
-            rem = "?"
-        else:
-            n0, t0 = state["rate0"]
-            rem = f"{(state['tEnd'] - t) * (now - n0) / (t - t0):.0f}" if t > t0 else "?"
+            return
+        n0, t0 = state["rate0"]
+        rem = f"{(state['tEnd'] - t) * (now - n0) / (t - t0):.0f}" if t > t0 else "?"
         print(f"exudyn_lie: t = {t:.6g} / {state['tEnd']:.6g} s ({100 * frac:.0f} %), {el:.1f} s elapsed, "
               f"~{rem} s to go", flush=True)
 
@@ -1071,7 +1071,8 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
     on the Exudyn-evaluated path, which does not project; None: the paper's unstabilised
     methods; 'velocity'), ``projectInitial`` (default True: an inconsistent initial state is
     projected onto the constraints with a warning; False: ConstraintError), ``verbose``
-    (print the group per body, the plan and the time spent), ``showProgress`` (a progress line every 2 s on runs longer than 2 s),
+    (print the group per body, the plan and the time spent), ``showProgress`` (a progress line every 2 s on runs longer than about 4 s, with
+    the time to go),
     ``substeps`` (internal steps per Exudyn step; default: one Exudyn step per output
     period), ``accelerations`` (write q_tt / multipliers; default: when something reads
     them), ``constraintTolerance`` (adaptive steps only; default None: off): project on the

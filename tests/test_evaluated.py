@@ -164,9 +164,9 @@ def test_random_mechanisms_same_trajectory_as_compiled(seed):
 
 
 def _evaluated_model(mbs):
-    """An EvaluatedModel and stepper of an assembled mbs (Exudyn's solver initialised)."""
+    """An EvaluatedModel and its problem of an assembled mbs (Exudyn's solver initialised)."""
     from exudyn_lie.bridge.evaluated import EvaluatedModel, Layout
-    from exudyn_lie.bridge.evaluated_stepper import EvaluatedStepper
+    from exudyn_lie.bridge.evaluated_problem import EvaluatedProblem
     solver = exu.MainSolverImplicitSecondOrder()
     solver.InitializeSolver(mbs, quiet_settings())
     sd, cur = mbs.systemData, exu.ConfigurationType.Current
@@ -174,7 +174,7 @@ def _evaluated_model(mbs):
     qt = sd.GetODE2Coordinates_t(configuration=cur, copy=False)
     layout = Layout(mbs, {})
     model = EvaluatedModel(mbs, solver, layout, q, qt)
-    st = EvaluatedStepper(model, exl.get_method("RK4"))
+    st = EvaluatedProblem(model, exl.get_method("RK4"))
     return solver, model, st
 
 
@@ -468,3 +468,73 @@ def test_post_newton_user_function_is_called_by_exudyn_after_every_step():
     # the switch is found at the end of the step that crosses: time error <= h = 1e-4, so the
     # position error is about h * (20 N / 1 kg) * 0.25 s = 5e-4 (measured 3.6e-4)
     assert np.max(np.abs(p - pr)) < 1e-3
+
+
+# ---------------------------------------------------------------------------- adaptive steps
+def _adaptive_settings(T, nsteps, tol):
+    ss = quiet_settings(T, nsteps)
+    ss.timeIntegration.adaptiveStep = True
+    ss.timeIntegration.absoluteTolerance = tol
+    ss.timeIntegration.relativeTolerance = tol
+    return ss
+
+
+def test_adaptive_dopri5_with_a_foreign_item_against_fine_native():
+    """The one stepper's adaptive steps on the Exudyn-evaluated path: DOPRI5 with Exudyn's
+    tolerances on a pendulum with an ObjectGenericODE2 (an item the kernel lacks), 2 Exudyn
+    steps (steps of at most 0.25 s), against native generalized-alpha at h = 1e-5 (its own error
+    ~1e-9).  The error falls with the tolerance (measured: 7.9e-5 at 1e-4, 7.4e-9 at 1e-7), and
+    the error control takes more steps for the tighter one (7 and 24, no rejection)."""
+    T = 0.5
+    ref = _pendulum_with_generic_ode2()
+    ssn = quiet_settings(T, 50000)
+    ssn.timeIntegration.generalizedAlpha.spectralRadius = 1.0
+    ssn.timeIntegration.generalizedAlpha.computeInitialAccelerations = True
+    ref.SolveDynamic(ssn)
+    qn = _final_state(ref)[0]
+    err, steps = {}, {}
+    for tol in (1e-4, 1e-7):
+        mbs = _pendulum_with_generic_ode2()
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            exl.SolveDynamic(mbs, _adaptive_settings(T, 2, tol), method="DOPRI5", showProgress=False)
+        err[tol] = _rel(_final_state(mbs)[0], qn)
+        steps[tol] = mbs.sys["lieGroupSolver"].problem.sim.adaptiveCounters[0]
+    assert err[1e-7] < 3e-8, err
+    assert err[1e-7] < err[1e-4] / 100, err
+    assert steps[1e-7] > 2 * steps[1e-4] > 4, steps
+
+
+def test_adaptive_steps_on_ode1_coordinates():
+    """ObjectGenericODE1 y' = A y with adaptive DOPRI5 (tolerance 1e-10) against expm(A)."""
+    from scipy.linalg import expm
+    A = np.array([[0, 1.0], [-4.0, -0.1]])
+    mbs = _generic_ode1(A)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        exl.SolveDynamic(mbs, _adaptive_settings(1.0, 10, 1e-10), method="DOPRI5", showProgress=False)
+    y = np.array(mbs.systemData.GetODE1Coordinates())
+    assert np.max(np.abs(y - expm(A) @ [1.0, 0.0])) < 1e-8
+    assert mbs.sys["lieGroupSolver"].problem.sim.adaptiveCounters[0] > 10
+
+
+# ---------------------------------------------------------------------------- velocity-level joints
+def test_rolling_disc_same_trajectory_as_compiled():
+    """A nonholonomic joint (ObjectJointRollingDisc: Exudyn's Jacobian is C_qdot, no position
+    level) on the Exudyn-evaluated path: the rolling coin of TestModels/rollingCoinTest.py gives
+    the compiled path's trajectory and contact force (eta by the central difference of Exudyn's
+    velocity-level equation)."""
+    from test_rolling_disc import rolling_coin
+    out, force = {}, {}
+    for ev in ("compiled", "exudyn"):
+        mbs, o = rolling_coin()
+        ss = quiet_settings(0.1, 200)
+        ss.timeIntegration.generalizedAlpha.computeInitialAccelerations = True
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            exl.SolveDynamic(mbs, ss, evaluation=ev, stabilization=None, showProgress=False)
+        out[ev] = _final_state(mbs)
+        force[ev] = np.array(mbs.GetObjectOutput(o, exu.OutputVariableType.ForceLocal))
+    (q0, v0), (q1, v1) = out["compiled"], out["exudyn"]
+    assert _rel(q1, q0) < TOL and _rel(v1, v0) < TOL, (_rel(q1, q0), _rel(v1, v0))
+    assert _rel(force["exudyn"], force["compiled"]) < 1e-6, force

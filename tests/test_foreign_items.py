@@ -175,15 +175,6 @@ def _nan_node(m):
     m.mbs.SetNodeParameter(n, "initialCoordinates", [float("nan"), 0.0])
 
 
-def _rolling_joint(m):
-    from exudyn.utilities import ObjectJointRollingDisc
-    mbs = m.mbs
-    body = next(i for i in range(mbs.systemData.NumberOfObjects()) if mbs.GetObject(i)["objectType"] == "RigidBody")
-    mG = mbs.AddMarker(MarkerBodyRigid(bodyNumber=0))
-    mD = mbs.AddMarker(MarkerBodyRigid(bodyNumber=body))
-    mbs.AddObject(ObjectJointRollingDisc(markerNumbers=[mG, mD], discRadius=0.1, constrainedAxes=[1, 1, 1]))
-
-
 def _sliding_joint(m):
     """An ObjectJointSliding2D along the cable (Exudyn's ANCFslidingJoint2D example): with its
     default classical formulation Exudyn has no velocity-level equation (it raised
@@ -205,7 +196,6 @@ BAD = {
     "GeneralContact": ("generic_ode2", _general_contact, {}, r"GeneralContact"),
     "non-finite initial coordinate of the foreign item's node": ("generic_ode2", _nan_node, {},
                                                                  r"node \d+ .*NodeGenericODE2.*not finite"),
-    "nonholonomic joint": ("generic_ode2", _rolling_joint, {}, r"ObjectJointRollingDisc.*velocity level"),
     "sliding joint, classical formulation": ("cable2d_pendulum", _sliding_joint, {},
                                              r"object \d+ \('slider'\) ObjectJointSliding2D: useClassicalFormulation"),
     "evaluation='compiled' with a foreign item": ("generic_ode2", lambda m: None, dict(evaluation="compiled"),

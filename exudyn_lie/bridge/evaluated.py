@@ -64,7 +64,8 @@ LIE_GROUP_NODES = ("RigidBodyRotVecLG",)
 REFUSED_NODES = {
     "GenericAE": "its algebraic coordinates are not Lagrange multipliers of an index-1 solve",
 }
-#: object types whose constraints are at velocity level (the index-1 solve needs position-level rows)
+#: object types whose constraints are at velocity level (nonholonomic): Exudyn's Jacobian of their
+#: rows is w.r.t. the velocities (C_qdot), and they have no position-level residual
 VELOCITY_LEVEL_OBJECTS = ("JointRollingDisc", "JointRollingDisc2D")
 
 
@@ -101,10 +102,6 @@ def check_model(mbs):
     for o in range(sd.NumberOfObjects()):
         d = mbs.GetObject(o)
         t = d["objectType"]
-        if t in VELOCITY_LEVEL_OBJECTS:
-            raise BridgeError(f"object {o} ('{d.get('name', '')}') of type Object{t} is not supported by exudyn_lie: "
-                              f"its constraints are at velocity level (nonholonomic), and exudyn_lie's index-1 solve "
-                              f"needs position-level constraints; solve this model with exudyn.SolveDynamic")
         if t == "ConnectorCoordinate" and d.get("activeConnector", True) and _rotvec_coordinate_marker(mbs, d):
             # Exudyn's C_q on a RotVecLG rotation coordinate is e_k on the local omega, not the
             # gradient of theta_k: this path's symmetric solve with Exudyn's C_q would hold the
@@ -127,8 +124,10 @@ def check_model(mbs):
 
 
 def coordinate_constraint_rows(mbs):
-    """The ObjectConnectorCoordinate rows that need more than Exudyn's evaluation (active ones):
-    ``(velocity-level AE rows, [(AE row, offset function, label)])``.  A velocity-level row's
+    """The rows that need more than Exudyn's evaluation (active ones): ``(velocity-level AE rows,
+    [(AE row, offset function, label)])``: the rows of nonholonomic joints
+    (:data:`VELOCITY_LEVEL_OBJECTS`) and of velocity-level ObjectConnectorCoordinates, and the
+    moving offsets of position-level ones.  A velocity-level row's
     Jacobian is Exudyn's ``C_qdot`` (``ComputeJacobianAE`` with the ODE2_t factor), its
     position-level residual does not exist (the initial position check skips it).  A
     position-level row with an ``offsetUserFunction`` and no ``offsetUserFunction_t``: Exudyn's
@@ -140,6 +139,9 @@ def coordinate_constraint_rows(mbs):
     vel, moving = [], []
     for o in range(sd.NumberOfObjects()):
         d = mbs.GetObject(o)
+        if d["objectType"] in VELOCITY_LEVEL_OBJECTS and d.get("activeConnector", True):
+            vel += [int(r) for r in sd.GetObjectLTGAE(o)]
+            continue
         if d["objectType"] != "ConnectorCoordinate" or not d.get("activeConnector", True):
             continue
         rows = [int(r) for r in sd.GetObjectLTGAE(o)]

@@ -60,17 +60,17 @@ def _correction(model, t, rhs):
     return model.a.copy()
 
 
-def project_initial(model, stepper, t, projectInitial):
-    """Check / project the stepper's (initial) state; writes it into mbs.  Returns a
+def project_initial(model, problem, t, projectInitial):
+    """Check / project the problem's (:mod:`.evaluated_problem`) initial state; writes it into mbs.  Returns a
     description of the correction, or None."""
     if model.m == 0:
         return None
     mbs = model.mbs
-    stepper.write()
+    problem.write()
     fixed = []
     g = _position_residual(model, t)
-    scale = max(1.0, float(np.max(np.abs(stepper.r))) if stepper.r.size else 1.0,
-                float(np.max(np.abs(stepper.qv))) if stepper.qv.size else 1.0)
+    scale = max(1.0, float(np.max(np.abs(problem.r))) if problem.r.size else 1.0,
+                float(np.max(np.abs(problem.qv))) if problem.qv.size else 1.0)
     bad = np.nonzero(np.abs(g) > INITIAL_TOL * scale)[0]
     if len(bad):
         if not projectInitial:
@@ -83,10 +83,10 @@ def project_initial(model, stepper, t, projectInitial):
             d = _correction(model, t, -g)
             for i in range(len(L.lgNodes)):
                 idx = L.lgIdx[i]
-                stepper.R[i] = stepper.R[i] @ so3.exp(np.ascontiguousarray(d[idx[3:]]))
-                stepper.r[i] += d[idx[:3]]
-            stepper.qv += d[L.vecIdx]
-            stepper.write()
+                problem.R[i] = problem.R[i] @ so3.exp(np.ascontiguousarray(d[idx[3:]]))
+                problem.r[i] += d[idx[:3]]
+            problem.qv += d[L.vecIdx]
+            problem.write()
             g = _position_residual(model, t)
             if np.max(np.abs(g)) <= TOL * scale:
                 break
@@ -96,7 +96,7 @@ def project_initial(model, stepper, t, projectInitial):
                                   f"{np.max(np.abs(g)):.3g}); they may not be satisfiable")
         fixed.append(f"positions of objects {_names(mbs, bad)} (max |g| = {g0:.3g})")
     # velocities: C_q v (+ C_t) = g_v
-    gv = model.velocity_constraints(t, stepper.R, stepper.r, stepper.prev, stepper.qv)
+    gv = model.velocity_constraints(t, problem.R, problem.r, problem.prev, problem.qv)
     vscale = max(1.0, float(np.max(np.abs(model.qt))) if model.n else 1.0)
     bad = np.nonzero(np.abs(gv) > INITIAL_TOL * vscale)[0]
     if len(bad):
@@ -109,11 +109,11 @@ def project_initial(model, stepper, t, projectInitial):
         L = model.L
         for i in range(len(L.lgNodes)):
             idx = L.lgIdx[i]
-            stepper.V[i, :3] = qt[idx[3:]]
+            problem.V[i, :3] = qt[idx[3:]]
             v = qt[idx[:3]]
-            stepper.V[i, 3:] = stepper.R[i].T @ v if BODY_TWIST[stepper.gid[i]] else v
-        stepper.vv[:] = qt[L.vecIdx]
-        stepper.write()
+            problem.V[i, 3:] = problem.R[i].T @ v if BODY_TWIST[problem.gid[i]] else v
+        problem.set_vector_velocities(qt[L.vecIdx])
+        problem.write()
         fixed.append(f"velocities of objects {_names(mbs, bad)} (max |g_v| = {np.max(np.abs(gv)):.3g}): changed "
                      f"by up to {np.max(np.abs(dv)):.3g}")
     return "; ".join(fixed) or None

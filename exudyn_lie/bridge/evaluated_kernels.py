@@ -1,12 +1,10 @@
-"""Compiled pieces of the Exudyn-evaluated path (:mod:`.evaluated`, :mod:`.evaluated_stepper`):
+"""Compiled pieces of the Exudyn-evaluated path (:mod:`.evaluated`, :mod:`.evaluated_problem`):
 one numba call per stage before Exudyn evaluates the model, one after.
 
-The Lie group nodes (``NodeRigidBodyRotVecLG``) are "bodies" with a group id of the
-registry (SE3 / SO3xR3) and go through the *same* stage functions as the compiled kernel
-(:func:`~exudyn_lie.mbs.stepper.stage_state`, :func:`~exudyn_lie.mbs.stepper.stage_k`,
-:func:`~exudyn_lie.mbs.stepper.finish`: eq. MK1, ``g_j = g exp(Psi_j)``,
-``k_j = dexp^-1_{-Psi_j} V_j``), so both paths integrate the same ODE with the same
-arithmetic.  Their state velocity is the kernel's: SE3 the body twist ``(omega, U)``,
+The Lie group nodes (``NodeRigidBodyRotVecLG``) are bodies with a group id of the
+registry (SE3 / SO3xR3) of the one compiled stepper (:mod:`exudyn_lie.mbs.stepper`: eq. MK1,
+``g_j = g exp(Psi_j)``, ``k_j = dexp^-1_{-Psi_j} V_j``), so both paths integrate the same ODE
+with the same arithmetic.  Their state velocity is the kernel's: SE3 the body twist ``(omega, U)``,
 ``U = R^T rdot``; SO3xR3 ``(omega, rdot)``.  Exudyn's velocity coordinates of such a node are
 ``[rdot (global), omega (local)]`` (DESIGN.md, facts).
 
@@ -21,7 +19,6 @@ from numba import njit
 from ..groups import so3
 from ..mbs.codes import uses_body_twist
 from ..mbs.linalg import REL_PIVOT_TOL, band_ldl_inplace, band_ldl_solve_inplace, pivoted_cholesky_solve
-from ..mbs.stepper import finish, stage_k, stage_state
 from .nodes import rotvec_row
 
 
@@ -84,83 +81,81 @@ def write_moved_positions(R, r, lgIdx, lgRef, prev, q, qt, vecIdx, qv, eps, ER, 
 
 
 @njit(cache=True)
-def lg_stage(gid, A, j, h, R, r, V, K, Vd, Psi, Rs, rs, Vs, ER, Er, vq, vv, QK, VK, qs, vs):
-    """Stage state of eq. MK1: the Lie group nodes through the compiled kernel's
-    ``stage_state``; the vector coordinates ``q_j = q + h sum a_jl qdot_l``,
-    ``v_j = v + h sum a_jl vdot_l``.  Returns -1 or the node whose stage argument left the
-    domain of dexp^-1 (as the compiled kernel)."""
-    bad = stage_state(gid, A, j, h, R, r, V, K, Vd, Psi, Rs, rs, Vs, ER, Er)
-    for k in range(vq.shape[0]):
-        a = vq[k]
-        b = vv[k]
-        for l in range(j):
-            a += h * A[j, l] * QK[l, k]
-            b += h * A[j, l] * VK[l, k]
-        qs[k] = a
-        vs[k] = b
-    return bad
+def unpack_state(gid, R, r, V, nvb, lgIdx, lgRef, prev, q, qt, vecIdx, qv, vv, y, rv):
+    """Exudyn's ``q``, ``qt`` (and the ODE1 coordinates ``y``) of a state of the problem's
+    bodies (:mod:`.evaluated_problem`): the first ``nl = gid.size`` bodies are the Lie group
+    nodes (:func:`write_exudyn_state`), the next ``nvb`` hold the vector-space ODE2
+    coordinates three by three (position ``r``, velocity ``V[3:6]``), the rest the ODE1
+    coordinates three by three (``V[3:6]``).  ``qv``, ``vv`` receive the vector coordinates.
+    Returns ``max |qt|``."""
+    nl = gid.shape[0]
+    nv = qv.shape[0]
+    for k in range(nv):
+        b = nl + k // 3
+        qv[k] = r[b, k % 3]
+        vv[k] = V[b, 3 + k % 3]
+    for k in range(y.shape[0]):
+        y[k] = V[nl + nvb + k // 3, 3 + k % 3]
+    return write_exudyn_state(gid, R[:nl], r[:nl], V[:nl], lgIdx, lgRef, prev, q, qt, vecIdx, qv, vv, rv)
 
 
 @njit(cache=True)
-def lg_stage_rates(gid, j, Rs, Vs, acc, lgIdx, Psi, K, Vd, tmp6, vecIdx, vs, QK, VK):
-    """After Exudyn's accelerations ``acc`` (nODE2) of stage j: the group velocity rates
-    ``Vdot_j`` per Lie group node (SO3xR3: ``(omegadot, rddot)``; SE3:
-    ``(omegadot, R^T rddot - omega x U)``, from ``rdot = R U``), the MK stage map
-    ``k_j = dexp^-1_{-Psi_j} V_j`` (compiled kernel's ``stage_k``), and the vector
-    coordinates' rates ``qdot_j = v_j``, ``vdot_j = acc``."""
-    for i in range(gid.shape[0]):
-        Vdi = Vd[j, i]
+def pack_rates(gid, R, V, acc, lgIdx, vecIdx, ydot, nvb, Vdot):
+    """``Vdot`` of the problem's bodies from Exudyn's accelerations ``acc`` (nODE2) and ODE1
+    rates ``ydot``: per Lie group node the group velocity rates (SO3xR3: ``(omegadot,
+    rddot)``; SE3: ``(omegadot, R^T rddot - omega x U)``, from ``rdot = R U``), per vector
+    body ``(0, vdot)``, per ODE1 body ``(0, ydot)``; padding rows 0."""
+    nl = gid.shape[0]
+    for i in range(Vdot.shape[0]):
+        for k in range(6):
+            Vdot[i, k] = 0.0
+    for i in range(nl):
+        Vdi = Vdot[i]
         for k in range(3):
             Vdi[k] = acc[lgIdx[i, 3 + k]]
         if uses_body_twist(gid[i]):
-            w = Vs[i]
-            R = Rs[i]
+            w = V[i]
+            Ri = R[i]
             for k in range(3):
-                Vdi[3 + k] = (R[0, k] * acc[lgIdx[i, 0]] + R[1, k] * acc[lgIdx[i, 1]] + R[2, k] * acc[lgIdx[i, 2]])
+                Vdi[3 + k] = (Ri[0, k] * acc[lgIdx[i, 0]] + Ri[1, k] * acc[lgIdx[i, 1]] + Ri[2, k] * acc[lgIdx[i, 2]])
             Vdi[3] -= w[1] * w[5] - w[2] * w[4]
             Vdi[4] -= w[2] * w[3] - w[0] * w[5]
             Vdi[5] -= w[0] * w[4] - w[1] * w[3]
         else:
             for k in range(3):
                 Vdi[3 + k] = acc[lgIdx[i, k]]
-    stage_k(gid, j, Psi, Vs, K, tmp6)
     for k in range(vecIdx.shape[0]):
-        QK[j, k] = vs[k]
-        VK[j, k] = acc[vecIdx[k]]
+        Vdot[nl + k // 3, 3 + k % 3] = acc[vecIdx[k]]
+    for k in range(ydot.shape[0]):
+        Vdot[nl + nvb + k // 3, 3 + k % 3] = ydot[k]
 
 
 @njit(cache=True)
-def lg_finish(gid, stages, b, h, R, r, V, K, Vd, Psi, Rn, C, rn, Er, vq, vv, QK, VK, vlimit):
-    """``g <- g exp(h sum b_j k_j)`` (compiled kernel's ``finish``, with its
-    re-orthonormalisation), ``V <- V + h sum b_j Vdot_j``; vector coordinates likewise.
-    Returns 0, 1 if the new state is not finite, 2 if a velocity exceeds ``vlimit``
-    (a blow-up)."""
-    finish(gid, stages, b, h, R, r, V, K, Vd, Psi, Rn, C, rn, Er)
-    for k in range(vq.shape[0]):
-        a = 0.0
-        c = 0.0
-        for jj in range(stages.shape[0]):
-            j = stages[jj]
-            a += b[j] * QK[j, k]
-            c += b[j] * VK[j, k]
-        vq[k] += h * a
-        vv[k] += h * c
-    big = False
-    for i in range(gid.shape[0]):
+def pack_state(gid, Rl, rl, Vl, qv, vv, y, nvb, R, r, V):
+    """The problem's body state from the Lie group nodes' ``Rl, rl, Vl``, the vector
+    coordinates ``qv, vv`` and the ODE1 coordinates ``y`` (the layout of
+    :func:`unpack_state`; padding and the ODE1 bodies' positions 0, the packed bodies'
+    rotations I)."""
+    nl = gid.shape[0]
+    for i in range(R.shape[0]):
+        for a in range(3):
+            r[i, a] = 0.0
+            for c in range(3):
+                R[i, a, c] = 1.0 if a == c else 0.0
         for k in range(6):
-            if not math.isfinite(V[i, k]):
-                return 1
-            if abs(V[i, k]) > vlimit:
-                big = True
-        for k in range(3):
-            if not math.isfinite(r[i, k]):
-                return 1
-    for k in range(vq.shape[0]):
-        if not (math.isfinite(vq[k]) and math.isfinite(vv[k])):
-            return 1
-        if abs(vv[k]) > vlimit:
-            big = True
-    return 2 if big else 0
+            V[i, k] = 0.0
+    for i in range(nl):
+        for a in range(3):
+            r[i, a] = rl[i, a]
+            for c in range(3):
+                R[i, a, c] = Rl[i, a, c]
+        for k in range(6):
+            V[i, k] = Vl[i, k]
+    for k in range(qv.shape[0]):
+        r[nl + k // 3, k % 3] = qv[k]
+        V[nl + k // 3, 3 + k % 3] = vv[k]
+    for k in range(y.shape[0]):
+        V[nl + nvb + k // 3, 3 + k % 3] = y[k]
 
 
 @njit(cache=True, inline="always")
@@ -470,32 +465,3 @@ def schur_band_solve(M, f, Cq, eta, blk, blkPtr, blkOff, blockOf, pos, bw, MinvB
                 acc += MinvB[o + i * s + k] * T[k]
             a[blk[p0 + i]] -= acc
     return 4 if empty else 0
-
-
-@njit(cache=True)
-def stiffness_estimate(A, h, jl, K, Vd, QK, VK):
-    """An estimate of the fastest rate |lambda| the last step met (Shampine's idea, for
-    second-order equations): between the first and the last evaluated stage ``jl`` the
-    configuration moved by ``dq = h sum_l a_jl qdot_l`` (Lie group nodes in the algebra,
-    ``k_l``) and the acceleration changed by ``da``; ``rho = sqrt(|da| / |dq|)``.  For
-    ``a = -K q - D v`` it gives omega for a stiffness-dominated mode (``da = -K dq``) and c for a
-    damping-dominated one (``da = -c dv``, ``dv = c dq``); ``h rho`` beyond the method's
-    stability radius means the step amplifies that mode."""
-    num = 0.0
-    den = 0.0
-    for i in range(K.shape[1]):
-        for k in range(6):
-            dq = 0.0
-            for l in range(jl):
-                dq += A[jl, l] * K[l, i, k]
-            den += (h * dq) ** 2
-            num += (Vd[jl, i, k] - Vd[0, i, k]) ** 2
-    for k in range(QK.shape[1]):
-        dq = 0.0
-        for l in range(jl):
-            dq += A[jl, l] * QK[l, k]
-        den += (h * dq) ** 2
-        num += (VK[jl, k] - VK[0, k]) ** 2
-    if den == 0.0 or num == 0.0:
-        return 0.0
-    return math.sqrt(math.sqrt(num / den))

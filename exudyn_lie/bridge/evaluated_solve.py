@@ -1,11 +1,13 @@
 """``SolveDynamic`` on the Exudyn-evaluated path: Exudyn evaluates the whole model
-(:mod:`.evaluated`), exudyn_lie integrates it with the Munthe-Kaas method
-(:mod:`.evaluated_stepper`), inside Exudyn's own time loop (as the compiled path,
+(:mod:`.evaluated`), exudyn_lie integrates it with the Munthe-Kaas method of the one
+compiled stepper (:mod:`.evaluated_problem`: the model is the right-hand side of a
+:class:`~exudyn_lie.mbs.Simulator`), inside Exudyn's own time loop (as the compiled path,
 :mod:`.solver`): sensors, solution and restart files, pre/post-step user functions and the
 renderer work as in a native solve.
 
 Per Exudyn step the hook (``SetUserFunctionNewton``) advances one MK step (``substeps=k``:
-``k``, for models without data coordinates) and writes
+``k``, for models without data coordinates; with adaptive steps, as many as the error control
+needs, the last one ending at the Exudyn step's time) and writes
 the end state (and, if something reads them, the accelerations and multipliers) into mbs'
 Current configuration.  Between the stages of a step only the ODE2 / ODE1 coordinates and
 the time change; data coordinates (contact states, friction, switching) keep their values
@@ -29,7 +31,7 @@ import numpy as np
 from ..userwarn import warn_user
 from .evaluated import EvaluatedModel, Layout, check_model, parameter_offset_rows
 from .moving_offsets import ParameterOffsets
-from .evaluated_stepper import EvaluatedStepper
+from .evaluated_problem import EvaluatedProblem
 from .evaluated_initial import project_initial
 from .evaluated_stiffness import check_step
 from .constraint_check import ConsistencyAccount, ConstraintCheck, check_tolerance
@@ -118,6 +120,7 @@ class EvaluatedSolver:
         self.liegroup = liegroup
         self.verbose = bool(verbose)
         self.reasons = reasons
+        self.constraintTolerance = None      # (the compiled path's keyword: not available here)
         check_system(mbs)
         check_model(mbs)
         self.timing = {}
@@ -128,6 +131,7 @@ class EvaluatedSolver:
     _period_steps = staticmethod(_L._period_steps)
     _time_settings = staticmethod(_L._time_settings)
     _needs_accelerations_compiled = _L._needs_accelerations
+    _adaptive_settings = _L._adaptive_settings
     del _L
 
     def _needs_accelerations(self, ss, userStep):
@@ -153,12 +157,10 @@ class EvaluatedSolver:
         """Raise for settings this path refuses (changes nothing)."""
         nsteps, t0, tEnd, h = self._time_settings(ss)
         check_settings(ss)
-        self._plan(ss, nsteps, h, substeps)
-        if self.tableau.b_hat is not None and ss.timeIntegration.adaptiveStep:
-            raise BridgeError(f"adaptive steps (method {self.tableau.name} with an embedded pair, "
-                              f"timeIntegration.adaptiveStep = True) are not available when Exudyn evaluates the "
-                              f"model; set timeIntegration.adaptiveStep = False for fixed steps, or use a method "
-                              f"without a pair (e.g. RK4)")
+        k, _ = self._plan(ss, nsteps, h, substeps)
+        if self._adaptive_settings(ss, h) is not None and substeps is not None and k > 1:
+            raise BridgeError(f"substeps={substeps}: with adaptive steps the error control chooses the steps "
+                              f"within each Exudyn step; use substeps=None or 1")
 
     def _post_newton_items(self):
         """What needs Exudyn's PostNewton after every MK step (one MK step per Exudyn step):
@@ -178,8 +180,9 @@ class EvaluatedSolver:
     def describe_plan(self, layout, groups, why, h, k, nsteps):
         L = layout
         lines = [f"exudyn_lie: Exudyn evaluates the whole model (M, f, C_q, velocity-level constraints) at every "
-                 f"stage; {self.tableau.name} ({len(self.stepper.stages)} evaluated stages) with h = {h:.6g} s, "
-                 f"{nsteps} steps, {k} per Exudyn step"]
+                 f"stage; {self.tableau.name} ({len(self.problem.stages)} evaluated stages) with "
+                 + (f"adaptive steps of at most {h:.6g} s, {nsteps} Exudyn steps" if self._adaptive else
+                    f"h = {h:.6g} s, {nsteps} steps, {k} per Exudyn step")]
         for i, n in enumerate(L.lgNodes):
             lines.append(f"exudyn_lie: node {n} (NodeRigidBodyRotVecLG): {groups[n]} ({why[n]})")
         lines.append(f"exudyn_lie: {len(L.vecIdx)} ODE2 coordinates in vector space (qdot = v), {L.nODE1} ODE1 "
@@ -221,8 +224,16 @@ class EvaluatedSolver:
         needAcc = self._needs_accelerations(ss, userStep) if accelerations is None else bool(accelerations)
         groups, why = node_groups(mbs, self.liegroup)
         tab = self.tableau
-        info = (f"exudyn_lie: explicit Munthe-Kaas {tab.name} (order {tab.order}) on the Exudyn-evaluated model, "
-                f"step size h = {h:.6g} s, {nsteps} steps from t = {t0:g} to {tEnd:g} s")
+        adaptive = self._adaptive = self._adaptive_settings(ss, h)
+        if adaptive is not None:
+            k = 1                          # the error control chooses the steps within each Exudyn step
+            info = (f"exudyn_lie: explicit Munthe-Kaas {tab.name} (order {tab.order}) with adaptive steps (error "
+                    f"control on the group, absoluteTolerance = {adaptive['atol']:g}, relativeTolerance = "
+                    f"{adaptive['rtol']:g}, step size <= {h:.6g} s) on the Exudyn-evaluated model, from t = {t0:g} to "
+                    f"{tEnd:g} s in {nsteps} Exudyn steps")
+        else:
+            info = (f"exudyn_lie: explicit Munthe-Kaas {tab.name} (order {tab.order}) on the Exudyn-evaluated model, "
+                    f"step size h = {h:.6g} s, {nsteps} steps from t = {t0:g} to {tEnd:g} s")
         ss2 = loop_settings(ss, nsteps // k, info)
 
         solver = exu.MainSolverImplicitSecondOrder()
@@ -259,25 +270,28 @@ class EvaluatedSolver:
             y = (np.array(sd.GetODE1Coordinates(configuration=cur), float) if layout.nODE1 else np.zeros(0))
             model = EvaluatedModel(mbs, solver, layout, q, qt, verbose=self.verbose)
             self.model = model
-            stepper = EvaluatedStepper(model, tab)
-            self.stepper = stepper
-            stepper.read_state(q, qt, y, t0)
-            fixed = project_initial(model, stepper, t0, self.projectInitial)
+            problem = EvaluatedProblem(model, tab)
+            self.problem = problem
+            problem.read_state(q, qt, y, t0)
+            fixed = project_initial(model, problem, t0, self.projectInitial)
             if fixed:
                 warn_user(f"exudyn_lie: the initial state does not satisfy the constraints; projected onto them: "
                           f"{fixed} (Exudyn's own solvers start from it unchanged; pass projectInitial=False to "
                           f"raise instead)")
-            stepper.write()
-            # stability of the step at the initial state (stiff items at the script's step)
-            rate, stable = check_step(model, tab, h)
+            problem.write()
+            # stability of the step at the initial state (stiff items at the script's step); adaptive
+            # steps find a stable step themselves
+            rate, stable = check_step(model, tab, h, adaptive is None)
+            if adaptive is not None:
+                problem.sim.SetAdaptive(**adaptive)
             # the initial accelerations (and a measured estimate of the cost per step)
-            stepper.write()
-            model.accelerations(t0, stepper.R, stepper.r, stepper.prev, stepper.qv, True)    # first call: set-up
+            problem.write()
+            model.accelerations(t0, problem.R, problem.r, problem.prev, problem.qv, True)    # first call: set-up
             tic = time.perf_counter()
             for _ in range(ESTIMATE_EVALUATIONS):
-                model.accelerations(t0, stepper.R, stepper.r, stepper.prev, stepper.qv, True)
+                model.accelerations(t0, problem.R, problem.r, problem.prev, problem.qv, True)
             perStage = (time.perf_counter() - tic) / ESTIMATE_EVALUATIONS
-            perStep = perStage * len(stepper.stages)
+            perStep = perStage * len(problem.stages)
             model.evaluations = 0
             if needAcc:
                 qtt[:] = model.a
@@ -286,14 +300,14 @@ class EvaluatedSolver:
                 warn_user(f"exudyn_lie.SolveDynamic: {'; '.join(self.reasons)}: the compiled kernel does not have "
                           f"{'this item' if len(self.reasons) == 1 else 'these items'}, so Exudyn evaluates the "
                           f"whole model (M, f, C_q) at every stage; expected cost {1e6 * perStep:.0f} us per step "
-                          f"({len(stepper.stages)} stages of {1e6 * perStage:.0f} us, measured at the initial state; "
+                          f"({len(problem.stages)} stages of {1e6 * perStage:.0f} us, measured at the initial state; "
                           f"{1e-6 * perStep * nsteps * 1e6:.3g} s for {nsteps} steps)")
             if self.verbose or ss.timeIntegration.verboseMode >= 1:
                 print(self.describe_plan(layout, groups, why, h, k, nsteps))
                 print(f"exudyn_lie: fastest linearised mode |lambda| = {rate:.4g} 1/s: stable up to h = {stable:.3g} s; "
                       f"one stage costs {1e6 * perStage:.1f} us (Exudyn's evaluation, its dense copies of M "
                       f"and the Jacobian, the solve)")
-            stepper.write()                      # the initial state and time, for Exudyn's initial outputs
+            problem.write()                      # the initial state and time, for Exudyn's initial outputs
             sd.SetTime(t0)
             offsets = ParameterOffsets(mbs, t0, parameter_offset_rows(mbs))
 
@@ -307,13 +321,13 @@ class EvaluatedSolver:
                 dependent = range(sd.NumberOfObjects()) if model.pivoted else None
                 check = ConstraintCheck(mbs, solver, tolCheck, dependent)
                 account = ConsistencyAccount(check)
-                account.step(t0, model.velocity_constraints(t0, stepper.R, stepper.r, stepper.prev, stepper.qv),
+                account.step(t0, model.velocity_constraints(t0, problem.R, problem.r, problem.prev, problem.qv),
                              np.max(np.abs(qt)) if qt.size else 0.0)
                 check.start(ticTotal, ticCheck)
                 self.constraintCheck = check
             written = [q.copy(), qt.copy()]
             steps = [t0, t0]
-            snap = [stepper.snapshot()]
+            snap = [problem.snapshot()]
             it = solver.it
             integ = [0.0]
             nAE = layout.nAE
@@ -322,15 +336,14 @@ class EvaluatedSolver:
                 try:
                     t1 = it.currentTime
                     if t1 == steps[1] and t1 != t0:
-                        stepper.restore(snap[0])           # discontinuous iteration: the step again
+                        problem.restore(snap[0])           # discontinuous iteration: the step again
                     else:
                         if not (np.array_equal(q, written[0]) and np.array_equal(qt, written[1])):
-                            stepper.read_state(q, qt, None, steps[1])     # a user function set the state
-                        snap[0] = stepper.snapshot()
+                            problem.read_state(q, qt, None, steps[1])     # a user function set the state
+                        snap[0] = problem.snapshot()
                         steps[0], steps[1] = steps[1], t1
-                    stepper.start = snap[0]
                     if offsets:
-                        stepper.write()               # the step's start state into mbs
+                        problem.write()               # the step's start state into mbs
                         model.set_parameter_offsets(offsets.record(steps[0], t1, actual_coordinates))
                     tic = time.perf_counter()
                     hh = (t1 - steps[0]) / k
@@ -339,13 +352,10 @@ class EvaluatedSolver:
                                           f"planned steps of {h:g} s: Exudyn changed its step size (after a failed "
                                           f"discontinuous iteration or a step reduction); check "
                                           f"timeIntegration.discontinuous and the step settings")
-                    stepper.t = steps[0]
-                    for _ in range(k):
-                        stepper.step(h)
-                    stepper.t = t1
-                    stepper.write()
+                    problem.advance(steps[0], t1, k, h, adaptive is not None)
+                    problem.write()
                     if needAcc:
-                        model.accelerations(t1, stepper.R, stepper.r, stepper.prev, stepper.qv, True)
+                        model.accelerations(t1, problem.R, problem.r, problem.prev, problem.qv, True)
                         qtt[:] = model.a
                         if nAE:
                             ae[:] = model.lam
@@ -356,8 +366,8 @@ class EvaluatedSolver:
                     if check is not None:
                         if model.pivoted and check.dependent is None:
                             check.dependent = set(range(sd.NumberOfObjects()))
-                        account.step(t1, model.velocity_constraints(t1, stepper.R, stepper.r, stepper.prev,
-                                                                    stepper.qv), np.max(np.abs(qt)) if qt.size else 0.0)
+                        account.step(t1, model.velocity_constraints(t1, problem.R, problem.r, problem.prev,
+                                                                    problem.qv), np.max(np.abs(qt)) if qt.size else 0.0)
                         check.at_output(t1, account.explain, t1 >= tEnd - 1e-9 * max(1.0, abs(tEnd)))
                     return True
                 except BaseException as e:      # noqa: BLE001 - re-raised after Exudyn unwinds
@@ -367,6 +377,12 @@ class EvaluatedSolver:
             solver.SetUserFunctionNewton(mbs, hook)
             ticLoop = time.perf_counter()
             ok = solver.SolveSteps(mbs, ss2)
+            if ok and not needAcc:
+                # the final accelerations and multipliers, as a native solve leaves them
+                model.accelerations(problem.t, problem.R, problem.r, problem.prev, problem.qv, True)
+                qtt[:] = model.a
+                if nAE:
+                    ae[:] = model.lam
             loop = time.perf_counter() - ticLoop
             finalized = True
             solver.FinalizeSolver(mbs, ss2)

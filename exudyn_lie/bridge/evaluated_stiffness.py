@@ -10,8 +10,8 @@ The equations linearised at a state, on the constraint manifold, are
 (:func:`~exudyn_lie.integrators.stability.stability_coefficients`, from the tableau's
 coefficients).  :func:`stable_step` finds the largest such ``h`` by bisection;
 :func:`check_step` raises :class:`~exudyn_lie.errors.StepSizeError` with ``0.9`` of it
-before a run whose step is beyond it; :func:`suggest_step` gives it for the error of a
-blow-up during the run.  A mode whose stiffness appears only later (a contact that closes,
+before a run whose step is beyond it (a blow-up during the run is the stepper's error, with
+the simulator's suggestion).  A mode whose stiffness appears only later (a contact that closes,
 a regularised friction zone that is entered) is not seen at the initial state: that is
 what the blow-up check of the stepper is for; a regularised friction that only chatters
 (bounded) is not detected (docs/EVALUATED.md).
@@ -129,29 +129,14 @@ def stable_step(tableau, model):
     return largest_stable_step(tableau, ev), float(np.max(np.abs(ev))) if ev.size else 0.0
 
 
-def check_step(model, tableau, h):
-    """Raise StepSizeError if ``h`` is beyond the linear stability limit at the state in
-    mbs; returns (fastest rate, largest stable step)."""
+def check_step(model, tableau, h, refuse=True):
+    """Raise StepSizeError (with ``refuse``) if ``h`` is beyond the linear stability limit at
+    the state in mbs; returns (fastest rate, largest stable step)."""
     hmax, rate = stable_step(tableau, model)
-    if h > hmax:
+    if refuse and h > hmax:
         raise StepSizeError(f"the step size {h:.3g} s is beyond the stability limit of {tableau.name} for this "
                             f"model: its fastest mode has |lambda| = {rate:.4g} 1/s (Exudyn's stiffness, damping "
                             f"and mass matrices on the constraint manifold at the initial state), stable up to "
                             f"h = {hmax:.3g} s; use timeIntegration.numberOfSteps for a step size of "
                             f"{SAFETY * hmax:.3g} s or smaller")
     return rate, hmax
-
-
-def suggest_step(stepper, h):
-    """A stable step for the error of a blow-up: from the linearisation at the state the
-    run last started a step from (``stepper.start``), at most ``h / 2``; else ``h / 10``."""
-    start = getattr(stepper, "start", None)
-    if start is None:
-        return h / 10
-    try:
-        stepper.restore(start)
-        stepper.write()
-        hmax, _ = stable_step(stepper.tableau, stepper.model)
-        return min(SAFETY * hmax, h / 2)
-    except Exception:           # noqa: BLE001 - the suggestion must not hide the error
-        return h / 10

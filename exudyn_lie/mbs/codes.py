@@ -40,6 +40,11 @@ ROW_KIND, ROW_AX, ROW_BX, ROW_BODY_A, ROW_BODY_B = 0, 1, 2, 3, 4      # rint (m,
 J_BODY_A, J_BODY_B, J_ROW0, J_NROW = 0, 1, 2, 3                        # jint (nj, 4)
 L_BODY, L_KIND, L_FIXED = 0, 1, 2                                      # lint (nl, 3)
 
+# the right-hand side outside the compiled code (mbs/external.py), SceneData.hasQext
+EXTERNAL_NONE = 0
+EXTERNAL_FORCES = 1        # Python forces added to the compiled ones (Scene.AddPythonForce)
+EXTERNAL_RATES = 2         # the whole Vdot and the multipliers (Scene.SetRightHandSide)
+
 STATUS_OK = 0
 STATUS_SINGULAR = 1
 STATUS_NONFINITE = 2

@@ -10,7 +10,7 @@ from collections import namedtuple
 import numpy as np
 
 from .force_elements import compile_elements, lean_elements_only, scene_fields
-from .codes import GROUP_NAMES, J_NROW, J_ROW0, ROW_COORD, ROW_COORD_VEL, ROW_DIST, ROW_KIND, ROW_ROLL, ROW_ROT, ROW_TRANS_LOCAL, ROW_TRANS_WORLD
+from .codes import EXTERNAL_FORCES, EXTERNAL_NONE, EXTERNAL_RATES, GROUP_NAMES, J_NROW, J_ROW0, ROW_COORD, ROW_COORD_VEL, ROW_DIST, ROW_KIND, ROW_ROLL, ROW_ROT, ROW_TRANS_LOCAL, ROW_TRANS_WORLD
 from .rotation_parameters import TRACK_ANGLE, TRACK_NONE
 from .external_probes import N_PROBE, probe_table
 from .linalg import REL_PIVOT_TOL, rcm_order
@@ -26,7 +26,8 @@ GROUP_NAMES = {v: k for k, v in GROUP_IDS.items()}
 # scene lacks the feature.  Few, packed fields keep numba's compile time down (it grows
 # steeply with the number of arrays a compiled function receives).
 SceneData = namedtuple("SceneData", [
-    "nb", "gid", "mass", "com", "M", "Minv", "gravity", "hasGravity", "hasQext",
+    "nb", "gid", "mass", "com", "M", "Minv", "gravity", "hasGravity",
+    "hasQext",                        # codes.EXTERNAL_*: none, Python forces, or the whole right-hand side
     "lint", "lvec",                   # loads: [body, 0 force / 1 torque, bodyFixed]; [vector, point]
     # the compiled force elements' fields, from their registrations (mbs/force_elements.py), in this
     # order: springs sint [A, B], spos [posA, posB], spar [k, d, L0, f0]; Cartesian springs cint, cpos,
@@ -334,7 +335,8 @@ def compile_scene(scene: Scene, groups):
     sd = SceneData(
         nb=nb, gid=gid, mass=mass, com=com, M=M, Minv=Minv,
         gravity=scene.gravity.astype(float), hasGravity=bool(np.any(scene.gravity != 0)),
-        hasQext=bool(scene.pythonForces),
+        hasQext=(EXTERNAL_RATES if scene.rightHandSide is not None else
+                 EXTERNAL_FORCES if scene.pythonForces else EXTERNAL_NONE),
         lint=arr([[l.body, 0 if l.kind == "force" else 1, int(l.bodyFixed)] for l in L], (-1, 3), np.int64),
         lvec=arr([[l.vector, l.pos] for l in L], (-1, 2, 3)),
         **compile_elements(scene, lean),

@@ -34,3 +34,26 @@ def all_rows(sd, wk, R, r, V, h, Jr, eta, e):
     e[0] = ekin
     e[1] = egrav
     e[2] = spring_energy(sd, wk, R, r, V)       # the registered force elements' (mbs/force_elements.py)
+
+
+@njit(cache=True)
+def stage_stiffness(A, h, jl, K, Vd, nb):
+    """The fastest rate |lambda| the last step met, from its stages (Shampine's idea, for
+    second-order equations): between the first and the last evaluated stage ``jl`` the
+    configuration of bodies ``0 .. nb-1`` moved by ``dq = h sum_l a_jl k_l`` (in the algebra)
+    and the acceleration changed by ``dVdot``; ``rho = sqrt(|dVdot| / |dq|)``.  For
+    ``Vdot = -K q - D V`` it gives omega for a stiffness-dominated mode (``dVdot = -K dq``) and
+    c for a damping-dominated one (``dVdot = -c dV``, ``dV = c dq``); ``h rho`` beyond the
+    method's stability radius means the step amplifies that mode."""
+    num = 0.0
+    den = 0.0
+    for i in range(nb):
+        for k in range(6):
+            dq = 0.0
+            for l in range(jl):
+                dq += A[jl, l] * K[l, i, k]
+            den += (h * dq) ** 2
+            num += (Vd[jl, i, k] - Vd[0, i, k]) ** 2
+    if den == 0.0 or num == 0.0:
+        return 0.0
+    return np.sqrt(np.sqrt(num / den))

@@ -372,6 +372,7 @@ class Scene:
         self.rollingDiscPenalties: List[RollingDiscPenalty] = []
         self.loads: List[Load] = []
         self.pythonForces: List[PythonForce] = []
+        self.rightHandSide = None
 
     def SetGravity(self, gravity):
         """Change the gravity vector (world frame).  Checked before it is assigned: a
@@ -818,8 +819,24 @@ class Scene:
         self.pythonForces.append(PythonForce(fn, name or f"pythonForce{len(self.pythonForces)}"))
         return len(self.pythonForces) - 1
 
+    def SetRightHandSide(self, rhs):
+        """Let ``rhs`` give the bodies' whole right-hand side ``Vdot = F(t, g, V)`` (eq. ODE2)
+        instead of the compiled forces and joints: a problem evaluated outside the kernel (the
+        Exudyn-evaluated model, bridge/evaluated_problem.py).  ``rhs.bind(Rs, rs, Vs, Vdot)`` gets
+        the stage state and the output (arrays the compiled stepper shares, valid while the
+        simulator's work arrays live) and returns ``f(t)``, which fills ``Vdot`` (nBodies, 6) at the
+        stage state.  Such a scene has bodies only (their mass properties are not used)."""
+        if not callable(getattr(rhs, "bind", None)):
+            raise SceneError(f"SetRightHandSide: {rhs!r} has no bind(Rs, rs, Vs, Vdot) method")
+        self.rightHandSide = rhs
+
     def validate(self):
         """Re-check all data (the item records are mutable): raises SceneError."""
+        if self.rightHandSide is not None:
+            other = [name for name in ("joints", "loads", "pythonForces") + self.CONNECTOR_LISTS if getattr(self, name)]
+            if other or np.any(self.gravity != 0):
+                raise SceneError(f"a scene whose right-hand side is set (SetRightHandSide) has bodies only; this one "
+                                 f"has {', '.join(other + (['gravity'] if np.any(self.gravity != 0) else []))}")
         for b in self.bodies:
             if b.isPoint:
                 b.mass = _checked_point_mass(b.name, b.mass)

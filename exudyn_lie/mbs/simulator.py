@@ -27,6 +27,7 @@ from .rolling_disc_penalty_forces import D_DATA
 from .presence import is_present
 from .rotation_parameters import update_tracked_bodies
 from .constraints import joints_rows
+from .diagnostics import stage_stiffness
 from .compiled import compile_scene, compile_tracking, make_work, resolve_groups, with_redundant
 from .linalg import REL_PIVOT_TOL, rows_in_null_space, schur_rank_and_null
 from .row_drives import RowDrives
@@ -166,7 +167,8 @@ class Simulator:
         self.method = method_arrays(self.tableau)
         self.control = fixed_step_control()
         self._extViews = None
-        self._extToken = external.register(self, "_external_forces") if self.sd.hasQext else 0
+        self._extToken = (0 if not self.sd.hasQext else
+                          external.register(self, "_external_rates" if self.rates else "_external_forces"))
         self._drives = RowDrives(scene, self.sd)      # rows with a moving offset (mbs/row_drives.py)
         self._driveToken = external.register(self, "_row_drives") if self._drives else 0
         self.wk = self._make_work()
@@ -507,6 +509,21 @@ class Simulator:
         if self._drives:
             self._drives.evaluate(t, self.wk.rdrive)
 
+    @property
+    def rates(self):
+        """True if the scene's whole right-hand side comes from outside (Scene.SetRightHandSide)."""
+        return self.sd.hasQext == kernel.EXTERNAL_RATES
+
+    def _external_rates(self, t):
+        """The right-hand side seam with the whole ``Vdot`` from the scene's problem
+        (``Scene.SetRightHandSide``), bound once per work set to the stage state and to
+        ``wk.Qext``, where it writes."""
+        bound = self._extViews
+        if bound is None or bound[0] is not self.wk:
+            wk = self.wk
+            bound = self._extViews = (wk, self.scene.rightHandSide.bind(wk.Rs, wk.rs, wk.Vs, wk.Qext))
+        bound[1](t)
+
     def _external_forces(self, t):
         """The right-hand side seam (:mod:`.external`): called by the compiled stepper once
         per stage; adds the Python forces at the stage state to ``wk.Qext`` as world forces
@@ -591,12 +608,16 @@ class Simulator:
         if st == kernel.STATUS_EXTERNAL:
             external.reraise(self._driveToken)
             external.reraise(self._extToken)
-            if self.wk.ext[1]:
+            if self.wk.ext[1] and self.rates:
+                self.wk.ext[1] = 0
+                st = kernel.STATUS_NONFINITE          # the step's error below, with a suggested step
+            elif self.wk.ext[1]:
                 self.wk.ext[1] = 0
                 names = ", ".join(pf.name for pf in self.scene.pythonForces)
                 raise SimulationError(f"{names} must return finite (F, T) arrays of shape ({self.sd.nb}, 3); "
                                       f"got non-finite values at t = {self.t:.6g} s")
-            raise SimulationError(f"the Python forces failed at t = {self.t:.6g} s")
+            else:
+                raise SimulationError(f"the Python forces failed at t = {self.t:.6g} s")
         if st == kernel.STATUS_SINGULAR:
             # the failing stage's state (same rule as the kernel: linalg module docstring)
             rank, dep = self._dependent_rows(self.wk.Rs, self.wk.rs, self.wk.Vs, forced=True)
@@ -634,6 +655,15 @@ class Simulator:
             f"try a step size of {sugg:.3g} s or smaller")
 
     RaiseStatus = _raise_status
+
+    def StageStiffness(self, h, nb=None):
+        """Shampine's estimate of the fastest rate the last fixed step of size ``h`` met, from
+        its stages (:func:`~.diagnostics.stage_stiffness`; the first ``nb`` bodies, default all):
+        a mode that became stiff during the run (a contact that closed) shows here before it
+        blows up."""
+        tab = self.method
+        return float(stage_stiffness(tab.A, float(h), int(tab.stages[-1]), self.wk.K, self.wk.Vd,
+                                     self.sd.nb if nb is None else int(nb)))
 
     def suggest_step(self, h):
         """A step size that should be stable: ``0.8 r / rho``, where ``rho`` is the spectral

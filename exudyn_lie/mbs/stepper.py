@@ -22,8 +22,10 @@ Two seams:
 
 * the **right-hand side outside the compiled code** (:mod:`.external`): when
   ``sd.hasQext`` the stage calls the registered Python evaluator once
-  (:func:`~.external.call`), which fills the extra generalised forces ``wk.Qext`` at the stage state;
-  no Python stage loop.  An exception there ends the call with ``STATUS_EXTERNAL``.
+  (:func:`~.external.call`), which fills the extra generalised forces ``wk.Qext`` at the stage state
+  (``EXTERNAL_FORCES``), or the whole ``Vdot`` (``EXTERNAL_RATES``: a problem evaluated outside the
+  kernel, such as Exudyn's evaluation of a whole model); no Python stage loop.  An exception there
+  ends the call with ``STATUS_EXTERNAL``.
 * the **step controller** (``ctl``): a namedtuple whose *type* is the controller.
   ``Control`` with ``CONTROL_FIXED`` (:func:`fixed_step_control`): fixed steps, every step
   accepted.  ``adaptive.AdaptiveControl``: adaptive steps (:mod:`.adaptive`, docs/ADAPTIVE.md):
@@ -45,7 +47,7 @@ from numba.extending import overload
 from . import external
 from .external_probes import probe_kinematics
 from .bodies import body_dexpinv_stage, body_world_velocity, exp_compose, add_point_force_origin, add_world_torque_row
-from .codes import (STAGE_ARG_MAX2, STATUS_BLOWUP, STATUS_EXTERNAL, STATUS_NONFINITE, STATUS_OK,
+from .codes import (EXTERNAL_RATES, STAGE_ARG_MAX2, STATUS_BLOWUP, STATUS_EXTERNAL, STATUS_NONFINITE, STATUS_OK,
                     STATUS_STAGE_ARG)
 from .forces import update_contact_data, update_torsion_tracking
 from .rotation_parameters import record_tracked
@@ -235,6 +237,23 @@ def external_forces(token, gid, t, Rs, rs, Vs, Vw, Qext, ext, probe):
     return STATUS_OK
 
 
+@njit(cache=True, _nrt=False)
+def external_rates(token, t, Vout, Vdot, ext):
+    """The whole right-hand side from outside (``EXTERNAL_RATES``): the evaluator writes the
+    stage's ``Vdot`` into ``Vout`` (``wk.Qext``, which it holds a view of), copied here after a
+    check that it is finite (``ext[1] = 1`` otherwise).  Returns a status code."""
+    if call_evaluator(token, t):
+        return STATUS_EXTERNAL
+    for i in range(Vout.shape[0]):
+        for k in range(6):
+            x = Vout[i, k]
+            if not np.isfinite(x):
+                ext[1] = 1
+                return STATUS_EXTERNAL
+            Vdot[i, k] = x
+    return STATUS_OK
+
+
 @njit(cache=True, inline="always", _nrt=False)
 def stage_rhs(sd, wk, t, Vdot):
     """``Vdot_j = F(t, g_j, V_j)`` at the stage state ``wk.Rs, wk.rs, wk.Vs``: the
@@ -250,6 +269,8 @@ def stage_rhs(sd, wk, t, Vdot):
     # runs interleaved, states bit-identical): LLVM lays out the stage loop differently
     # without the call.
     if sd.hasQext:
+        if sd.hasQext == EXTERNAL_RATES:
+            return external_rates(wk.ext[0], t, wk.Qext, Vdot, wk.ext)
         st = external_forces(wk.ext[0], sd.gid, t, wk.Rs, wk.rs, wk.Vs, wk.Vw, wk.Qext, wk.ext, wk.probe)
         if st != STATUS_OK:
             return st

@@ -1,0 +1,205 @@
+"""The Exudyn-evaluated model as a problem of the one compiled stepper.
+
+:class:`EvaluatedProblem` gives, for a state of bodies on their groups, the rates ``Vdot`` of
+every body from Exudyn's evaluation of the whole model (:class:`~.evaluated.EvaluatedModel`:
+M, f, C_q, eta and the index-1 solve).  It is the scene's right-hand side
+(``Scene.SetRightHandSide``), so :class:`~exudyn_lie.mbs.Simulator` integrates it with the
+same ``mk_steps`` as a compiled scene: fixed and adaptive steps, the stage-argument and
+blow-up checks, the step suggestions.  One stage is one call from the compiled stepper into
+:meth:`EvaluatedProblem.bind`'s function: a compiled unpacking of the stage state into
+Exudyn's coordinates, Exudyn's evaluation, a compiled packing of the accelerations.
+
+The bodies of the problem:
+
+* one per ``NodeRigidBodyRotVecLG`` node, on SE3 or SO3xR3 (the kernel's velocity: SE3 the
+  body twist ``(omega, R^T rdot)``, SO3xR3 ``(omega, rdot)``);
+* the vector-space ODE2 coordinates (every other node: ``qdot = v``), three per body on R3
+  (position ``r``, velocity ``V[3:6]``; ``R3`` is a vector space, so the Munthe-Kaas method
+  is the underlying Runge-Kutta method there);
+* the ODE1 coordinates ``y``, three per body on R3 as its velocity ``V[3:6]`` with the rate
+  ``ydot`` (the body's position integrates ``y`` and is not used).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..errors import StepSizeError
+from ..groups import so3
+from ..integrators.stability import stability_radius
+from ..mbs.codes import BODY_TWIST, GROUP_NAMES
+from ..mbs.scene import Scene
+from ..mbs.simulator import Simulator
+from .evaluated_kernels import pack_rates, pack_state, unpack_state
+
+STIFF_STEPS = 3      # h rho beyond the stability radius in this many consecutive steps: StepSizeError
+STIFF_FACTOR = 10.0  # ... or beyond this multiple of it in one step (a stiff contact lasts a step or two)
+
+
+class EvaluatedScene(Scene):
+    """The problem's bodies, named after Exudyn's nodes and coordinates in errors."""
+
+    def __init__(self, names):
+        super().__init__()
+        self.names = names
+
+    def describe_body(self, i):
+        return self.names[i]
+
+
+class EvaluatedProblem:
+    """An :class:`~.evaluated.EvaluatedModel` integrated by a :class:`Simulator` with ``tableau``."""
+
+    def __init__(self, model, tableau):
+        self.model = model
+        L = model.L
+        self.gid = L.gid
+        nl, nv, n1 = len(L.lgNodes), len(L.vecIdx), L.nODE1
+        self.nl, self.nv, self.n1 = nl, nv, n1
+        self.nvb, self.n1b = -(-nv // 3), -(-n1 // 3)
+        names = [f"node {n} (NodeRigidBodyRotVecLG)" for n in L.lgNodes]
+        names += [f"ODE2 coordinates {list(L.vecIdx[3 * b:3 * b + 3])}" for b in range(self.nvb)]
+        names += [f"ODE1 coordinates {list(range(3 * b, min(3 * b + 3, n1)))}" for b in range(self.n1b)]
+        sc = EvaluatedScene(names)
+        for name in names[:nl]:
+            sc.AddBody(1.0, np.eye(3), name=name)
+        for name in names[nl:]:
+            sc.AddPointMass(1.0, name=name)
+        sc.SetRightHandSide(self)
+        self.prev = np.zeros((nl, 3))          # rotation vectors last written (their continuity)
+        self._qv, self._vv, self._y = np.zeros(nv), np.zeros(nv), np.zeros(n1)
+        self.sim = Simulator(sc, tableau, [GROUP_NAMES[g] for g in L.gid] + ["R3"] * (self.nvb + self.n1b))
+        self.tableau = self.sim.tableau
+        self.stages = self.sim.method.stages
+        self._radius = stability_radius(self.tableau)
+        self._stiffCount = 0
+        self.vscale = 1.0
+
+    # ------------------------------------------------------------------ the right-hand side
+    def bind(self, Rs, rs, Vs, Vdot):
+        """The stage function ``f(t)`` on the stepper's stage state ``Rs, rs, Vs``, writing
+        ``Vdot`` (Scene.SetRightHandSide)."""
+        model, L = self.model, self.model.L
+        gid, lgIdx, lgRef, vecIdx = L.gid, L.lgIdx, L.lgRef, L.vecIdx
+        nl, nvb, n1 = self.nl, self.nvb, self.n1
+        q, qt, prev, rv = model.q, model.qt, self.prev, model._rv
+        qs, vs, ys = np.zeros(self.nv), np.zeros(self.nv), np.zeros(n1)
+        RsL, rsL = Rs[:nl], rs[:nl]
+        accelerations, write_ode1, ydot = model.accelerations, model.write_ode1, model.ydot
+
+        def stage(t):
+            model._vmax = unpack_state(gid, Rs, rs, Vs, nvb, lgIdx, lgRef, prev, q, qt, vecIdx, qs, vs, ys, rv)
+            if n1:
+                write_ode1(ys)
+            acc = accelerations(t, RsL, rsL, prev, qs)
+            pack_rates(gid, Rs, Vs, acc, lgIdx, vecIdx, ydot, nvb, Vdot)
+        return stage
+
+    # ------------------------------------------------------------------ state
+    @property
+    def t(self):
+        return self.sim.t
+
+    @property
+    def R(self):
+        """The Lie group nodes' rotations (a view of the simulator's state)."""
+        return self.sim.R[:self.nl]
+
+    @property
+    def r(self):
+        return self.sim.r[:self.nl]
+
+    @property
+    def V(self):
+        return self.sim.V[:self.nl]
+
+    @property
+    def qv(self):
+        """The vector-space ODE2 coordinates (a writable view of the simulator's state)."""
+        return self.sim.r[self.nl:self.nl + self.nvb].reshape(-1)[:self.nv]
+
+    @qv.setter
+    def qv(self, value):
+        self.sim.r[self.nl:self.nl + self.nvb].reshape(-1)[:self.nv] = value
+
+    def set_vector_velocities(self, vv):
+        flat = np.zeros(3 * self.nvb)
+        flat[:self.nv] = vv
+        self.sim.V[self.nl:self.nl + self.nvb, 3:] = flat.reshape(-1, 3)
+
+    def read_state(self, q, qt, y=None, t=None):
+        """The state from Exudyn's coordinates (Current): ``R = exp(ref + rotation vector)``."""
+        L = self.model.L
+        nl = self.nl
+        Rl, rl, Vl = np.zeros((nl, 3, 3)), np.zeros((nl, 3)), np.zeros((nl, 6))
+        for i in range(nl):
+            idx, ref = L.lgIdx[i], L.lgRef[i]
+            rv = ref[3:] + q[idx[3:]]
+            U, _, Wt = np.linalg.svd(so3.exp(np.ascontiguousarray(rv)))
+            Rl[i] = U @ Wt
+            rl[i] = ref[:3] + q[idx[:3]]
+            self.prev[i] = rv
+            Vl[i, :3] = qt[idx[3:]]
+            v = qt[idx[:3]]
+            Vl[i, 3:] = Rl[i].T @ v if BODY_TWIST[self.gid[i]] else v
+        if y is not None and self.n1:
+            self._y[:] = y
+        sim = self.sim
+        pack_state(self.gid, Rl, rl, Vl, np.ascontiguousarray(q[L.vecIdx]), np.ascontiguousarray(qt[L.vecIdx]),
+                   self._y, self.nvb, sim.R, sim.r, sim.V)
+        if t is not None:
+            sim.t = float(t)
+        sim.RestartAdaptive()              # a new state: a new first step
+        self.vscale = max(1.0, float(np.max(np.abs(qt))) if len(qt) else 0.0)
+
+    def snapshot(self):
+        sim = self.sim
+        return sim.R.copy(), sim.r.copy(), sim.V.copy(), self.prev.copy(), sim.t
+
+    def restore(self, snap):
+        sim = self.sim
+        R, r, V, prev, t = snap
+        sim.R[:], sim.r[:], sim.V[:], self.prev[:] = R, r, V, prev
+        sim.t = t
+        sim.RestartAdaptive()
+
+    def write(self):
+        """Write the state into mbs (Current) and remember the rotation vectors written."""
+        m, sim = self.model, self.sim
+        L = m.L
+        m._vmax = unpack_state(self.gid, sim.R, sim.r, sim.V, self.nvb, L.lgIdx, L.lgRef, self.prev, m.q, m.qt,
+                               L.vecIdx, self._qv, self._vv, self._y, m._rv)
+        self.prev[:] = m._rv
+        if self.n1:
+            m.write_ode1(self._y)
+
+    # ------------------------------------------------------------------ steps
+    def advance(self, t0, t1, nsteps, h, adaptive):
+        """From ``t0`` to ``t1``: ``nsteps`` fixed steps of ``h``, or adaptive steps (the
+        simulator's SetAdaptive) whose last one ends at ``t1``.  Raises StepSizeError as the
+        compiled path (the stepper's checks), and for fixed steps when the stages of the
+        last steps show a mode beyond the method's stability radius (:meth:`check_stiffness`)."""
+        sim = self.sim
+        sim.t = t0
+        if adaptive:
+            sim.AdvanceTo(t1)
+        else:
+            sim.Advance(nsteps, h)
+            self.check_stiffness(h)       # (the last of the nsteps steps)
+        sim.t = t1
+
+    def check_stiffness(self, h):
+        """A mode that became stiff during the run (a contact that closed, a friction zone):
+        Shampine's estimate from the last step's stages (Simulator.StageStiffness, the ODE2
+        bodies) against the method's stability radius."""
+        rho = self.sim.StageStiffness(h, self.nl + self.nvb)
+        if h * rho > self._radius:
+            self._stiffCount += 1
+            if self._stiffCount >= STIFF_STEPS or h * rho > STIFF_FACTOR * self._radius:
+                raise StepSizeError(
+                    f"the step size {h:.3g} s is beyond the stability limit of {self.tableau.name} at t = "
+                    f"{self.sim.t:.6g} s: the stages of the last step(s) show a mode of rate |lambda| ~ {rho:.4g} "
+                    f"1/s (Shampine's estimate from the stages; e.g. a contact or a friction zone that became "
+                    f"active), h |lambda| = {h * rho:.3g} > {self._radius:.3g} (the method's stability radius); "
+                    f"the state is not reliable: try a step size of {0.9 * self._radius / rho:.3g} s or smaller")
+        else:
+            self._stiffCount = 0

@@ -474,16 +474,17 @@ def test_every_method_runs_through_the_bridge(method):
     assert mbs.sys["lieGroupSolver"].tableau.name == method
 
 
-def test_progress_lines_on_long_runs(capsys, monkeypatch):
-    import exudyn_lie.bridge.solver as bs
-    monkeypatch.setattr(bs, "PROGRESS_FIRST", 0.0)
-    monkeypatch.setattr(bs, "PROGRESS_EVERY", 0.0)
+@pytest.mark.parametrize("evaluation", ["compiled", "exudyn"])
+def test_progress_lines_on_long_runs(capsys, monkeypatch, evaluation):
+    import exudyn_lie.bridge.time_loop as tl
+    monkeypatch.setattr(tl, "PROGRESS_FIRST", 0.0)
+    monkeypatch.setattr(tl, "PROGRESS_EVERY", 0.0)
     mbs, b, s = free_body()
-    exl.SolveDynamic(mbs, settings(0.05, 1e-3))
+    exl.SolveDynamic(mbs, settings(0.05, 1e-3), evaluation=evaluation)
     out = capsys.readouterr().out
     assert "exudyn_lie: t = 0.05 / 0.05 s (100 %)" in out
     mbs, b, s = free_body()
-    exl.SolveDynamic(mbs, settings(0.05, 1e-3), showProgress=False)
+    exl.SolveDynamic(mbs, settings(0.05, 1e-3), showProgress=False, evaluation=evaluation)
     assert "exudyn_lie: t =" not in capsys.readouterr().out
 
 

@@ -4,14 +4,14 @@ force with ``evaluation='exudyn'``.
 
 The decision reads only: item types the compiled reader does not know
 (:func:`foreign_items`: types without a registration in :mod:`.items`), else the reader's own check of the model
-(:func:`~.reader.SceneFromExudyn`), whose "not supported" errors (an option of a known item,
-a GeneralContact) also select the evaluated path; any other error of the reader (bad
-input) is raised as it is.
+(:func:`~.reader.SceneFromExudyn`), whose :class:`~.reader.NotCompiled` errors (an option of a
+known item the kernel lacks, a PostNewtonUserFunction) also select the evaluated path; any
+other error of the reader (bad input) is raised as it is.
 """
 from __future__ import annotations
 
 from . import items
-from .reader import BridgeError, SceneFromExudyn
+from .reader import BridgeError, NotCompiled, SceneFromExudyn
 
 
 def _listing(kind, idx):
@@ -44,16 +44,12 @@ def foreign_items(mbs):
 
 
 def _compiled_refusal(mbs, assemble):
-    """None if the compiled reader takes the model, else its "not supported" message;
+    """None if the compiled reader takes the model, else why not (its NotCompiled error);
     other errors (bad input) are raised."""
     try:
         SceneFromExudyn(mbs, "items" if assemble else "initial")
-    except BridgeError as e:
-        msg = str(e)
-        if ("not supported" in msg or "does not integrate" in msg or "has no ObjectRigidBody" in msg
-                or "PostNewtonUserFunction" in msg):      # Exudyn's PostNewton calls it on the evaluated path
-            return msg
-        raise
+    except NotCompiled as e:
+        return str(e)
     return None
 
 

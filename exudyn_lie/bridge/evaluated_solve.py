@@ -23,7 +23,6 @@ compares mbs' coordinates with those it wrote) and the run continues from them.
 """
 from __future__ import annotations
 
-import math
 import time
 
 import numpy as np
@@ -35,9 +34,10 @@ from .evaluated_problem import EvaluatedProblem
 from .evaluated_initial import project_initial
 from .evaluated_stiffness import check_step
 from .constraint_check import ConsistencyAccount, ConstraintCheck, check_tolerance
-from .reader import BridgeError, RIGID_NODE_TYPES, UNHONOURED_MBS_FUNCTIONS, check_system_level
+from .reader import BridgeError, UNHONOURED_MBS_FUNCTIONS, check_system_level
 from .settings import check_settings
 from .solver import loop_settings
+from .time_loop import TimeLoop, update_initial_values
 
 #: mbs-level user functions this path cannot honour (Exudyn calls the PostNewton one itself)
 UNHONOURED_HERE = {k: v for k, v in UNHONOURED_MBS_FUNCTIONS.items() if k != "PostNewtonUserFunction"}
@@ -190,7 +190,7 @@ class EvaluatedSolver:
                      f"velocity-level constraints), {L.nData} data coordinates (updated by Exudyn's PostNewton "
                      f"after each step)")
         nb = len(self.model.blkPtr) - 1 if self.model.blkPtr is not None else 0
-        lines.append(f"exudyn_lie: linear solve: "
+        lines.append("exudyn_lie: linear solve: "
                      + ("dense KKT (the mass matrix has a singular block)" if self.model.dense else
                         f"block-diagonal M ({nb} blocks, largest {int(np.max(np.diff(self.model.blkPtr))) if nb else 0}"
                         f") and the Schur complement C_q M^-1 C_q^T ({L.nAE} x {L.nAE})"))
@@ -235,179 +235,144 @@ class EvaluatedSolver:
             info = (f"exudyn_lie: explicit Munthe-Kaas {tab.name} (order {tab.order}) on the Exudyn-evaluated model, "
                     f"step size h = {h:.6g} s, {nsteps} steps from t = {t0:g} to {tEnd:g} s")
         ss2 = loop_settings(ss, nsteps // k, info)
-
-        solver = exu.MainSolverImplicitSecondOrder()
-        self.solver = solver
-        stored = {}
-        if storeSolver:
-            sysd = mbs.sys
-            stored = {key: (key in sysd, sysd.get(key)) for key in ("dynamicSolver", "simulationSettings",
-                                                                     "lieGroupSolver")}
-            sysd["dynamicSolver"] = solver
-            sysd["simulationSettings"] = ss
-            sysd["lieGroupSolver"] = self
-        try:
-            ok = solver.InitializeSolver(mbs, ss2)
-            if ok is False:
-                raise BridgeError(f"Exudyn's InitializeSolver failed: {solver.GetErrorString()}")
-        except BaseException:
-            for key, (had, value) in stored.items():
-                if had:
-                    mbs.sys[key] = value
-                else:
-                    mbs.sys.pop(key, None)
-            raise
-        finalized = False
-        self._hookError = None
-        try:
-            sd = mbs.systemData
-            cur = exu.ConfigurationType.Current
-            q = sd.GetODE2Coordinates(configuration=cur, copy=False)
-            qt = sd.GetODE2Coordinates_t(configuration=cur, copy=False)
-            qtt = sd.GetODE2Coordinates_tt(configuration=cur, copy=False)
-            layout = Layout(mbs, groups)
-            ae = sd.GetAECoordinates(configuration=cur, copy=False) if layout.nAE else np.zeros(0)
-            y = (np.array(sd.GetODE1Coordinates(configuration=cur), float) if layout.nODE1 else np.zeros(0))
-            model = EvaluatedModel(mbs, solver, layout, q, qt, verbose=self.verbose)
-            self.model = model
-            problem = EvaluatedProblem(model, tab)
-            self.problem = problem
-            problem.read_state(q, qt, y, t0)
-            fixed = project_initial(model, problem, t0, self.projectInitial)
-            if fixed:
-                warn_user(f"exudyn_lie: the initial state does not satisfy the constraints; projected onto them: "
-                          f"{fixed} (Exudyn's own solvers start from it unchanged; pass projectInitial=False to "
-                          f"raise instead)")
-            problem.write()
-            # stability of the step at the initial state (stiff items at the script's step); adaptive
-            # steps find a stable step themselves
-            rate, stable = check_step(model, tab, h, adaptive is None)
-            if adaptive is not None:
-                problem.sim.SetAdaptive(**adaptive)
-            # the initial accelerations (and a measured estimate of the cost per step)
-            problem.write()
-            model.accelerations(t0, problem.R, problem.r, problem.prev, problem.qv, True)    # first call: set-up
-            tic = time.perf_counter()
-            for _ in range(ESTIMATE_EVALUATIONS):
-                model.accelerations(t0, problem.R, problem.r, problem.prev, problem.qv, True)
-            perStage = (time.perf_counter() - tic) / ESTIMATE_EVALUATIONS
-            perStep = perStage * len(problem.stages)
-            model.evaluations = 0
-            if needAcc:
-                qtt[:] = model.a
-                ae[:] = model.lam
-            if self.reasons:
-                warn_user(f"exudyn_lie.SolveDynamic: {'; '.join(self.reasons)}: the compiled kernel does not have "
-                          f"{'this item' if len(self.reasons) == 1 else 'these items'}, so Exudyn evaluates the "
-                          f"whole model (M, f, C_q) at every stage; expected cost {1e6 * perStep:.0f} us per step "
-                          f"({len(problem.stages)} stages of {1e6 * perStage:.0f} us, measured at the initial state; "
-                          f"{1e-6 * perStep * nsteps * 1e6:.3g} s for {nsteps} steps)")
-            if self.verbose or ss.timeIntegration.verboseMode >= 1:
-                print(self.describe_plan(layout, groups, why, h, k, nsteps))
-                print(f"exudyn_lie: fastest linearised mode |lambda| = {rate:.4g} 1/s: stable up to h = {stable:.3g} s; "
-                      f"one stage costs {1e6 * perStage:.1f} us (Exudyn's evaluation, its dense copies of M "
-                      f"and the Jacobian, the solve)")
-            problem.write()                      # the initial state and time, for Exudyn's initial outputs
-            sd.SetTime(t0)
-            offsets = ParameterOffsets(mbs, t0, parameter_offset_rows(mbs))
-
-            def actual_coordinates():
-                # Exudyn's residual g = x - offset holds the new offset already: x = g + offset
-                g, gv = model.raw_residuals()
-                return lambda r, v: (g[r] + v, gv[r])
-            check = account = None
-            if tolCheck is not None and layout.nAE:
-                ticCheck = time.perf_counter()
-                dependent = range(sd.NumberOfObjects()) if model.pivoted else None
-                check = ConstraintCheck(mbs, solver, tolCheck, dependent)
-                account = ConsistencyAccount(check)
-                account.step(t0, model.velocity_constraints(t0, problem.R, problem.r, problem.prev, problem.qv),
-                             np.max(np.abs(qt)) if qt.size else 0.0)
-                check.start(ticTotal, ticCheck)
-                self.constraintCheck = check
-            written = [q.copy(), qt.copy()]
-            steps = [t0, t0]
-            snap = [problem.snapshot()]
-            it = solver.it
-            integ = [0.0]
-            nAE = layout.nAE
-
-            def hook(mainSolver, mbs_, settings):
-                try:
-                    t1 = it.currentTime
-                    if t1 == steps[1] and t1 != t0:
-                        problem.restore(snap[0])           # discontinuous iteration: the step again
-                    else:
-                        if not (np.array_equal(q, written[0]) and np.array_equal(qt, written[1])):
-                            problem.read_state(q, qt, None, steps[1])     # a user function set the state
-                        snap[0] = problem.snapshot()
-                        steps[0], steps[1] = steps[1], t1
-                    if offsets:
-                        problem.write()               # the step's start state into mbs
-                        model.set_parameter_offsets(offsets.record(steps[0], t1, actual_coordinates))
-                    tic = time.perf_counter()
-                    hh = (t1 - steps[0]) / k
-                    if abs(hh - h) > 1e-9 * h:
-                        raise BridgeError(f"Exudyn's time loop asks for a step to t = {t1!r} s, exudyn_lie "
-                                          f"planned steps of {h:g} s: Exudyn changed its step size (after a failed "
-                                          f"discontinuous iteration or a step reduction); check "
-                                          f"timeIntegration.discontinuous and the step settings")
-                    problem.advance(steps[0], t1, k, h, adaptive is not None)
-                    problem.write()
-                    if needAcc:
-                        model.accelerations(t1, problem.R, problem.r, problem.prev, problem.qv, True)
-                        qtt[:] = model.a
-                        if nAE:
-                            ae[:] = model.lam
-                    sd.SetTime(t1)
-                    written[0][:] = q
-                    written[1][:] = qt
-                    integ[0] += time.perf_counter() - tic
-                    if check is not None:
-                        if model.pivoted and check.dependent is None:
-                            check.dependent = set(range(sd.NumberOfObjects()))
-                        account.step(t1, model.velocity_constraints(t1, problem.R, problem.r, problem.prev,
-                                                                    problem.qv), np.max(np.abs(qt)) if qt.size else 0.0)
-                        check.at_output(t1, account.explain, t1 >= tEnd - 1e-9 * max(1.0, abs(tEnd)))
-                    return True
-                except BaseException as e:      # noqa: BLE001 - re-raised after Exudyn unwinds
-                    self._hookError = e
-                    raise
-
-            solver.SetUserFunctionNewton(mbs, hook)
-            ticLoop = time.perf_counter()
-            ok = solver.SolveSteps(mbs, ss2)
-            if ok and not needAcc:
-                # the final accelerations and multipliers, as a native solve leaves them
-                model.accelerations(problem.t, problem.R, problem.r, problem.prev, problem.qv, True)
-                qtt[:] = model.a
-                if nAE:
-                    ae[:] = model.lam
-            loop = time.perf_counter() - ticLoop
-            finalized = True
-            solver.FinalizeSolver(mbs, ss2)
-        except BaseException:
-            if not finalized:
-                try:
-                    solver.FinalizeSolver(mbs, ss2)
-                except Exception:
-                    pass
-            err = self._hookError
-            if err is not None:
-                raise err from None
-            raise
-        if not ok:
-            raise exu.SolverError(f"exudyn_lie: Exudyn's time loop terminated: {solver.GetErrorString()}")
+        self._loopPlan = dict(k=k, h=h, t0=t0, tEnd=tEnd, nsteps=nsteps, needAcc=needAcc, groups=groups, why=why,
+                              tolCheck=tolCheck, ticTotal=ticTotal, log=self.verbose or ss.timeIntegration.verboseMode >= 1)
+        self._integration = 0.0
+        loop = TimeLoop(mbs, self, ss, ss2, t0, tEnd, nsteps // k, storeSolver=storeSolver, showProgress=showProgress,
+                        watch=True)
+        loop.run()
         if updateInitialValues:
-            sd = mbs.systemData
-            sd.SetSystemState(systemStateList=sd.GetSystemState(), configuration=exu.ConfigurationType.Initial)
-            sd.SetODE2Coordinates_tt(coordinates=sd.GetODE2Coordinates_tt(),
-                                     configuration=exu.ConfigurationType.Initial)
-        nev = model.evaluations
-        self.timing = dict(total=time.perf_counter() - ticTotal, loop=loop, integration=integ[0], steps=nsteps,
-                           evaluations=nev, perStage=integ[0] / max(nev, 1), perStep=integ[0] / max(nsteps, 1))
-        if self.verbose or ss.timeIntegration.verboseMode >= 1:
-            print(f"exudyn_lie: {nsteps} steps in {self.timing['total']:.3g} s (integration {integ[0]:.3g} s = "
+            update_initial_values(mbs)
+        nev, integ = self.model.evaluations, self._integration
+        self.timing = dict(total=time.perf_counter() - ticTotal, loop=loop.loopSeconds, integration=integ,
+                           steps=nsteps, evaluations=nev, perStage=integ / max(nev, 1), perStep=integ / max(nsteps, 1))
+        if self._adaptive is not None:
+            acc, rej, nrhs = self.problem.sim.adaptiveCounters
+            self.timing.update(adaptive=True, accepted=acc, rejected=rej, rhsEvaluations=nrhs)
+        if self._loopPlan["log"]:
+            print(f"exudyn_lie: {nsteps} steps in {self.timing['total']:.3g} s (integration {integ:.3g} s = "
                   f"{1e6 * self.timing['perStep']:.3g} us/step, {nev} evaluations of {1e6 * self.timing['perStage']:.3g}"
                   f" us)")
         return True
+
+    # ------------------------------------------------------------------ the driver of the time loop
+    def loop_begin(self, solver):
+        """After InitializeSolver (bridge/time_loop.py): the model and its problem on mbs'
+        coordinates, the initial projection, the stability of the step, the initial
+        accelerations, the plan's announcement and the run-time constraint check."""
+        import exudyn as exu
+        P, mbs, tab = self._loopPlan, self.mbs, self.tableau
+        t0, h, k, nsteps = P["t0"], P["h"], P["k"], P["nsteps"]
+        sd = mbs.systemData
+        cur = exu.ConfigurationType.Current
+        q = sd.GetODE2Coordinates(configuration=cur, copy=False)
+        qt = sd.GetODE2Coordinates_t(configuration=cur, copy=False)
+        self._qtt = sd.GetODE2Coordinates_tt(configuration=cur, copy=False)
+        layout = Layout(mbs, P["groups"])
+        self._ae = sd.GetAECoordinates(configuration=cur, copy=False) if layout.nAE else np.zeros(0)
+        y = (np.array(sd.GetODE1Coordinates(configuration=cur), float) if layout.nODE1 else np.zeros(0))
+        model = self.model = EvaluatedModel(mbs, solver, layout, q, qt, verbose=self.verbose)
+        problem = self.problem = EvaluatedProblem(model, tab)
+        problem.read_state(q, qt, y, t0)
+        fixed = project_initial(model, problem, t0, self.projectInitial)
+        if fixed:
+            warn_user(f"exudyn_lie: the initial state does not satisfy the constraints; projected onto them: "
+                      f"{fixed} (Exudyn's own solvers start from it unchanged; pass projectInitial=False to "
+                      f"raise instead)")
+        problem.write()
+        # stability of the step at the initial state (stiff items at the script's step); adaptive
+        # steps find a stable step themselves
+        rate, stable = check_step(model, tab, h, self._adaptive is None)
+        if self._adaptive is not None:
+            problem.sim.SetAdaptive(**self._adaptive)
+        # the initial accelerations (and a measured estimate of the cost per step)
+        problem.write()
+        model.accelerations(t0, problem.R, problem.r, problem.prev, problem.qv, True)    # first call: set-up
+        tic = time.perf_counter()
+        for _ in range(ESTIMATE_EVALUATIONS):
+            model.accelerations(t0, problem.R, problem.r, problem.prev, problem.qv, True)
+        perStage = (time.perf_counter() - tic) / ESTIMATE_EVALUATIONS
+        perStep = perStage * len(problem.stages)
+        model.evaluations = 0
+        if P["needAcc"]:
+            self._write_accelerations()
+        if self.reasons:
+            warn_user(f"exudyn_lie.SolveDynamic: {'; '.join(self.reasons)}: the compiled kernel does not have "
+                      f"{'this item' if len(self.reasons) == 1 else 'these items'}, so Exudyn evaluates the "
+                      f"whole model (M, f, C_q) at every stage; expected cost {1e6 * perStep:.0f} us per step "
+                      f"({len(problem.stages)} stages of {1e6 * perStage:.0f} us, measured at the initial state; "
+                      f"{1e-6 * perStep * nsteps * 1e6:.3g} s for {nsteps} steps)")
+        if P["log"]:
+            print(self.describe_plan(layout, P["groups"], P["why"], h, k, nsteps))
+            print(f"exudyn_lie: fastest linearised mode |lambda| = {rate:.4g} 1/s: stable up to h = {stable:.3g} s; "
+                  f"one stage costs {1e6 * perStage:.1f} us (Exudyn's evaluation, its dense copies of M "
+                  f"and the Jacobian, the solve)")
+        problem.write()                      # the initial state and time, for Exudyn's initial outputs
+        sd.SetTime(t0)
+        self._offsets = ParameterOffsets(mbs, t0, parameter_offset_rows(mbs))
+        self._snap = problem.snapshot()
+        self.loop_check = None
+        if P["tolCheck"] is not None and layout.nAE:
+            ticCheck = time.perf_counter()
+            dependent = range(sd.NumberOfObjects()) if model.pivoted else None
+            check = self.constraintCheck = ConstraintCheck(mbs, solver, P["tolCheck"], dependent)
+            account = ConsistencyAccount(check)
+            account.step(t0, model.velocity_constraints(t0, problem.R, problem.r, problem.prev, problem.qv),
+                         np.max(np.abs(qt)) if qt.size else 0.0)
+            check.start(P["ticTotal"], ticCheck)
+            tEnd = P["tEnd"]
+
+            def at_output(t1, last):
+                if model.pivoted and check.dependent is None:
+                    check.dependent = set(range(sd.NumberOfObjects()))
+                account.step(t1, model.velocity_constraints(t1, problem.R, problem.r, problem.prev, problem.qv),
+                             np.max(np.abs(qt)) if qt.size else 0.0)
+                check.at_output(t1, account.explain, t1 >= tEnd - 1e-9 * max(1.0, abs(tEnd)))
+            self.loop_check = at_output
+
+    def _write_accelerations(self):
+        """Exudyn's q_tt and multipliers at the state in mbs (written there)."""
+        problem, model = self.problem, self.model
+        model.accelerations(problem.t, problem.R, problem.r, problem.prev, problem.qv, True)
+        self._qtt[:] = model.a
+        if self._ae.size:
+            self._ae[:] = model.lam
+
+    def _actual_coordinates(self):
+        # Exudyn's residual g = x - offset holds the new offset already: x = g + offset
+        g, gv = self.model.raw_residuals()
+        return lambda r, v: (g[r] + v, gv[r])
+
+    def loop_restart(self, t, repeat):
+        """Exudyn's discontinuous iteration repeats the step: from the step's start again (the
+        data coordinates PostNewton updated are Exudyn's); a user function set the state: from it."""
+        if repeat:
+            self.problem.restore(self._snap)
+        else:
+            m = self.model
+            self.problem.read_state(m.q, m.qt, None, t)
+
+    def loop_advance(self, t0, t1, outputsLeft):
+        """One Exudyn step: ``k`` MK steps (or adaptive ones) from ``t0`` to ``t1``, the end state
+        (with accelerations and multipliers when something reads them) into mbs."""
+        P, problem, model = self._loopPlan, self.problem, self.model
+        k, h = P["k"], P["h"]
+        self._snap = problem.snapshot()          # the step's start (a repeat of the step restores it)
+        if self._offsets:
+            problem.write()                      # the step's start state into mbs
+            model.set_parameter_offsets(self._offsets.record(t0, t1, self._actual_coordinates))
+        tic = time.perf_counter()
+        if abs((t1 - t0) / k - h) > 1e-9 * h:
+            raise BridgeError(f"Exudyn's time loop asks for a step to t = {t1!r} s, exudyn_lie planned steps of "
+                              f"{h:g} s: Exudyn changed its step size (after a failed discontinuous iteration or a "
+                              f"step reduction); check timeIntegration.discontinuous and the step settings")
+        problem.advance(t0, t1, k, h, self._adaptive is not None)
+        problem.write()
+        if P["needAcc"]:
+            self._write_accelerations()
+        self.mbs.systemData.SetTime(t1)
+        self._integration += time.perf_counter() - tic
+
+    def loop_end(self):
+        if not self._loopPlan["needAcc"]:
+            self._write_accelerations()          # the final ones, as a native solve leaves them

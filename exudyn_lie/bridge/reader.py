@@ -111,6 +111,12 @@ class BridgeError(SceneError):
     """The Exudyn model contains something exudyn_lie cannot integrate (or bad data)."""
 
 
+class NotCompiled(BridgeError):
+    """An item, an option of an item or an mbs-level function that the compiled kernel does not
+    have, but Exudyn evaluates: ``SolveDynamic``'s 'auto' takes the Exudyn-evaluated path for it
+    (bridge/evaluated_dispatch.py), ``evaluation='compiled'`` raises it."""
+
+
 @dataclass
 class MarkerFrame:
     """A marker resolved to a scene body: ``pos``/``rot`` in body coordinates (world
@@ -226,7 +232,9 @@ def check_system_level(mbs, unhonoured=None, contactReason=""):
             continue
         uf = fn()
         if not (isinstance(uf, (int, float)) and uf == 0) and uf is not None:
-            raise BridgeError(f"mbs has a {name} (mbs.Set{name}): exudyn_lie does not call it ({why}); "
+            # Exudyn's PostNewton calls it on the Exudyn-evaluated path
+            error = NotCompiled if name == "PostNewtonUserFunction" else BridgeError
+            raise error(f"mbs has a {name} (mbs.Set{name}): exudyn_lie does not call it ({why}); "
                               f"solve with exudyn.SolveDynamic, or remove it with mbs.Set{name}(0)")
 
 
@@ -358,7 +366,7 @@ class _Reader:
             sc.nodeTypes[n] = t
             if t in NODE_KINDS:
                 if t == "RigidBodyEP" and not d.get("addConstraintEquation", True):
-                    raise BridgeError(f"node {n} ('{d.get('name', '')}') NodeRigidBodyEP: addConstraintEquation=False "
+                    raise NotCompiled(f"node {n} ('{d.get('name', '')}') NodeRigidBodyEP: addConstraintEquation=False "
                                       f"is not supported by exudyn_lie (it keeps the Euler parameters on the unit "
                                       f"sphere itself); use the default addConstraintEquation=True")
                 byKind.setdefault(t, []).append(n)
@@ -371,7 +379,7 @@ class _Reader:
     def check_nodes(self):
         """Unsupported nodes not already reported through their object."""
         for n, name, t in self.badNodes:
-            raise BridgeError(f"node {n} ('{name}') of type Node{t} is not supported by exudyn_lie; supported "
+            raise NotCompiled(f"node {n} ('{name}') of type Node{t} is not supported by exudyn_lie; supported "
                               f"nodes: {', '.join(SUPPORTED_NODES)}")
 
     # ------------------------------------------------------------------ bodies
@@ -395,7 +403,7 @@ class _Reader:
                                       f"object {bodyOfNode[n]}; one body per node is supported")
                 bodyOfNode[n] = o
             elif t not in JOINT_TYPES + CONNECTOR_TYPES:
-                raise BridgeError(f"object {o} ('{d.get('name', '')}') of type Object{t} is not supported by "
+                raise NotCompiled(f"object {o} ('{d.get('name', '')}') of type Object{t} is not supported by "
                                   f"exudyn_lie; supported objects: {', '.join(SUPPORTED_OBJECTS)}")
         self.check_nodes()
         # node kinds, in node order; states of all nodes of a kind at once
@@ -469,7 +477,7 @@ class _Reader:
         for kind in sc.nodeKinds:
             sc.kindBodies.append(np.array([self.rigidNodeBody[n] for n in kind.ids], dtype=np.int64))
         if sc.nBodies == 0:
-            raise BridgeError("the Exudyn model has no ObjectRigidBody or mass point; nothing to integrate")
+            raise NotCompiled("the Exudyn model has no ObjectRigidBody or mass point; nothing to integrate")
         # EP normalisation rows stay 0
         for n, t in sc.nodeTypes.items():
             if t == "RigidBodyEP" and not self.items:
@@ -533,7 +541,7 @@ class _Reader:
                     raise BridgeError(f"{what}: marker {m} (Marker{t}) is attached to node {n} of type Node{nt}, "
                                       f"which belongs to no ObjectRigidBody / ObjectRigidBody2D")
             else:
-                raise BridgeError(f"{what}: marker {m} of type Marker{t} is not supported for this item; it "
+                raise NotCompiled(f"{what}: marker {m} of type Marker{t} is not supported for this item; it "
                                   f"needs one of: {', '.join(POSITION_MARKERS)}")
             mf = MarkerFrame(m, t, body, np.asarray(pos, float), Rm)
             self.markers[m] = mf
@@ -575,9 +583,9 @@ class _Reader:
             return
         for key in ("offsetUserFunction", "offsetUserFunction_t"):
             if _userfunction(d, key, what) is not None:
-                raise BridgeError(f"{what}: {key} (moving joint offsets) is not supported by exudyn_lie")
+                raise NotCompiled(f"{what}: {key} (moving joint offsets) is not supported by exudyn_lie")
         if d.get("alternativeConstraints", False):
-            raise BridgeError(f"{what}: alternativeConstraints=True is not supported by exudyn_lie; use the "
+            raise NotCompiled(f"{what}: alternativeConstraints=True is not supported by exudyn_lie; use the "
                               f"default rotation constraints")
         m0, m1 = (int(m) for m in d["markerNumbers"])
         if t in ("JointRevolute2D", "JointPrismatic2D"):
@@ -807,7 +815,7 @@ class _Reader:
                                 name=name, worldTranslation=True)
             else:
                 if not d.get("constrainRotation", True):
-                    raise BridgeError(f"{what}: constrainRotation=False is not supported by exudyn_lie; use the "
+                    raise NotCompiled(f"{what}: constrainRotation=False is not supported by exudyn_lie; use the "
                                       f"default constrainRotation=True (or a 2D body with a coordinate constraint)")
                 axes = {}
                 for key in ("axisMarker0", "normalMarker1"):
@@ -894,7 +902,7 @@ class _Reader:
     def read_linear_spring_damper(self, sc, o, d, A, B, what, name):
         """CObjectConnectorLinearSpringDamper: along ``A_0 axisMarker0`` (marker 0's orientation)."""
         if _userfunction(d, "springForceUserFunction", what) is not None:
-            raise BridgeError(f"{what}: springForceUserFunction is not supported by exudyn_lie yet; solve with "
+            raise NotCompiled(f"{what}: springForceUserFunction is not supported by exudyn_lie yet; solve with "
                               f"exudyn.SolveDynamic")
         sc.AddLinearSpringDamper(A.body, A.pos, A.rot @ np.asarray(d["axisMarker0"], float), B.body, B.pos,
                                  d["stiffness"], d["damping"], d["offset"],
@@ -1000,7 +1008,7 @@ class _Reader:
                 self.read_coordinate_load(sc, l, d, what)
                 continue
             if t not in ("ForceVector", "TorqueVector", "MassProportional"):
-                raise BridgeError(f"{what} is not supported by exudyn_lie; supported loads: "
+                raise NotCompiled(f"{what} is not supported by exudyn_lie; supported loads: "
                                   f"{', '.join(SUPPORTED_LOADS)}")
             lv = np.asarray(d["loadVector"], float)
             if not np.all(np.isfinite(lv)):

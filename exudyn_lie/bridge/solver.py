@@ -55,12 +55,11 @@ from .moving_offsets import ParameterOffsets
 from .params import ParameterWatch
 from .settings import check_settings, positive_float
 from .solvertype import resolve_solver_type
+from .time_loop import TimeLoop, update_initial_values
 from .reader import BridgeError, ExudynScene, SceneFromExudyn
 
 GROUP_ALIASES = {"se3": "SE3", "so3xr3": "SO3xR3", "so3r3": "SO3xR3", "auto": "auto"}
 MAX_SUBSTEPS = 1000          # at most this many internal steps per Exudyn step (progress, renderer)
-PROGRESS_FIRST = 2.0         # seconds before the first progress check (it measures the rate, prints nothing)
-PROGRESS_EVERY = 2.0         # seconds between progress lines
 
 
 def _group_name(g, what):
@@ -331,7 +330,6 @@ class LieGroupSolver:
         self._Vdot = np.zeros((self.scene.nBodies, 6))
         self._lam = np.zeros(self.sim.sd.nrows)
         self._hasJ = len(self._jrow) > 0
-        self._written = None
 
     def _watch_singular_nodes(self):
         """Nodes with singular coordinates (Rxyz) are watched at every internal step, so
@@ -383,8 +381,6 @@ class LieGroupSolver:
                     sd.SetAECoordinates(self._ae, configuration=cur)
         if self._nodes.flags.any():
             self._nodes.warn_flags()
-        if self._watch:
-            self._written = (np.array(self._q), np.array(self._qt))
 
     def _write(self, accelerations):
         self._fill(accelerations)
@@ -413,22 +409,6 @@ class LieGroupSolver:
                               f"discontinuous iteration or a step reduction), which exudyn_lie's fixed steps do not "
                               f"follow; check timeIntegration.discontinuous and the step settings")
         ch.pop()
-
-    def _finalize(self, solver, ss2):
-        """Exudyn's FinalizeSolver.  A user function's ``mbs.Modify*`` marks mbs as not
-        assembled (``systemIsConsistent = False``) although it changed only live fields (the
-        parameter watch stops the run otherwise); Exudyn's own solve finalizes such a run in
-        C++ and leaves the flag False, but the Python FinalizeSolver refuses: it runs with
-        the flag set, which is then put back."""
-        mbs = self.mbs
-        consistent = mbs.systemIsConsistent
-        if not consistent:
-            mbs.systemIsConsistent = True
-        try:
-            solver.FinalizeSolver(mbs, ss2)
-        finally:
-            if not consistent:
-                mbs.systemIsConsistent = False
 
     def _restart_from_mbs(self, t):
         """Continue from the state in mbs at time ``t`` (Exudyn's start of the step): a user
@@ -739,171 +719,12 @@ class LieGroupSolver:
             disc.maxIterations = 1
             disc.ignoreMaxIterations = True
 
-        solver = exu.MainSolverImplicitSecondOrder()
-        self.solver = solver
-        self._hookError = None
-        state = dict(tic=time.perf_counter(), nextProgress=time.perf_counter() + PROGRESS_FIRST, t0=t0, tEnd=tEnd)
+        self._loopPlan = dict(k=k, h=h, tEnd=tEnd, adaptive=adaptive, needAcc=needAcc, since=ticTotal - pendingPrepare)
         self.timing = dict(integration=0.0, steps=nsteps, exudynSteps=nsteps // k, substeps=k)
-
-        stored = {}
-        if storeSolver:                          # as exudyn.SolveDynamic: available from the start
-            sysd = self.mbs.sys
-            stored = {key: (key in sysd, sysd.get(key)) for key in ("dynamicSolver", "simulationSettings",
-                                                                     "lieGroupSolver")}
-            sysd["dynamicSolver"] = solver
-            sysd["simulationSettings"] = ss
-            sysd["lieGroupSolver"] = self
-        try:
-            ok = solver.InitializeSolver(self.mbs, ss2)
-            if ok is False:
-                raise BridgeError(f"Exudyn's InitializeSolver failed: {solver.GetErrorString()}")
-        except BaseException:
-            for key, (had, value) in stored.items():     # bad input: mbs.sys as it was
-                if had:
-                    self.mbs.sys[key] = value
-                else:
-                    self.mbs.sys.pop(key, None)
-            raise
-        finalized = False
-        try:
-            self._init_buffers_from_mbs()
-            vmax = 1e6 * max(1.0, float(np.max(np.abs(sim.V))) if sim.V.size else 0.0)
-            self._write(True)                    # initial state with accelerations / multipliers
-            # chunks of outputs from the one compiled stepper; one output per chunk if a user
-            # function may change the state in between or Python forces (Exudyn user
-            # functions) run, so that they are called in step with Exudyn's outputs
-            bufs, jac = (self._q, self._qt, self._qtt, self._ae), (self._jrow, self._jae)
-            maxRows = 1 if (self._watch or sim.sd.hasQext) else CHUNK_ROWS
-            if adaptive is None:
-                self._chunks = OutputChunks(sim, self._nodes, vmax, bufs, jac, k, h, needAcc, maxRows=maxRows)
-            else:
-                sim.SetAdaptive(**adaptive)
-                self._chunks = AdaptiveOutputChunks(sim, self._nodes, vmax, bufs, jac, k, h, needAcc, tEnd,
-                                                    maxRows=maxRows)
-            checkOutput = self._make_constraint_check(solver, ticTotal - pendingPrepare)
-            # the hook, per Exudyn step (kept lean: it runs per output)
-            sdat = self.mbs.systemData
-            cur = exu.ConfigurationType.Current
-            watch = self._watch
-            live = self._live
-            perf = time.perf_counter
-            nextOutput = self._next_output
-            push = self._push
-            nExudyn = nsteps // k
-            count = [0]
-            params = self._params = ParameterWatch(self)
-            offsets, actual = self._parameter_offsets(t0)
-            marks = params.marks                 # non-empty: a user function changed parameters
-            steps = [t0, t0]                     # start and end time of the current Exudyn step
-
-            it = solver.it                       # Exudyn's iteration data (live), read once per step
-
-            def hook(mainSolver, mbs, settings):
-                try:
-                    t1 = it.currentTime
-                    repeat = t1 == steps[1]
-                    if repeat:
-                        # Exudyn's discontinuous iteration calls the hook again for the same step,
-                        # with the ODE2 coordinates reset to the start of the step
-                        self._restart_from_mbs(steps[0])
-                    else:
-                        steps[0] = steps[1]
-                        steps[1] = t1
-                        count[0] += 1
-                        if watch and self._written is not None and not (
-                                np.array_equal(sdat.GetODE2Coordinates(configuration=cur), self._written[0])
-                                and np.array_equal(sdat.GetODE2Coordinates_t(configuration=cur), self._written[1])):
-                            self._restart_from_mbs(steps[0])     # a user function changed the state
-                    if marks or params.late:
-                        self._apply_parameters(steps[0])
-                    if offsets:
-                        for _, curve, drive in offsets.record(steps[0], t1, actual):
-                            drive.curve = curve
-                    params.busy = True               # force user functions run inside: changes refused
-                    try:
-                        nextOutput(t1, nExudyn - count[0] + 1)
-                    finally:
-                        params.busy = False
-                    if params.late:
-                        params.apply(t1)             # refused: changed inside the step
-                    if not live:
-                        push(needAcc)
-                    if checkOutput is not None:
-                        checkOutput(t1, count[0] >= nExudyn)
-                    if watch:
-                        self._written = (self._q.copy(), self._qt.copy())
-                    if showProgress and perf() > state["nextProgress"]:
-                        self._progress(state, t1)
-                    return True
-                except BaseException as e:      # noqa: BLE001 - re-raised after Exudyn unwinds
-                    self._hookError = e
-                    raise
-
-            ch = self._chunks
-            if ch is not None and live and not watch:
-                # the common case, kept to a few operations per output (the bridge-overhead
-                # bench): the next row of the current chunk goes into the live coordinate
-                # views; refilling a chunk, a time off the plan (the error) and everything
-                # else go through ``hook``.  ch.on_plan and ch.pop are inlined here: the
-                # three method calls cost 1-2 % of a heavy-top run with a sensor every 10
-                # steps (bench --sections overhead: 8.5-9.6 % with the calls, 6.9-7.7 %
-                # inlined); keep the two in step with OutputChunks.
-                q, qt, qtt, ae = self._q, self._qt, self._qtt, self._ae
-                Qr, Qtr, Qttr, AEr = ch.rowViews
-                doacc, hasAE = ch.doacc, ae.size > 0
-                dtOut, tolOut = ch.nsub * ch.h, 1e-6 * ch.nsub * ch.h
-
-                def fast_hook(mainSolver, mbs, settings):
-                    o = ch.next
-                    if o >= ch.rows or marks:
-                        return hook(mainSolver, mbs, settings)
-                    t1 = it.currentTime
-                    if abs(ch.tStart + (o + 1) * dtOut - t1) > tolOut + 1e-12 * abs(t1):
-                        return hook(mainSolver, mbs, settings)       # raises the planning error
-                    q[:] = Qr[o]
-                    qt[:] = Qtr[o]
-                    if doacc:
-                        qtt[:] = Qttr[o]
-                        if hasAE:
-                            ae[:] = AEr[o]
-                    ch.next = o + 1
-                    count[0] += 1
-                    steps[0] = steps[1]
-                    steps[1] = t1
-                    if checkOutput is not None:
-                        checkOutput(t1, count[0] >= nExudyn)
-                    if showProgress and perf() > state["nextProgress"]:
-                        self._progress(state, t1)
-                    return True
-
-                solver.SetUserFunctionNewton(self.mbs, fast_hook)
-            else:
-                solver.SetUserFunctionNewton(self.mbs, hook)
-            with params:                         # Set*Parameter / Modify* recorded during the loop
-                ok = solver.SolveSteps(self.mbs, ss2)
-            if ok and not needAcc:
-                self._write(True)                # final accelerations, as a native solve leaves them
-            if ok:
-                self._write_torsion_data()       # the exact turned angles (Exudyn tracks per output)
-            finalized = True
-            self._finalize(solver, ss2)
-        except BaseException:
-            if not finalized:
-                try:
-                    solver.FinalizeSolver(self.mbs, ss2)
-                except Exception:
-                    pass
-            err = self._hookError
-            if err is not None:
-                raise err from None
-            raise
-        if not ok:
-            raise exu.SolverError(f"exudyn_lie: Exudyn's time loop terminated: {solver.GetErrorString()}")
+        TimeLoop(self.mbs, self, ss, ss2, t0, tEnd, nsteps // k, storeSolver=storeSolver, showProgress=showProgress,
+                 watch=self._watch).run()
         if updateInitialValues:
-            sd = self.mbs.systemData
-            sd.SetSystemState(systemStateList=sd.GetSystemState(), configuration=exu.ConfigurationType.Initial)
-            sd.SetODE2Coordinates_tt(coordinates=sd.GetODE2Coordinates_tt(),
-                                     configuration=exu.ConfigurationType.Initial)
+            update_initial_values(self.mbs)
         now = time.perf_counter()
         loop, setUp = now - ticLoop, (ticLoop - ticTotal) + pendingPrepare
         compiled, compileLoop = ct.seconds + pendingCompile, ct.seconds - compileSetUp
@@ -925,6 +746,100 @@ class LieGroupSolver:
                   + (f"; numba compilation {compiled:.3g} s of it (first run on this machine, cached from now on)"
                      if compiled > 0.05 else ""))
         return True
+
+    # ------------------------------------------------------------------ the driver of the time loop
+    def loop_begin(self, solver):
+        """After InitializeSolver (bridge/time_loop.py): buffers on mbs' coordinates, the initial
+        state with accelerations, the output chunks of the one compiled stepper."""
+        plan, sim = self._loopPlan, self.sim
+        self._init_buffers_from_mbs()
+        vmax = 1e6 * max(1.0, float(np.max(np.abs(sim.V))) if sim.V.size else 0.0)
+        self._write(True)                    # initial state with accelerations / multipliers
+        # chunks of outputs from the one compiled stepper; one output per chunk if a user
+        # function may change the state in between or Python forces (Exudyn user
+        # functions) run, so that they are called in step with Exudyn's outputs
+        bufs, jac = (self._q, self._qt, self._qtt, self._ae), (self._jrow, self._jae)
+        maxRows = 1 if (self._watch or sim.sd.hasQext) else CHUNK_ROWS
+        k, h, needAcc = plan["k"], plan["h"], plan["needAcc"]
+        if plan["adaptive"] is None:
+            self._chunks = OutputChunks(sim, self._nodes, vmax, bufs, jac, k, h, needAcc, maxRows=maxRows)
+        else:
+            sim.SetAdaptive(**plan["adaptive"])
+            self._chunks = AdaptiveOutputChunks(sim, self._nodes, vmax, bufs, jac, k, h, needAcc, plan["tEnd"],
+                                                maxRows=maxRows)
+        self.loop_check = self._make_constraint_check(solver, plan["since"])
+        self._params = ParameterWatch(self)
+        self._offsets, self._actual = self._parameter_offsets(sim.t)
+
+    def loop_context(self):
+        return self._params                  # Set*Parameter / Modify* recorded during the loop
+
+    def loop_restart(self, t, repeat):
+        self._restart_from_mbs(t)
+
+    def loop_advance(self, t0, t1, outputsLeft):
+        """The next output row at ``t1`` into mbs (a new chunk when the last one is used up),
+        after the parameters a user function changed and the moving offsets of the step."""
+        params = self._params
+        if params.marks or params.late:
+            self._apply_parameters(t0)
+        if self._offsets:
+            for _, curve, drive in self._offsets.record(t0, t1, self._actual):
+                drive.curve = curve
+        params.busy = True                   # force user functions run inside: changes refused
+        try:
+            self._next_output(t1, outputsLeft)
+        finally:
+            params.busy = False
+        if params.late:
+            params.apply(t1)                 # refused: changed inside the step
+        if not self._live:
+            self._push(self._loopPlan["needAcc"])
+
+    def loop_fast_hook(self, hook, loop):
+        """The common case, kept to a few operations per output (the bridge-overhead bench):
+        the next row of the current chunk goes into the live coordinate views; refilling a
+        chunk, a time off the plan (the error) and everything else go through ``hook``.
+        ch.on_plan and ch.pop are inlined here: the three method calls cost 1-2 % of a heavy-top
+        run with a sensor every 10 steps; keep the two in step with OutputChunks."""
+        ch = self._chunks
+        if ch is None or not self._live or self._watch:
+            return None
+        q, qt, qtt, ae = self._q, self._qt, self._qtt, self._ae
+        Qr, Qtr, Qttr, AEr = ch.rowViews
+        doacc, hasAE = ch.doacc, ae.size > 0
+        dtOut, tolOut = ch.nsub * ch.h, 1e-6 * ch.nsub * ch.h
+        marks, it, steps = self._params.marks, loop.it, loop.steps
+        check, progress, perf, nExudyn = loop.check, loop.progress, time.perf_counter, loop.nExudyn
+
+        def fast_hook(mainSolver, mbs, settings):
+            o = ch.next
+            if o >= ch.rows or marks:
+                return hook(mainSolver, mbs, settings)
+            t1 = it.currentTime
+            if abs(ch.tStart + (o + 1) * dtOut - t1) > tolOut + 1e-12 * abs(t1):
+                return hook(mainSolver, mbs, settings)       # raises the planning error
+            q[:] = Qr[o]
+            qt[:] = Qtr[o]
+            if doacc:
+                qtt[:] = Qttr[o]
+                if hasAE:
+                    ae[:] = AEr[o]
+            ch.next = o + 1
+            loop.count += 1
+            steps[0] = steps[1]
+            steps[1] = t1
+            if check is not None:
+                check(t1, loop.count >= nExudyn)
+            if perf() > progress.next:
+                progress(t1)
+            return True
+        return fast_hook
+
+    def loop_end(self):
+        if not self._loopPlan["needAcc"]:
+            self._write(True)                # final accelerations, as a native solve leaves them
+        self._write_torsion_data()           # the exact turned angles (Exudyn tracks per output)
 
     # ------------------------------------------------------------------ torsional springs' data nodes
     def _torsion_angles(self):
@@ -982,24 +897,6 @@ class LieGroupSolver:
                 tphi[td.spring] = phi + 2.0 * math.pi * round((target - phi) / (2.0 * math.pi))
             else:
                 td.item.prev = prev
-
-    def _progress(self, state, t):
-        now = time.perf_counter()
-        if now < state["nextProgress"]:
-            return
-        state["nextProgress"] = now + PROGRESS_EVERY
-        frac = (t - state["t0"]) / (state["tEnd"] - state["t0"])
-        el = now - state["tic"]
-        # the rate is measured from the first progress check on (the first step may include
-        # numba's one-off compilation, which says nothing about the remaining time), and that
-        # check prints nothing: a short run whose first step compiled is not a long run
-        if "rate0" not in state:
-            state["rate0"] = (now, t)
-            return
-        n0, t0 = state["rate0"]
-        rem = f"{(state['tEnd'] - t) * (now - n0) / (t - t0):.0f}" if t > t0 else "?"
-        print(f"exudyn_lie: t = {t:.6g} / {state['tEnd']:.6g} s ({100 * frac:.0f} %), {el:.1f} s elapsed, "
-              f"~{rem} s to go", flush=True)
 
     # ------------------------------------------------------------------ fast path
     def Run(self, endTime, stepSize, outputEvery=1, startTime=0.0, writeBack=True, progress=False,

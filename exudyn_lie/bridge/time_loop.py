@@ -1,0 +1,223 @@
+"""Exudyn's own time loop with its Newton iteration replaced: the one adapter of both paths.
+
+An ``exudyn.MainSolverImplicitSecondOrder`` runs ``SolveSteps`` on the bridge's settings, and
+its Newton iteration is a hook (``SetUserFunctionNewton``) that puts the integrator's state at
+the Exudyn step's end time into mbs.  Exudyn therefore does everything else as in a native
+solve: sensors, solution and restart files, pre/post-step user functions, PostNewton with its
+discontinuous iteration, the renderer, ``mbs.sys['dynamicSolver']``.
+
+:class:`TimeLoop` owns what is the same on both paths: ``mbs.sys`` entries put back when
+``InitializeSolver`` fails, the hook (which step Exudyn asks for, a step repeated by the
+discontinuous iteration, a state changed by a user function between steps, the progress
+lines, the run-time constraint check at the outputs), ``FinalizeSolver``, the exception a
+hook raised re-raised after Exudyn unwinds, and ``updateInitialValues``.  A *driver* (the
+compiled :class:`~.solver.LieGroupSolver`, the Exudyn-evaluated
+:class:`~.evaluated_solve.EvaluatedSolver`) says how the state is made:
+
+* ``loop_begin(solver)``: after ``InitializeSolver`` (mbs holds the initial values);
+* ``loop_advance(t0, t1, outputsLeft)``: the state at ``t1`` into mbs, from the step that
+  starts at ``t0``;
+* ``loop_restart(t, repeat)``: continue from the state in mbs at ``t`` (``repeat``: Exudyn's
+  discontinuous iteration repeats the step; else a user function changed the state);
+* ``loop_end()``: after a successful ``SolveSteps`` (the final writes);
+* optional ``loop_context()`` (a context manager around ``SolveSteps``) and
+  ``loop_fast_hook(hook, loop)`` (a hook for the common case that falls back to ``hook``).
+"""
+from __future__ import annotations
+
+import contextlib
+import time
+
+import numpy as np
+
+from .reader import BridgeError
+
+PROGRESS_FIRST = 2.0         # seconds before the first progress check (it measures the rate, prints nothing)
+PROGRESS_EVERY = 2.0         # seconds between progress lines
+
+
+class Progress:
+    """A progress line every PROGRESS_EVERY seconds on long runs, with the time to go."""
+
+    def __init__(self, t0, tEnd, show):
+        now = time.perf_counter()
+        self.show, self.t0, self.tEnd, self.tic = bool(show), t0, tEnd, now
+        self.next = now + PROGRESS_FIRST if show else float("inf")
+        self.rate0 = None
+
+    def __call__(self, t):
+        now = time.perf_counter()
+        if now < self.next:
+            return
+        self.next = now + PROGRESS_EVERY
+        # the rate is measured from the first progress check on (the first step may include
+        # numba's one-off compilation, which says nothing about the remaining time), and that
+        # check prints nothing: a short run whose first step compiled is not a long run
+        if self.rate0 is None:
+            self.rate0 = (now, t)
+            return
+        n0, ta = self.rate0
+        rem = f"{(self.tEnd - t) * (now - n0) / (t - ta):.0f}" if t > ta else "?"
+        frac = (t - self.t0) / (self.tEnd - self.t0)
+        print(f"exudyn_lie: t = {t:.6g} / {self.tEnd:.6g} s ({100 * frac:.0f} %), {now - self.tic:.1f} s elapsed, "
+              f"~{rem} s to go", flush=True)
+
+
+def finalize(mbs, solver, settings):
+    """Exudyn's FinalizeSolver.  A user function's ``mbs.Modify*`` marks mbs as not assembled
+    (``systemIsConsistent = False``) although it changed only live fields (the parameter watch
+    stops the run otherwise); Exudyn's own solve finalizes such a run in C++ and leaves the flag
+    False, but the Python FinalizeSolver refuses: it runs with the flag set, which is then put
+    back."""
+    consistent = mbs.systemIsConsistent
+    if not consistent:
+        mbs.systemIsConsistent = True
+    try:
+        solver.FinalizeSolver(mbs, settings)
+    finally:
+        if not consistent:
+            mbs.systemIsConsistent = False
+
+
+class TimeLoop:
+    """One run of ``driver`` inside Exudyn's time loop (module docstring).
+
+    ``settings`` the user's simulation settings (stored in ``mbs.sys`` as by
+    ``exudyn.SolveDynamic``), ``loopSettings`` the bridge's copy Exudyn runs with
+    (``solver.loop_settings``), ``nExudyn`` its number of steps; ``watch``: compare mbs'
+    coordinates after each step with those written (a pre/post-step user function may change
+    them); ``check(t, last)``: the run-time constraint check at an output (or None)."""
+
+    def __init__(self, mbs, driver, settings, loopSettings, t0, tEnd, nExudyn, *, storeSolver=True,
+                 showProgress=True, watch=False, check=None):
+        self.mbs, self.driver = mbs, driver
+        self.settings, self.loopSettings = settings, loopSettings
+        self.t0, self.tEnd, self.nExudyn = t0, tEnd, nExudyn
+        self.storeSolver, self.watch, self.check = storeSolver, watch, check
+        self.progress = Progress(t0, tEnd, showProgress)
+        self.hookError = None
+        self.steps = [t0, t0]            # start and end time of the current Exudyn step
+        self.count = 0                   # Exudyn steps done
+        self.written = None              # (q, q_t) last written, when watched
+        self.loopSeconds = 0.0
+
+    # ------------------------------------------------------------------ the run
+    def run(self):
+        """InitializeSolver, SolveSteps with the hook, FinalizeSolver; returns True or raises."""
+        import exudyn as exu
+        mbs, driver = self.mbs, self.driver
+        solver = exu.MainSolverImplicitSecondOrder()
+        driver.solver = solver
+        self._initialize(solver)
+        finalized = False
+        try:
+            driver.loop_begin(solver)
+            self.check = getattr(driver, "loop_check", None) if self.check is None else self.check
+            if self.watch:
+                self._remember()
+            self.it = solver.it              # Exudyn's iteration data (live), read once per step
+            fast = getattr(driver, "loop_fast_hook", None)
+            hook = (fast(self.hook, self) if fast is not None else None) or self.hook
+            solver.SetUserFunctionNewton(mbs, hook)
+            context = getattr(driver, "loop_context", None)
+            tic = time.perf_counter()
+            with (context() if context is not None else contextlib.nullcontext()):
+                ok = solver.SolveSteps(mbs, self.loopSettings)
+            if ok:
+                driver.loop_end()
+            self.loopSeconds = time.perf_counter() - tic
+            finalized = True
+            finalize(mbs, solver, self.loopSettings)
+        except BaseException:
+            if not finalized:
+                try:
+                    solver.FinalizeSolver(mbs, self.loopSettings)
+                except Exception:           # noqa: BLE001 - the original error matters
+                    pass
+            if self.hookError is not None:
+                raise self.hookError from None
+            raise
+        if not ok:
+            raise exu.SolverError(f"exudyn_lie: Exudyn's time loop terminated: {solver.GetErrorString()}")
+        return True
+
+    def _initialize(self, solver):
+        """``mbs.sys`` entries as ``exudyn.SolveDynamic`` sets them (available from the start),
+        then Exudyn's InitializeSolver; on a failure (e.g. a solution file that cannot be opened)
+        ``mbs.sys`` as it was."""
+        mbs = self.mbs
+        stored = {}
+        if self.storeSolver:
+            sysd = mbs.sys
+            stored = {key: (key in sysd, sysd.get(key)) for key in ("dynamicSolver", "simulationSettings",
+                                                                     "lieGroupSolver")}
+            sysd["dynamicSolver"] = solver
+            sysd["simulationSettings"] = self.settings
+            sysd["lieGroupSolver"] = self.driver
+        try:
+            ok = solver.InitializeSolver(mbs, self.loopSettings)
+            if ok is False:
+                raise BridgeError(f"Exudyn's InitializeSolver failed: {solver.GetErrorString()}")
+        except BaseException:
+            for key, (had, value) in stored.items():
+                if had:
+                    mbs.sys[key] = value
+                else:
+                    mbs.sys.pop(key, None)
+            raise
+
+    # ------------------------------------------------------------------ per Exudyn step
+    def _remember(self):
+        sd = self.mbs.systemData
+        self.written = (np.array(sd.GetODE2Coordinates()), np.array(sd.GetODE2Coordinates_t()))
+
+    def _changed(self):
+        sd = self.mbs.systemData
+        w = self.written
+        return w is not None and not (np.array_equal(sd.GetODE2Coordinates(), w[0])
+                                      and np.array_equal(sd.GetODE2Coordinates_t(), w[1]))
+
+    def hook(self, mainSolver, mbs, settings):
+        """Exudyn's Newton iteration: the state at the step's end time into mbs."""
+        try:
+            t1 = self.it.currentTime
+            steps, driver = self.steps, self.driver
+            if t1 == steps[1] and self.count > 0:
+                # Exudyn's discontinuous iteration calls the hook again for the same step, with
+                # the ODE2 coordinates reset to the start of the step
+                driver.loop_restart(steps[0], True)
+            else:
+                steps[0], steps[1] = steps[1], t1
+                self.count += 1
+                if self.watch and self._changed():
+                    driver.loop_restart(steps[0], False)     # a user function changed the state
+            driver.loop_advance(steps[0], t1, self.nExudyn - self.count + 1)
+            self.output(t1)
+            if self.watch:
+                self._remember()
+            return True
+        except BaseException as e:      # noqa: BLE001 - re-raised after Exudyn unwinds
+            self.hookError = e
+            raise
+
+    def output(self, t1):
+        """After the state at ``t1`` is in mbs: the constraint check and the progress line."""
+        if self.check is not None:
+            self.check(t1, self.count >= self.nExudyn)
+        if time.perf_counter() > self.progress.next:
+            self.progress(t1)
+
+    def off_plan(self, t1, planned):
+        """The error for an Exudyn step that does not end where the driver planned."""
+        return BridgeError(f"Exudyn's time loop asks for the step ending at t = {t1!r} s, exudyn_lie planned its "
+                           f"output at t = {planned!r} s: Exudyn changed its step size (after a failed discontinuous "
+                           f"iteration or a step reduction), which exudyn_lie's steps do not follow; check "
+                           f"timeIntegration.discontinuous and the step settings")
+
+
+def update_initial_values(mbs):
+    """``updateInitialValues``: the final state becomes the initial one (as Exudyn's own solve)."""
+    import exudyn as exu
+    sd = mbs.systemData
+    sd.SetSystemState(systemStateList=sd.GetSystemState(), configuration=exu.ConfigurationType.Initial)
+    sd.SetODE2Coordinates_tt(coordinates=sd.GetODE2Coordinates_tt(), configuration=exu.ConfigurationType.Initial)

@@ -20,8 +20,8 @@ subclass), :class:`SimulationError` (a run failed) with :class:`ConstraintError`
 """
 __version__ = "0.1.0"
 
-# Nothing is imported here: ``import exudyn_lie`` costs no numpy, numba or Exudyn (issue 19,
-# start-up).  The names below load their module on first use; every subpackage with
+# Nothing is imported here: ``import exudyn_lie`` costs no numpy, numba or Exudyn (a
+# short start-up).  The names below load their module on first use; every subpackage with
 # compiled code imports ``_numba_cache`` first (the cache key of every compiled function).
 _LAZY = {
     "get_method": "integrators.tableau", "method_names": "integrators.tableau",

@@ -1,4 +1,4 @@
-"""Exact import-time computations kept on disk, like numba's cache (issue 19, start-up).
+"""Exact import-time computations kept on disk, like numba's cache (start-up).
 
 Importing the package derives exact (``Fraction``) Taylor coefficients of the group maps
 (:mod:`exudyn_lie.groups._taylor`) and checks every catalogue tableau's order conditions

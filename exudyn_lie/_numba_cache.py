@@ -266,7 +266,7 @@ class LazyFunctionCache:
     """numba's ``FunctionCache`` of a package function, made when the dispatcher first uses
     it (a cache load, save or query) instead of when the function is defined: making it
     finds the locator, stats the source and reads nothing else, 0.1 ms per function and
-    300 functions in an import of the solver (issue 19, start-up)."""
+    300 functions in an import of the solver (start-up)."""
     __slots__ = ("_py_func", "_real")
 
     def __init__(self, py_func):

@@ -18,7 +18,8 @@ from numba import njit
 from numba.core.registry import CPUDispatcher
 from numba.core.runtime import rtsys
 
-from exudyn_lie.groups import dualquat, quaternion, se3, so3, so3xr3
+import dualquat_oracle as dualquat
+from exudyn_lie.groups import quaternion, se3, so3, so3xr3
 
 # not in the quick subset (pytest -m "not slow"): compiles every public group map inside an njit wrapper (about 25 s per run)
 pytestmark = pytest.mark.slow

@@ -4,7 +4,7 @@ import math
 import numpy as np
 import pytest
 
-from exudyn_lie.groups import dualquat as dq
+import dualquat_oracle as dq
 from exudyn_lie.groups import quaternion as qt
 from exudyn_lie.groups import se3, so3
 

@@ -8,9 +8,10 @@ Problems (exact solutions, independent of the package's group maps):
 import numpy as np
 import pytest
 
-from exudyn_lie.groups import dualquat, quaternion
+import dualquat_oracle as dualquat
+from exudyn_lie.groups import quaternion
 from exudyn_lie.integrators import METHODS, mk
-from exudyn_lie.integrators import vector_space as vs
+import vector_space_oracle as vs
 from test_mk_convergence import memo, step_counts
 
 GROUPS = ["SE3", "SO3xR3"]

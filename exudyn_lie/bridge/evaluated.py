@@ -2,7 +2,7 @@
 equations (M, f, C_q and the velocity-level constraints) through the
 ``MainSolverImplicitSecondOrder`` interface, for any item Exudyn can evaluate.
 
-Why the *whole* model (issue 17's design question): an item the kernel does not compile
+Why the *whole* model (the design question): an item the kernel does not compile
 (an ANCF cable, a contact, a GenericODE2 system) couples to the rigid bodies through
 markers whose kinematics, Jacobians and reaction forces Exudyn computes in its own
 coordinates.  Evaluating everything in Exudyn couples every item with every other exactly

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 from . import items
 from .reader import BridgeError, NotCompiled, SceneFromExudyn
+from .settings import liegroup_argument
 
 
 def _listing(kind, idx):
@@ -54,7 +55,7 @@ def _compiled_refusal(mbs, assemble):
 
 
 def evaluated_path(mbs, evaluation, assemble, *, method, liegroup, stabilization, projectInitial, verbose, settings,
-                   substeps, check_liegroup):
+                   substeps):
     """The :class:`~.evaluated_solve.EvaluatedSolver` of the run, or None for the compiled
     path.  Raises before mbs is touched for input neither path takes."""
     from .evaluated_solve import EvaluatedSolver
@@ -73,21 +74,7 @@ def evaluated_path(mbs, evaluation, assemble, *, method, liegroup, stabilization
                           f"(the model has items the compiled kernel does not have, or evaluation='exudyn'); use "
                           f"stabilization=None")
     tab = _check_method(method)
-    if isinstance(liegroup, str):
-        lg = check_liegroup(liegroup, "liegroup")
-    elif isinstance(liegroup, dict):
-        lg = {}
-        for k, v in liegroup.items():
-            try:
-                key = int(k)
-            except (TypeError, ValueError):
-                raise BridgeError(f"liegroup mapping key {k!r} is not an Exudyn object index") from None
-            g = check_liegroup(v, f"liegroup[{key}]")
-            if g != "auto":
-                lg[key] = g
-    else:
-        raise BridgeError(f"liegroup must be 'SE3', 'SO3xR3', 'auto' or a mapping {{object index: group}}, "
-                          f"got {type(liegroup).__name__}")
+    lg = liegroup_argument(liegroup)
     solver = EvaluatedSolver(mbs, tab, lg, verbose=verbose, reasons=reasons, projectInitial=projectInitial)
     solver.check_run(settings, substeps)
     return solver

@@ -35,7 +35,7 @@ from .evaluated_initial import project_initial
 from .evaluated_stiffness import check_step
 from .constraint_check import ConsistencyAccount, ConstraintCheck, check_tolerance
 from .reader import BridgeError, UNHONOURED_MBS_FUNCTIONS, check_system_level
-from .settings import check_settings
+from .run_plan import adaptive_settings, needs_accelerations, plan_substeps, time_settings
 from .solver import loop_settings
 from .time_loop import TimeLoop, update_initial_values
 
@@ -120,45 +120,15 @@ class EvaluatedSolver:
         self.liegroup = liegroup
         self.verbose = bool(verbose)
         self.reasons = reasons
-        self.constraintTolerance = None      # (the compiled path's keyword: not available here)
         check_system(mbs)
         check_model(mbs)
         self.timing = {}
 
-    # the planning rules of the compiled path (output periods -> internal steps per Exudyn step)
-    from .solver import LieGroupSolver as _L
-    _plan = _L._plan
-    _period_steps = staticmethod(_L._period_steps)
-    _time_settings = staticmethod(_L._time_settings)
-    _needs_accelerations_compiled = _L._needs_accelerations
-    _adaptive_settings = _L._adaptive_settings
-    del _L
-
-    def _needs_accelerations(self, ss, userStep):
-        """As the compiled path: only if a sensor, file or user function can read them."""
-        if userStep:
-            return True
-        exp = ss.solution.file.export
-        if ss.solution.file.write and (exp.accelerations or exp.algebraicCoordinates):
-            return True
-        if ss.solution.restart.write:
-            return True
-        mbs = self.mbs
-        if ss.solution.sensors.active:
-            for s in range(mbs.systemData.NumberOfSensors()):
-                d = mbs.GetSensor(s)
-                if d.get("sensorType", "") == "UserFunction" or "Acceleration" in str(d.get("outputVariableType", "")):
-                    return True
-                if d.get("sensorType", "") == "Object":
-                    return True          # object outputs may read the multipliers
-        return False
-
     def check_run(self, ss, substeps):
         """Raise for settings this path refuses (changes nothing)."""
-        nsteps, t0, tEnd, h = self._time_settings(ss)
-        check_settings(ss)
-        k, _ = self._plan(ss, nsteps, h, substeps)
-        if self._adaptive_settings(ss, h) is not None and substeps is not None and k > 1:
+        nsteps, t0, tEnd, h = time_settings(ss)
+        k, _ = plan_substeps(self.mbs, ss, nsteps, h, substeps)
+        if adaptive_settings(self.tableau, ss, h) is not None and substeps is not None and k > 1:
             raise BridgeError(f"substeps={substeps}: with adaptive steps the error control chooses the steps "
                               f"within each Exudyn step; use substeps=None or 1")
 
@@ -208,8 +178,8 @@ class EvaluatedSolver:
         ticTotal = time.perf_counter()
         ss = exu.SimulationSettings() if simulationSettings is None else simulationSettings
         self.check_run(ss, substeps)
-        nsteps, t0, tEnd, h = self._time_settings(ss)
-        k, userStep = self._plan(ss, nsteps, h, substeps)
+        nsteps, t0, tEnd, h = time_settings(ss)
+        k, userStep = plan_substeps(mbs, ss, nsteps, h, substeps)
         # one MK step per Exudyn step by default: Exudyn's per-step work (InitializeStep,
         # PostNewton with the data coordinates of contacts, search trees) then runs after
         # every step as in its own solvers; it costs a few us against the stages' tens.
@@ -221,10 +191,11 @@ class EvaluatedSolver:
         elif postNewton and k > 1:
             raise BridgeError(f"substeps={substeps}: {postNewton} need Exudyn's PostNewton after every step "
                               f"(their data coordinates change between steps); use substeps=None or 1")
-        needAcc = self._needs_accelerations(ss, userStep) if accelerations is None else bool(accelerations)
+        # object outputs may read the multipliers
+        needAcc = needs_accelerations(mbs, ss, userStep) if accelerations is None else bool(accelerations)
         groups, why = node_groups(mbs, self.liegroup)
         tab = self.tableau
-        adaptive = self._adaptive = self._adaptive_settings(ss, h)
+        adaptive = self._adaptive = adaptive_settings(tab, ss, h)
         if adaptive is not None:
             k = 1                          # the error control chooses the steps within each Exudyn step
             info = (f"exudyn_lie: explicit Munthe-Kaas {tab.name} (order {tab.order}) with adaptive steps (error "

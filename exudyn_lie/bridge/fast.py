@@ -9,28 +9,18 @@ output, converts the chunk to node coordinates in one call of
 :func:`~exudyn_lie.bridge.nodes.write_rows`, and per Exudyn step only copies one row into
 mbs.  Where a user function may change the state between outputs, or Python forces run, the
 chunk is one output long.  Both calls go through entry points resolved once
-(:func:`entry_point`).  Every output path of the bridge goes through here.
+(:func:`~exudyn_lie.mbs.entry.call`).  Every output path of the bridge goes through here.
 """
 import numpy as np
 
 from ..mbs import kernel, stepper
-from ..mbs.entry import entry_point
+from ..mbs.entry import call
 from ..mbs.rotation_parameters import record_tracked
 from .nodes import CODE_1D_ROT, CODE_2D, NCOORD_MAX, present_writers, write_rows
 
 CHUNK_SECONDS = 0.05        # aimed wall time of one chunk (progress, responsiveness)
 CHUNK_DOUBLES = 1 << 22     # at most this many doubles of chunk buffers (32 MiB)
 CHUNK_ROWS = 256            # at most this many outputs per chunk
-
-def _call(cache, name, dispatcher, args):
-    """``dispatcher(*args)``, through its entry point from the second call on."""
-    ep = cache.get(name)
-    if ep is None:
-        out = dispatcher(*args)
-        cache[name] = entry_point(dispatcher, args) or dispatcher
-        return out
-    return ep(*args)
-
 
 class OutputChunks:
     """Output steps of ``nsub`` MK steps each, computed a chunk at a time.
@@ -75,7 +65,7 @@ class OutputChunks:
         acc = n if self.doacc else 0
         a1 = (sim.sd, sim.wk, sim.method, sim.control, float(t0), h, n * nsub, sim.R, sim.r, sim.V, self.vmax, nsub,
               self.Ro[:n], self.ro[:n], self.Vo[:n], self.Po[:n], self.Vdo[:acc], self.lamo[:acc])
-        st, done = _call(self._ep, "mk", stepper.mk_steps, a1)
+        st, done = call(self._ep, "mk", stepper.mk_steps, a1)
         rows = done // nsub
         if st != kernel.STATUS_OK and self.doacc and rows > 0 and np.isnan(self.Vdo[rows - 1, 0, 0]):
             rows -= 1                   # its accelerations failed: not an output
@@ -86,7 +76,7 @@ class OutputChunks:
         a2 = (rows, sim.sd.gid, self.Ro, self.ro, self.Vo, self.Vdo, self.lamo, self.doacc, nt.code, nt.body,
               nt.idx, nt.nq, nt.qref, nt.prev, self.Q, self.Qt, self.Qtt, nt.flags, jrow, jae, self.AE, To,
               self.Po, nt.scratch, nt.present)
-        nflag = _call(self._ep, "write", write_rows, a2)
+        nflag = call(self._ep, "write", write_rows, a2)
         sim.t = t0 + done * h           # on a failure: the last accepted step
         self.tStart, self.rows, self.next = t0, rows, 0
         self.failure = None if st == kernel.STATUS_OK else st
@@ -167,7 +157,7 @@ class AdaptiveOutputChunks(OutputChunks):
         a2 = (rows, sim.sd.gid, self.Ro, self.ro, self.Vo, self.Vdo, self.lamo, self.doacc, nt.code, nt.body,
               nt.idx, nt.nq, nt.qref, nt.prev, self.Q, self.Qt, self.Qtt, nt.flags, jrow, jae, self.AE,
               np.ascontiguousarray(tout, dtype=float), self.Po, nt.scratch, nt.present)
-        nflag = _call(self._ep, "write", write_rows, a2)
+        nflag = call(self._ep, "write", write_rows, a2)
         self.tStart, self.rows, self.next = tPrev, rows, 0
         self.done += rows
         self.failure = None if st == kernel.STATUS_OK else st

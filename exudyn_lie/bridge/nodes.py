@@ -113,7 +113,7 @@ def ep_row(R, omega, omegad, prev, first, p, p_t, p_tt, tmp):
 def _wrap_near(x, ref):
     # np.rint, not np.round: the same value (round half to even), but np.round's numba
     # implementation lives in numba.np.arraymath, which imports scipy.linalg when a
-    # cached kernel is loaded (0.12 s of a warm start, issue 19)
+    # cached kernel is loaded (0.12 s of a warm start)
     return x + TWO_PI * np.rint((ref - x) / TWO_PI)
 
 
@@ -232,7 +232,7 @@ def write_nodes(gid, R, r, V, Vdot, doacc, code, body, idx, nq, qref, prev, firs
     those, i.e. Exudyn's continuous branch however far apart the outputs are.  ``scratch``
     (8, 4): the working vectors, zeroed here; nothing is allocated, so the compiled
     write-back needs no numba array allocator (its implementation module is not imported
-    when the cached code is loaded: 14 ms CPU of a warm first solve, issue 19)."""
+    when the cached code is loaded: 14 ms CPU of a warm first solve)."""
     for i in range(scratch.shape[0]):
         for k in range(4):
             scratch[i, k] = 0.0

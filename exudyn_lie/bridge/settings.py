@@ -11,6 +11,7 @@ otherwise.
 """
 from __future__ import annotations
 
+from ..groups import canonical_name
 from .params import IGNORED, LIVE, REFUSED
 from .reader import BridgeError
 
@@ -99,3 +100,32 @@ def positive_float(value, error):
     if not (v > 0.0 and v < float("inf")):
         raise error
     return v
+
+
+def group_name(g, what):
+    """A body group the user may name (``groups.canonical_name``): 'SE3', 'SO3xR3' or 'auto'."""
+    key = canonical_name(g)
+    if key in ("SE3", "SO3xR3", "auto"):
+        return key
+    raise BridgeError(f"{what}: unknown Lie group {g!r}; use 'SE3', 'SO3xR3' or 'auto' (or a mapping "
+                      f"{{rigid-body object index: 'SE3' | 'SO3xR3'}})")
+
+
+def liegroup_argument(liegroup):
+    """``SolveDynamic``'s ``liegroup`` checked: a group name, or ``{object index: group}``
+    without its 'auto' entries (the same rule on both paths)."""
+    if isinstance(liegroup, str):
+        return group_name(liegroup, "liegroup")
+    if isinstance(liegroup, dict):
+        out = {}
+        for k, v in liegroup.items():
+            try:
+                key = int(k)
+            except (TypeError, ValueError):
+                raise BridgeError(f"liegroup mapping key {k!r} is not an Exudyn object index") from None
+            g = group_name(v, f"liegroup[{key}]")
+            if g != "auto":
+                out[key] = g
+        return out
+    raise BridgeError(f"liegroup must be 'SE3', 'SO3xR3', 'auto' or a mapping {{object index: group}}, "
+                      f"got {type(liegroup).__name__}")

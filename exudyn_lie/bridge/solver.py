@@ -53,22 +53,12 @@ from .constraint_check import ConstraintCheck, check_tolerance, kernel_explanati
 from .fast import CHUNK_ROWS, AdaptiveOutputChunks, NodeTable, OutputChunks
 from .moving_offsets import ParameterOffsets
 from .params import ParameterWatch
-from .settings import check_settings, positive_float
+from .settings import liegroup_argument, positive_float
 from .solvertype import resolve_solver_type
+from .run_plan import adaptive_settings, needs_accelerations, plan_substeps, time_settings
 from .time_loop import TimeLoop, update_initial_values
 from .reader import BridgeError, ExudynScene, SceneFromExudyn
 
-GROUP_ALIASES = {"se3": "SE3", "so3xr3": "SO3xR3", "so3r3": "SO3xR3", "auto": "auto"}
-MAX_SUBSTEPS = 1000          # at most this many internal steps per Exudyn step (progress, renderer)
-
-
-def _group_name(g, what):
-    if isinstance(g, str):
-        key = g.strip().lower().replace("(", "").replace(")", "").replace(" ", "").replace("_", "")
-        if key in GROUP_ALIASES:
-            return GROUP_ALIASES[key]
-    raise BridgeError(f"{what}: unknown Lie group {g!r}; use 'SE3', 'SO3xR3' or 'auto' (or a mapping "
-                      f"{{rigid-body object index: 'SE3' | 'SO3xR3'}})")
 
 
 def _check_method(method):
@@ -164,22 +154,7 @@ class LieGroupSolver:
 
     # ------------------------------------------------------------------ set-up
     def _check_liegroup(self, liegroup):
-        if isinstance(liegroup, str):
-            return _group_name(liegroup, "liegroup")
-        if isinstance(liegroup, dict):
-            out = {}
-            for k, v in liegroup.items():
-                try:
-                    key = int(k)
-                except (TypeError, ValueError):
-                    raise BridgeError(f"liegroup mapping key {k!r} is not an Exudyn object index") from None
-                g = _group_name(v, f"liegroup[{key}]")
-                if g == "auto":
-                    continue
-                out[key] = g
-            return out
-        raise BridgeError(f"liegroup must be 'SE3', 'SO3xR3', 'auto' or a mapping {{object index: group}}, "
-                          f"got {type(liegroup).__name__}")
+        return liegroup_argument(liegroup)
 
     def _groups(self, sc: ExudynScene):
         auto = auto_groups(sc)
@@ -481,65 +456,14 @@ class LieGroupSolver:
         self._seed_contact_data()
         self._nodes.prev[:] = NodeTable(self.scene.nodeKinds, self.scene.kindBodies, t).prev
 
-    # ------------------------------------------------------------------ planning
-    @staticmethod
-    def _period_steps(period, h):
-        """Output period in steps: an integer >= 1, or 1 if it is not a multiple of h."""
-        if period <= 0:
-            return 1
-        n = period / h
-        k = int(round(n))
-        if k < 1 or abs(n - k) > 1e-9 * max(1.0, n):
-            return 1
-        return k
-
+    # ------------------------------------------------------------------ planning (bridge/run_plan.py)
     def _plan(self, ss, nsteps, h, substeps):
-        mbs = self.mbs
-        check_settings(ss)
-        # one Exudyn step per step: user step functions run, and Exudyn pauses, after every step
-        userStep = bool(mbs.GetPreStepUserFunction()) or bool(mbs.GetPostStepUserFunction())
-        if substeps is not None:
-            k = int(substeps)
-            if k < 1 or nsteps % k:
-                raise BridgeError(f"substeps={substeps} must be a positive divisor of numberOfSteps={nsteps}")
-            return k, userStep
-        if userStep or ss.pauseAfterEachStep:
-            return 1, userStep
-        sol = ss.solution
-        k = nsteps
-        if sol.file.write:
-            k = math.gcd(k, self._period_steps(sol.file.writePeriod, h))
-        if sol.sensors.active and mbs.systemData.NumberOfSensors() > 0:
-            k = math.gcd(k, self._period_steps(sol.sensors.writePeriod, h))
-        if sol.restart.write:
-            k = math.gcd(k, self._period_steps(sol.restart.writePeriod, h))
-        if sol.recordImagesInterval > 0:
-            k = math.gcd(k, self._period_steps(sol.recordImagesInterval, h))
-        if k > MAX_SUBSTEPS:
-            k = max(d for d in range(1, MAX_SUBSTEPS + 1) if k % d == 0)
-        return k, userStep
+        return plan_substeps(self.mbs, ss, nsteps, h, substeps)
 
     def _needs_accelerations(self, ss, userStep):
-        """Accelerations / multipliers are written only if something can read them."""
-        if userStep:
-            return True
-        exp = ss.solution.file.export
-        if ss.solution.file.write and (exp.accelerations or exp.algebraicCoordinates):
-            return True
-        if ss.solution.restart.write:
-            return True                  # the restart file stores ODE2_tt and the AE coordinates
-        mbs = self.mbs
-        if ss.solution.sensors.active:
-            jointObjects = {ji.objectIndex for ji in self.scene.joints_info}
-            for s in range(mbs.systemData.NumberOfSensors()):
-                d = mbs.GetSensor(s)
-                st = d.get("sensorType", "")
-                ovt = str(d.get("outputVariableType", ""))
-                if st == "UserFunction" or "Acceleration" in ovt:
-                    return True
-                if st == "Object" and int(d.get("objectNumber", -1)) in jointObjects:
-                    return True          # joint outputs are the multipliers
-        return False
+        """Accelerations / multipliers are written only if something can read them (joint
+        outputs are the multipliers)."""
+        return needs_accelerations(self.mbs, ss, userStep, {ji.objectIndex for ji in self.scene.joints_info})
 
     # ------------------------------------------------------------------ adaptive steps
     @staticmethod
@@ -557,56 +481,10 @@ class LieGroupSolver:
         return ct
 
     def _adaptive_settings(self, ss, h):
-        """Keywords of :meth:`Simulator.SetAdaptive` from Exudyn's settings, or None for fixed
-        steps (docs/ADAPTIVE.md).  Adaptive: a method with an embedded pair and
-        ``timeIntegration.adaptiveStep`` (Exudyn's default True); tolerances
-        ``absoluteTolerance`` / ``relativeTolerance`` (with L = 1 m, T = 1 s: every SI
-        quantity, as Exudyn applies them to every coordinate); the largest step
-        ``(endTime - startTime) / numberOfSteps`` (Exudyn: CSolverBase.cpp, no
-        maximumStepSize); ``minimumStepSize``; the first step ``initialStepSize`` if
-        ``automaticStepSize`` and it is > 0, h_max without ``automaticStepSize`` (as Exudyn),
-        else Hairer's HINIT (Exudyn starts at h_max and rejects its way down); the PI
-        controller with Exudyn's ``stepSizeSafety`` and ``stepSizeMaxIncrease``."""
-        ti = ss.timeIntegration
-        if self.tableau.b_hat is None or not ti.adaptiveStep:
-            if self.constraintTolerance is not None:
-                raise BridgeError(f"constraintTolerance needs adaptive steps: a method with an embedded pair "
-                                  f"(DOPRI5, ODE23, Vern6; here {self.tableau.name}) and timeIntegration.adaptiveStep "
-                                  f"= True (here {ti.adaptiveStep}); fixed steps project with stabilization="
-                                  f"'position' or 'velocity'")
-            return None
-        atol, rtol = float(ti.absoluteTolerance), float(ti.relativeTolerance)
-        hmin, h0 = float(ti.minimumStepSize), float(ti.initialStepSize)
-        safety, inc = float(ti.stepSizeSafety), float(ti.stepSizeMaxIncrease)
-        bad = [f"{name} = {v}" for name, v, ok in (
-            ("absoluteTolerance", atol, atol > 0), ("relativeTolerance", rtol, rtol >= 0),
-            ("minimumStepSize", hmin, 0 <= hmin < h), ("initialStepSize", h0, h0 >= 0),
-            ("stepSizeSafety", safety, 0 < safety <= 1), ("stepSizeMaxIncrease", inc, inc > 1)) if not ok]
-        if bad:
-            raise BridgeError(f"timeIntegration: {', '.join(bad)} cannot control adaptive steps (need "
-                              f"absoluteTolerance > 0, relativeTolerance >= 0, 0 <= minimumStepSize < (endTime - "
-                              f"startTime) / numberOfSteps = {h:g}, initialStepSize >= 0, 0 < stepSizeSafety <= 1, "
-                              f"stepSizeMaxIncrease > 1); or set timeIntegration.adaptiveStep = False for fixed steps")
-        if not ti.automaticStepSize:
-            first = h
-        elif h0 > 0:
-            first = min(h0, h)
-        else:
-            first = None
-        return dict(rtol=rtol, atol=atol, maxStep=h, minStep=hmin, firstStep=first, safety=safety,
-                    maxIncrease=inc, constraintTolerance=self.constraintTolerance)
+        return adaptive_settings(self.tableau, ss, h, self.constraintTolerance)
 
     # ------------------------------------------------------------------ solve
-    @staticmethod
-    def _time_settings(ss):
-        """(numberOfSteps, startTime, endTime, step size) of the settings, checked."""
-        ti = ss.timeIntegration
-        nsteps = int(ti.numberOfSteps)
-        t0, tEnd = float(ti.startTime), float(ti.endTime)
-        if nsteps < 1 or not (np.isfinite(t0) and np.isfinite(tEnd)) or tEnd <= t0:
-            raise BridgeError(f"timeIntegration: need numberOfSteps >= 1 and endTime > startTime, got "
-                              f"numberOfSteps={ti.numberOfSteps}, startTime={t0}, endTime={tEnd}")
-        return nsteps, t0, tEnd, (tEnd - t0) / nsteps
+    _time_settings = staticmethod(time_settings)
 
     def _check_run(self, ss, substeps):
         """Raise for settings a run with ``Solve(ss, substeps=...)`` would refuse (changes
@@ -1010,7 +888,7 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
         from .evaluated_dispatch import evaluated_path
         path = evaluated_path(mbs, evaluation, assemble, method=method, liegroup=liegroup,
                               stabilization=None if auto else stabilization, projectInitial=projectInitial, verbose=verbose,
-                              settings=settings, substeps=substeps, check_liegroup=_group_name)
+                              settings=settings, substeps=substeps)
         if path is not None:
             if constraintTolerance is not None:
                 raise BridgeError("exudyn_lie.SolveDynamic: constraintTolerance is available on the compiled path only "

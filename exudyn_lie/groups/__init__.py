@@ -37,19 +37,35 @@ allocation-free variants for hot loops, which write into caller-provided arrays:
 
 (so3 without the translation arguments), dexp_series, dexpinv_series; se3 also
 dexpinv_selig, dexp_P, dexpinv_U; coefficient helpers (coef_*) and switch
-constants (T_SWITCH_*).  Every public function of so3, se3, so3xr3, quaternion
-and dualquat is called from inside an njit function in tests/test_groups_njit.py,
+constants (T_SWITCH_*).  Every public function of so3, se3, so3xr3 and quaternion
+(and of the tests' dual quaternions) is called from inside an njit function in tests/test_groups_njit.py,
 which also checks that the _into variants do not allocate.
 """
 from .. import _numba_cache  # noqa: F401  (first: the cache key of every compiled function)
-from . import so3, se3, so3xr3, rn, se2, so2xr2, quaternion, dualquat
+from . import so3, se3, so3xr3, rn, se2, so2xr2, quaternion
 
 # The one registry of body configuration groups (name -> module).  Every entry implements
 # the interface of :mod:`.interface` with the same signatures; its position is the group
 # id the compiled kernel uses (exudyn_lie.mbs.codes).  A new group: its module, one line here.
 GROUPS = {'SE3': se3, 'SO3xR3': so3xr3, 'R3': rn, 'SE2': se2, 'SO2xR2': so2xr2}
 
-__all__ = ["so3", "se3", "so3xr3", "rn", "se2", "so2xr2", "quaternion", "dualquat", "GROUPS", "switch_report"]
+__all__ = ["so3", "se3", "so3xr3", "rn", "se2", "so2xr2", "quaternion", "GROUPS", "canonical_name",
+           "switch_report"]
+
+
+def canonical_name(name):
+    """The registry name of a group as users write it (case, blanks, parentheses and underscores
+    ignored, 'SO3R3' for SO3xR3), ``'auto'``, or None for anything else: the one parser of group
+    names (the callers say which groups they accept)."""
+    if not isinstance(name, str):
+        return None
+    key = name.strip().lower()
+    for ch in "() _":
+        key = key.replace(ch, "")
+    if key == "auto":
+        return "auto"
+    key = {"so3r3": "so3xr3"}.get(key, key)
+    return next((g for g in GROUPS if g.lower() == key), None)
 
 
 def switch_report():

@@ -5,7 +5,8 @@
 * :mod:`.mk` -- TEST ORACLE ONLY: the Python reference MK stepper (clear, slow), against
   which tests check the compiled stepper (:mod:`exudyn_lie.mbs.stepper`, the one every
   solver path runs) and the vector-space formulations.
-* :mod:`.vector_space` -- the vector-space formulations (ODEvec1, ODEvec2) for comparison.
+* the vector-space formulations (ODEvec1, ODEvec2) the paper compares with are a test oracle
+  (``tests/vector_space_oracle.py``).
 """
 from .. import _numba_cache  # noqa: F401  (first: the cache key of every compiled function)
 from .tableau import (METHODS, ButcherTableau, achieved_order, get_method, method_names,

@@ -46,7 +46,7 @@ guard up to 3e-13 at 1e-8, 4e-11 at 1e-9, 4e-9 at 1e-10, 1e-4..2e-3 at 1e-12..1e
 O(1) at 1e-14; RK4 at h |omega| = 2 pi (the double nearest to it): 4e-2, at 4 pi: 1e7).
 
 This module favours clarity over speed: it is the reference the compiled multibody
-kernel and the vector-space formulations (:mod:`.vector_space`) are compared with.
+kernel and the vector-space formulations (``tests/vector_space_oracle.py``) are compared with.
 Group maps come from :mod:`exudyn_lie.groups` (numba-compiled), called per body.
 """
 from dataclasses import dataclass

@@ -1,5 +1,5 @@
 """Adaptive explicit Munthe-Kaas integration with error control on the group: the Python
-reference (test oracle) for the compiled adaptive stepper of issue 18.
+reference (test oracle) for the compiled adaptive stepper.
 
 One step from ``(t, g, V)`` with an embedded pair ``(A, b, b_hat)`` (eq. MK1, per body)::
 

@@ -53,7 +53,7 @@ __all__ = [
     "RK33",
     "RK67",
     "extrapolated_euler",
-    # --- embedded pairs and continuous extensions (issue 18) ---
+    # --- embedded pairs and continuous extensions ---
     "ContinuousExtension",
     "PAIRS",
     "continuous_order_residuals",
@@ -234,7 +234,7 @@ def _readonly(x):
 
 
 # --------------------------------------------------------------------------- continuous extensions
-# (issue 18: dense output).  A continuous extension ("dense output") of an explicit RK
+# (dense output).  A continuous extension ("dense output") of an explicit RK
 # method replaces the weights b_j by polynomials b_j(theta), 0 <= theta <= 1, so that
 # y(t + theta h) ~ y + h sum_j b_j(theta) k_j  (Hairer-Norsett-Wanner I, sec. II.6).  It
 # has order q when every tree t with |t| <= q satisfies the continuous order condition
@@ -485,7 +485,7 @@ class ButcherTableau:
         set_(self, "aliases", tuple(self.aliases))
         set_(self, "exact", bool(exact))
         set_(self, "_exact_coeffs", (A_raw, b_raw, c_raw) if exact else None)
-        # --- dense output (issue 18): checked against A and b, stored as float arrays
+        # --- dense output: checked against A and b, stored as float arrays
         if self.dense is not None:
             dense = self.dense
             set_(self, "dense", _MEMO.get(arg_key("dense", dense, A_raw, b_raw, exact, scale),
@@ -522,7 +522,7 @@ class ButcherTableau:
                 need[j] = any(need[l] and self.A[l, j] != 0.0 for l in range(j + 1, s))
         return tuple(j for j in range(s) if need[j])
 
-    # --- embedded pairs (issue 18) ----------------------------------------------------
+    # --- embedded pairs ----------------------------------------------------
     @property
     def fsal(self):
         """First Same As Last, decided from the coefficients: the last stage row equals the
@@ -633,7 +633,7 @@ RK38 = ButcherTableau(
     description="Kutta's 3/8 rule.",
 )
 
-# --- dense output of DOPRI5 (issue 18) -------------------------------------------------
+# --- dense output of DOPRI5 -------------------------------------------------
 # Shampine's order-4 continuous extension (L. F. Shampine, "Some practical Runge-Kutta
 # formulas", Math. Comp. 46 (1986) 135-150), in the form Hairer's dopri5.f (CONTD5) uses:
 # y(theta) = y0 + theta (y1 - y0) + theta (1 - theta) (h k1 - (y1 - y0))
@@ -730,7 +730,7 @@ RK67 = ButcherTableau(
 )
 
 # --------------------------------------------------------------------------- embedded pairs
-# (issue 18: adaptive steps).  Each pair carries b_hat / order_hat; `fsal` and `dense` are
+# (adaptive steps).  Each pair carries b_hat / order_hat; `fsal` and `dense` are
 # derived / checked by the tableau type.  Coefficients are the published rationals; the
 # type verifies every order condition of b (order), b_hat (order_hat) and of the dense
 # weights exactly.
@@ -872,7 +872,7 @@ METHODS = (ExplicitEuler, ExplicitMidpoint, Heun, RK3, RK4, RK38, DOPRI5, RK6, R
 #: 1e-6 and 1e-7 from 2 pi, where h |omega| = 3 pi), see PAIRS.
 NAMED_EXTRA = (RK33,)
 
-#: The embedded pairs (issue 18).  BS3 and Vern6 are not (yet) in METHODS: the generic
+#: The embedded pairs.  BS3 and Vern6 are not (yet) in METHODS: the generic
 #: fixed-step tests that iterate over METHODS assume round-off of a method with weights of
 #: size ~1 (Vern6's weights of size 176 cancel: its round-off is ~350x larger), and BS3
 #: fails the SE3 fixed-axis "exact up to the domain limit" test (errors 2e-11..3e-9 for steps
@@ -935,7 +935,7 @@ def _check_catalogue(methods):
 
 
 _check_catalogue(METHODS)
-_check_catalogue(METHODS + PAIRS[1:])     # embedded pairs (issue 18): no name clashes
+_check_catalogue(METHODS + PAIRS[1:])     # embedded pairs: no name clashes
 _check_catalogue(METHODS + NAMED_EXTRA + PAIRS[1:])
 
 

@@ -1,4 +1,4 @@
-"""The adaptive step controller of the one stepper, compiled (issue 18).
+"""The adaptive step controller of the one stepper, compiled.
 
 ``AdaptiveControl`` is a controller of :func:`~.stepper.mk_steps`'s seam: this module registers
 its overloads of the seam functions (``stepper.step_begin``, ``control_step``, ...), so that

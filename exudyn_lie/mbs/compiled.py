@@ -17,6 +17,7 @@ from .linalg import REL_PIVOT_TOL, rcm_order
 from .rolling_disc_penalty_forces import N_DISC, rolling_disc_penalty_row
 from .oblique_solve import oblique_plan
 from .scene import GROUND, Scene, SceneError
+from ..groups import canonical_name
 from .tree_solve import tree_plan, work_size
 
 GROUP_IDS = {name: gid for gid, name in enumerate(GROUP_NAMES)}
@@ -150,7 +151,7 @@ def joint_parameters(joint):
 
 
 #: the planar subgroup of each c-space: a 2D body (Scene.AddBody2D) on c-space 'SE3' is
-#: integrated on SE2, on 'SO3xR3' on SO2xR2 (issue 16)
+#: integrated on SE2, on 'SO3xR3' on SO2xR2
 PLANAR_GROUP = {"SE3": "SE2", "SO3xR3": "SO2xR2"}
 _SPACE_OF = {v: k for k, v in PLANAR_GROUP.items()}
 PLANAR_AXES = [2, 3, 4]          # (omega_z, v_x, v_y) in the 6-vector velocity
@@ -260,11 +261,9 @@ def _planar_subgroups(scene, names):
 
 
 def _group_key(name, what):
-    if isinstance(name, str):
-        low = name.strip().lower().replace("(", "").replace(")", "").replace(" ", "")
-        table = {"se3": "SE3", "so3xr3": "SO3xR3", "so3r3": "SO3xR3", "auto": "auto", "r3": "R3"}
-        if low in table:
-            return table[low]
+    g = canonical_name(name)
+    if g in ("SE3", "SO3xR3", "R3", "auto"):
+        return g
     raise SceneError(f"{what}: unknown Lie group {name!r}; use 'SE3', 'SO3xR3' or 'auto' "
                      f"(2D bodies then run on SE2 / SO2xR2)")
 

@@ -30,7 +30,7 @@ def frame_angle(F, R, prev):
     a = np.arctan2(s, c)
     # np.rint, not np.round: the same value (round half to even), but np.round's numba
     # implementation lives in numba.np.arraymath, which imports scipy.linalg when a
-    # cached kernel is loaded (0.12 s of a warm start, issue 19)
+    # cached kernel is loaded (0.12 s of a warm start)
     return a + TWO_PI * np.rint((prev - a) / TWO_PI)
 
 

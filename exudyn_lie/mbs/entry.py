@@ -4,8 +4,8 @@ A Python call of a numba function re-derives the types of its arguments every ti
 kernel's namedtuples of ~60 arrays that costs microseconds per call and about a millisecond
 for the first resolution.  :func:`entry_point` caches the compiled entry point by a cheap
 structural key, so repeated solves (and every new :class:`~exudyn_lie.mbs.Simulator` with
-the same scene structure) skip it.  Used by the bridge's output chunks and by the adaptive
-driver.
+the same scene structure) skip it.  :func:`call` is how the simulator and the bridge's output
+chunks call the kernel.
 """
 import numpy as np
 from numba._dispatcher import compute_fingerprint
@@ -51,3 +51,16 @@ def entry_point(dispatcher, args):
         return None
 
 
+def call(cache, name, dispatcher, args):
+    """``dispatcher(*args)`` through its compiled entry point, resolved once and kept in
+    ``cache[name]`` (the one place that resolves them; drop the cache when the argument types
+    may change)."""
+    ep = cache.get(name)
+    if ep is None:
+        ep = entry_point(dispatcher, args)
+        if ep is None:
+            out = dispatcher(*args)              # the first call compiles or loads it
+            cache[name] = entry_point(dispatcher, args) or dispatcher
+            return out
+        cache[name] = ep
+    return ep(*args)

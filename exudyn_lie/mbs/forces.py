@@ -99,7 +99,7 @@ def torsion_angle(rotA, rotB, prev, RA, VA, RB, VB, FA, FB):
     phi0 = np.arctan2(-r01, r00)
     # np.rint, not np.round: the same value (round half to even), but np.round's numba
     # implementation lives in numba.np.arraymath, which imports scipy.linalg when a
-    # cached kernel is loaded (0.12 s of a warm start, issue 19)
+    # cached kernel is loaded (0.12 s of a warm start)
     turns = np.rint((prev - phi0) / (2.0 * np.pi))
     phi = phi0 + 2.0 * np.pi * turns
     # phidot = z_A . (omega_B,world - omega_A,world)

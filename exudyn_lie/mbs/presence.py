@@ -4,8 +4,7 @@ A *lean* scene (``compiled.scene_is_lean``: bodies, gravity, loads, point-to-poi
 joints of the lower-pair and distance row kinds) gets ``None`` for the tables of every other
 feature.  Its SceneData type then differs from that of a full scene, so numba compiles the
 kernel once per kind (each cached), and the calls below compile to nothing on ``None``: a
-first run ever of such a scene types and lowers none of the other features' code (issue 19,
-section 3).  A full scene has arrays, zero rows where it lacks a feature, as before, and
+first run ever of such a scene types and lowers none of the other features' code.  A full scene has arrays, zero rows where it lacks a feature, as before, and
 runs the same machine code as before.
 
 ``guarded(entry)`` makes ``g(table, *args)``: nothing when ``table`` is None, else

@@ -89,7 +89,7 @@ def quat_rotvec(q, out):
 def wrap_near(x, ref):
     # np.rint, not np.round: the same value (round half to even), but np.round's numba
     # implementation lives in numba.np.arraymath, which imports scipy.linalg when a
-    # cached kernel is loaded (0.12 s of a warm start, issue 19)
+    # cached kernel is loaded (0.12 s of a warm start)
     return x + TWO_PI * np.rint((ref - x) / TWO_PI)
 
 

@@ -36,7 +36,7 @@ from .state import BodyStates, twist_to_world_velocity, world_velocity_to_twist
 from .stepper import fixed_step_control, method_arrays
 from . import adaptive as _adaptive
 from . import projection as _projection
-from .entry import entry_point
+from .entry import call
 from ..integrators import control as _control
 
 
@@ -194,9 +194,7 @@ class Simulator:
         wk.ext[0] = external.handle(self._extToken) if self._extToken else 0
         if self._driveToken:
             wk = wk._replace(drive=np.array([external.handle(self._driveToken)], np.int64))
-        self._mkEntry = None
-        if getattr(self, "_ad", None) is not None:
-            self._ad.pop("entry", None)
+        self._entries = {}
         return wk
 
     # ----------------------------------------------------------------- state
@@ -238,7 +236,7 @@ class Simulator:
         """``kernel.update_torsion_tracking`` at the current state, if the scene tracks an angle
         (the same three conditions as the compiled function): a scene without one does not
         load that compiled entry point at all (its cache load and first-call typing are part
-        of a warm first solve, issue 19)."""
+        of a warm first solve)."""
         sd, wk = self.sd, self.wk
         if is_present(sd.tint) or (sd.nangles or 0) > 0:
             kernel.update_torsion_tracking(sd, wk, self.R, self.r, self.V)
@@ -262,7 +260,7 @@ class Simulator:
             raise SceneError(f"WatchRotationEntries: entry ({i}, {j}) is not in a 3x3 matrix")
         entry = np.tile(np.array([[int(i), int(j)]], np.int64), (len(b), 1))
         self.wk = self.wk._replace(watchBody=b.copy(), watchEntry=entry, watchMax=np.zeros(len(b)))
-        self._mkEntry = None
+        self._entries = {}
         self.ResetWatch()
 
     @property
@@ -488,15 +486,7 @@ class Simulator:
         args = (self.sd, self.wk, self.method, self.control, float(self.t if t is None else t), float(h), int(n),
                 self.R if R is None else R, self.r if r is None else r, self.V if V is None else V,
                 float(self._vmaxValue)) + self.NoOutputs()
-        ep = getattr(self, "_mkEntry", None)
-        if ep is None:
-            ep = entry_point(kernel.mk_steps, args)      # cached per argument structure (mbs/entry.py)
-            if ep is None:
-                out = kernel.mk_steps(*args)
-                self._mkEntry = entry_point(kernel.mk_steps, args) or kernel.mk_steps
-                return out
-            self._mkEntry = ep
-        return ep(*args)
+        return call(self._entries, "fixed", kernel.mk_steps, args)
 
     def _row_drives(self, t):
         """The row-drive seam (:mod:`.row_drives`, through :mod:`.external`): called by the
@@ -782,7 +772,7 @@ class Simulator:
             L += np.cross(xc, b.mass * vc) + R @ (Jc @ omega[i])
         return p, L
 
-    # ----------------------------------------------------------------- adaptive steps (issue 18)
+    # ----------------------------------------------------------------- adaptive steps
     def SetAdaptive(self, rtol=1e-3, atol=1e-6, maxStep=np.inf, minStep=0.0, firstStep=None, safety=0.9,
                     maxIncrease=10.0, lengthScale=1.0, timeScale=1.0, constraintTolerance=None):
         """Prepare adaptive steps of the embedded pair (:mod:`.adaptive`) with the scaled
@@ -918,17 +908,7 @@ class Simulator:
         # the one stepper with the adaptive controller (t0, h, nsteps, every unused; no accelerations)
         args = (self.sd, self.wk, ad["am"], ctl, 0.0, 0.0, 0, self.R, self.r, self.V, float(self._vmaxValue), 0, Ro,
                 ro, Vo, np.zeros((0, self.sd.nb, 4)) if Po is None else Po, noOut[5], noOut[6])
-        ep = ad.get("entry")
-        if ep is None:                  # resolved once per argument structure (mbs/entry.py)
-            ep = entry_point(kernel.mk_steps, args)
-            if ep is None:
-                st, k = kernel.mk_steps(*args)
-                ad["entry"] = entry_point(kernel.mk_steps, args) or kernel.mk_steps
-            else:
-                ad["entry"] = ep
-                st, k = ep(*args)
-        else:
-            st, k = ep(*args)
+        st, k = call(self._entries, "adaptive", kernel.mk_steps, args)
         self.t = float(ad["fs"][_adaptive.FS_T])
         return st, k
 

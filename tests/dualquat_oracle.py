@@ -1,4 +1,5 @@
-"""Unit dual quaternions Qh = (Q, Qe) (8-vector) as global coordinates on SE(3).
+"""Unit dual quaternions Qh = (Q, Qe) (8-vector) as global coordinates on SE(3): a test oracle
+(the vector-space formulation ODEvec2 of tests/vector_space_oracle.py uses them).
 
 Paper, appendix "Proper rigid body motions in terms of dual quaternions":
 
@@ -26,9 +27,9 @@ tangent to the constraint manifold), and H(Qh) Qhdot = V for unit Qh.
 import numpy as np
 from numba import njit
 
-from . import quaternion as quat
-from . import se3
-from ._taylor import mm, mv
+from exudyn_lie.groups import quaternion as quat
+from exudyn_lie.groups import se3
+from exudyn_lie.groups._taylor import mm, mv
 
 
 @njit(cache=True)

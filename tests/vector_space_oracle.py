@@ -1,4 +1,5 @@
-"""The paper's vector-space formulations of the motion equations, for comparison with MK.
+"""The paper's vector-space formulations of the motion equations, for comparison with MK: a test
+oracle (the library integrates on the groups only).
 
 Two formulations are provided, each integrated by a *plain* explicit Runge-Kutta method
 (the same Butcher tableaus as the MK stepper) on a vector space, and each exposing the
@@ -53,8 +54,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .mk import _as_velocity, _run, _translate, as_poses, resolve_groups
-from .tableau import get_method
+from exudyn_lie.integrators.mk import _as_velocity, _run, _translate, as_poses, resolve_groups
+from exudyn_lie.integrators.tableau import get_method
 
 __all__ = [
     "RECENTER_ANGLE",
@@ -314,7 +315,7 @@ def canonical_integrate_kinematic(tableau, groups, g0, vel, t_span, n_steps, eve
 # --------------------------------------------------------------------------- (b) ODEvec2
 def _kinds(gms):
     """'dq' (dual quaternion, SE3) or 'ep' (Euler parameters + position, SO3xR3) per body."""
-    from ..groups import GROUPS
+    from exudyn_lie.groups import GROUPS
     kinds = []
     for gm in gms:
         if gm is GROUPS.get("SE3"):
@@ -362,12 +363,12 @@ class DependentState:
 
 
 def _quat():
-    from ..groups import quaternion
+    from exudyn_lie.groups import quaternion
     return quaternion
 
 
 def _dualquat():
-    from ..groups import dualquat
+    import dualquat_oracle as dualquat
     return dualquat
 
 

@@ -513,7 +513,7 @@ def test_entry_point_resolves_only_compiled_signatures():
     (same result as the dispatcher), None for types never compiled or no overload."""
     from numba import njit
 
-    from exudyn_lie.bridge.fast import entry_point
+    from exudyn_lie.mbs.entry import call, entry_point
 
     @njit
     def f(x, a):
@@ -528,6 +528,9 @@ def test_entry_point_resolves_only_compiled_signatures():
     assert entry_point(f, (2, a)) is None                    # int64 x: a signature never compiled
     assert entry_point(f, (2.0, a.astype(np.float32))) is None
     assert entry_point(f, ()) is None
+    cache = {}                                               # call: resolved once, then reused
+    assert call(cache, "f", f, (2.0, a)) == 6.0 and cache["f"] is ep
+    assert call(cache, "f", f, (1.0, a)) == 3.0
 
 
 @pytest.mark.parametrize("rows", [1, 3, None])

@@ -77,7 +77,7 @@ def test_no_growth_right_after_a_rejection():
     fac_max = 10 a tiny error would grow it tenfold; one step at a time shows h."""
     sim2 = simulator("DOPRI5")
     sim2.SetAdaptive(rtol=1e-8, atol=1e-8, firstStep=1.0)
-    fs, S = sim2._ad["fs"], sim2._ad["S"]
+    fs, S = sim2.adaptiveRun.fs, sim2.adaptiveRun.S
     sim2.AdvanceTo(TA.T_END, [1e-12])  # stops after the first accepted step (its output is inside)
     acc, rej, _ = sim2.adaptiveCounters
     assert acc == 1 and rej >= 1

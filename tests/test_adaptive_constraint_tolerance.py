@@ -65,7 +65,7 @@ def one_step_error(scene, group, h, ct):
     sim.AdvanceTo(h)
     acc, rej, _ = sim.adaptiveCounters
     assert (acc, rej) == (1, 0)
-    return sim._ad["S"][C.S_ERR]
+    return sim.adaptiveRun.S[C.S_ERR]
 
 
 @pytest.mark.parametrize("name,group,reduction", (CASES[0] + (False,), CASES[1] + (True,)))

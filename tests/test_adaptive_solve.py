@@ -108,7 +108,7 @@ def test_first_step_from_exudyns_settings():
         ss.timeIntegration.automaticStepSize = auto
         ss.timeIntegration.initialStepSize = h0
         exl.SolveDynamic(mbs, ss, method="DOPRI5", showProgress=False)
-        return mbs.sys["lieGroupSolver"].sim._ad["hInitial"]
+        return mbs.sys["lieGroupSolver"].sim.adaptiveRun.hInitial
     assert first(False, 0.0) == pytest.approx(0.01)
     assert first(True, 1e-5) == pytest.approx(1e-5)
     h = first(True, 0.0, n=5, tol=1e-10)            # HINIT below h_max = 0.1

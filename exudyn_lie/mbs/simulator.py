@@ -17,27 +17,23 @@ import numpy as np
 from ..compiling import announce_cold_compile
 from ..errors import ConstraintError, SimulationError, StepSizeError  # noqa: F401 (re-exported)
 from ..groups import so3
-from ..integrators.stability import stability_radius
 from ..integrators.mk_adaptive import resolve_pair
 from ..userwarn import warn_user
 from . import external, kernel
 from .codes import BODY_TWIST
-from .bodies import body_dexpinv_stage, exp_compose
 from .rolling_disc_penalty_forces import D_DATA
 from .presence import is_present
 from .rotation_parameters import update_tracked_bodies
 from .constraints import joints_rows
-from .diagnostics import stage_stiffness
 from .compiled import compile_scene, compile_tracking, make_work, resolve_groups, with_redundant
 from .linalg import REL_PIVOT_TOL, rows_in_null_space, schur_rank_and_null
 from .row_drives import RowDrives
 from .scene import Scene, SceneError
 from .state import BodyStates, twist_to_world_velocity, world_velocity_to_twist
 from .stepper import fixed_step_control, method_arrays
-from . import adaptive as _adaptive
-from . import projection as _projection
 from .entry import call
-from ..integrators import control as _control
+from .adaptive_run import AdaptiveRun
+from . import step_errors
 
 
 # relative size of the constraint residual/velocity error accepted at the start
@@ -440,11 +436,15 @@ class Simulator:
             self._raise_status(st, 0.0)
 
     # ----------------------------------------------------------------- stepping
-    def _vmax(self):
-        """A velocity bound far beyond any physical motion of this scene: used only to
-        stop a blowing-up integration before it produces inf/NaN."""
-        v0 = float(np.max(np.abs(self.V))) if self.V.size else 0.0
-        return 1e6 * max(1.0, v0)
+    @property
+    def vmax(self):
+        """A velocity bound far beyond any physical motion of this scene (10^6 times the
+        velocities of the first run), fixed at the first step: used only to stop a blowing-up
+        integration before it produces inf/NaN."""
+        if not hasattr(self, "_vmaxValue"):
+            v0 = float(np.max(np.abs(self.V))) if self.V.size else 0.0
+            self._vmaxValue = 1e6 * max(1.0, v0)
+        return self._vmaxValue
 
     def Advance(self, nsteps, stepSize):
         """Integrate ``nsteps`` steps of size ``stepSize`` from the current state.
@@ -458,8 +458,6 @@ class Simulator:
             raise ValueError(f"step size must be positive and finite, got {stepSize}")
         if nsteps <= 0:
             return
-        if not hasattr(self, "_vmaxValue"):
-            self._vmaxValue = self._vmax()
         # the state this call starts from: restored on failure, and where a blow-up's
         # step suggestion linearises (the rejected state itself is far from the motion)
         self._segmentStart = (self.t, self.R.copy(), self.r.copy(), self.V.copy())
@@ -481,11 +479,9 @@ class Simulator:
     def _mk_steps(self, n, h, t=None, R=None, r=None, V=None):
         """``stepper.mk_steps`` through its resolved compiled entry point: a plain numba
         call re-derives the types of the two namedtuples every time (~10 us)."""
-        if not hasattr(self, "_vmaxValue"):
-            self._vmaxValue = self._vmax()
         args = (self.sd, self.wk, self.method, self.control, float(self.t if t is None else t), float(h), int(n),
                 self.R if R is None else R, self.r if r is None else r, self.V if V is None else V,
-                float(self._vmaxValue)) + self.NoOutputs()
+                float(self.vmax)) + self.NoOutputs()
         return call(self._entries, "fixed", kernel.mk_steps, args)
 
     def _row_drives(self, t):
@@ -592,136 +588,24 @@ class Simulator:
         return Q
 
     def _raise_status(self, st, h):
-        """Raise the error for a kernel status (public as :meth:`RaiseStatus`)."""
-        if st == kernel.STATUS_STEP_MIN:
-            self._raise_step_min()
-        if st == kernel.STATUS_EXTERNAL:
-            external.reraise(self._driveToken)
-            external.reraise(self._extToken)
-            if self.wk.ext[1] and self.rates:
-                self.wk.ext[1] = 0
-                st = kernel.STATUS_NONFINITE          # the step's error below, with a suggested step
-            elif self.wk.ext[1]:
-                self.wk.ext[1] = 0
-                names = ", ".join(pf.name for pf in self.scene.pythonForces)
-                raise SimulationError(f"{names} must return finite (F, T) arrays of shape ({self.sd.nb}, 3); "
-                                      f"got non-finite values at t = {self.t:.6g} s")
-            else:
-                raise SimulationError(f"the Python forces failed at t = {self.t:.6g} s")
-        if st == kernel.STATUS_SINGULAR:
-            # the failing stage's state (same rule as the kernel: linalg module docstring)
-            rank, dep = self._dependent_rows(self.wk.Rs, self.wk.rs, self.wk.Vs, forced=True)
-            names = self._joints_of_rows(dep) if dep else self._joints_of_rows([int(self.wk.info[0])])
-            raise ConstraintError(
-                f"singular constraint Jacobian at t = {self.t:.6g} s: the constraints of joints "
-                f"{', '.join(names)} are linearly dependent (a Cholesky pivot of J M^-1 J^T fell to "
-                f"{REL_PIVOT_TOL:g} x its row's diagonal or below: a singular configuration, or redundant "
-                f"joints); remove the redundant constraint axes (e.g. make one joint spherical) or "
-                f"check the joint frames")
-        if st == kernel.STATUS_STAGE_ARG:
-            i = int(self.wk.info[2])
-            psi = float(np.linalg.norm(self.wk.Psi[i, :3]))
-            # the stage arguments scale with h: aim the largest at pi, and keep the
-            # stability-based suggestion if that is smaller
-            sugg = min(self.suggest_step(h), h * np.pi / psi) if psi > 0 else self.suggest_step(h)
-            raise StepSizeError(
-                f"the rotation of {self.scene.describe_body(i)} in an MK stage, |Psi| = {psi:.4g} rad, "
-                f"is beyond {kernel.STAGE_ARG_MAX:.4g} = 2 pi - {2 * np.pi - kernel.STAGE_ARG_MAX:.2g} (dexp^-1 of "
-                f"the stage equation is singular "
-                f"at 2 pi) at t = {self.t:.6g} s with step size {h:.3g} s (method {self.tableau.name}); the "
-                f"rotation per step is too large: try a step size of {sugg:.3g} s or smaller")
-        if st == kernel.STATUS_PROJECTION:
-            hres = self.wk.h
-            bad = np.nonzero(np.abs(hres) > kernel.PROJ_FAIL * kernel.PROJ_TOL)[0]
-            raise ConstraintError(
-                f"position projection did not converge in {kernel.PROJ_MAX_ITER} iterations at t = {self.t:.6g} s "
-                f"(max |h| = {np.max(np.abs(hres)):.3g}); the constraints of joints "
-                f"{', '.join(self._joints_of_rows(bad))} may not be satisfiable")
-        sugg = self.suggest_step(h)
-        what = "non-finite (NaN/inf)" if st == kernel.STATUS_NONFINITE else "unbounded (blow-up)"
-        raise StepSizeError(
-            f"the state became {what} at t = {self.t:.6g} s with step size {h:.3g} s "
-            f"(method {self.tableau.name}); the step is beyond the stability limit: "
-            f"try a step size of {sugg:.3g} s or smaller")
+        """Raise the error for a kernel status (public as :meth:`RaiseStatus`; mbs/step_errors.py)."""
+        step_errors.raise_status(self, st, h)
 
     RaiseStatus = _raise_status
 
     def StageStiffness(self, h, nb=None):
         """Shampine's estimate of the fastest rate the last fixed step of size ``h`` met, from
-        its stages (:func:`~.diagnostics.stage_stiffness`; the first ``nb`` bodies, default all):
-        a mode that became stiff during the run (a contact that closed) shows here before it
-        blows up."""
-        tab = self.method
-        return float(stage_stiffness(tab.A, float(h), int(tab.stages[-1]), self.wk.K, self.wk.Vd,
-                                     self.sd.nb if nb is None else int(nb)))
+        its stages (the first ``nb`` bodies, default all; :func:`.step_errors.stage_stiffness_of`)."""
+        return step_errors.stage_stiffness_of(self, h, nb)
 
     def suggest_step(self, h):
-        """A step size that should be stable: ``0.8 r / rho``, where ``rho`` is the spectral
-        radius of the linearised equations of motion at the state the failed
-        :meth:`Advance` started from (:meth:`SpectralRadius`) and ``r`` the radius of the
-        method's stability half-disk (:func:`~exudyn_lie.integrators.stability.stability_radius`).
-        Never more than ``h / 2``; ``h / 10`` if the estimate is not available."""
-        start = getattr(self, "_segmentStart", None)
-        try:
-            if start is None:
-                raise ValueError("no reference state")
-            t0, R, r, V = start[:4]
-            rho = self.SpectralRadius(R, r, V, t0)
-        except Exception:           # noqa: BLE001 - a suggestion must never mask the error
-            return h / 10.0
-        if not np.isfinite(rho) or rho <= 0:
-            return h / 10.0
-        return float(min(0.5 * h, 0.8 * stability_radius(self.tableau) / rho))
+        """A step size that should be stable (:func:`.step_errors.suggest_step`)."""
+        return step_errors.suggest_step(self, h)
 
     def SpectralRadius(self, R=None, r=None, V=None, t=None, iterations=40, seed=0):
-        """Estimate of the spectral radius ``rho`` of the Jacobian of the first-order
-        equations of motion ``(xi, V)' = (dexp^-1_{-xi} V, F(g exp(xi), V))`` in local
-        coordinates ``xi`` around ``g`` (eqs. ODE2 with MK1): power iteration on
-        central-difference Jacobian-vector products.  ``h rho`` is what the step size
-        must keep inside the method's stability region."""
-        R = self.R if R is None else np.asarray(R, float)
-        r = self.r if r is None else np.asarray(r, float)
-        V = self.V if V is None else np.asarray(V, float)
-        t = self.t if t is None else float(t)
-        nb = self.sd.nb
-        rng = np.random.default_rng(seed)
-        d = rng.normal(size=(2, nb, 6))
-        d /= np.linalg.norm(d)
-        scale = 1.0 + float(np.max(np.abs(V))) + float(np.max(np.abs(r)))
-        logs = []
-        for it in range(int(iterations)):
-            eps = 1e-7 * scale
-            fp = self._local_field(R, r, V, t, eps * d)
-            fm = self._local_field(R, r, V, t, -eps * d)
-            w = (fp - fm) / (2 * eps)
-            nw = float(np.linalg.norm(w))
-            if not np.isfinite(nw):
-                return float("nan")
-            if nw == 0.0:
-                return 0.0
-            logs.append(np.log(nw))
-            d = w / nw
-        # the dominant modes of a mechanical system come in complex pairs, for which the
-        # norm ratio oscillates: average the logarithms of the second half
-        return float(np.exp(np.mean(logs[len(logs) // 2:])))
-
-    def _local_field(self, R, r, V, t, dx):
-        """The vector field of :meth:`SpectralRadius` at ``(xi, V + dV) = dx``."""
-        sd, wk = self.sd, self.wk
-        nb = sd.nb
-        Rp = np.empty((nb, 3, 3))
-        rp = np.empty((nb, 3))
-        Vp = np.ascontiguousarray(V + dx[1])
-        out = np.empty((2, nb, 6))
-        ER, Er = np.empty((3, 3)), np.empty(3)
-        for i in range(nb):
-            X = np.ascontiguousarray(dx[0, i])
-            exp_compose(int(self.gid[i]), R[i], r[i], X, Rp[i], rp[i], ER, Er)
-            body_dexpinv_stage(int(self.gid[i]), -X, Vp[i], out[0, i])
-        if self._evaluate(t, Rp, rp, Vp) != kernel.STATUS_OK:
-            raise SimulationError("right-hand side failed while estimating the spectral radius")
-        out[1] = wk.Vd[0]
-        return out
+        """Estimate of the spectral radius of the linearised equations of motion at a state
+        (default: the current one; :func:`.step_errors.spectral_radius`)."""
+        return step_errors.spectral_radius(self, R, r, V, t, iterations, seed)
 
     def Accelerations(self):
         """``(Vdot, lambda)`` at the current state from the index-1 system (eq. index1):
@@ -787,85 +671,19 @@ class Simulator:
         the velocities; the error estimate of every step is projected onto the tangent space of
         the constraint manifold (docs/ADAPTIVE.md, "Constraint tolerance").  The next
         :meth:`AdvanceTo` starts afresh from the current state."""
-        tab = self.tableau
-        am = _adaptive.adaptive_method(tab)
-        maxStep = float(np.inf if maxStep is None else maxStep)
-        minStep = float(0.0 if minStep is None else minStep)
-        if not maxStep > 0:
-            raise ValueError(f"maxStep must be positive, got {maxStep}")
-        if not (minStep >= 0 and minStep < maxStep):
-            raise ValueError(f"minStep must be >= 0 and below maxStep, got {minStep} (maxStep {maxStep})")
-        if firstStep is not None and not (np.isfinite(firstStep) and firstStep > 0):
-            raise ValueError(f"firstStep must be positive and finite, got {firstStep}")
-        ctol = np.zeros(3)                   # mbs/projection.py CT_*: off
-        if constraintTolerance is not None:
-            ct = float(constraintTolerance)
-            if not (np.isfinite(ct) and ct > 0):
-                raise ValueError(f"constraintTolerance must be positive and finite (or None: off), got "
-                                 f"{constraintTolerance}")
-            if self.stabilization is not None:
-                raise ValueError(f"constraintTolerance projects when the drift exceeds it; stabilization="
-                                 f"{self.stabilization!r} projects after every step: use one of them")
-            ctol[_projection.CT_POS] = ct
-            ctol[_projection.CT_VEL] = ct / float(timeScale)
-        nb = self.sd.nb
-        self._ad = dict(
-            am=am, tol=_control.tolerances(atol, rtol, lengthScale, timeScale),
-            par=_control.controller_params(tab.order_hat, safety=safety, fac_max=maxIncrease, h_min=minStep,
-                                           h_max=maxStep),
-            S=_control.controller_state(), fs=np.zeros(_adaptive.FS_SIZE), ist=np.zeros(3, np.int64),
-            R0=np.zeros((nb, 3, 3)), r0=np.zeros((nb, 3)), V0=np.zeros((nb, 6)),
-            dPhi=np.zeros((nb, 6)), dV=np.zeros((nb, 6)), w=np.zeros(am.A.shape[0]),
-            firstStep=firstStep, started=False, rtol=rtol, atol=atol, ctol=ctol)
+        self._ad = AdaptiveRun(self, rtol, atol, maxStep, minStep, firstStep, safety, maxIncrease, lengthScale,
+                               timeScale, constraintTolerance)
+
+    @property
+    def adaptiveRun(self):
+        """The :class:`~.adaptive_run.AdaptiveRun` of the last :meth:`SetAdaptive` (None before)."""
+        return getattr(self, "_ad", None)
 
     def RestartAdaptive(self):
         """Start the adaptive integration afresh at the next :meth:`AdvanceTo` (a new first
         step, no FSAL reuse): after the state was changed from outside."""
         if getattr(self, "_ad", None) is not None:
-            self._ad["started"] = False
-
-    def _hinit(self, ad):
-        """Hairer's HINIT on the group (``integrators/control.py``; as ``mk_adaptive.initial_step``):
-        two evaluations; the first is kept as the first step's stage 1."""
-        tol, P = ad["tol"], ad["par"]
-        R, r, V, t = self.R, self.r, self.V, self.t
-        st = self._evaluate(t, R, r, V)
-        if st != kernel.STATUS_OK:
-            self._raise_status(st, 0.0)
-        Vd0 = self.wk.Vd[0].copy()
-        size = np.zeros_like(V)
-        size[:, 0] = 1.0                                     # a rotation's size: 1 rad
-        size[:, 3:] = r
-        d0 = _control.weighted_rms(size, V, r, r, V, V, tol)
-        d1 = _control.weighted_rms(V, Vd0, r, r, V, V, tol)
-        h0 = min(_control.hinit_first(d0, d1), P[_control.P_H_MAX])
-        R1, r1 = np.empty_like(R), np.empty_like(r)         # explicit Euler probe (g exp(h0 V), V + h0 Vdot)
-        ER, Er = np.zeros((3, 3)), np.zeros(3)
-        for i in range(self.sd.nb):
-            exp_compose(int(self.gid[i]), R[i], r[i], h0 * V[i], R1[i], r1[i], ER, Er)
-        V1 = V + h0 * Vd0
-        st = self._evaluate(t + h0, R1, r1, V1)
-        if st != kernel.STATUS_OK:
-            self._raise_status(st, 0.0)
-        d2 = _control.weighted_rms(V1 - V, self.wk.Vd[0] - Vd0, r, r, V, V, tol) / h0
-        self.wk.Vd[0] = Vd0
-        ad["S"][_control.S_N_RHS] += 2
-        return _control.hinit_second(h0, d1, d2, P[_control.P_Q], P[_control.P_H_MAX])
-
-    def _adaptive_start(self, ad):
-        ad["S"][:] = _control.controller_state()
-        ad["ctol"][_projection.CT_N_PROJ] = 0.0
-        fs, ist = ad["fs"], ad["ist"]
-        ist[:] = 0
-        h = ad["firstStep"]
-        if h is None:
-            h = self._hinit(ad)                               # leaves stage 1 in wk.Vd[0]
-            ist[_adaptive.IS_HAVE0] = _adaptive.HAVE0_STAGE1
-        P = ad["par"]
-        fs[_adaptive.FS_T] = self.t
-        fs[_adaptive.FS_H] = max(min(float(h), P[_control.P_H_MAX]), P[_control.P_H_MIN])
-        ad["hInitial"] = fs[_adaptive.FS_H]
-        ad["started"] = True
+            self._ad.restart()
 
     def AdvanceTo(self, endTime, outputTimes=None):
         """Adaptive steps (after :meth:`SetAdaptive`) from the current time to ``endTime``
@@ -880,7 +698,7 @@ class Simulator:
         Ro, ro, Vo = np.zeros((tout.size, nb, 3, 3)), np.zeros((tout.size, nb, 3)), np.zeros((tout.size, nb, 6))
         st, k = self.AdvanceToInto(endTime, tout, Ro, ro, Vo)
         if st != kernel.STATUS_OK:
-            self._raise_status(st, float(self._ad["fs"][_adaptive.FS_H]))
+            self._raise_status(st, self._ad.step)
         return Ro[:k], ro[:k], Vo[:k]
 
     def AdvanceToInto(self, endTime, tout, Ro, ro, Vo, Po=None):
@@ -890,45 +708,21 @@ class Simulator:
         ad = getattr(self, "_ad", None)
         if ad is None:
             raise RuntimeError("AdvanceTo needs SetAdaptive(rtol=..., atol=...) first")
-        tEnd = float(endTime)
-        if tEnd < self.t:
-            raise ValueError(f"endTime {tEnd} is before the current time {self.t}")
-        if tout.size and (np.any(np.diff(tout) < 0) or tout[-1] > tEnd):
-            raise ValueError("outputTimes must be sorted and at most endTime")
-        if not ad["started"]:
-            if tout.size and tout[0] < self.t:
-                raise ValueError("outputTimes before the current time")
-            self._adaptive_start(ad)
-        if not hasattr(self, "_vmaxValue"):
-            self._vmaxValue = self._vmax()
-        ad["fs"][_adaptive.FS_TEND] = tEnd
-        ctl = _adaptive.AdaptiveControl(ad["par"], ad["S"], ad["tol"], ad["ctol"], ad["fs"], ad["ist"], ad["R0"],
-                                        ad["r0"], ad["V0"], ad["dPhi"], ad["dV"], ad["w"], tout)
-        noOut = self.NoOutputs()
-        # the one stepper with the adaptive controller (t0, h, nsteps, every unused; no accelerations)
-        args = (self.sd, self.wk, ad["am"], ctl, 0.0, 0.0, 0, self.R, self.r, self.V, float(self._vmaxValue), 0, Ro,
-                ro, Vo, np.zeros((0, self.sd.nb, 4)) if Po is None else Po, noOut[5], noOut[6])
-        st, k = call(self._entries, "adaptive", kernel.mk_steps, args)
-        self.t = float(ad["fs"][_adaptive.FS_T])
-        return st, k
+        return ad.advance_into(endTime, tout, Ro, ro, Vo, Po)
 
     def _raise_step_min(self):
-        ad = self._ad
-        S = ad["S"]
-        _control.raise_step_size_error(self.t, S[_control.S_H], ad["par"][_control.P_H_MIN], S[_control.S_ERR],
-                                       self.tableau.name)
+        self._ad.raise_step_min()
 
     @property
     def adaptiveCounters(self):
         """(accepted steps, rejected steps, right-hand-side evaluations) since SetAdaptive
         or the last restart (HINIT's two evaluations and the dense extra stages included)."""
-        S = self._ad["S"]
-        return int(S[_control.S_N_ACCEPT]), int(S[_control.S_N_REJECT]), int(S[_control.S_N_RHS])
+        return self._ad.counters
 
     @property
     def constraintProjections(self):
         """Projections the constraint tolerance triggered since SetAdaptive or the last restart."""
-        return int(self._ad["ctol"][_projection.CT_N_PROJ])
+        return self._ad.projections
 
     def _run_adaptive(self, endTime, t0, outputTimes, progress, **kw):
         self.t = t0
@@ -962,7 +756,7 @@ class Simulator:
         omega, vel = twist_to_world_velocity(np.tile(self.gid, nout), R.reshape(-1, 3, 3), V.reshape(-1, 6))
         acc, rej, nrhs = self.adaptiveCounters
         return Result(tout.copy(), R, r, V, omega.reshape(nout, nb, 3), vel.reshape(nout, nb, 3), energy, res, pv,
-                      rv, list(self.groups), self.tableau.name, float(self._ad["hInitial"]), cpu, acc,
+                      rv, list(self.groups), self.tableau.name, float(self._ad.hInitial), cpu, acc,
                       rejectedSteps=rej, rhsEvaluations=nrhs, adaptive=True,
                       constraintProjections=self.constraintProjections)
 

@@ -712,3 +712,21 @@ def test_torsional_spring_turns_survive_a_state_change_in_a_pre_step_function(uf
     assert out[0][0][0] > 2 * np.pi                     # turned more than once
     for a, b in zip(*out):
         np.testing.assert_allclose(b, a, rtol=0, atol=1e-9)
+
+
+def test_the_model_is_read_once_per_solve(monkeypatch):
+    """SolveDynamic on an assembled model reads it once: the scene the path choice read is the
+    compiled path's (a second reading cost the set-up of every solve)."""
+    import exudyn_lie.bridge.evaluated_dispatch as dispatch
+    import exudyn_lie.bridge.solver as bsolver
+    calls = []
+    real = dispatch.SceneFromExudyn
+
+    def counting(*a, **k):
+        calls.append(a[1:])
+        return real(*a, **k)
+    monkeypatch.setattr(dispatch, "SceneFromExudyn", counting)
+    monkeypatch.setattr(bsolver, "SceneFromExudyn", counting)
+    mbs, b, s, sj = heavy_top()
+    exl.SolveDynamic(mbs, settings(0.01, 1e-3))
+    assert len(calls) == 1, calls

@@ -233,8 +233,9 @@ def test_check_stops_a_compiled_row_that_differs_from_exudyns(monkeypatch):
     mbs2, o2 = pendulum_pair()
     assert exl.SolveDynamic(mbs2, generic_settings(200, 0.2), showProgress=False) is True
     monkeypatch.setattr(reader, "SceneFromExudyn", shifted)
-    from exudyn_lie.bridge import solver as solver_module
+    from exudyn_lie.bridge import evaluated_dispatch, solver as solver_module
     monkeypatch.setattr(solver_module, "SceneFromExudyn", shifted)
+    monkeypatch.setattr(evaluated_dispatch, "SceneFromExudyn", shifted)      # the path choice's reading is used
     mbs2, o2 = pendulum_pair()
     with pytest.raises(ConstraintError, match=r"object \d+ .* do not hold .* exudyn_lie's own rows of it are at"):
         exl.SolveDynamic(mbs2, generic_settings(200, 0.2), showProgress=False)

@@ -44,28 +44,28 @@ def foreign_items(mbs):
     return out
 
 
-def _compiled_refusal(mbs, assemble):
-    """None if the compiled reader takes the model, else why not (its NotCompiled error);
-    other errors (bad input) are raised."""
+def _compiled_read(mbs, assemble):
+    """``(scene, None)`` if the compiled reader takes the model (the scene it read, so that the
+    compiled path does not read the model again), else ``(None, why not)`` (its NotCompiled
+    error); other errors (bad input) are raised."""
     try:
-        SceneFromExudyn(mbs, "items" if assemble else "initial")
+        return SceneFromExudyn(mbs, "items" if assemble else "initial"), None
     except NotCompiled as e:
-        return str(e)
-    return None
+        return None, str(e)
 
 
 def evaluated_path(mbs, evaluation, assemble, *, method, liegroup, stabilization, projectInitial, verbose, settings,
                    substeps):
-    """The :class:`~.evaluated_solve.EvaluatedSolver` of the run, or None for the compiled
-    path.  Raises before mbs is touched for input neither path takes."""
+    """``(EvaluatedSolver of the run, None)``, or ``(None, the compiled reader's scene or None)``
+    for the compiled path.  Raises before mbs is touched for input neither path takes."""
     from .evaluated_solve import EvaluatedSolver
     from .solver import _check_method
     if evaluation == "auto":
         reasons = foreign_items(mbs)
         if not reasons:
-            why = _compiled_refusal(mbs, assemble)
+            scene, why = _compiled_read(mbs, assemble)
             if why is None:
-                return None
+                return None, scene
             reasons = [why.rstrip(".")]
     else:
         reasons = None
@@ -77,4 +77,4 @@ def evaluated_path(mbs, evaluation, assemble, *, method, liegroup, stabilization
     lg = liegroup_argument(liegroup)
     solver = EvaluatedSolver(mbs, tab, lg, verbose=verbose, reasons=reasons, projectInitial=projectInitial)
     solver.check_run(settings, substeps)
-    return solver
+    return solver, None

@@ -131,9 +131,10 @@ class LieGroupSolver:
     """
 
     def __init__(self, mbs, method="RK4", liegroup="auto", stabilization=None, projectInitial=True,
-                 verbose=False, *, constraintTolerance=None, _configuration="initial"):
+                 verbose=False, *, constraintTolerance=None, _configuration="initial", _scene=None):
         # _configuration='items' (internal, SolveDynamic): validate an mbs that is not assembled
-        # yet from its item dictionaries; Solve() then re-reads it after mbs.Assemble()
+        # yet from its item dictionaries; Solve() then re-reads it after mbs.Assemble().  _scene
+        # (internal, SolveDynamic): the scene SceneFromExudyn just read of this mbs, used as it is
         self.mbs = mbs
         self._configuration = _configuration
         self.tableau = _check_method(method)
@@ -150,7 +151,7 @@ class LieGroupSolver:
         self.sim = None
         self._compileSeconds = 0.0           # numba compilation in set-ups since the last run (cold start)
         self._prepareSeconds = 0.0           # wall time of those set-ups
-        self._prepare(announce=self.verbose)
+        self._prepare(announce=self.verbose, scene=_scene)
 
     # ------------------------------------------------------------------ set-up
     def _check_liegroup(self, liegroup):
@@ -188,11 +189,12 @@ class LieGroupSolver:
                 groups[b], why[b] = "R3", "point mass"
         return groups, why
 
-    def _prepare(self, announce=False, startTime=0.0):
-        """(Re-)read the model and build the simulator from mbs' initial configuration
-        (checked against the constraints at ``startTime``: rows with a moving offset)."""
+    def _prepare(self, announce=False, startTime=0.0, scene=None):
+        """(Re-)read the model (unless ``scene`` is its reading) and build the simulator from
+        mbs' initial configuration (checked against the constraints at ``startTime``: rows with a
+        moving offset)."""
         tic = time.perf_counter()
-        sc = SceneFromExudyn(self.mbs, self._configuration)
+        sc = SceneFromExudyn(self.mbs, self._configuration) if scene is None else scene
         groups, why = self._groups(sc)
         with warnings.catch_warnings(), compile_timer() as ct:
             warnings.simplefilter("ignore", DeprecationWarning)
@@ -884,11 +886,12 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
     assemble = not mbs.systemIsConsistent and autoAssemble
     if evaluation not in ("auto", "compiled", "exudyn"):
         raise BridgeError(f"evaluation must be 'auto', 'compiled' or 'exudyn', got {evaluation!r}")
+    scene = None                         # the model as the compiled reader read it (read once)
     if evaluation != "compiled":
         from .evaluated_dispatch import evaluated_path
-        path = evaluated_path(mbs, evaluation, assemble, method=method, liegroup=liegroup,
-                              stabilization=None if auto else stabilization, projectInitial=projectInitial, verbose=verbose,
-                              settings=settings, substeps=substeps)
+        path, scene = evaluated_path(mbs, evaluation, assemble, method=method, liegroup=liegroup,
+                                     stabilization=None if auto else stabilization, projectInitial=projectInitial,
+                                     verbose=verbose, settings=settings, substeps=substeps)
         if path is not None:
             if constraintTolerance is not None:
                 raise BridgeError("exudyn_lie.SolveDynamic: constraintTolerance is available on the compiled path only "
@@ -907,7 +910,7 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
         stabilization = None if constraintTolerance is not None else "position"
     solver = LieGroupSolver(mbs, method=method, liegroup=liegroup, stabilization=stabilization,
                             projectInitial=projectInitial, verbose=verbose, constraintTolerance=constraintTolerance,
-                            _configuration="items" if assemble else "initial")
+                            _configuration="items" if assemble else "initial", _scene=scene)
     solver._check_run(settings, substeps)
     _check_index2_rotvec_constraints(mbs, typeName, settings)
     if replaced:

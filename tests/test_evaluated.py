@@ -79,6 +79,17 @@ def _pendulum_with_generic_ode2(mbs=None):
     return mbs
 
 
+def _fine_native_pendulum(T):
+    """The final configuration of :func:`_pendulum_with_generic_ode2` by native generalized-alpha
+    (no damping) at 50,000 steps: the fine reference."""
+    ref = _pendulum_with_generic_ode2()
+    ssn = quiet_settings(T, 50000)
+    ssn.timeIntegration.generalizedAlpha.spectralRadius = 1.0
+    ssn.timeIntegration.generalizedAlpha.computeInitialAccelerations = True
+    ref.SolveDynamic(ssn)
+    return _final_state(ref)[0]
+
+
 def test_generic_ode2_with_joint_runs_automatically_and_matches_native():
     """A model with an item the kernel lacks takes the path by itself, with one warning
     naming the item; the trajectory agrees with a fine native generalized-alpha run."""
@@ -91,12 +102,7 @@ def test_generic_ode2_with_joint_runs_automatically_and_matches_native():
     msgs = [str(x.message) for x in w if "exudyn_lie" in str(x.message)]
     assert len(msgs) == 1 and "ObjectGenericODE2" in msgs[0] and "us per step" in msgs[0]
     q = _final_state(mbs)[0]
-    ref = _pendulum_with_generic_ode2()
-    ssn = quiet_settings(T, 50000)
-    ssn.timeIntegration.generalizedAlpha.spectralRadius = 1.0
-    ssn.timeIntegration.generalizedAlpha.computeInitialAccelerations = True
-    ref.SolveDynamic(ssn)
-    qn = _final_state(ref)[0]
+    qn = _fine_native_pendulum(T)
     # RK4 at h = 1e-3 against the fine reference (its own error ~1e-10)
     assert _rel(q, qn) < 1e-7
 
@@ -486,12 +492,7 @@ def test_adaptive_dopri5_with_a_foreign_item_against_fine_native():
     ~1e-9).  The error falls with the tolerance (measured: 7.9e-5 at 1e-4, 7.4e-9 at 1e-7), and
     the error control takes more steps for the tighter one (7 and 24, no rejection)."""
     T = 0.5
-    ref = _pendulum_with_generic_ode2()
-    ssn = quiet_settings(T, 50000)
-    ssn.timeIntegration.generalizedAlpha.spectralRadius = 1.0
-    ssn.timeIntegration.generalizedAlpha.computeInitialAccelerations = True
-    ref.SolveDynamic(ssn)
-    qn = _final_state(ref)[0]
+    qn = _fine_native_pendulum(T)
     err, steps = {}, {}
     for tol in (1e-4, 1e-7):
         mbs = _pendulum_with_generic_ode2()

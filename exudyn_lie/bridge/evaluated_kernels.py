@@ -19,6 +19,7 @@ from numba import njit
 from ..groups import so3
 from ..mbs.codes import uses_body_twist
 from ..mbs.linalg import REL_PIVOT_TOL, band_ldl_inplace, band_ldl_solve_inplace, pivoted_cholesky_solve
+from ..mbs.stepper import copy_state
 from .nodes import rotvec_row
 
 
@@ -137,20 +138,14 @@ def pack_state(gid, Rl, rl, Vl, qv, vv, y, nvb, R, r, V):
     :func:`unpack_state`; padding and the ODE1 bodies' positions 0, the packed bodies'
     rotations I)."""
     nl = gid.shape[0]
-    for i in range(R.shape[0]):
+    for i in range(nl, R.shape[0]):
         for a in range(3):
             r[i, a] = 0.0
             for c in range(3):
                 R[i, a, c] = 1.0 if a == c else 0.0
         for k in range(6):
             V[i, k] = 0.0
-    for i in range(nl):
-        for a in range(3):
-            r[i, a] = rl[i, a]
-            for c in range(3):
-                R[i, a, c] = Rl[i, a, c]
-        for k in range(6):
-            V[i, k] = Vl[i, k]
+    copy_state(Rl, rl, Vl, R[:nl], r[:nl], V[:nl])
     for k in range(qv.shape[0]):
         r[nl + k // 3, k % 3] = qv[k]
         V[nl + k // 3, 3 + k % 3] = vv[k]

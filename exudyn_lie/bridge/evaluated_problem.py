@@ -72,7 +72,6 @@ class EvaluatedProblem:
         self.stages = self.sim.method.stages
         self._radius = stability_radius(self.tableau)
         self._stiffCount = 0
-        self.vscale = 1.0
 
     # ------------------------------------------------------------------ the right-hand side
     def bind(self, Rs, rs, Vs, Vdot):
@@ -149,7 +148,6 @@ class EvaluatedProblem:
         if t is not None:
             sim.t = float(t)
         sim.RestartAdaptive()              # a new state: a new first step
-        self.vscale = max(1.0, float(np.max(np.abs(qt))) if len(qt) else 0.0)
 
     def snapshot(self):
         sim = self.sim

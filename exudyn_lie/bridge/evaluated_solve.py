@@ -37,7 +37,7 @@ from .constraint_check import ConsistencyAccount, ConstraintCheck, check_toleran
 from .reader import BridgeError, UNHONOURED_MBS_FUNCTIONS, check_system_level
 from .run_plan import adaptive_settings, needs_accelerations, plan_substeps, time_settings
 from .solver import loop_settings
-from .time_loop import TimeLoop, update_initial_values
+from .time_loop import TimeLoop, off_plan, update_initial_values
 
 #: mbs-level user functions this path cannot honour (Exudyn calls the PostNewton one itself)
 UNHONOURED_HERE = {k: v for k, v in UNHONOURED_MBS_FUNCTIONS.items() if k != "PostNewtonUserFunction"}
@@ -281,7 +281,6 @@ class EvaluatedSolver:
         problem.write()                      # the initial state and time, for Exudyn's initial outputs
         sd.SetTime(t0)
         self._offsets = ParameterOffsets(mbs, t0, parameter_offset_rows(mbs))
-        self._snap = problem.snapshot()
         self.loop_check = None
         if P["tolCheck"] is not None and layout.nAE:
             ticCheck = time.perf_counter()
@@ -334,9 +333,7 @@ class EvaluatedSolver:
             model.set_parameter_offsets(self._offsets.record(t0, t1, self._actual_coordinates))
         tic = time.perf_counter()
         if abs((t1 - t0) / k - h) > 1e-9 * h:
-            raise BridgeError(f"Exudyn's time loop asks for a step to t = {t1!r} s, exudyn_lie planned steps of "
-                              f"{h:g} s: Exudyn changed its step size (after a failed discontinuous iteration or a "
-                              f"step reduction); check timeIntegration.discontinuous and the step settings")
+            raise off_plan(t1, t0 + k * h)
         problem.advance(t0, t1, k, h, self._adaptive is not None)
         problem.write()
         if P["needAcc"]:

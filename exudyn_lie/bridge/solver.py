@@ -11,12 +11,8 @@ a native solve: sensors (stored and files), the solution file, pre/post-step use
 functions, the renderer, ``mbs.sys['dynamicSolver']`` and the final state left in
 ``mbs``.
 
-Sub-stepping: one Exudyn step is one *output period*; the hook integrates ``k`` steps of
-size ``h = (endTime - startTime) / numberOfSteps`` inside it.  ``k`` is the largest
-common divisor of the number of steps and of every active output period (solution file,
-sensors, restart file, image recording) measured in steps, so outputs happen at exactly
-the times of a native solve.  With a pre- or post-step user function ``k = 1`` (they are
-called every step, as natively).  ``substeps=`` overrides the choice.
+Sub-stepping: one Exudyn step is one *output period* of ``k`` integration steps
+(:mod:`.run_plan`), so outputs happen at exactly the times of a native solve.
 
 Chunks (:class:`~.fast.OutputChunks`): on the compiled path the simulator integrates up
 to a few hundred output periods in one kernel call, recording the state at each output,
@@ -56,7 +52,7 @@ from .params import ParameterWatch
 from .settings import liegroup_argument, positive_float
 from .solvertype import resolve_solver_type
 from .run_plan import adaptive_settings, needs_accelerations, plan_substeps, time_settings
-from .time_loop import TimeLoop, update_initial_values
+from .time_loop import TimeLoop, off_plan, update_initial_values
 from .reader import BridgeError, ExudynScene, SceneFromExudyn
 
 
@@ -381,10 +377,7 @@ class LieGroupSolver:
             if rows == 0:
                 self.sim.RaiseStatus(ch.failure, ch.h)
         if not ch.on_plan(t1):
-            raise BridgeError(f"Exudyn's time loop asks for the step ending at t = {t1!r} s, exudyn_lie planned its "
-                              f"output at t = {ch.time_of_next()!r} s: Exudyn changed its step size (after a failed "
-                              f"discontinuous iteration or a step reduction), which exudyn_lie's fixed steps do not "
-                              f"follow; check timeIntegration.discontinuous and the step settings")
+            raise off_plan(t1, ch.time_of_next())
         ch.pop()
 
     def _restart_from_mbs(self, t):
@@ -633,7 +626,7 @@ class LieGroupSolver:
         state with accelerations, the output chunks of the one compiled stepper."""
         plan, sim = self._loopPlan, self.sim
         self._init_buffers_from_mbs()
-        vmax = 1e6 * max(1.0, float(np.max(np.abs(sim.V))) if sim.V.size else 0.0)
+        vmax = sim.vmax
         self._write(True)                    # initial state with accelerations / multipliers
         # chunks of outputs from the one compiled stepper; one output per chunk if a user
         # function may change the state in between or Python forces (Exudyn user

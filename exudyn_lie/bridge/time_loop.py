@@ -207,12 +207,13 @@ class TimeLoop:
         if time.perf_counter() > self.progress.next:
             self.progress(t1)
 
-    def off_plan(self, t1, planned):
-        """The error for an Exudyn step that does not end where the driver planned."""
-        return BridgeError(f"Exudyn's time loop asks for the step ending at t = {t1!r} s, exudyn_lie planned its "
-                           f"output at t = {planned!r} s: Exudyn changed its step size (after a failed discontinuous "
-                           f"iteration or a step reduction), which exudyn_lie's steps do not follow; check "
-                           f"timeIntegration.discontinuous and the step settings")
+
+def off_plan(t1, planned):
+    """The error for an Exudyn step that does not end where the driver planned (both drivers)."""
+    return BridgeError(f"Exudyn's time loop asks for the step ending at t = {t1!r} s, exudyn_lie planned its "
+                       f"output at t = {planned!r} s: Exudyn changed its step size (after a failed discontinuous "
+                       f"iteration or a step reduction), which exudyn_lie's steps do not follow; check "
+                       f"timeIntegration.discontinuous and the step settings")
 
 
 def update_initial_values(mbs):

@@ -129,7 +129,7 @@ class AdaptiveRun:
         noOut = sim.NoOutputs()
         # the one stepper with the adaptive controller (t0, h, nsteps, every unused; no accelerations)
         args = (sim.sd, sim.wk, self.method, ctl, 0.0, 0.0, 0, sim.R, sim.r, sim.V, float(sim.vmax), 0, Ro, ro, Vo,
-                np.zeros((0, sim.sd.nb, 4)) if Po is None else Po, noOut[5], noOut[6])
+                noOut[4] if Po is None else Po, noOut[5], noOut[6])
         st, k = call(sim._entries, "adaptive", kernel.mk_steps, args)
         sim.t = float(self.fs[_adaptive.FS_T])
         return st, k

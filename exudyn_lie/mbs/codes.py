@@ -43,7 +43,7 @@ L_BODY, L_KIND, L_FIXED = 0, 1, 2                                      # lint (n
 # the right-hand side outside the compiled code (mbs/external.py), SceneData.hasQext
 EXTERNAL_NONE = 0
 EXTERNAL_FORCES = 1        # Python forces added to the compiled ones (Scene.AddPythonForce)
-EXTERNAL_RATES = 2         # the whole Vdot and the multipliers (Scene.SetRightHandSide)
+EXTERNAL_RATES = 2         # the whole Vdot (Scene.SetRightHandSide)
 
 STATUS_OK = 0
 STATUS_SINGULAR = 1

@@ -439,7 +439,7 @@ class Simulator:
     @property
     def vmax(self):
         """A velocity bound far beyond any physical motion of this scene (10^6 times the
-        velocities of the first run), fixed at the first step: used only to stop a blowing-up
+        velocities when first asked for), then fixed: used only to stop a blowing-up
         integration before it produces inf/NaN."""
         if not hasattr(self, "_vmaxValue"):
             v0 = float(np.max(np.abs(self.V))) if self.V.size else 0.0
@@ -709,9 +709,6 @@ class Simulator:
         if ad is None:
             raise RuntimeError("AdvanceTo needs SetAdaptive(rtol=..., atol=...) first")
         return ad.advance_into(endTime, tout, Ro, ro, Vo, Po)
-
-    def _raise_step_min(self):
-        self._ad.raise_step_min()
 
     @property
     def adaptiveCounters(self):

@@ -10,6 +10,7 @@ from exudyn_lie.bridge import NODE_KINDS, EPNode, RotVecLGNode, RxyzNode
 from exudyn_lie.bridge import rotations as rot
 from exudyn_lie.groups import so3
 
+from node_writer import write
 from test_bridge_common import NODE_TYPES, add_body, new_mbs
 
 O = exu.OutputVariableType
@@ -75,7 +76,7 @@ def test_written_coordinates_give_the_same_exudyn_outputs(node, rng):
     for _ in range(10):
         R = rand_rot(rng, 0.8)
         r, om, vel, omd, acc = (rng.normal(size=3) for _ in range(5))
-        kind.write(R[None], r[None], om[None], vel[None], omd[None], acc[None], q=q, q_t=qt, q_tt=qtt)
+        write(kind, R[None], r[None], om[None], vel[None], omd[None], acc[None], q=q, q_t=qt, q_tt=qtt)
         sd.SetODE2Coordinates(q, configuration=CUR)
         sd.SetODE2Coordinates_t(qt, configuration=CUR)
         sd.SetODE2Coordinates_tt(qtt, configuration=CUR)
@@ -131,13 +132,13 @@ def test_compiled_rates_equal_numpy_maps(cls, rng):
 
     t0, e = 0.4, 1e-4
     kind.first = True
-    kind.write(motion(t0 - e)[None], np.zeros((1, 3)), omega(t0 - e)[None], np.zeros((1, 3)), q=q, q_t=qt)
+    write(kind, motion(t0 - e)[None], np.zeros((1, 3)), omega(t0 - e)[None], np.zeros((1, 3)), q=q, q_t=qt)
     pt_m = qt[3:].copy()
     omd = (omega(t0 + 1e-5) - omega(t0 - 1e-5)) / 2e-5
-    kind.write(motion(t0)[None], np.zeros((1, 3)), omega(t0)[None], np.zeros((1, 3)), omd[None],
+    write(kind, motion(t0)[None], np.zeros((1, 3)), omega(t0)[None], np.zeros((1, 3)), omd[None],
                np.zeros((1, 3)), q=q, q_t=qt, q_tt=qtt)
     p, pt, ptt = q[3:].copy(), qt[3:].copy(), qtt[3:].copy()
-    kind.write(motion(t0 + e)[None], np.zeros((1, 3)), omega(t0 + e)[None], np.zeros((1, 3)), q=q, q_t=qt)
+    write(kind, motion(t0 + e)[None], np.zeros((1, 3)), omega(t0 + e)[None], np.zeros((1, 3)), q=q, q_t=qt)
     pt_p = qt[3:].copy()
     np.testing.assert_allclose(pt, kind.rate_from_omega(p[None], omega(t0)[None])[0], atol=1e-12)
     np.testing.assert_allclose(ptt, kind.rate2_from_omega(p[None], pt[None], omega(t0)[None], omd[None])[0],
@@ -152,7 +153,7 @@ def _spin(kind, axis, angles, R0=np.eye(3)):
     axis = np.asarray(axis, float) / np.linalg.norm(axis)
     for a in angles:
         R = so3.exp(a * axis) @ R0
-        p = kind.write(R[None], np.zeros((1, 3)), (axis * 1.0)[None], np.zeros((1, 3)), q=q, q_t=qt)
+        p = write(kind, R[None], np.zeros((1, 3)), (axis * 1.0)[None], np.zeros((1, 3)), q=q, q_t=qt)
         out.append(p[0].copy())
         np.testing.assert_allclose(kind.rotation(p)[0], R, atol=1e-13)
     return np.array(out)
@@ -195,7 +196,7 @@ def test_rotvec_reference_plus_current():
     q, qt = np.zeros(6), np.zeros(6)
     kind.read(q, qt)
     R = rot.rotvec_to_matrix(ref[3:] + np.array([0.1, 0.2, -0.1]))[0]
-    kind.write(R[None], np.array([[1, 2, 3.5]]), np.zeros((1, 3)), np.zeros((1, 3)), q=q, q_t=qt)
+    write(kind, R[None], np.array([[1, 2, 3.5]]), np.zeros((1, 3)), np.zeros((1, 3)), q=q, q_t=qt)
     np.testing.assert_allclose(q, [0, 0, 0.5, 0.1, 0.2, -0.1], atol=1e-13)
 
 
@@ -233,9 +234,10 @@ def test_ep_read_rejects_non_unit_parameters():
 
 def test_write_back_compiles_only_the_row_writers_of_its_nodes():
     """present_writers marks the row writers the nodes' codes need (the others are None, so
-    the write-back compiles none of their code), and the per-node path has all of them."""
+    the write-back compiles none of their code), and the per-node writer of the tests has all of them."""
     from exudyn_lie.bridge import nodes
+    from node_writer import ALL_WRITERS
     p = nodes.present_writers([nodes.CODE_EP, nodes.CODE_POINT, nodes.CODE_EP])
     assert [x is not None for x in p] == [c == nodes.CODE_EP for c in nodes.WRITER_CODES]
-    assert all(x is not None for x in nodes.ALL_WRITERS)
+    assert all(x is not None for x in ALL_WRITERS)
     assert all(x is None for x in nodes.present_writers([nodes.CODE_POINT, nodes.CODE_1D]))

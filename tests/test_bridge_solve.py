@@ -501,7 +501,7 @@ def test_fast_path_is_used_for_compiled_scenes():
     solver = mbs.sys["lieGroupSolver"]
     ch = solver._chunks
     assert ch is not None and ch.size > 1 and ch.maxRows > 1
-    assert ch._ep["mk"] is not kernel.mk_steps and ch._ep["write"] is not write_rows
+    assert ch.out._ep["mk"] is not kernel.mk_steps and ch._ep["write"] is not write_rows
     assert solver._live
     # the resolved entry point is the compiled overload of the chunk call's argument types
     sig = [sg for sg in kernel.mk_steps.overloads if kernel.mk_steps.overloads[sg].entry_point is ch._ep["mk"]]

@@ -539,3 +539,41 @@ def test_rolling_disc_same_trajectory_as_compiled():
     (q0, v0), (q1, v1) = out["compiled"], out["exudyn"]
     assert _rel(q1, q0) < TOL and _rel(v1, v0) < TOL, (_rel(q1, q0), _rel(v1, v0))
     assert _rel(force["exudyn"], force["compiled"]) < 1e-6, force
+
+
+@pytest.mark.parametrize("what", ["positions", "velocities"])
+def test_inconsistent_initial_state_is_refused_or_projected_by_the_one_rule(what):
+    """The evaluated path checks the initial state by the compiled path's rule
+    (mbs/initial_state.py): with projectInitial=False the error names the object, by default
+    the state is projected onto Exudyn's own constraints with the warning, and the spherical
+    joint then holds (its point on the body stays at the origin)."""
+    from exudyn_lie.errors import ConstraintError
+
+    def build():
+        mbs = _pendulum_with_generic_ode2()
+        n = [k for k in range(mbs.systemData.NumberOfNodes())
+             if mbs.GetNode(k)["nodeType"] == "RigidBodyRotVecLG"][0]
+        key = "initialCoordinates" if what == "positions" else "initialVelocities"
+        v = np.array(mbs.GetNodeParameter(n, key), float)
+        v[1] += 0.01 if what == "positions" else 0.5          # the joint's point moves off the origin
+        mbs.SetNodeParameter(n, key, list(v))
+        mbs.Assemble()
+        return mbs, n
+
+    mbs, n = build()
+    match = "initial configuration violates" if what == "positions" else "initial velocities violate"
+    with pytest.raises(ConstraintError, match=match + r" the .*constraints of objects 2 \('object2', ObjectJointSpherical\)"):
+        exl.SolveDynamic(mbs, quiet_settings(0.01, 10), projectInitial=False, showProgress=False)
+    mbs, n = build()
+    with warnings.catch_warnings(record=True) as w:
+        warnings.simplefilter("always")
+        exl.SolveDynamic(mbs, quiet_settings(0.01, 10), showProgress=False)
+    msgs = [str(x.message) for x in w if "projected onto them" in str(x.message)]
+    assert len(msgs) == 1 and f"{what} of objects 2 ('object2', ObjectJointSpherical)" in msgs[0]
+    p = np.array(mbs.GetNodeOutput(n, exu.OutputVariableType.Position))
+    R = np.array(mbs.GetNodeOutput(n, exu.OutputVariableType.RotationMatrix)).reshape(3, 3)
+    v = np.array(mbs.GetNodeOutput(n, exu.OutputVariableType.Velocity))
+    om = np.array(mbs.GetNodeOutput(n, exu.OutputVariableType.AngularVelocity))
+    arm = R @ np.array([-0.5, 0.0, 0.0])                    # the joint's point on the body
+    assert np.linalg.norm(p + arm) < 1e-8
+    assert np.linalg.norm(v + np.cross(om, arm)) < 1e-7

@@ -14,7 +14,8 @@ True
 from .. import _numba_cache  # noqa: F401  (first: the cache key of every compiled function)
 from .nodes import NODE_KINDS, EPNode, NodeKind, RotVecLGNode, RxyzNode
 from .reader import BridgeError, ExudynScene, SceneFromExudyn
-from .solver import LieGroupSolver, SolveDynamic
+from .solve_dynamic import SolveDynamic
+from .solver import LieGroupSolver
 
 __all__ = ["SolveDynamic", "LieGroupSolver", "SceneFromExudyn", "ExudynScene", "BridgeError",
            "NODE_KINDS", "NodeKind", "RotVecLGNode", "EPNode", "RxyzNode"]

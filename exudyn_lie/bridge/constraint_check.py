@@ -405,7 +405,7 @@ def kernel_explanation(sim, jointRows):
             return None
         if "h" not in state:
             ch, o, t = state["s"]
-            state["h"] = np.abs(sim.RowResiduals(ch.Ro[o], ch.ro[o], ch.Vo[o], t)[0])
+            state["h"] = np.abs(sim.RowResiduals(ch.out.Ro[o], ch.out.ro[o], ch.out.Vo[o], t)[0])
         own = float(state["h"][rows].max())
         if own >= EXPLAINED * g:
             return None

@@ -31,8 +31,8 @@ One evaluation at a stage state (:meth:`EvaluatedModel.accelerations`):
    motion, ``(g_v(q exp(+eps V), t + eps) - g_v(q exp(-eps V), t - eps)) / (2 eps)``;
 4. ``[M C_q^T; C_q 0][a; lam] = [f; eta]`` with M block diagonal (blocks found once from
    the pattern of M and the nodes' coordinates) and the Schur complement
-   (:func:`~.evaluated_kernels.block_kkt_solve`); a singular block of M falls back to a
-   dense KKT solve.
+   (:class:`~exudyn_lie.mbs.block_kkt.BlockKKT`, the kernel's factorisations); a singular
+   block of M falls back to the whole KKT matrix.
 
 The step of the central difference (the rule): ``eps = cbrt(eps_mach) * tau`` with the time
 scale ``tau = 1 / max(1 1/s, max|v|)`` (v: Exudyn's velocity coordinates in SI units per
@@ -49,9 +49,9 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import ConstraintError, SimulationError
-from .evaluated_kernels import block_kkt_solve, schur_band_solve, write_exudyn_state, write_moved_positions
-from ..mbs.linalg import REL_PIVOT_TOL
+from ..mbs.block_kkt import BlockKKT
 from ..mbs.row_drives import offset_and_derivatives
+from .evaluated_kernels import write_exudyn_state, write_moved_positions
 from .moving_offsets import offset_objects
 from .reader import BridgeError, _userfunction
 
@@ -262,7 +262,7 @@ class Layout:
 
     def blocks(self, M):
         """Connected components of the pattern of M joined with each node's coordinates:
-        (blk, blkPtr) for :func:`block_kkt_solve`."""
+        (blk, blkPtr) for :class:`~exudyn_lie.mbs.block_kkt.BlockKKT`."""
         n = self.nODE2
         parent = np.arange(n)
 
@@ -306,17 +306,12 @@ class EvaluatedModel:
         self.n, self.m, self.n1 = n, m, n1
         self.nsys = n + n1 + m
         self._Z = np.zeros((self.nsys, self.nsys))
-        self.a = np.zeros(n)
-        self.lam = np.zeros(m)
+        self.kkt = BlockKKT(n, m, layout.blocks, self._check_rows, verbose)
+        self.a, self.lam = self.kkt.a, self.kkt.lam
         self.ydot = np.zeros(n1)
-        self._Minv = self._X = self._S = None       # the general (dense-S) path's arrays, when it is used
-        self._nzIdx = np.zeros((m, n), np.int64)
-        self._nzCnt = np.zeros(m, np.int64)
         self._ER = np.zeros((3, 3))
         self._rv = np.zeros((len(layout.lgNodes), 3))
         self._qsave = np.zeros(n)
-        self.dense = False
-        self.pivoted = False
         self._eta0 = np.zeros(0)
         self._etaBuf = np.zeros(m)
         self._vmax = 0.0
@@ -331,9 +326,6 @@ class EvaluatedModel:
         self._posObjectRows, self._posNodeRows = self.positionRows[~nr], self.positionRows[nr]
         # C_qdot of velocity-level rows: the ODE2_t factor (position-level rows have no ODE2_t part)
         self._factorODE2_t = 1.0 if len(self.velocityRows) else 0.0
-        self._perm = np.zeros(m, np.int64)
-        self._yw = np.zeros(m)
-        self.blk = self.blkPtr = None
         self.evaluations = 0
         # bound methods, looked up once (the stage loop is Python)
         s = solver
@@ -594,141 +586,20 @@ class EvaluatedModel:
                                   f"constraint with a compliance); exudyn_lie's index-1 solve needs rigid "
                                   f"constraints; solve with exudyn.SolveDynamic")
 
-    def _active_rows(self, Cq):
-        """None if every AE row constrains ODE2 coordinates; else the active rows (inactive
-        connectors give ``lam = 0`` by an equation in lam alone: dropped)."""
-        empty = ~np.any(np.asarray(Cq) != 0.0, axis=1)
-        self._check_rows(Cq, empty)
-        return None if not empty.any() else np.nonzero(~empty)[0]
-
     # ------------------------------------------------------------------ linear algebra
-    def _set_up_blocks(self, M):
-        n = self.n
-        self.blk, self.blkPtr = self.L.blocks(M)
-        sizes = np.diff(self.blkPtr)
-        nb = len(sizes)
-        self.blockOf = np.zeros(n, np.int64)
-        for b in range(nb):
-            self.blockOf[self.blk[self.blkPtr[b]:self.blkPtr[b + 1]]] = b
-        self.blkOff = np.concatenate([[0], np.cumsum(sizes * sizes)]).astype(np.int64)
-        smax = int(sizes.max()) if nb else 1
-        self._MinvB = np.zeros(int(self.blkOff[-1]))
-        self._W = np.zeros((smax, 2 * smax))
-        self._T = np.zeros(smax)
-        m = self.m
-        self._rowBlk = np.zeros((m, max(nb, 1)), np.int64)
-        self._rowBlkCnt = np.zeros(m, np.int64)
-        self._bRowPtr = np.zeros(nb + 1, np.int64)
-        self._bRows = np.zeros(max(m * nb, 1), np.int64)
-        self._cnt = np.zeros(max(nb, 1), np.int64)
-        self._Y = np.zeros((max(m, 1), smax))
-        self._x = np.zeros(m)
-
-    def _order_rows(self, Cq):
-        """Reverse Cuthill-McKee order of the constraint rows (rows adjacent when they act
-        on the same block of M) and the bandwidth of S in it: for a chain or tree of bodies
-        the band is narrow and the Schur solve linear in the number of bodies."""
-        from ..mbs.linalg import rcm_order
-        Cq = np.asarray(Cq)
-        m = self.m
-        rowsOf = {}
-        for r in range(m):
-            for b in np.unique(self.blockOf[np.nonzero(Cq[r])[0]]):
-                rowsOf.setdefault(int(b), []).append(r)
-        edges = [(r, c) for rows in rowsOf.values() for r in rows for c in rows if r < c]
-        order = rcm_order(m, edges)
-        self._pos = np.zeros(m, np.int64)
-        self._pos[np.asarray(order, np.int64)] = np.arange(m)
-        self._bw = int(max((abs(self._pos[r] - self._pos[c]) for r, c in edges), default=0))
-        self._band = np.zeros((m, self._bw + 1))
-
     def solve(self, M, f, Cq, eta):
-        """``a``, ``lam`` of ``[M Cq^T; Cq 0][a; lam] = [f; eta]`` (Exudyn's matrices)."""
-        if self.blk is None:
-            self._set_up_blocks(M)
-            if self.m:
-                self._check_rows(Cq)
-                self._order_rows(Cq)
-        if self.m == 0 or self.dense or self.pivoted:
-            if self.m:
-                active = self._active_rows(Cq)
-                if active is not None:
-                    Cq, eta = Cq[active], eta[active]
-            else:
-                active = None
-                Cq = np.zeros((0, self.n))
-            self._solve(M, f, Cq, eta, active)
-            return
-        for _ in range(2):
-            st = schur_band_solve(M, f, Cq, eta, self.blk, self.blkPtr, self.blkOff, self.blockOf, self._pos,
-                                  self._bw, self._MinvB, self._W, self.a, self.lam, self._nzIdx, self._nzCnt,
-                                  self._rowBlk, self._rowBlkCnt, self._bRowPtr, self._bRows, self._cnt, self._Y,
-                                  self._band, self._x, self._T, self._yw)
-            if st != 3:
-                break
-            self._order_rows(Cq)          # rows act on other blocks now: a new order
-        if st == 0:
-            return
-        if st == 4:                       # rows without coordinates (inactive connectors): lam = 0
-            self._check_rows(Cq, self._nzCnt == 0)
-            return
-        if st == 1 or st == 2:
-            # a singular block of M (dense KKT) or redundant constraints (rank-revealing
-            # Cholesky): the general path, from now on
-            active = self._active_rows(Cq)
-            if active is not None:
-                Cq, eta = Cq[active], eta[active]
-            self._solve(M, f, Cq, eta, active)
-            return
-        raise SimulationError(f"internal: Schur solve status {st}")
+        """``a``, ``lam`` of ``[M Cq^T; Cq 0][a; lam] = [f; eta]`` (Exudyn's matrices;
+        :class:`~exudyn_lie.mbs.block_kkt.BlockKKT`, blocks from the nodes and M's pattern)."""
+        self.kkt.solve(M, f, np.zeros((0, self.n)) if Cq is None else np.asarray(Cq), eta)
 
-    def _solve(self, M, f, Cq, eta, active):
-        if self.blk is None:
-            self.blk, self.blkPtr = self.L.blocks(M)
-        m = Cq.shape[0]
-        lam = self.lam if active is None else np.zeros(m)
-        if self._Minv is None:
-            self._Minv = np.zeros((self.n, self.n))
-            self._X = np.zeros((self.n, self.m))
-            self._S = np.zeros((self.m, self.m))
-        if not self.dense:
-            full = m == self.m
-            X = self._X if full else np.zeros((self.n, m))
-            S = self._S if full else np.zeros((m, m))
-            nzI = self._nzIdx if full else np.zeros((m, self.n), np.int64)
-            Cq = np.ascontiguousarray(Cq)
-            args = (self.blk, self.blkPtr, self._Minv, X, S, lam, self.a, nzI, self._nzCnt)
-            st = block_kkt_solve(M, f, Cq, eta, *args, self.pivoted, self._perm, self._yw)
-            if st == 2 and self.evaluations <= 1:
-                # redundant constraints at the initial state (e.g. a closed planar loop): the
-                # rank-revealing path of the compiled kernel from now on (mbs/linalg.py)
-                self.pivoted = True
-                if self.verbose:
-                    print("exudyn_lie: the constraints are redundant (J M^-1 J^T is singular at the initial state); "
-                          "rank-revealing Cholesky from now on (multipliers of dependent rows 0)")
-                st = block_kkt_solve(M, f, Cq, eta, *args, True, self._perm, self._yw)
-            if st == 2:
-                raise ConstraintError("singular constraint Jacobian: the constraints became linearly dependent "
-                                      f"(a singular configuration; a Cholesky pivot of J M^-1 J^T fell to {REL_PIVOT_TOL:g} x "
-                                      f"its row's diagonal or below); check the joint frames")
-            if st == 1:
-                self.dense = True
-                if self.verbose:
-                    print("exudyn_lie: the mass matrix has a singular block; solving the dense KKT system from now on")
-        if self.dense:
-            n = self.n
-            K = np.zeros((n + m, n + m))
-            K[:n, :n] = M
-            K[:n, n:] = Cq.T
-            K[n:, :n] = Cq
-            try:
-                x = np.linalg.lstsq(K, np.concatenate([f, eta]), rcond=1e-12)[0] if self.pivoted else \
-                    np.linalg.solve(K, np.concatenate([f, eta]))
-            except np.linalg.LinAlgError:
-                raise SimulationError("the KKT matrix [M Cq^T; Cq 0] is singular (a coordinate without mass "
-                                      "that no constraint fixes?); exudyn_lie cannot compute accelerations") from None
-            self.a[:] = x[:n]
-            lam[:] = x[n:]
-        if active is not None:
-            self.lam[:] = 0.0
-            self.lam[active] = lam
+    @property
+    def pivoted(self):
+        return self.kkt.pivoted
+
+    @property
+    def dense(self):
+        return self.kkt.dense
+
+    @property
+    def blkPtr(self):
+        return None if self.kkt.blk is None else self.kkt.blkPtr

@@ -1,7 +1,6 @@
-"""Initial consistency on the Exudyn-evaluated path, with the compiled path's rules
-(``Simulator._check_initial_consistency``): a residual above ``INITIAL_TOL`` (relative) of the
-position-level constraints, then of the velocity-level ones, either raises
-:class:`~exudyn_lie.errors.ConstraintError` (``projectInitial=False``) or is projected away:
+"""Initial consistency on the Exudyn-evaluated path: Exudyn's own constraint equations as the
+levels of the one rule (:func:`~exudyn_lie.mbs.initial_state.check_initial_state`, which the
+compiled path's ``Simulator._check_initial_consistency`` uses too); the projections:
 
 * positions: Gauss-Newton steps ``Delta = -M^-1 C_q^T (C_q M^-1 C_q^T)^-1 g`` in Exudyn's
   velocity coordinates, applied on the group for Lie group nodes (``R exp(Delta omega)``,
@@ -19,7 +18,7 @@ import numpy as np
 from ..errors import ConstraintError
 from ..groups import so3
 from ..mbs.codes import BODY_TWIST
-from ..mbs.simulator import INITIAL_TOL
+from ..mbs.initial_state import check_initial_state
 
 MAX_ITER = 20
 TOL = 1e-13
@@ -60,25 +59,31 @@ def _correction(model, t, rhs):
     return model.a.copy()
 
 
-def project_initial(model, problem, t, projectInitial):
-    """Check / project the problem's (:mod:`.evaluated_problem`) initial state; writes it into mbs.  Returns a
-    description of the correction, or None."""
-    if model.m == 0:
-        return None
-    mbs = model.mbs
-    problem.write()
-    fixed = []
-    g = _position_residual(model, t)
-    scale = max(1.0, float(np.max(np.abs(problem.r))) if problem.r.size else 1.0,
-                float(np.max(np.abs(problem.qv))) if problem.qv.size else 1.0)
-    bad = np.nonzero(np.abs(g) > INITIAL_TOL * scale)[0]
-    if len(bad):
-        if not projectInitial:
-            raise ConstraintError(f"initial configuration violates the constraints of objects {_names(mbs, bad)} "
-                                  f"(max |g| = {np.max(np.abs(g)):.3g}); fix the initial poses or pass "
-                                  f"projectInitial=True to project them onto the constraints first")
-        g0 = float(np.max(np.abs(g)))
+class _ExudynLevels:
+    """Exudyn's own constraint equations at the problem's state as the levels of
+    :func:`~exudyn_lie.mbs.initial_state.check_initial_state`."""
+
+    def __init__(self, model, problem, t):
+        self.model, self.problem, self.t = model, problem, t
+        self.velocityChange = 0.0
+
+    def position_residual(self):
+        p = self.problem
+        scale = max(1.0, float(np.max(np.abs(p.r))) if p.r.size else 1.0,
+                    float(np.max(np.abs(p.qv))) if p.qv.size else 1.0)
+        self.scale = scale
+        return _position_residual(self.model, self.t), scale
+
+    def velocity_residual(self):
+        m, p = self.model, self.problem
+        gv = m.velocity_constraints(self.t, p.R, p.r, p.prev, p.qv)
+        return gv, max(1.0, float(np.max(np.abs(m.qt))) if m.n else 1.0)
+
+    def project_positions(self):
+        """Gauss-Newton steps on the group for Lie group nodes, added to vector coordinates."""
+        model, problem, t = self.model, self.problem, self.t
         L = model.L
+        g = _position_residual(model, t)
         for _ in range(MAX_ITER):
             d = _correction(model, t, -g)
             for i in range(len(L.lgNodes)):
@@ -88,25 +93,20 @@ def project_initial(model, problem, t, projectInitial):
             problem.qv += d[L.vecIdx]
             problem.write()
             g = _position_residual(model, t)
-            if np.max(np.abs(g)) <= TOL * scale:
-                break
-        else:
-            raise ConstraintError(f"the initial configuration could not be projected onto the constraints of "
-                                  f"objects {_names(mbs, bad)} in {MAX_ITER} Gauss-Newton steps (max |g| = "
-                                  f"{np.max(np.abs(g)):.3g}); they may not be satisfiable")
-        fixed.append(f"positions of objects {_names(mbs, bad)} (max |g| = {g0:.3g})")
-    # velocities: C_q v (+ C_t) = g_v
-    gv = model.velocity_constraints(t, problem.R, problem.r, problem.prev, problem.qv)
-    vscale = max(1.0, float(np.max(np.abs(model.qt))) if model.n else 1.0)
-    bad = np.nonzero(np.abs(gv) > INITIAL_TOL * vscale)[0]
-    if len(bad):
-        if not projectInitial:
-            raise ConstraintError(f"initial velocities violate the velocity constraints of objects "
-                                  f"{_names(mbs, bad)} (max |g_v| = {np.max(np.abs(gv)):.3g}); pass "
-                                  f"projectInitial=True to project them onto the constraints first")
+            if np.max(np.abs(g)) <= TOL * self.scale:
+                return
+        bad = np.nonzero(np.abs(g) > TOL * self.scale)[0]
+        raise ConstraintError(f"the initial configuration could not be projected onto the constraints of "
+                              f"{self.describe_rows(bad)} in {MAX_ITER} Gauss-Newton steps (max |h| = "
+                              f"{np.max(np.abs(g)):.3g}); they may not be satisfiable")
+
+    def project_velocities(self):
+        """The mass-orthogonal projection, written as the problem's velocities."""
+        model, problem, t = self.model, self.problem, self.t
+        L = model.L
+        gv = model.velocity_constraints(t, problem.R, problem.r, problem.prev, problem.qv)
         dv = _correction(model, t, -gv)
         qt = model.qt.copy() + dv
-        L = model.L
         for i in range(len(L.lgNodes)):
             idx = L.lgIdx[i]
             problem.V[i, :3] = qt[idx[3:]]
@@ -114,6 +114,26 @@ def project_initial(model, problem, t, projectInitial):
             problem.V[i, 3:] = problem.R[i].T @ v if BODY_TWIST[problem.gid[i]] else v
         problem.set_vector_velocities(qt[L.vecIdx])
         problem.write()
-        fixed.append(f"velocities of objects {_names(mbs, bad)} (max |g_v| = {np.max(np.abs(gv)):.3g}): changed "
-                     f"by up to {np.max(np.abs(dv)):.3g}")
-    return "; ".join(fixed) or None
+        self.velocityChange = float(np.max(np.abs(dv)))
+
+    def describe_rows(self, rows):
+        return "objects " + _names(self.model.mbs, rows)
+
+
+def project_initial(model, problem, t, projectInitial):
+    """Check / project the problem's (:mod:`.evaluated_problem`) initial state
+    (:func:`~exudyn_lie.mbs.initial_state.check_initial_state`); writes it into mbs.  Returns a
+    description of the correction, or None."""
+    if model.m == 0:
+        return None
+    problem.write()
+    levels = _ExudynLevels(model, problem, t)
+    fixed = check_initial_state(levels, projectInitial)
+    out = []
+    for level, rows, residual in fixed:
+        if level == "positions":
+            out.append(f"positions of {levels.describe_rows(rows)} (max |h| = {residual:.3g})")
+        else:
+            out.append(f"velocities of {levels.describe_rows(rows)} (max |g_v| = {residual:.3g}): changed by up "
+                       f"to {levels.velocityChange:.3g}")
+    return "; ".join(out) or None

@@ -23,16 +23,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import StepSizeError
 from ..groups import so3
-from ..integrators.stability import stability_radius
 from ..mbs.codes import BODY_TWIST, GROUP_NAMES
 from ..mbs.scene import Scene
 from ..mbs.simulator import Simulator
+from ..mbs.stiffness import StageStiffnessWatch
 from .evaluated_kernels import pack_rates, pack_state, unpack_state
 
-STIFF_STEPS = 3      # h rho beyond the stability radius in this many consecutive steps: StepSizeError
-STIFF_FACTOR = 10.0  # ... or beyond this multiple of it in one step (a stiff contact lasts a step or two)
 
 
 class EvaluatedScene(Scene):
@@ -70,8 +67,7 @@ class EvaluatedProblem:
         self.sim = Simulator(sc, tableau, [GROUP_NAMES[g] for g in L.gid] + ["R3"] * (self.nvb + self.n1b))
         self.tableau = self.sim.tableau
         self.stages = self.sim.method.stages
-        self._radius = stability_radius(self.tableau)
-        self._stiffCount = 0
+        self._stiffness = StageStiffnessWatch(self.tableau)
 
     # ------------------------------------------------------------------ the right-hand side
     def bind(self, Rs, rs, Vs, Vdot):
@@ -175,29 +171,12 @@ class EvaluatedProblem:
         """From ``t0`` to ``t1``: ``nsteps`` fixed steps of ``h``, or adaptive steps (the
         simulator's SetAdaptive) whose last one ends at ``t1``.  Raises StepSizeError as the
         compiled path (the stepper's checks), and for fixed steps when the stages of the
-        last steps show a mode beyond the method's stability radius (:meth:`check_stiffness`)."""
+        last steps show a mode beyond the method's stability radius (:class:`~exudyn_lie.mbs.stiffness.StageStiffnessWatch`)."""
         sim = self.sim
         sim.t = t0
         if adaptive:
             sim.AdvanceTo(t1)
         else:
             sim.Advance(nsteps, h)
-            self.check_stiffness(h)       # (the last of the nsteps steps)
+            self._stiffness.check(sim, h, self.nl + self.nvb)     # (the last of the nsteps steps; the ODE2 bodies)
         sim.t = t1
-
-    def check_stiffness(self, h):
-        """A mode that became stiff during the run (a contact that closed, a friction zone):
-        Shampine's estimate from the last step's stages (Simulator.StageStiffness, the ODE2
-        bodies) against the method's stability radius."""
-        rho = self.sim.StageStiffness(h, self.nl + self.nvb)
-        if h * rho > self._radius:
-            self._stiffCount += 1
-            if self._stiffCount >= STIFF_STEPS or h * rho > STIFF_FACTOR * self._radius:
-                raise StepSizeError(
-                    f"the step size {h:.3g} s is beyond the stability limit of {self.tableau.name} at t = "
-                    f"{self.sim.t:.6g} s: the stages of the last step(s) show a mode of rate |lambda| ~ {rho:.4g} "
-                    f"1/s (Shampine's estimate from the stages; e.g. a contact or a friction zone that became "
-                    f"active), h |lambda| = {h * rho:.3g} > {self._radius:.3g} (the method's stability radius); "
-                    f"the state is not reliable: try a step size of {0.9 * self._radius / rho:.3g} s or smaller")
-        else:
-            self._stiffCount = 0

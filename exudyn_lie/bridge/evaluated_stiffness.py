@@ -8,10 +8,10 @@ The equations linearised at a state, on the constraint manifold, are
 ``lambda`` (of the first-order matrix ``[[0, I], [-M_r^-1 K_r, -M_r^-1 D_r]]``) must satisfy
 ``|R(h lambda)| <= 1`` with the method's stability polynomial ``R``
 (:func:`~exudyn_lie.integrators.stability.stability_coefficients`, from the tableau's
-coefficients).  :func:`stable_step` finds the largest such ``h`` by bisection;
-:func:`check_step` raises :class:`~exudyn_lie.errors.StepSizeError` with ``0.9`` of it
-before a run whose step is beyond it (a blow-up during the run is the stepper's error, with
-the simulator's suggestion).  A mode whose stiffness appears only later (a contact that closes,
+coefficients); :func:`check_step` raises the StepSizeError of
+:func:`~exudyn_lie.mbs.stiffness.check_linear_stability` before a run whose step is beyond the
+largest such ``h`` (a blow-up during the run is the stepper's error, with the simulator's
+suggestion).  A mode whose stiffness appears only later (a contact that closes,
 a regularised friction zone that is entered) is not seen at the initial state: that is
 what the blow-up check of the stepper is for; a regularised friction that only chatters
 (bounded) is not detected (docs/EVALUATED.md).
@@ -20,11 +20,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import StepSizeError
-from ..integrators.stability import stability_coefficients
-
-SAFETY = 0.9
-GROWTH_TOL = 1e-9          # |R(z)| <= 1 + GROWTH_TOL counts as stable (R(0) = 1 exactly)
+from ..mbs.stiffness import check_linear_stability
 
 
 def linear_eigenvalues(model):
@@ -92,51 +88,10 @@ def _ode1_jacobian(model):
     return J
 
 
-def _grows(coeffs, z):
-    return np.abs(np.polyval(coeffs[::-1], z)) > 1.0 + GROWTH_TOL
-
-
-def largest_stable_step(tableau, ev):
-    """The largest h with ``|R(h lambda)| <= 1`` for every eigenvalue (inf if every mode is
-    stable for all h, e.g. no stiffness); bisection between stable and unstable h.  Modes
-    that grow physically count with their imaginary part only."""
-    # a mode that grows physically (Re lambda > 0: an inverted pendulum, gyroscopic
-    # coupling) grows for every h; only its oscillation must be resolved: Re lambda -> 0
-    ev = np.minimum(ev.real, 0.0) + 1j * ev.imag
-    ev = ev[np.abs(ev) > 0]
-    if ev.size == 0:
-        return float("inf")
-    c = np.array([float(x) for x in stability_coefficients(tableau)])
-    rho = float(np.max(np.abs(ev)))
-    hi = 1.0 / rho
-    while not np.any(_grows(c, hi * ev)):
-        hi *= 2.0
-        if hi * rho > 1e6:
-            return float("inf")
-    lo = 0.0
-    for _ in range(60):
-        mid = 0.5 * (lo + hi)
-        if np.any(_grows(c, mid * ev)):
-            hi = mid
-        else:
-            lo = mid
-    return lo
-
-
-def stable_step(tableau, model):
-    """(largest stable step, fastest rate |lambda|) at the state in mbs."""
-    ev = linear_eigenvalues(model)
-    return largest_stable_step(tableau, ev), float(np.max(np.abs(ev))) if ev.size else 0.0
-
-
 def check_step(model, tableau, h, refuse=True):
-    """Raise StepSizeError (with ``refuse``) if ``h`` is beyond the linear stability limit at
-    the state in mbs; returns (fastest rate, largest stable step)."""
-    hmax, rate = stable_step(tableau, model)
-    if refuse and h > hmax:
-        raise StepSizeError(f"the step size {h:.3g} s is beyond the stability limit of {tableau.name} for this "
-                            f"model: its fastest mode has |lambda| = {rate:.4g} 1/s (Exudyn's stiffness, damping "
-                            f"and mass matrices on the constraint manifold at the initial state), stable up to "
-                            f"h = {hmax:.3g} s; use timeIntegration.numberOfSteps for a step size of "
-                            f"{SAFETY * hmax:.3g} s or smaller")
-    return rate, hmax
+    """The stability check before a run (:func:`~exudyn_lie.mbs.stiffness.check_linear_stability`)
+    with the eigenvalues of Exudyn's linearisation at the state in mbs; returns (fastest rate,
+    largest stable step)."""
+    return check_linear_stability(tableau, h, model.sd.GetTime(), linear_eigenvalues(model),
+                                  "Exudyn's stiffness, damping and mass matrices on the constraint manifold at "
+                                  "this state", refuse)

@@ -1,11 +1,10 @@
 """Exudyn output steps on the compiled path: chunks of outputs per call of the kernel.
 
-A Python call of a numba function unboxes every array it receives: the kernel's scene and
-work tuples hold ~60 arrays (~2 us per call, as much as a heavy-top step), the write-back
-another ~20.  Per Exudyn output step that would be most of the bridge's cost at the usual
-ten steps per output.  So :class:`OutputChunks` lets ``kernel.mk_steps`` integrate a chunk
-of output steps in one call, recording the state (and accelerations / multipliers) at each
-output, converts the chunk to node coordinates in one call of
+A Python call of a numba function unboxes every array it receives: the write-back takes
+~20.  Per Exudyn output step that would be most of the bridge's cost at the usual ten steps
+per output.  So :class:`OutputChunks` takes a chunk of the kernel's output rows (state, and
+accelerations / multipliers, at each output: :mod:`exudyn_lie.mbs.outputs`), converts the
+chunk to node coordinates in one call of
 :func:`~exudyn_lie.bridge.nodes.write_rows`, and per Exudyn step only copies one row into
 mbs.  Where a user function may change the state between outputs, or Python forces run, the
 chunk is one output long.  Both calls go through entry points resolved once
@@ -13,17 +12,16 @@ chunk is one output long.  Both calls go through entry points resolved once
 """
 import numpy as np
 
-from ..mbs import kernel, stepper
 from ..mbs.entry import call
+from ..mbs.outputs import CHUNK_ROWS, AdaptiveOutputRows, OutputRows
 from ..mbs.rotation_parameters import record_tracked
 from .nodes import CODE_1D_ROT, CODE_2D, NCOORD_MAX, present_writers, write_rows
 
-CHUNK_SECONDS = 0.05        # aimed wall time of one chunk (progress, responsiveness)
-CHUNK_DOUBLES = 1 << 22     # at most this many doubles of chunk buffers (32 MiB)
-CHUNK_ROWS = 256            # at most this many outputs per chunk
 
 class OutputChunks:
-    """Output steps of ``nsub`` MK steps each, computed a chunk at a time.
+    """Exudyn output steps of ``nsub`` MK steps each: the kernel's output rows
+    (:class:`~exudyn_lie.mbs.outputs.OutputRows`, a chunk per call of the stepper) converted
+    to node coordinates a chunk at a time.
 
     :meth:`refill` integrates the next chunk from the simulator's state (which then runs
     ahead of Exudyn's time by up to one chunk) and :meth:`pop` copies the next output row
@@ -36,57 +34,54 @@ class OutputChunks:
         self.bufs = bufs
         self.jac = jac
         q, qt, qtt, ae = bufs
-        nb, m = sim.sd.nb, sim.sd.nrows
-        perRow = nb * 24 + m + 3 * q.size + ae.size
-        self.maxRows = max(1, min(int(maxRows), CHUNK_DOUBLES // max(perRow, 1)))
-        M = self.maxRows
-        self.Ro, self.ro = np.zeros((M, nb, 3, 3)), np.zeros((M, nb, 3))
-        self.Vo, self.Vdo, self.lamo = np.zeros((M, nb, 6)), np.zeros((M, nb, 6)), np.zeros((M, m))
-        self.Po = np.zeros((M, nb, 4))          # tracked angles / node rotation parameters per row
+        self.out = self._rows(sim, nsub, h, doacc, maxRows, 3 * q.size + ae.size)
+        M = self.out.maxRows
         # rows start as the current coordinates: entries the write-back does not touch
         # (AE coordinates of no joint row) keep their values
         self.Q, self.Qt, self.Qtt = np.tile(q, (M, 1)), np.tile(qt, (M, 1)), np.tile(qtt, (M, 1))
         self.AE = np.tile(ae, (M, 1))
         # one view per row, made once: the per-output copy then indexes a list
         self.rowViews = (list(self.Q), list(self.Qt), list(self.Qtt), list(self.AE))
-        self.size = 1                   # outputs in the next chunk (adapted to CHUNK_SECONDS)
         self.rows = self.next = 0
         self.tStart = sim.t
         self.failure = None
         self._ep = {}
 
-    def refill(self, nout):
-        """Integrate the next ``min(nout, size)`` outputs; returns (outputs computed,
-        flagged nodes).  On a kernel failure the outputs before it are kept, the
-        simulator holds the last accepted step and :attr:`failure` the status."""
-        sim, h, nsub = self.sim, self.h, self.nsub
-        n = max(1, min(int(nout), self.size))
-        t0 = sim.t
-        acc = n if self.doacc else 0
-        a1 = (sim.sd, sim.wk, sim.method, sim.control, float(t0), h, n * nsub, sim.R, sim.r, sim.V, self.vmax, nsub,
-              self.Ro[:n], self.ro[:n], self.Vo[:n], self.Po[:n], self.Vdo[:acc], self.lamo[:acc])
-        st, done = call(self._ep, "mk", stepper.mk_steps, a1)
-        rows = done // nsub
-        if st != kernel.STATUS_OK and self.doacc and rows > 0 and np.isnan(self.Vdo[rows - 1, 0, 0]):
-            rows -= 1                   # its accelerations failed: not an output
-        nt = self.nodes
-        q, qt, qtt, ae = self.bufs
+    _rows = OutputRows
+
+    @property
+    def maxRows(self):
+        return self.out.maxRows
+
+    @property
+    def size(self):
+        """Outputs in the next chunk."""
+        return self.out.size
+
+    def _write(self, rows, times):
+        """Node coordinates (and multipliers) of the first ``rows`` output rows; returns the
+        number of nodes flagged."""
+        o, nt = self.out, self.nodes
         jrow, jae = self.jac
-        To = t0 + ((np.arange(self.maxRows) + 1) * nsub) * h        # the rows' times (the last: t0 + done h)
-        a2 = (rows, sim.sd.gid, self.Ro, self.ro, self.Vo, self.Vdo, self.lamo, self.doacc, nt.code, nt.body,
-              nt.idx, nt.nq, nt.qref, nt.prev, self.Q, self.Qt, self.Qtt, nt.flags, jrow, jae, self.AE, To,
-              self.Po, nt.scratch, nt.present)
-        nflag = call(self._ep, "write", write_rows, a2)
-        sim.t = t0 + done * h           # on a failure: the last accepted step
+        a2 = (rows, self.sim.sd.gid, o.Ro, o.ro, o.Vo, o.Vdo, o.lamo, self.doacc, nt.code, nt.body, nt.idx, nt.nq,
+              nt.qref, nt.prev, self.Q, self.Qt, self.Qtt, nt.flags, jrow, jae, self.AE,
+              np.ascontiguousarray(times, dtype=float), o.Po, nt.scratch, nt.present)
+        return call(self._ep, "write", write_rows, a2)
+
+    def refill(self, nout):
+        """Integrate the next outputs (at most ``nout``); returns (outputs computed, flagged
+        nodes).  On a kernel failure the outputs before it are kept, the simulator holds the
+        last accepted step and :attr:`failure` the status."""
+        t0 = self.sim.t
+        rows, times = self.out.integrate(nout, self.vmax)
+        nflag = self._write(rows, times)
         self.tStart, self.rows, self.next = t0, rows, 0
-        self.failure = None if st == kernel.STATUS_OK else st
+        self.failure = self.out.failure
         return rows, nflag
 
     def adapt(self, seconds, rows):
         """The next chunk's size from the wall time of this one."""
-        if rows > 0 and self.maxRows > 1:
-            per = max(seconds / rows, 1e-9)
-            self.size = max(1, min(self.maxRows, int(CHUNK_SECONDS / per)))
+        self.out.adapt(seconds, rows)
 
     def time_of_next(self):
         return self.tStart + (self.next + 1) * self.nsub * self.h
@@ -110,11 +105,12 @@ class OutputChunks:
 
 
 class AdaptiveOutputChunks(OutputChunks):
-    """Exudyn's output times on adaptive steps (:mod:`~exudyn_lie.mbs.adaptive`): the same
-    grid of outputs every ``nsub * h`` as :class:`OutputChunks` (the last at ``tEnd``), each
-    from the dense output on the group of the step that contains it; no step is shortened
-    for an output.  Accelerations and multipliers at an output (``doacc``) are one
-    evaluation of the equations of motion at its state (not counted as integration work)."""
+    """Exudyn's output times on adaptive steps (:class:`~exudyn_lie.mbs.outputs.
+    AdaptiveOutputRows`): the same grid of outputs every ``nsub * h`` as
+    :class:`OutputChunks` (the last at ``tEnd``), each from the dense output on the group of
+    the step that contains it; no step is shortened for an output."""
+
+    _rows = AdaptiveOutputRows
 
     def __init__(self, sim, nodes, vmax, bufs, jac, nsub, h, doacc, tEnd, maxRows=CHUNK_ROWS):
         super().__init__(sim, nodes, vmax, bufs, jac, nsub, h, doacc, maxRows=maxRows)
@@ -134,33 +130,13 @@ class AdaptiveOutputChunks(OutputChunks):
         return t
 
     def refill(self, nout):
-        sim = self.sim
-        n = max(1, min(int(nout), self.size, self.total - self.done))
+        n = max(1, min(int(nout), self.out.size, self.total - self.done))
         tout = self._output_times(n)
-        tPrev = self.t0 + self.done * self.nsub * self.h
-        st, rows = sim.AdvanceToInto(self.tEnd, tout, self.Ro[:n], self.ro[:n], self.Vo[:n], self.Po[:n])
-        if self.doacc and rows > 0:
-            wk = sim.wk
-            keep0, keepLam = wk.Vd[0].copy(), wk.lam.copy()     # stage 1 / dense data of the step
-            for o in range(rows):
-                est = sim._evaluate(float(tout[o]), self.Ro[o], self.ro[o], self.Vo[o])
-                if est != kernel.STATUS_OK:
-                    rows, st = o, est
-                    break
-                self.Vdo[o] = wk.Vd[0]
-                self.lamo[o] = wk.lam
-            wk.Vd[0] = keep0
-            wk.lam[:] = keepLam
-        nt = self.nodes
-        q, qt, qtt, ae = self.bufs
-        jrow, jae = self.jac
-        a2 = (rows, sim.sd.gid, self.Ro, self.ro, self.Vo, self.Vdo, self.lamo, self.doacc, nt.code, nt.body,
-              nt.idx, nt.nq, nt.qref, nt.prev, self.Q, self.Qt, self.Qtt, nt.flags, jrow, jae, self.AE,
-              np.ascontiguousarray(tout, dtype=float), self.Po, nt.scratch, nt.present)
-        nflag = call(self._ep, "write", write_rows, a2)
-        self.tStart, self.rows, self.next = tPrev, rows, 0
+        rows = self.out.integrate_at(self.tEnd, tout)
+        nflag = self._write(rows, tout)
+        self.tStart, self.rows, self.next = self.t0 + self.done * self.nsub * self.h, rows, 0
         self.done += rows
-        self.failure = None if st == kernel.STATUS_OK else st
+        self.failure = self.out.failure
         return rows, nflag
 
 

@@ -6,8 +6,8 @@ state ``(R, r, omega_local, vel_world)`` (rotation body->world, node position, b
 angular velocity, world velocity of the node):
 
 * :meth:`NodeKind.read`  ``(q_current, q_t) -> (R, r, omega, vel)``;
-* :meth:`NodeKind.write` ``(R, r, omega, vel[, omegaDot, acc]) -> (q_current, q_t[, q_tt])``,
-  keeping the rotation parameters continuous from one call to the next;
+* the compiled row writers below ``(R, r, omega, vel[, omegaDot, acc]) -> (q_current, q_t[,
+  q_tt])``, keeping the rotation parameters continuous from one call to the next;
 * :meth:`NodeKind.velocity_map` ``T`` with ``q_t = T (omega, vel)`` and
   :meth:`NodeKind.velocity_map_dot` ``Tdot (omega, vel)``, to compare Exudyn's mass matrix,
   right-hand side and constraint Jacobian with the package's (tests).
@@ -199,10 +199,6 @@ def present_writers(codes):
     differs per combination; mbs/presence.py)."""
     used = set(int(c) for c in codes)
     return tuple(np.zeros(0) if c in used else None for c in WRITER_CODES)
-
-
-#: every row writer (the per-node Python path, NodeKind.write)
-ALL_WRITERS = present_writers(WRITER_CODES)
 
 
 @njit(cache=True)
@@ -429,34 +425,6 @@ class NodeKind:
         self.first = False
         return self.rotation(p), tot[:, :3].copy(), self.omega_from_rate(p, vel[:, 3:]), vel[:, :3].copy()
 
-    def write(self, R, r, omega, vel, omegad=None, acc=None, q=None, q_t=None, q_tt=None):
-        """Scatter the state into the full system vectors q, q_t (and q_tt if given);
-        returns the total rotation parameters (n, nrot)."""
-        n, m = len(self), self.nrot
-        out = np.zeros((n, m))
-        p_t = np.zeros(m)
-        p_tt = np.zeros(m)
-        zero = np.zeros(3)
-        tmp = np.zeros(4)
-        for i in range(n):
-            p = out[i]
-            flag = write_row(self.code, np.ascontiguousarray(R[i], dtype=float),
-                             np.ascontiguousarray(omega[i], dtype=float),
-                             zero if omegad is None else np.ascontiguousarray(omegad[i], dtype=float),
-                             self.prev[i], self.first, p, p_t, p_tt, 0.0, math.nan, tmp, ALL_WRITERS)
-            ix = self.idx[i]
-            q[ix[:3]] = np.asarray(r[i]) - self.qref[i, :3]
-            q[ix[3:]] = p - self.qref[i, 3:]
-            q_t[ix[:3]] = vel[i]
-            q_t[ix[3:]] = p_t
-            if q_tt is not None and omegad is not None:
-                q_tt[ix[:3]] = acc[i]
-                q_tt[ix[3:]] = p_tt
-            if flag:
-                self.singular_warning(i)
-        self.first = False
-        return out
-
     def singular_warning(self, i):
         pass
 
@@ -641,15 +609,6 @@ class PointNode(NodeKind):
         return (np.repeat(np.eye(3)[None], n, axis=0), self._pad(self.qref + q[self.idx]), np.zeros((n, 3)),
                 self._pad(q_t[self.idx]))
 
-    def write(self, R, r, omega, vel, omegad=None, acc=None, q=None, q_t=None, q_tt=None):
-        k = self.npos
-        q[self.idx] = np.asarray(r)[:, :k] - self.qref
-        q_t[self.idx] = np.asarray(vel)[:, :k]
-        if q_tt is not None and acc is not None:
-            q_tt[self.idx] = np.asarray(acc)[:, :k]
-        self.first = False
-        return np.zeros((len(self), 0))
-
     def velocity_map(self, q):
         T = np.zeros((len(self), self.npos, 6))
         T[:, :, 3:3 + self.npos] = np.eye(self.npos)
@@ -700,26 +659,6 @@ class Rigid2DNode(NodeKind):
         v = np.zeros((n, 3))
         v[:, :2] = vel[:, :2]
         return self._rz(tot[:, 2]), r, om, v
-
-    def write(self, R, r, omega, vel, omegad=None, acc=None, q=None, q_t=None, q_tt=None, t=None):
-        out = np.zeros((len(self), 1))
-        p_t = np.zeros(1)
-        p_tt = np.zeros(1)
-        for i in range(len(self)):
-            planar_row(np.ascontiguousarray(R[i], dtype=float), np.asarray(omega[i], float),
-                       np.zeros(3) if omegad is None else np.asarray(omegad[i], float),
-                       self.prev[i], self.first, out[i], p_t, p_tt, self.prev[i, 2] if t is None else float(t),
-                       math.nan)
-            ix = self.idx[i]
-            q[ix[:2]] = np.asarray(r[i])[:2] - self.qref[i, :2]
-            q[ix[2]] = out[i, 0] - self.qref[i, 2]
-            q_t[ix[:2]] = np.asarray(vel[i])[:2]
-            q_t[ix[2]] = p_t[0]
-            if q_tt is not None and omegad is not None:
-                q_tt[ix[:2]] = np.asarray(acc[i])[:2]
-                q_tt[ix[2]] = p_tt[0]
-        self.first = False
-        return out
 
     def velocity_map(self, q):
         T = np.zeros((len(self), 3, 6))
@@ -796,26 +735,6 @@ class Node1DNode(PointNode):
         self.prev[:, 0] = np.where(self.rotor, x, self.prev[:, 0])
         self.prev[:, 1] = np.where(self.rotor, xt, self.prev[:, 1])
         return R, r, om, vel
-
-    def write(self, R, r, omega, vel, omegad=None, acc=None, q=None, q_t=None, q_tt=None, t=None):
-        for k in range(len(self)):
-            j = self.idx[k, 0]
-            if self.rotor[k]:
-                F0 = self.frame[k][:, 0]
-                a = math.atan2(-(F0 @ R[k][:, 1]), F0 @ R[k][:, 0])
-                x = continued_angle(a, float(omega[k][2]), self.prev[k], self.first,
-                                    self.prev[k, 2] if t is None else float(t), math.nan)
-                q[j] = x - self.qref[k, 0]
-                q_t[j] = omega[k][2]
-                if q_tt is not None and omegad is not None:
-                    q_tt[j] = omegad[k][2]
-            else:
-                q[j] = self.axis[k] @ (np.asarray(r[k]) - self.origin[k]) - self.qref[k, 0]
-                q_t[j] = self.axis[k] @ np.asarray(vel[k])
-                if q_tt is not None and acc is not None:
-                    q_tt[j] = self.axis[k] @ np.asarray(acc[k])
-        self.first = False
-        return np.zeros((len(self), 0))
 
     def velocity_map(self, q):
         T = np.zeros((len(self), 1, 6))

@@ -1,5 +1,6 @@
-"""``SolveDynamic`` for ordinary Exudyn scripts, and :class:`LieGroupSolver` (read once,
-solve many times).
+""":class:`LieGroupSolver` (read once, solve many times), the compiled path of
+``SolveDynamic`` (:mod:`.solve_dynamic`) for ordinary Exudyn scripts; its state in and out
+of mbs is :mod:`.state_io`.
 
 How it works: the model is read into a :class:`~exudyn_lie.mbs.Scene`
 (:func:`~exudyn_lie.bridge.reader.SceneFromExudyn`) and integrated by the package's
@@ -29,7 +30,6 @@ the state, and Exudyn's discontinuous iteration calling the hook again for the s
 """
 from __future__ import annotations
 
-import math
 import time
 import warnings
 
@@ -37,24 +37,20 @@ import numpy as np
 
 from .. import __version__
 from ..compiling import compile_timer
-from ..errors import SimulationError, raised_at_boundary
 from ..integrators.mk_adaptive import resolve_pair
 from ..integrators.tableau import ButcherTableau, method_names
 from ..mbs.compiled import auto_groups
-from ..mbs.rolling_disc_penalty_forces import D_DATA
-from ..mbs.scene import SceneError
 from ..mbs.simulator import Simulator
 from ..userwarn import warn_user
 from .constraint_check import ConstraintCheck, check_tolerance, kernel_explanation
-from .fast import CHUNK_ROWS, AdaptiveOutputChunks, NodeTable, OutputChunks
+from .fast import CHUNK_ROWS, AdaptiveOutputChunks, OutputChunks
 from .moving_offsets import ParameterOffsets
 from .params import ParameterWatch
 from .settings import liegroup_argument, positive_float
-from .solvertype import resolve_solver_type
 from .run_plan import adaptive_settings, needs_accelerations, plan_substeps, time_settings
-from .time_loop import TimeLoop, off_plan, update_initial_values
+from .time_loop import TimeLoop, update_initial_values
 from .reader import BridgeError, ExudynScene, SceneFromExudyn
-
+from .state_io import StateIO
 
 
 def _check_method(method):
@@ -100,7 +96,7 @@ def loop_settings(ss, exudynSteps, info):
     return ss2
 
 
-class LieGroupSolver:
+class LieGroupSolver(StateIO):
     """Integrate an Exudyn ``mbs`` with explicit Munthe-Kaas Lie group methods.
 
     Parameters
@@ -242,158 +238,6 @@ class LieGroupSolver:
         if sc.pyItems:
             print(f"exudyn_lie: {len(sc.pyItems)} item(s) evaluated in Python: "
                   f"{', '.join(it.label for it in sc.pyItems)}")
-
-    def _build_buffers(self):
-        sc, sim = self.scene, self.sim
-        # kernel rows of every joint, and their AE slots in Exudyn
-        self._jrows = []
-        for ji in sc.joints_info:
-            r0, n = (int(x) for x in sim.sd.jint[ji.sceneJoint, 2:4])
-            self._jrows.append((np.arange(r0, r0 + n), ji.aeRows))
-
-    # ------------------------------------------------------------------ state <-> mbs
-    def _views(self):
-        """Writable zero-copy views of mbs' Current q, q_t, q_tt, AE coordinates (Exudyn
-        >= 1.13 getters with ``copy=False``), checked to be live; None if unavailable."""
-        sd = self.mbs.systemData
-        cur = self._exu.ConfigurationType.Current
-        try:
-            views = (sd.GetODE2Coordinates(configuration=cur, copy=False),
-                     sd.GetODE2Coordinates_t(configuration=cur, copy=False),
-                     sd.GetODE2Coordinates_tt(configuration=cur, copy=False),
-                     sd.GetAECoordinates(configuration=cur, copy=False) if sd.AEsize() else np.zeros(0))
-        except TypeError:
-            return None
-        for v in views[:3]:
-            if not (isinstance(v, np.ndarray) and v.dtype == np.float64 and v.flags.c_contiguous
-                    and v.flags.writeable) or v.size == 0:
-                return None
-        q = views[0]
-        old = q[0]
-        q[0] = old + 1.0
-        live = sd.GetODE2Coordinates(configuration=cur)[0] == old + 1.0
-        q[0] = old
-        return views if live else None
-
-    def _init_buffers_from_mbs(self, t0=None):
-        """Coordinate buffers: zero-copy views of mbs' Current configuration if possible
-        (then nothing has to be copied per output step), else copies pushed with Set*.
-        Called right after Exudyn's InitializeSolver (Current = the initial values)."""
-        exu = self._exu
-        sd = self.mbs.systemData
-        cur = exu.ConfigurationType.Current
-        self._nAE = sd.AEsize()
-        views = self._views()
-        self._live = views is not None
-        if self._live:
-            self._q, self._qt, self._qtt, self._ae = views
-        else:
-            self._q = np.array(sd.GetODE2Coordinates(configuration=cur), float)
-            self._qt = np.array(sd.GetODE2Coordinates_t(configuration=cur), float)
-            self._qtt = np.array(sd.GetODE2Coordinates_tt(configuration=cur), float)
-            self._ae = np.array(sd.GetAECoordinates(configuration=cur), float) if self._nAE else np.zeros(0)
-        if self._nAE:
-            self._ae[self.scene.aeZero] = 0.0
-        for kind in self.scene.nodeKinds:       # continuity starts from the initial parameters
-            kind.read(np.array(self._q), np.array(self._qt))
-        self._nodes = NodeTable(self.scene.nodeKinds, self.scene.kindBodies, self.sim.t if t0 is None else t0)
-        jr = self._jrows
-        self._jrow = np.concatenate([x[0] for x in jr]).astype(np.int64) if jr else np.zeros(0, np.int64)
-        self._jae = np.concatenate([x[1] for x in jr]).astype(np.int64) if jr else np.zeros(0, np.int64)
-        self._Vdot = np.zeros((self.scene.nBodies, 6))
-        self._lam = np.zeros(self.sim.sd.nrows)
-        self._hasJ = len(self._jrow) > 0
-
-    def _watch_singular_nodes(self):
-        """Nodes with singular coordinates (Rxyz) are watched at every internal step, so
-        that passing near the singularity between two outputs is reported too."""
-        nodes, bodies, limits, entry = [], [], [], None
-        for kind, kb in zip(self.scene.nodeKinds, self.scene.kindBodies):
-            if kind.singularity is not None:
-                entry = kind.singularity[0]
-                nodes += [(kind, k) for k in range(len(kind))]
-                bodies += list(kb)
-                limits += [kind.singularity[1]] * len(kind)
-        self._watchNodes = nodes
-        self._watchLimit = np.array(limits)
-        if nodes:
-            self.sim.WatchRotationEntries(bodies, *entry)
-
-    def _warn_watched_nodes(self):
-        """Warn (once per node) about watched nodes that came near their singularity
-        since the last call."""
-        if not self._watchNodes:
-            return
-        hit = self.sim.watchedMaxima > self._watchLimit
-        if hit.any():
-            self.sim.ResetWatch()
-            for w in np.nonzero(hit)[0]:
-                kind, k = self._watchNodes[w]
-                kind.singular_warning(k)
-
-    def _fill(self, accelerations):
-        """Node and AE buffers from the simulator state (Python path)."""
-        sim = self.sim
-        lam = self._lam
-        if accelerations:
-            Vdot, lam = sim.Accelerations()
-            self._Vdot[:] = Vdot
-        return self._nodes.write(sim, self._Vdot, lam, accelerations, self._q, self._qt, self._qtt,
-                                 (self._jrow, self._jae, self._ae))
-
-    def _push(self, accelerations):
-        """Copy the buffers into mbs' Current configuration (nothing to do for views)."""
-        if not self._live:
-            sd = self.mbs.systemData
-            cur = self._exu.ConfigurationType.Current
-            sd.SetODE2Coordinates(self._q, configuration=cur)
-            sd.SetODE2Coordinates_t(self._qt, configuration=cur)
-            if accelerations:
-                sd.SetODE2Coordinates_tt(self._qtt, configuration=cur)
-                if self._nAE:
-                    sd.SetAECoordinates(self._ae, configuration=cur)
-        if self._nodes.flags.any():
-            self._nodes.warn_flags()
-
-    def _write(self, accelerations):
-        self._fill(accelerations)
-        self._push(accelerations)
-
-    def _next_output(self, t1, outputsLeft):
-        """The compiled path: the buffers at Exudyn's time ``t1`` from the next row of the
-        output chunk, integrating a new chunk when the last one is used up."""
-        ch = self._chunks
-        if ch.next == ch.rows:
-            if ch.failure is not None:
-                self.sim.RaiseStatus(ch.failure, ch.h)
-            tic = time.perf_counter()
-            rows, nflag = ch.refill(outputsLeft)
-            sec = time.perf_counter() - tic
-            ch.adapt(sec, rows)
-            self.timing["integration"] += sec
-            if nflag:
-                self._nodes.warn_flags()
-            self._warn_watched_nodes()
-            if rows == 0:
-                self.sim.RaiseStatus(ch.failure, ch.h)
-        if not ch.on_plan(t1):
-            raise off_plan(t1, ch.time_of_next())
-        ch.pop()
-
-    def _restart_from_mbs(self, t):
-        """Continue from the state in mbs at time ``t`` (Exudyn's start of the step): a user
-        function changed the coordinates, Exudyn's discontinuous iteration repeats the step
-        (it resets the ODE2 coordinates to the start of the step), or changed parameters
-        invalidate the outputs integrated ahead."""
-        self._reread_current(t)
-        ch = self._chunks
-        if ch is not None:
-            ch.rows = ch.next = 0
-            ch.failure = None
-            if isinstance(ch, AdaptiveOutputChunks):     # a new first step, no FSAL reuse
-                ch.restart(t)
-                self.sim.RestartAdaptive()
-
     def _apply_parameters(self, t):
         """Parameters changed by user functions since the last step: the simulator must not
         be ahead of Exudyn (outputs integrated with the old values are dropped), then only
@@ -426,31 +270,6 @@ class LieGroupSolver:
                 return h[q] + c, gv[q] + cd
             return at
         return ParameterOffsets(self.mbs, t0, objects), actual
-
-    def _reread_current(self, t):
-        """A pre-step user function changed the coordinates: continue from them."""
-        sd = self.mbs.systemData
-        cur = self._exu.ConfigurationType.Current
-        q = np.array(sd.GetODE2Coordinates(configuration=cur), float)
-        qt = np.array(sd.GetODE2Coordinates_t(configuration=cur), float)
-        nb = self.scene.nBodies
-        R = np.zeros((nb, 3, 3))
-        r = np.zeros((nb, 3))
-        om = np.zeros((nb, 3))
-        ve = np.zeros((nb, 3))
-        for kind, bodies in zip(self.scene.nodeKinds, self.scene.kindBodies):
-            R[bodies], r[bodies], om[bodies], ve[bodies] = kind.read(q, qt)
-        U, _, Vt = np.linalg.svd(R)
-        self.sim.SetInitialState(U @ Vt, r, om, ve, t0=t)
-        for kind, bodies in zip(self.scene.nodeKinds, self.scene.kindBodies):
-            for k, b in enumerate(bodies):          # the rotation parameters in mbs go on from here
-                tr = kind.tracked(k)
-                if tr is not None:
-                    self.sim.wk.bparam[b] = tr[1]
-        self._seed_torsion()
-        self._seed_contact_data()
-        self._nodes.prev[:] = NodeTable(self.scene.nodeKinds, self.scene.kindBodies, t).prev
-
     # ------------------------------------------------------------------ planning (bridge/run_plan.py)
     def _plan(self, ss, nsteps, h, substeps):
         return plan_substeps(self.mbs, ss, nsteps, h, substeps)
@@ -713,64 +532,6 @@ class LieGroupSolver:
         if not self._loopPlan["needAcc"]:
             self._write(True)                # final accelerations, as a native solve leaves them
         self._write_torsion_data()           # the exact turned angles (Exudyn tracks per output)
-
-    # ------------------------------------------------------------------ torsional springs' data nodes
-    def _torsion_angles(self):
-        """Exudyn's continuous angle of every torsional spring with a data node, at the
-        simulator's state (compiled springs: the kernel's tracked angle + the folded turns)."""
-        out = []
-        st = None
-        for td in self.scene.torsionData:
-            if td.spring is not None:
-                out.append(float(self.sim.wk.tphi[td.spring]) + 2.0 * math.pi * td.turns0)
-            else:
-                st = self.sim.states() if st is None else st
-                out.append(float(td.item.angle(st)[0]))
-        return out
-
-    def _write_torsion_data(self):
-        """Write the turned angles into the springs' data nodes (Current): Exudyn's own
-        update after each of its steps takes the branch nearest to the last angle, which
-        loses turns when a spring turns by more than pi between two outputs."""
-        tds = self.scene.torsionData
-        if not tds:
-            return
-        sd = self.mbs.systemData
-        cur = self._exu.ConfigurationType.Current
-        data = np.array(sd.GetDataCoordinates(configuration=cur), float)
-        for td, angle in zip(tds, self._torsion_angles()):
-            data[int(sd.GetNodeLTGData(td.dataNode)[0])] = angle
-        sd.SetDataCoordinates(data, configuration=cur)
-
-    def _seed_contact_data(self):
-        """After the state was re-read from mbs: the penalty rolling discs' data coordinates
-        (slip velocity, gap of the last step) as they are in mbs."""
-        if not self.scene.rollingDiscData:
-            return
-        sd = self.mbs.systemData
-        data = np.asarray(sd.GetDataCoordinates(configuration=self._exu.ConfigurationType.Current), float)
-        for k, (_, node) in enumerate(self.scene.rollingDiscData):
-            self.sim.wk.disc[k, D_DATA:] = data[np.asarray(sd.GetNodeLTGData(node), np.int64)]
-
-    def _seed_torsion(self):
-        """After the state was re-read from mbs: continue every tracked torsion angle from
-        the angle in its data node, as Exudyn does (the simulator restarts its tracking from
-        the principal angle)."""
-        tds = self.scene.torsionData
-        if not tds:
-            return
-        sd = self.mbs.systemData
-        data = np.asarray(sd.GetDataCoordinates(configuration=self._exu.ConfigurationType.Current), float)
-        tphi = self.sim.wk.tphi
-        for td in tds:
-            prev = float(data[int(sd.GetNodeLTGData(td.dataNode)[0])])
-            if td.spring is not None:
-                target = prev - 2.0 * math.pi * td.turns0           # in the kernel's frame
-                phi = float(tphi[td.spring])
-                tphi[td.spring] = phi + 2.0 * math.pi * round((target - phi) / (2.0 * math.pi))
-            else:
-                td.item.prev = prev
-
     # ------------------------------------------------------------------ fast path
     def Run(self, endTime, stepSize, outputEvery=1, startTime=0.0, writeBack=True, progress=False,
             refresh=True):
@@ -797,124 +558,3 @@ class LieGroupSolver:
             self._write_torsion_data()
             self.mbs.systemData.SetTime(self.sim.t)
         return res
-
-
-def _check_index2_rotvec_constraints(mbs, typeName, settings):
-    """Exudyn's index-2 solves (TrapezoidalIndex2, generalizedAlpha.useIndex2Constraints) hold a
-    ConnectorCoordinate at velocity level, Exudyn's e_k: on a RotVecLG rotation coordinate that
-    is omega_k = 0, another model than the position-level theta_k = const (index 3, Exudyn's
-    default) that exudyn_lie integrates (mbs/node_coordinates.py).  Refused (reads only)."""
-    from .evaluated import _describe_object, _rotvec_coordinate_marker
-    if not (typeName == "TrapezoidalIndex2" or settings.timeIntegration.generalizedAlpha.useIndex2Constraints):
-        return
-    for o in range(mbs.systemData.NumberOfObjects()):
-        d = mbs.GetObject(o)
-        if d["objectType"] == "ConnectorCoordinate" and d.get("activeConnector", True) \
-                and _rotvec_coordinate_marker(mbs, d):
-            raise BridgeError(f"{_describe_object(mbs, o, d)}: on a rotation coordinate of a NodeRigidBodyRotVecLG, "
-                              f"Exudyn's index-2 solve ({'TrapezoidalIndex2' if typeName == 'TrapezoidalIndex2' else 'generalizedAlpha.useIndex2Constraints=True'}) "
-                              f"holds omega_k = 0, not the coordinate; exudyn_lie integrates the position-level "
-                              f"(index-3) model: use Exudyn's default index-3 setting, or solve with exudyn.SolveDynamic")
-
-
-@raised_at_boundary((SceneError, SimulationError))
-def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialValues=False, storeSolver=True,
-                 showHints=False, showCausingItems=True, autoAssemble=True, *, method=None, liegroup="auto",
-                 stabilization="auto", projectInitial=True, verbose=False, showProgress=True, substeps=None,
-                 accelerations=None, constraintTolerance=None, evaluation="auto", constraintCheck=True):
-    """Drop-in for ``exudyn.SolveDynamic``: integrate ``mbs`` with an explicit Munthe-Kaas
-    Lie group method inside Exudyn's time loop; returns True.
-
-    The positional arguments are Exudyn's.  ``solverType`` (else
-    ``timeIntegration.solverType``, as Exudyn reads them): an explicit type selects its
-    tableau (RK44 -> RK4, ODE23 -> BS3, ...), GeneralizedAlpha is replaced by ``method``,
-    TrapezoidalIndex2 too but with a warning, VelocityVerlet and DVERK6 are refused
-    (:mod:`exudyn_lie.bridge.solvertype`); ``showHints`` / ``showCausingItems`` are accepted for
-    compatibility.  Keyword-only extras: ``method`` (default RK4 or the explicit solverType's
-    tableau; :func:`exudyn_lie.method_names` or a
-    :class:`~exudyn_lie.integrators.ButcherTableau` of the user's own; it must agree with an
-    explicit solverType),
-    ``liegroup`` ('SE3', 'SO3xR3', 'auto' or {rigid-body object index: group}),
-    ``stabilization`` (default 'auto': 'position' on the compiled path, so that joints hold
-    to round-off as Exudyn's generalized-alpha holds them to its Newton tolerance; its cost:
-    ``bench --sections stabilization``; None with ``constraintTolerance``, which projects by its own rule, and
-    on the Exudyn-evaluated path, which does not project; None: the paper's unstabilised
-    methods; 'velocity'), ``projectInitial`` (default True: an inconsistent initial state is
-    projected onto the constraints with a warning; False: ConstraintError), ``verbose``
-    (print the group per body, the plan and the time spent), ``showProgress`` (a progress line every 2 s on runs longer than about 4 s, with
-    the time to go),
-    ``substeps`` (internal steps per Exudyn step; default: one Exudyn step per output
-    period), ``accelerations`` (write q_tt / multipliers; default: when something reads
-    them), ``constraintTolerance`` (adaptive steps only; default None: off): project on the
-    group when the constraint drift exceeds it, the error estimate projected onto the
-    constraint manifold's tangent space (Simbody's scheme; docs/ADAPTIVE.md),
-    ``evaluation`` ('auto': the compiled kernel when it has every item of the model,
-    else Exudyn evaluates the whole model, :mod:`.evaluated_solve`, with one warning naming
-    the items; 'compiled' / 'exudyn' force a path), ``constraintCheck`` (default True:
-    Exudyn's own position-level residuals of the constraints at the outputs, within 2 % of
-    the run's time (its set-up included) and always at the first and the last, with a tolerance of 1e-5 times the model's size; a residual above it that the integrator's own
-    account does not explain stops the run with a ConstraintError naming the item, one it
-    explains, the drift of an unstabilised method, is reported once per item as a warning;
-    a float sets the tolerance in the rows' units, False switches the check off;
-    :mod:`.constraint_check`).
-
-    Honours ``timeIntegration.startTime / endTime / numberOfSteps``, sensors (stored and
-    files), the solution and restart files, pre/post-step user functions,
-    ``updateInitialValues`` and ``storeSolver`` (``mbs.sys['dynamicSolver']``,
-    ``mbs.sys['lieGroupSolver']``).  ``simulationSettings`` is not changed, not even
-    during the run (see :meth:`LieGroupSolver.Solve`).
-
-    Bad input raises before ``mbs`` is touched: the arguments, the settings and the whole
-    model (items, initial state, and with ``projectInitial=False`` the initial constraint
-    consistency) are checked first; with
-    ``autoAssemble`` and an mbs that is not assembled, the model is checked from its item
-    dictionaries (what ``mbs.Assemble()`` will set) and only then assembled."""
-    import exudyn as exu
-    check_tolerance(constraintCheck)
-    auto = stabilization == "auto"
-    settings = exu.SimulationSettings() if simulationSettings is None else simulationSettings
-    # solverType (argument, else the setting, as Exudyn reads them) -> the tableau (bridge/solvertype.py)
-    method, typeName, replaced = resolve_solver_type(solverType, settings.timeIntegration.solverType, method,
-                                                     _check_method)
-    assemble = not mbs.systemIsConsistent and autoAssemble
-    if evaluation not in ("auto", "compiled", "exudyn"):
-        raise BridgeError(f"evaluation must be 'auto', 'compiled' or 'exudyn', got {evaluation!r}")
-    scene = None                         # the model as the compiled reader read it (read once)
-    if evaluation != "compiled":
-        from .evaluated_dispatch import evaluated_path
-        path, scene = evaluated_path(mbs, evaluation, assemble, method=method, liegroup=liegroup,
-                                     stabilization=None if auto else stabilization, projectInitial=projectInitial,
-                                     verbose=verbose, settings=settings, substeps=substeps)
-        if path is not None:
-            if constraintTolerance is not None:
-                raise BridgeError("exudyn_lie.SolveDynamic: constraintTolerance is available on the compiled path only "
-                                  "(adaptive steps); this model is evaluated by Exudyn: leave constraintTolerance=None")
-            if replaced:
-                warn_user(f"exudyn_lie.SolveDynamic: DynamicSolverType.{typeName} (Exudyn's implicit solver) is "
-                          f"replaced, like GeneralizedAlpha, by the explicit Munthe-Kaas method {path.tableau.name}; "
-                          f"method= or an explicit solverType chooses the method, liegroup= the groups")
-            if assemble:
-                warn_user("exudyn_lie.SolveDynamic: mbs is not assembled; calling mbs.Assemble()")
-                mbs.Assemble()
-            return path.Solve(simulationSettings, updateInitialValues=updateInitialValues, storeSolver=storeSolver,
-                              showProgress=showProgress, substeps=substeps, accelerations=accelerations,
-                              constraintCheck=constraintCheck)
-    if auto:      # the drop-in holds joints as native does (README, "Options that matter")
-        stabilization = None if constraintTolerance is not None else "position"
-    solver = LieGroupSolver(mbs, method=method, liegroup=liegroup, stabilization=stabilization,
-                            projectInitial=projectInitial, verbose=verbose, constraintTolerance=constraintTolerance,
-                            _configuration="items" if assemble else "initial", _scene=scene)
-    solver._check_run(settings, substeps)
-    _check_index2_rotvec_constraints(mbs, typeName, settings)
-    if replaced:
-        groups = ", ".join(f"{g} ({solver.groups.count(g)})" for g in dict.fromkeys(solver.groups)) or "none"
-        warn_user(f"exudyn_lie.SolveDynamic: DynamicSolverType.{typeName} (Exudyn's implicit solver) is replaced, "
-                  f"like GeneralizedAlpha, by the explicit Munthe-Kaas method {solver.tableau.name} on the Lie "
-                  f"groups {groups} (bodies per group); method= or an explicit solverType chooses the method, "
-                  f"liegroup= the groups")
-    if assemble:
-        warn_user("exudyn_lie.SolveDynamic: mbs is not assembled; calling mbs.Assemble()")
-        mbs.Assemble()
-    return solver.Solve(simulationSettings, updateInitialValues=updateInitialValues, storeSolver=storeSolver,
-                        showProgress=showProgress, substeps=substeps, accelerations=accelerations, refresh=assemble,
-                        constraintCheck=constraintCheck)

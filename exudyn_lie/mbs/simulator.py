@@ -9,9 +9,6 @@ scene with Python force callbacks (called from the compiled stages, :mod:`.exter
 """
 from __future__ import annotations
 
-import time as _time
-from dataclasses import dataclass
-
 import numpy as np
 
 from ..compiling import announce_cold_compile
@@ -33,45 +30,9 @@ from .state import BodyStates, twist_to_world_velocity, world_velocity_to_twist
 from .stepper import fixed_step_control, method_arrays
 from .entry import call
 from .adaptive_run import AdaptiveRun
-from . import step_errors
-
-
-# relative size of the constraint residual/velocity error accepted at the start
-INITIAL_TOL = 1e-8
-
-
-@dataclass
-class Result:
-    """Outputs of :meth:`Simulator.Run` (one row per output time)."""
-    times: np.ndarray
-    R: np.ndarray
-    r: np.ndarray
-    V: np.ndarray
-    omega: np.ndarray          # body-fixed angular velocity
-    vel: np.ndarray            # world velocity of the body frame origin
-    energy: np.ndarray         # (kinetic, gravity, springs)
-    residuals: np.ndarray      # all constraint rows h(g)
-    jointPositionViolation: np.ndarray   # per joint: norm of its translational rows
-    jointRotationViolation: np.ndarray   # per joint: norm of its rotational rows
-    groups: list
-    method: str
-    stepSize: float
-    cpuTime: float = 0.0
-    steps: int = 0
-    # adaptive runs (rtol / atol): rejected steps and right-hand-side evaluations
-    # (``steps`` counts the accepted ones); fixed-step runs: rhsEvaluations = steps x stages
-    rejectedSteps: int = 0
-    rhsEvaluations: int = 0
-    adaptive: bool = False
-    constraintProjections: int = 0     # adaptive runs with constraintTolerance: projections triggered
-
-    @property
-    def totalEnergy(self):
-        return self.energy.sum(axis=1)
-
-    @property
-    def jointViolation(self):
-        return np.hypot(self.jointPositionViolation, self.jointRotationViolation)
+from .initial_state import check_initial_state
+from .outputs import Result, run  # noqa: F401 (Result re-exported)
+from . import step_errors, stiffness
 
 
 def joint_rows_at(sd, wk, R, r, V, h, Jr, eta):
@@ -123,6 +84,30 @@ def schur_complement(sd, wk, R, r, V):
         Jb = np.array([wk.Jr[q, c:c + 6] for q, c in lst])
         S[np.ix_(rows, rows)] += Jb @ Mi @ Jb.T
     return wk.h.copy(), S
+
+
+class _RowLevels:
+    """The kernel's constraint rows as the levels of :func:`.initial_state.check_initial_state`."""
+
+    def __init__(self, sim):
+        self.sim = sim
+
+    def position_residual(self):
+        sim = self.sim
+        return sim._residuals_and_JV()[0], max(1.0, float(np.max(np.abs(sim.r))) if sim.r.size else 1.0)
+
+    def velocity_residual(self):
+        sim = self.sim
+        return sim._residuals_and_JV()[1], max(1.0, float(np.max(np.abs(sim.V))))
+
+    def project_positions(self):
+        self.sim.ProjectPositions()
+
+    def project_velocities(self):
+        self.sim.ProjectVelocities()
+
+    def describe_rows(self, rows):
+        return "joints " + ", ".join(self.sim._joints_of_rows(rows))
 
 
 class Simulator:
@@ -352,47 +337,28 @@ class Simulator:
 
     def _check_initial_consistency(self):
         """Raise for an inconsistent initial state, or (``projectInitial``) project it onto
-        the constraints and record what was corrected in ``self.initialProjection``
-        (None if nothing was): the joints, the residuals and the size of the correction."""
+        the constraints (:func:`.initial_state.check_initial_state`) and record what was
+        corrected in ``self.initialProjection`` (None if nothing was): the joints, the
+        residuals and the size of the correction."""
         self.initialProjection = None
         if self.sd.nrows == 0:
             return
-        before = (self.R.copy(), self.r.copy(), self.V.copy())
-        fixed = {}
-        h, JV = self._residuals_and_JV()
-        scale = max(1.0, float(np.max(np.abs(self.r))) if self.r.size else 1.0)
-        bad_pos = np.nonzero(np.abs(h) > INITIAL_TOL * scale)[0]
-        if len(bad_pos):
-            if not self.projectInitial:
-                raise ConstraintError(
-                    f"initial configuration violates joints {', '.join(self._joints_of_rows(bad_pos))} "
-                    f"(max |h| = {np.max(np.abs(h)):.3g}); fix the initial poses or pass "
-                    f"projectInitial=True to project them onto the constraints first")
-            fixed["positionJoints"] = self._joints_of_rows(bad_pos)
-            fixed["maxPositionResidual"] = float(np.max(np.abs(h)))
-            self.ProjectPositions()
-        h, JV = self._residuals_and_JV()
-        vscale = max(1.0, float(np.max(np.abs(self.V))))
-        bad_vel = np.nonzero(np.abs(JV) > INITIAL_TOL * vscale)[0]
-        if len(bad_vel):
-            if not self.projectInitial:
-                raise ConstraintError(
-                    f"initial velocities violate the velocity constraints of joints "
-                    f"{', '.join(self._joints_of_rows(bad_vel))} (max |J V| = {np.max(np.abs(JV)):.3g}); "
-                    f"pass projectInitial=True to project them onto J V = 0 first")
-            fixed["velocityJoints"] = self._joints_of_rows(bad_vel)
-            fixed["maxVelocityResidual"] = float(np.max(np.abs(JV)))
-            self.ProjectVelocities()
-        if fixed:
-            R0, r0, V0 = before
-            fixed["maxPositionChange"] = float(np.max(np.linalg.norm(self.r - r0, axis=1)))
-            fixed["maxRotationChange"] = float(max(np.linalg.norm(so3.log(R0[i].T @ self.R[i]))
-                                                   for i in range(len(self.R))))
-            om0, ve0 = twist_to_world_velocity(self.gid, R0, V0)      # body-fixed omega, world velocity
-            om1, ve1 = twist_to_world_velocity(self.gid, self.R, self.V)
-            fixed["maxAngularVelocityChange"] = float(np.max(np.linalg.norm(om1 - om0, axis=1)))
-            fixed["maxVelocityChange"] = float(np.max(np.linalg.norm(ve1 - ve0, axis=1)))
-            self.initialProjection = fixed
+        R0, r0, V0 = self.R.copy(), self.r.copy(), self.V.copy()
+        fixed = check_initial_state(_RowLevels(self), self.projectInitial)
+        if not fixed:
+            return
+        p = {}
+        for level, rows, residual in fixed:
+            key = "position" if level == "positions" else "velocity"
+            p[f"{key}Joints"] = self._joints_of_rows(rows)
+            p[f"max{key.capitalize()}Residual"] = residual
+        p["maxPositionChange"] = float(np.max(np.linalg.norm(self.r - r0, axis=1)))
+        p["maxRotationChange"] = float(max(np.linalg.norm(so3.log(R0[i].T @ self.R[i])) for i in range(len(self.R))))
+        om0, ve0 = twist_to_world_velocity(self.gid, R0, V0)      # body-fixed omega, world velocity
+        om1, ve1 = twist_to_world_velocity(self.gid, self.R, self.V)
+        p["maxAngularVelocityChange"] = float(np.max(np.linalg.norm(om1 - om0, axis=1)))
+        p["maxVelocityChange"] = float(np.max(np.linalg.norm(ve1 - ve0, axis=1)))
+        self.initialProjection = p
 
     CheckInitialState = _check_initial_consistency
 
@@ -595,17 +561,17 @@ class Simulator:
 
     def StageStiffness(self, h, nb=None):
         """Shampine's estimate of the fastest rate the last fixed step of size ``h`` met, from
-        its stages (the first ``nb`` bodies, default all; :func:`.step_errors.stage_stiffness_of`)."""
-        return step_errors.stage_stiffness_of(self, h, nb)
+        its stages (the first ``nb`` bodies, default all; :func:`.stiffness.stage_stiffness_of`)."""
+        return stiffness.stage_stiffness_of(self, h, nb)
 
     def suggest_step(self, h):
-        """A step size that should be stable (:func:`.step_errors.suggest_step`)."""
-        return step_errors.suggest_step(self, h)
+        """A step size that should be stable (:func:`.stiffness.suggest_step`)."""
+        return stiffness.suggest_step(self, h)
 
     def SpectralRadius(self, R=None, r=None, V=None, t=None, iterations=40, seed=0):
         """Estimate of the spectral radius of the linearised equations of motion at a state
-        (default: the current one; :func:`.step_errors.spectral_radius`)."""
-        return step_errors.spectral_radius(self, R, r, V, t, iterations, seed)
+        (default: the current one; :func:`.stiffness.spectral_radius`)."""
+        return stiffness.spectral_radius(self, R, r, V, t, iterations, seed)
 
     def Accelerations(self):
         """``(Vdot, lambda)`` at the current state from the index-1 system (eq. index1):
@@ -721,42 +687,6 @@ class Simulator:
         """Projections the constraint tolerance triggered since SetAdaptive or the last restart."""
         return self._ad.projections
 
-    def _run_adaptive(self, endTime, t0, outputTimes, progress, **kw):
-        self.t = t0
-        self.SetAdaptive(**kw)
-        tout = np.asarray(outputTimes, dtype=np.float64)
-        nout = tout.size
-        nb, m, nj = self.sd.nb, self.sd.nrows, len(self.scene.joints)
-        R, r, V = np.zeros((nout, nb, 3, 3)), np.zeros((nout, nb, 3)), np.zeros((nout, nb, 6))
-        k0 = 0
-        while k0 < nout and tout[k0] <= t0:
-            R[k0], r[k0], V[k0] = self.R, self.r, self.V
-            k0 += 1
-        cpu = 0.0
-        tlast = _time.time()
-        chunk = 64
-        k = k0
-        while k < nout or self.t < endTime:
-            sl = tout[k:k + chunk]
-            tic = _time.perf_counter()
-            Ro, ro, Vo = self.AdvanceTo(endTime, sl)
-            cpu += _time.perf_counter() - tic
-            n = Ro.shape[0]
-            R[k:k + n], r[k:k + n], V[k:k + n] = Ro, ro, Vo
-            k += n
-            if progress and _time.time() - tlast > 2.0:
-                tlast = _time.time()
-                print(f"exudyn_lie: t = {self.t:.4g} / {endTime:.4g} s", flush=True)
-        energy, res, pv, rv = np.zeros((nout, 3)), np.zeros((nout, m)), np.zeros((nout, nj)), np.zeros((nout, nj))
-        for q in range(nout):
-            energy[q], res[q], pv[q], rv[q] = self.Diagnostics(R[q], r[q], V[q], t=tout[q])
-        omega, vel = twist_to_world_velocity(np.tile(self.gid, nout), R.reshape(-1, 3, 3), V.reshape(-1, 6))
-        acc, rej, nrhs = self.adaptiveCounters
-        return Result(tout.copy(), R, r, V, omega.reshape(nout, nb, 3), vel.reshape(nout, nb, 3), energy, res, pv,
-                      rv, list(self.groups), self.tableau.name, float(self._ad.hInitial), cpu, acc,
-                      rejectedSteps=rej, rhsEvaluations=nrhs, adaptive=True,
-                      constraintProjections=self.constraintProjections)
-
     def Run(self, endTime, stepSize=None, outputEvery=1, startTime=None, progress=False, *, rtol=None, atol=None,
             outputTimes=None, maxStep=None, minStep=0.0, firstStep=None, constraintTolerance=None):
         """Integrate from the current state to ``endTime``; returns a :class:`Result`.
@@ -774,102 +704,8 @@ class Simulator:
         has ``steps`` (accepted), ``rejectedSteps`` and ``rhsEvaluations``; its
         ``stepSize`` is the first step.  ``constraintTolerance`` (adaptive steps only):
         projection on the group when the constraint drift exceeds it
-        (:meth:`SetAdaptive`; ``Result.constraintProjections`` counts them)."""
-        if rtol is not None or atol is not None:
-            t0 = self.t if startTime is None else float(startTime)
-            if not (np.isfinite(t0) and np.isfinite(endTime) and endTime >= t0):
-                raise ValueError(f"need finite startTime <= endTime, got {t0}, {endTime}")
-            if outputTimes is None:
-                if stepSize is not None:
-                    dt = float(stepSize) * max(1, int(outputEvery))
-                    if not (np.isfinite(dt) and dt > 0):
-                        raise ValueError(f"stepSize must be positive and finite, got {stepSize}")
-                    nfull = int(np.floor((endTime - t0) / dt + 1e-9))
-                    outputTimes = t0 + dt * np.arange(nfull + 1)
-                    if endTime - outputTimes[-1] > 1e-9 * max(1.0, abs(endTime)):
-                        outputTimes = np.append(outputTimes, endTime)
-                    else:
-                        outputTimes[-1] = endTime
-                else:
-                    outputTimes = [t0, endTime]
-            span = endTime - t0
-            return self._run_adaptive(
-                float(endTime), t0, outputTimes, progress, rtol=1e-3 if rtol is None else rtol,
-                atol=1e-6 if atol is None else atol, maxStep=span if maxStep is None else min(maxStep, span),
-                minStep=minStep, firstStep=firstStep, constraintTolerance=constraintTolerance)
-        if constraintTolerance is not None:
-            raise ValueError("constraintTolerance needs adaptive steps (rtol= / atol=); fixed steps project "
-                             "with Simulator(stabilization='position' or 'velocity')")
-        if stepSize is None:
-            raise ValueError("Run needs a stepSize (fixed steps) or rtol / atol (adaptive steps)")
-        h = float(stepSize)
-        if not np.isfinite(h) or h <= 0:
-            raise ValueError(f"stepSize must be positive and finite, got {stepSize}")
-        t0 = self.t if startTime is None else float(startTime)
-        if not np.isfinite(t0):
-            raise ValueError(f"startTime must be finite, got {startTime}")
-        if not np.isfinite(endTime):
-            raise ValueError(f"endTime must be finite, got {endTime}")
-        if endTime < t0:
-            raise ValueError(f"endTime {endTime} is before the start time {t0}")
-        span = endTime - t0
-        # whole steps, then one shorter step that lands exactly on endTime
-        nsteps = int(np.floor(span / h + 1e-9))
-        hlast = span - nsteps * h
-        if hlast <= 1e-9 * max(1.0, abs(endTime)):
-            hlast = 0.0
-        if hlast > 0:
-            warn_user(f"exudyn_lie: endTime - startTime = {span:.6g} s is not a multiple of stepSize = {h:.6g} s; "
-                      f"{nsteps} steps of {h:.6g} s and a last step of {hlast:.6g} s end exactly at endTime")
-        self.t = t0
-        every = max(1, int(outputEvery))
-        nout = nsteps // every + 1 + (1 if nsteps % every else 0) + (1 if hlast > 0 else 0)
-        nb, m, nj = self.sd.nb, self.sd.nrows, len(self.scene.joints)
-        out = dict(times=np.zeros(nout), R=np.zeros((nout, nb, 3, 3)), r=np.zeros((nout, nb, 3)),
-                   V=np.zeros((nout, nb, 6)), energy=np.zeros((nout, 3)), residuals=np.zeros((nout, m)),
-                   pv=np.zeros((nout, nj)), rv=np.zeros((nout, nj)))
-
-        def record(k):
-            e, hres, pv, rv = self.Diagnostics()
-            out["times"][k] = self.t
-            out["R"][k] = self.R
-            out["r"][k] = self.r
-            out["V"][k] = self.V
-            out["energy"][k] = e
-            out["residuals"][k] = hres
-            out["pv"][k] = pv
-            out["rv"][k] = rv
-
-        record(0)
-        k = 1
-        done = 0
-        cpu = 0.0
-        tlast = _time.time()
-        t0 = self.t
-        while done < nsteps:
-            n = min(every, nsteps - done)
-            tic = _time.perf_counter()
-            self.Advance(n, h)
-            cpu += _time.perf_counter() - tic
-            done += n
-            # keep t exact (no drift from summing h)
-            self.t = t0 + done * h
-            record(k)
-            k += 1
-            if progress and _time.time() - tlast > 2.0:
-                tlast = _time.time()
-                print(f"exudyn_lie: t = {self.t:.4g} / {endTime:.4g} s", flush=True)
-        if hlast > 0:
-            tic = _time.perf_counter()
-            self.Advance(1, hlast)
-            cpu += _time.perf_counter() - tic
-            self.t = float(endTime)
-            record(k)
-            nsteps += 1
-        omega, vel = twist_to_world_velocity(np.tile(self.gid, nout), out["R"].reshape(-1, 3, 3),
-                                             out["V"].reshape(-1, 6))
-        omega = omega.reshape(nout, nb, 3)
-        vel = vel.reshape(nout, nb, 3)
-        return Result(out["times"], out["R"], out["r"], out["V"], omega, vel, out["energy"],
-                      out["residuals"], out["pv"], out["rv"], list(self.groups), self.tableau.name,
-                      h, cpu, nsteps, rhsEvaluations=nsteps * len(self.method.stages))
+        (:meth:`SetAdaptive`; ``Result.constraintProjections`` counts them).
+        :func:`.outputs.run` is the loop."""
+        return run(self, endTime, stepSize, outputEvery, startTime, progress, rtol=rtol, atol=atol,
+                   outputTimes=outputTimes, maxStep=maxStep, minStep=minStep, firstStep=firstStep,
+                   constraintTolerance=constraintTolerance)

@@ -1,0 +1,273 @@
+"""Output rows of a :class:`~.simulator.Simulator`: the one output loop of the kernel.
+
+A Python call of a numba function unboxes every array it receives: the kernel's scene and
+work tuples hold ~60 arrays, about as much time as a heavy-top step.  So the stepper
+(:func:`~.stepper.mk_steps`) integrates a chunk of outputs in one call and records, at each
+output, the state, the tracked rotation parameters and, if asked, the accelerations and
+multipliers.  :class:`OutputRows` holds those rows for outputs every ``nsub`` fixed steps of
+``h``; :class:`AdaptiveOutputRows` for outputs at given times on adaptive steps (dense output
+on the group, no step shortened).  Their consumers: :func:`run` (the loop of :meth:`Simulator.Run`, a
+:class:`Result` with diagnostics at every output) and the Exudyn bridge (node coordinates,
+bridge/fast.py).
+"""
+import time as _time
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import SimulationError
+from ..userwarn import warn_user
+from . import kernel, stepper
+from .entry import call
+from .state import twist_to_world_velocity
+
+CHUNK_SECONDS = 0.05        # aimed wall time of one chunk (progress, responsiveness)
+CHUNK_DOUBLES = 1 << 22     # at most this many doubles of chunk buffers (32 MiB)
+CHUNK_ROWS = 256            # at most this many outputs per chunk
+ADAPTIVE_RUN_ROWS = 64      # outputs per chunk of an adaptive Run
+
+
+@dataclass
+class Result:
+    """Outputs of :meth:`Simulator.Run` (one row per output time)."""
+    times: np.ndarray
+    R: np.ndarray
+    r: np.ndarray
+    V: np.ndarray
+    omega: np.ndarray          # body-fixed angular velocity
+    vel: np.ndarray            # world velocity of the body frame origin
+    energy: np.ndarray         # (kinetic, gravity, springs)
+    residuals: np.ndarray      # all constraint rows h(g)
+    jointPositionViolation: np.ndarray   # per joint: norm of its translational rows
+    jointRotationViolation: np.ndarray   # per joint: norm of its rotational rows
+    groups: list
+    method: str
+    stepSize: float
+    cpuTime: float = 0.0
+    steps: int = 0
+    # adaptive runs (rtol / atol): rejected steps and right-hand-side evaluations
+    # (``steps`` counts the accepted ones); fixed-step runs: rhsEvaluations = steps x stages
+    rejectedSteps: int = 0
+    rhsEvaluations: int = 0
+    adaptive: bool = False
+    constraintProjections: int = 0     # adaptive runs with constraintTolerance: projections triggered
+
+    @property
+    def totalEnergy(self):
+        return self.energy.sum(axis=1)
+
+    @property
+    def jointViolation(self):
+        return np.hypot(self.jointPositionViolation, self.jointRotationViolation)
+
+
+class OutputRows:
+    """Rows of outputs ``nsub`` fixed steps of ``h`` apart, integrated from the simulator's
+    state a chunk per call (:meth:`integrate`).  ``doacc``: accelerations ``Vdo`` and
+    multipliers ``lamo`` too.  ``extraPerRow``: doubles per row a consumer adds (for the
+    memory bound ``CHUNK_DOUBLES``).  After a kernel failure the rows before it are kept,
+    the simulator holds the last accepted step and :attr:`failure` the status."""
+
+    def __init__(self, sim, nsub, h, doacc, maxRows=CHUNK_ROWS, extraPerRow=0):
+        self.sim, self.nsub, self.h, self.doacc = sim, int(nsub), float(h), bool(doacc)
+        nb, m = sim.sd.nb, sim.sd.nrows
+        perRow = nb * 24 + m + int(extraPerRow)
+        self.maxRows = max(1, min(int(maxRows), CHUNK_DOUBLES // max(perRow, 1)))
+        M = self.maxRows
+        self.Ro, self.ro = np.zeros((M, nb, 3, 3)), np.zeros((M, nb, 3))
+        self.Vo, self.Vdo, self.lamo = np.zeros((M, nb, 6)), np.zeros((M, nb, 6)), np.zeros((M, m))
+        self.Po = np.zeros((M, nb, 4))          # tracked angles / node rotation parameters per row
+        self.size = 1                   # outputs in the next chunk (adapted to CHUNK_SECONDS)
+        self.failure = None
+        self._ep = {}
+
+    def integrate(self, nout, vmax):
+        """Integrate the next ``min(nout, size)`` outputs from ``sim.t``; returns (rows
+        computed, the rows' times).  ``vmax``: the stepper's blow-up bound."""
+        sim, h, nsub = self.sim, self.h, self.nsub
+        n = max(1, min(int(nout), self.size))
+        t0 = sim.t
+        acc = n if self.doacc else 0
+        # where a blow-up's step suggestion linearises (stiffness.suggest_step)
+        sim._segmentStart = (t0, sim.R.copy(), sim.r.copy(), sim.V.copy())
+        args = (sim.sd, sim.wk, sim.method, sim.control, float(t0), h, n * nsub, sim.R, sim.r, sim.V, float(vmax),
+                nsub, self.Ro[:n], self.ro[:n], self.Vo[:n], self.Po[:n], self.Vdo[:acc], self.lamo[:acc])
+        st, done = call(self._ep, "mk", stepper.mk_steps, args)
+        rows = done // nsub
+        if st != kernel.STATUS_OK and self.doacc and rows > 0 and np.isnan(self.Vdo[rows - 1, 0, 0]):
+            rows -= 1                   # its accelerations failed: not an output
+        sim.t = t0 + done * h           # on a failure: the last accepted step
+        self.failure = None if st == kernel.STATUS_OK else st
+        return rows, t0 + (np.arange(1, self.maxRows + 1) * nsub) * h
+
+    def adapt(self, seconds, rows):
+        """The next chunk's size from the wall time of this one."""
+        if rows > 0 and self.maxRows > 1:
+            per = max(seconds / rows, 1e-9)
+            self.size = max(1, min(self.maxRows, int(CHUNK_SECONDS / per)))
+
+
+class AdaptiveOutputRows(OutputRows):
+    """Rows of outputs at given times on adaptive steps (after ``sim.SetAdaptive``;
+    :mod:`.adaptive`), each from the dense output on the group of the step that contains
+    it.  Accelerations and multipliers at an output (``doacc``) are one evaluation of the
+    equations of motion at its state (not counted as integration work)."""
+
+    def integrate_at(self, tEnd, tout):
+        """The outputs at the times ``tout`` (at most ``maxRows``; sorted, in ``[sim.t,
+        tEnd]``), stepping towards ``tEnd``; returns the rows computed."""
+        sim = self.sim
+        n = len(tout)
+        st, rows = sim.AdvanceToInto(tEnd, np.ascontiguousarray(tout, dtype=float), self.Ro[:n], self.ro[:n],
+                                     self.Vo[:n], self.Po[:n])
+        if self.doacc and rows > 0:
+            wk = sim.wk
+            keep0, keepLam = wk.Vd[0].copy(), wk.lam.copy()     # stage 1 / dense data of the step
+            for o in range(rows):
+                est = sim._evaluate(float(tout[o]), self.Ro[o], self.ro[o], self.Vo[o])
+                if est != kernel.STATUS_OK:
+                    rows, st = o, est
+                    break
+                self.Vdo[o] = wk.Vd[0]
+                self.lamo[o] = wk.lam
+            wk.Vd[0] = keep0
+            wk.lam[:] = keepLam
+        self.failure = None if st == kernel.STATUS_OK else st
+        return rows
+
+
+def _fixed_segments(t0, endTime, h, every):
+    """``(nsub, h, outputs)`` of a fixed-step run: whole steps with an output every
+    ``every`` of them, the remainder as one output, then one shorter step that lands exactly
+    on ``endTime`` (if the span is not a multiple of ``h``)."""
+    span = endTime - t0
+    nsteps = int(np.floor(span / h + 1e-9))
+    hlast = span - nsteps * h
+    if hlast <= 1e-9 * max(1.0, abs(endTime)):
+        hlast = 0.0
+    if hlast > 0:
+        warn_user(f"exudyn_lie: endTime - startTime = {span:.6g} s is not a multiple of stepSize = {h:.6g} s; "
+                  f"{nsteps} steps of {h:.6g} s and a last step of {hlast:.6g} s end exactly at endTime")
+    segs = [(every, h, nsteps // every)]
+    if nsteps % every:
+        segs.append((nsteps % every, h, 1))
+    if hlast > 0:
+        segs.append((1, hlast, 1))
+    return [s for s in segs if s[2] > 0], nsteps, hlast > 0
+
+
+def _output_grid(t0, endTime, stepSize, outputEvery):
+    """Output times of an adaptive run without ``outputTimes``: every ``stepSize *
+    outputEvery`` and at ``endTime``; only the ends without ``stepSize``."""
+    if stepSize is None:
+        return np.array([t0, endTime])
+    dt = float(stepSize) * max(1, int(outputEvery))
+    if not (np.isfinite(dt) and dt > 0):
+        raise ValueError(f"stepSize must be positive and finite, got {stepSize}")
+    nfull = int(np.floor((endTime - t0) / dt + 1e-9))
+    tout = t0 + dt * np.arange(nfull + 1)
+    if endTime - tout[-1] > 1e-9 * max(1.0, abs(endTime)):
+        return np.append(tout, endTime)
+    tout[-1] = endTime
+    return tout
+
+
+def _check_times(t0, endTime, stepSize, adaptive):
+    if not adaptive:
+        if stepSize is None:
+            raise ValueError("Run needs a stepSize (fixed steps) or rtol / atol (adaptive steps)")
+        h = float(stepSize)
+        if not np.isfinite(h) or h <= 0:
+            raise ValueError(f"stepSize must be positive and finite, got {stepSize}")
+    if not np.isfinite(t0):
+        raise ValueError(f"startTime must be finite, got {t0}")
+    if not np.isfinite(endTime):
+        raise ValueError(f"endTime must be finite, got {endTime}")
+    if endTime < t0:
+        raise ValueError(f"endTime {endTime} is before the start time {t0}")
+
+
+def run(sim, endTime, stepSize=None, outputEvery=1, startTime=None, progress=False, *, rtol=None, atol=None,
+        outputTimes=None, maxStep=None, minStep=0.0, firstStep=None, constraintTolerance=None):
+    """:meth:`Simulator.Run`: output rows (fixed or adaptive steps) a chunk at a time, the
+    diagnostics of every row right after its chunk, then a :class:`Result`."""
+    adaptive = rtol is not None or atol is not None
+    t0 = sim.t if startTime is None else float(startTime)
+    endTime = float(endTime)
+    _check_times(t0, endTime, stepSize, adaptive)
+    if constraintTolerance is not None and not adaptive:
+        raise ValueError("constraintTolerance needs adaptive steps (rtol= / atol=); fixed steps project "
+                         "with Simulator(stabilization='position' or 'velocity')")
+    sim.t = t0
+    if adaptive:
+        span = endTime - t0
+        sim.SetAdaptive(rtol=1e-3 if rtol is None else rtol, atol=1e-6 if atol is None else atol,
+                        maxStep=span if maxStep is None else min(maxStep, span), minStep=minStep,
+                        firstStep=firstStep, constraintTolerance=constraintTolerance)
+        times = np.asarray(_output_grid(t0, endTime, stepSize, outputEvery) if outputTimes is None else outputTimes,
+                           dtype=np.float64)
+        # outputs at or before the start are the state itself (below); the rest by dense output
+        segments = [(AdaptiveOutputRows(sim, 1, 0.0, False, maxRows=ADAPTIVE_RUN_ROWS),
+                     int(np.count_nonzero(times > t0)))]
+        h = None
+    else:
+        h = float(stepSize)
+        segs, nsteps, landing = _fixed_segments(t0, endTime, h, max(1, int(outputEvery)))
+        segments = [(OutputRows(sim, nsub, hs, False, maxRows=1), count) for nsub, hs, count in segs]
+        last = segments[-1][0] if landing else None           # the shorter step onto endTime
+        times = np.zeros(1 + sum(c for _, c in segments))
+    nout = times.size
+    nb, m, nj = sim.sd.nb, sim.sd.nrows, len(sim.scene.joints)
+    R, r, V = np.zeros((nout, nb, 3, 3)), np.zeros((nout, nb, 3)), np.zeros((nout, nb, 6))
+    energy, res, pv, rv = np.zeros((nout, 3)), np.zeros((nout, m)), np.zeros((nout, nj)), np.zeros((nout, nj))
+
+    def record(k, Rk, rk, Vk, t):
+        R[k], r[k], V[k] = Rk, rk, Vk
+        times[k] = t
+        energy[k], res[k], pv[k], rv[k] = sim.Diagnostics(R[k], r[k], V[k], t=t)
+
+    k = 0
+    while k < nout and (times[k] <= t0 if adaptive else k == 0):     # outputs at the start: the state
+        record(k, sim.R, sim.r, sim.V, times[k] if adaptive else t0)
+        k += 1
+    cpu, tlast, done = 0.0, _time.time(), 0
+    for rows, count in segments:
+        end = k + count
+        while k < end:
+            tic = _time.perf_counter()
+            n = 0
+            if adaptive:
+                n = rows.integrate_at(endTime, times[k:min(end, k + rows.maxRows)])
+                tk = times[k:k + n].copy()
+            else:
+                n, _ = rows.integrate(1, sim.vmax)
+            cpu += _time.perf_counter() - tic
+            if rows.failure is not None:              # the state: the last accepted step
+                sim.RaiseStatus(rows.failure, sim._ad.step if adaptive else rows.h)
+            if n == 0:
+                raise SimulationError(f"internal: no output reached at t = {sim.t:.6g} s")
+            if not adaptive:
+                done += n * rows.nsub
+                # keep t exact (no drift from summing h); the shorter last step lands on endTime
+                sim.t = endTime if rows is last else t0 + done * h
+                tk = [sim.t]
+            for o in range(n):
+                record(k + o, rows.Ro[o], rows.ro[o], rows.Vo[o], tk[o])
+            k += n
+            if progress and _time.time() - tlast > 2.0:
+                tlast = _time.time()
+                print(f"exudyn_lie: t = {sim.t:.4g} / {endTime:.4g} s", flush=True)
+    if adaptive and sim.t < endTime:                   # outputs done before endTime: step on to it
+        segments[0][0].integrate_at(endTime, times[:0])
+        if segments[0][0].failure is not None:
+            sim.RaiseStatus(segments[0][0].failure, sim._ad.step)
+    omega, vel = twist_to_world_velocity(np.tile(sim.gid, nout), R.reshape(-1, 3, 3), V.reshape(-1, 6))
+    omega, vel = omega.reshape(nout, nb, 3), vel.reshape(nout, nb, 3)
+    if adaptive:
+        acc, rej, nrhs = sim.adaptiveCounters
+        return Result(times.copy(), R, r, V, omega, vel, energy, res, pv, rv, list(sim.groups), sim.tableau.name,
+                      float(sim._ad.hInitial), cpu, acc, rejectedSteps=rej, rhsEvaluations=nrhs, adaptive=True,
+                      constraintProjections=sim.constraintProjections)
+    steps = nsteps + (1 if landing else 0)
+    return Result(times, R, r, V, omega, vel, energy, res, pv, rv, list(sim.groups), sim.tableau.name, h, cpu,
+                  steps, rhsEvaluations=steps * len(sim.method.stages))

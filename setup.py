@@ -16,6 +16,6 @@ setup(
     package_dir={"exudyn_lie.models": "models"},
     python_requires=">=3.9",
     install_requires=["exudyn>=1.13", "numpy", "numba", "matplotlib"],
-    extras_require={"test": ["pytest", "scipy"], "bench": ["mujoco>=4.0.0"]},
+    extras_require={"test": ["pytest", "pytest-xdist", "scipy"], "bench": ["mujoco>=4.0.0"]},
     entry_points={"console_scripts": ["exudyn_lie=exudyn_lie.__main__:main"]},
 )

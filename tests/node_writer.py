@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 
-from exudyn_lie.bridge.nodes import WRITER_CODES, present_writers, write_row
+from exudyn_lie.bridge.node_writers import WRITER_CODES, present_writers, write_row
 
 ALL_WRITERS = present_writers(WRITER_CODES)          # every row writer
 

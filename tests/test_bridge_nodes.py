@@ -183,7 +183,7 @@ def test_rotvec_continuous_past_pi_and_bounded_below_2pi():
     inside = np.abs(np.abs(wrapped) - 2 * np.pi) > 1e-6
     np.testing.assert_allclose(p[inside], wrapped[inside, None] * axis, atol=1e-9)
     # at exactly 2 pi (sample 2000) the short vector ~0 is written (Exudyn 1.13.6 evaluates
-    # |theta| > 2 pi wrongly, even by a rounding error; nodes.ROTVEC_TURNOVER)
+    # |theta| > 2 pi wrongly, even by a rounding error; node_writers.ROTVEC_TURNOVER)
     assert np.linalg.norm(p[2000]) < 1e-8
     jumps = np.nonzero(np.linalg.norm(np.diff(p, axis=0), axis=1) > 0.01)[0]
     assert jumps.tolist() == [1999, 2000]
@@ -235,7 +235,7 @@ def test_ep_read_rejects_non_unit_parameters():
 def test_write_back_compiles_only_the_row_writers_of_its_nodes():
     """present_writers marks the row writers the nodes' codes need (the others are None, so
     the write-back compiles none of their code), and the per-node writer of the tests has all of them."""
-    from exudyn_lie.bridge import nodes
+    from exudyn_lie.bridge import node_writers as nodes
     from node_writer import ALL_WRITERS
     p = nodes.present_writers([nodes.CODE_EP, nodes.CODE_POINT, nodes.CODE_EP])
     assert [x is not None for x in p] == [c == nodes.CODE_EP for c in nodes.WRITER_CODES]

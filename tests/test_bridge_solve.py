@@ -492,7 +492,7 @@ def test_fast_path_is_used_for_compiled_scenes():
     """Chunks of outputs per kernel call (resolved entry points) and zero-copy coordinate
     views are active."""
     import warnings
-    from exudyn_lie.bridge.nodes import write_rows
+    from exudyn_lie.bridge.node_writers import write_rows
     from exudyn_lie.mbs import kernel
     mbs, b, s, sj = heavy_top()
     with warnings.catch_warnings():
@@ -504,8 +504,8 @@ def test_fast_path_is_used_for_compiled_scenes():
     assert ch.out._ep["mk"] is not kernel.mk_steps and ch._ep["write"] is not write_rows
     assert solver._live
     # the resolved entry point is the compiled overload of the chunk call's argument types
-    sig = [sg for sg in kernel.mk_steps.overloads if kernel.mk_steps.overloads[sg].entry_point is ch._ep["mk"]]
-    assert len(sig) == 1 and callable(ch._ep["mk"])
+    sig = [sg for sg in kernel.mk_steps.overloads if kernel.mk_steps.overloads[sg].entry_point is ch.out._ep["mk"]]
+    assert len(sig) == 1 and callable(ch.out._ep["mk"])
 
 
 def test_entry_point_resolves_only_compiled_signatures():

@@ -25,7 +25,7 @@ import exudyn_lie as exl
 from exudyn_lie.bridge.reader import BridgeError
 from exudyn_lie.mbs import GROUND, Scene, SceneError, Simulator
 from exudyn_lie.mbs.row_drives import offset_and_derivatives
-from exudyn_lie.mbs.simulator import constraint_jacobian
+from exudyn_lie.mbs.diagnostics import constraint_jacobian
 from test_bridge_common import CUR, add_body, new_mbs, package, quiet_settings, random_state
 from test_kernel_joints import random_rotation
 

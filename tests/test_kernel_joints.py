@@ -14,7 +14,7 @@ import pytest
 from exudyn_lie.groups import se3, so3, so3xr3
 from exudyn_lie.mbs import GROUND, JOINT_TYPES, Scene
 from exudyn_lie.mbs.compiled import compile_scene, make_work
-from exudyn_lie.mbs.simulator import constraint_jacobian
+from exudyn_lie.mbs.diagnostics import constraint_jacobian
 
 
 def random_rotation(rng):

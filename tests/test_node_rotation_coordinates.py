@@ -26,7 +26,7 @@ from exudyn_lie.mbs.node_coordinates import (PARAM_EP, PARAM_ROTVEC, PARAM_RXYZ,
                                              node_parameter, param_code)
 from exudyn_lie.mbs.oblique_solve import force_direction_rows
 from exudyn_lie.mbs.rotation_parameters import nearest_rxyz, quat_of
-from exudyn_lie.mbs.simulator import constraint_jacobian
+from exudyn_lie.mbs.diagnostics import constraint_jacobian
 from test_bridge_common import add_body, compare, new_mbs, oracle, package, quiet_settings, random_state
 
 KINDS = {"RotVecLG": (PARAM_ROTVEC, 3), "EP": (PARAM_EP, 4), "Rxyz": (PARAM_RXYZ, 3)}

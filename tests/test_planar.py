@@ -22,7 +22,7 @@ from exudyn.utilities import (LoadForceVector, LoadMassProportional, LoadTorqueV
 from exudyn_lie.groups import GROUPS, se2, se3, so2xr2, so3, so3xr3
 from exudyn_lie.mbs import GROUND, Scene, Simulator
 from exudyn_lie.mbs.compiled import compile_scene, make_work
-from exudyn_lie.mbs.simulator import constraint_jacobian
+from exudyn_lie.mbs.diagnostics import constraint_jacobian
 
 from test_bridge_common import NODE_TYPES, add_body, compare, new_mbs, random_state
 

@@ -19,7 +19,7 @@ from exudyn.utilities import (LoadCoordinate, MarkerBodyRigid, MarkerNodeCoordin
 import exudyn_lie as exl
 from exudyn_lie.mbs import GROUND, AngleCoordinate, Scene
 from exudyn_lie.mbs.compiled import compile_scene, make_work
-from exudyn_lie.mbs.simulator import constraint_jacobian
+from exudyn_lie.mbs.diagnostics import constraint_jacobian
 from test_bridge_common import compare, new_mbs, quiet_settings, random_state
 
 TOL = 1e-11

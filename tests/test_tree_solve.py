@@ -10,7 +10,7 @@ from exudyn_lie.apps import bench_topology as BT
 from exudyn_lie.apps.stress_models import planar_fourbar, random_mechanism, scene_from_spec
 from exudyn_lie.mbs import GROUND, Scene, Simulator
 from exudyn_lie.mbs.compiled import TREE_MIN_BANDWIDTH, make_work
-from exudyn_lie.mbs.simulator import constraint_jacobian
+from exudyn_lie.mbs.diagnostics import constraint_jacobian
 from exudyn_lie.mbs.tree_solve import P_ORDER, tree_plan
 from exudyn_lie.mbs.codes import BODY_TWIST
 

@@ -17,12 +17,12 @@ from numba import njit
 from ..groups import so3
 from ..mbs.codes import uses_body_twist
 from ..mbs.stepper import copy_state
-from .nodes import rotvec_row
+from .node_writers import rotvec_row
 
 
 @njit(cache=True)
 def _rotvec_continuous(R, prev, p):
-    """Rotation vector of R on the branch nearest to ``prev`` (bridge/nodes.rotvec_row,
+    """Rotation vector of R on the branch nearest to ``prev`` (bridge/node_writers.rotvec_row,
     whose continuity rule the compiled path uses for the same node type)."""
     z = np.zeros(3)
     pp = prev.copy()

@@ -28,7 +28,8 @@ import time
 import numpy as np
 
 from ..userwarn import warn_user
-from .evaluated import EvaluatedModel, Layout, check_model, parameter_offset_rows
+from .evaluated import EvaluatedModel, Layout
+from .evaluated_items import check_model, parameter_offset_rows
 from .moving_offsets import ParameterOffsets
 from .evaluated_problem import EvaluatedProblem
 from .evaluated_initial import project_initial

@@ -5,7 +5,7 @@ A Python call of a numba function unboxes every array it receives: the write-bac
 per output.  So :class:`OutputChunks` takes a chunk of the kernel's output rows (state, and
 accelerations / multipliers, at each output: :mod:`exudyn_lie.mbs.outputs`), converts the
 chunk to node coordinates in one call of
-:func:`~exudyn_lie.bridge.nodes.write_rows`, and per Exudyn step only copies one row into
+:func:`~exudyn_lie.bridge.node_writers.write_rows`, and per Exudyn step only copies one row into
 mbs.  Where a user function may change the state between outputs, or Python forces run, the
 chunk is one output long.  Both calls go through entry points resolved once
 (:func:`~exudyn_lie.mbs.entry.call`).  Every output path of the bridge goes through here.
@@ -15,7 +15,7 @@ import numpy as np
 from ..mbs.entry import call
 from ..mbs.outputs import CHUNK_ROWS, AdaptiveOutputRows, OutputRows
 from ..mbs.rotation_parameters import record_tracked
-from .nodes import CODE_1D_ROT, CODE_2D, NCOORD_MAX, present_writers, write_rows
+from .node_writers import CODE_1D_ROT, CODE_2D, NCOORD_MAX, present_writers, write_rows
 
 
 class OutputChunks:
@@ -141,7 +141,7 @@ class AdaptiveOutputChunks(OutputChunks):
 
 
 class NodeTable:
-    """All rigid nodes of a scene as flat arrays for :func:`~.nodes.write_rows`."""
+    """All rigid nodes of a scene as flat arrays for :func:`~.node_writers.write_rows`."""
 
     def __init__(self, kinds, kindBodies, t0=0.0):
         """``t0``: the time of the state the kinds read (a 2D node's angle continues from it)."""
@@ -168,7 +168,7 @@ class NodeTable:
             self.qref[i:i + n, :ref.shape[1]] = ref
             self.prev[i:i + n] = kind.prev
             angles = (self.code[i:i + n] == CODE_2D) | (self.code[i:i + n] == CODE_1D_ROT)
-            self.prev[i:i + n, 2][angles] = t0             # nodes.continued_angle: time of prev
+            self.prev[i:i + n, 2][angles] = t0             # node_writers.continued_angle: time of prev
             self.kindOfRow += [(kind, k) for k in range(n)]
             i += n
         self.present = present_writers(self.code)     # only these row writers are compiled

@@ -299,33 +299,7 @@ class _Reader(JointReaders, ForceReaders):
             if d["objectType"] not in BODY_OBJECTS:
                 continue
             n = int(d["nodeNumber"])
-            R, r, om, vel = states[n]
-            label = d.get("name", "") or f"object{o}"
-            try:
-                if d["objectType"] == "RigidBody2D":
-                    b = sc.AddBody2D(mass=float(d["mass"]), inertia=float(d["inertia"]), position=r[:2],
-                                     angle=angles[n], omega=float(om[2]),
-                                     velocity=vel[:2], com=np.asarray(d.get("centerOfMass", [0, 0]), float),
-                                     name=label)
-                elif d["objectType"] == "Mass1D":
-                    # nodes.Node1DNode: a point mass on the line origin + axis x
-                    axis = self.nodeAxisFrame[n][0]
-                    b = sc.AddPointMass(float(d.get("mass", d.get("physicsMass"))), r0=r, vel0=vel, name=label,
-                                        freeDirections=np.outer(axis, axis))
-                elif d["objectType"] == "RotationalMass1D":
-                    # nodes.Node1DNode: a rotor R = F Rz(x) turning about F e_z at its reference position
-                    F, origin = self.nodeRotor[n]
-                    b = sc.AddRotor(float(d.get("inertia", d.get("physicsInertia"))), frame=_orthonormal(F),
-                                    position=origin, angle=angles[n], omega=float(om[2]), name=label)
-                elif d["objectType"] != "RigidBody":
-                    b = sc.AddPointMass(float(d.get("mass", d.get("physicsMass"))), r0=r, vel0=vel, name=label,
-                                        freeDirections=np.diag([1.0, 1.0, float(d["objectType"] == "MassPoint")]))
-                else:
-                    b = sc.AddBody(mass=float(d["mass"]), inertia=_inertia_matrix(d["inertia"]),
-                                   com=np.asarray(d.get("centerOfMass", [0, 0, 0]), float), R0=_orthonormal(R),
-                                   r0=r, omega0=om, vel0=vel, name=label)
-            except SceneError as e:
-                raise BridgeError(f"object {o} Object{d['objectType']}: {e}") from None
+            b = self._add_body(sc, o, d, n, states[n], angles.get(n))
             sc.bodies[b].track = tracks.get(n)      # node rotation parameters tracked per step
             sc.bodyObject.append(o)
             sc.bodyNode.append(n)
@@ -341,6 +315,38 @@ class _Reader(JointReaders, ForceReaders):
                     sc.aeZero.extend(int(i) for i in self.sd.GetNodeLTGAE(n))
                 except Exception:
                     pass
+
+    def _add_body(self, sc, o, d, n, state, angle):
+        """The scene body of object ``o`` (item dictionary ``d``) on node ``n`` with its state
+        ``(R, r, omega, vel)`` read from the node (``angle``: a 2D body's or rotor's total angle)."""
+        R, r, om, vel = state
+        label = d.get("name", "") or f"object{o}"
+        try:
+            if d["objectType"] == "RigidBody2D":
+                b = sc.AddBody2D(mass=float(d["mass"]), inertia=float(d["inertia"]), position=r[:2],
+                                 angle=angle, omega=float(om[2]),
+                                 velocity=vel[:2], com=np.asarray(d.get("centerOfMass", [0, 0]), float),
+                                 name=label)
+            elif d["objectType"] == "Mass1D":
+                # nodes.Node1DNode: a point mass on the line origin + axis x
+                axis = self.nodeAxisFrame[n][0]
+                b = sc.AddPointMass(float(d.get("mass", d.get("physicsMass"))), r0=r, vel0=vel, name=label,
+                                    freeDirections=np.outer(axis, axis))
+            elif d["objectType"] == "RotationalMass1D":
+                # nodes.Node1DNode: a rotor R = F Rz(x) turning about F e_z at its reference position
+                F, origin = self.nodeRotor[n]
+                b = sc.AddRotor(float(d.get("inertia", d.get("physicsInertia"))), frame=_orthonormal(F),
+                                position=origin, angle=angle, omega=float(om[2]), name=label)
+            elif d["objectType"] != "RigidBody":
+                b = sc.AddPointMass(float(d.get("mass", d.get("physicsMass"))), r0=r, vel0=vel, name=label,
+                                    freeDirections=np.diag([1.0, 1.0, float(d["objectType"] == "MassPoint")]))
+            else:
+                b = sc.AddBody(mass=float(d["mass"]), inertia=_inertia_matrix(d["inertia"]),
+                               com=np.asarray(d.get("centerOfMass", [0, 0, 0]), float), R0=_orthonormal(R),
+                               r0=r, omega0=om, vel0=vel, name=label)
+        except SceneError as e:
+            raise BridgeError(f"object {o} Object{d['objectType']}: {e}") from None
+        return b
 
     # ------------------------------------------------------------------ markers
     def marker(self, m, what, need_rotation=False, allow_mass=False) -> MarkerFrame:

@@ -8,7 +8,7 @@ import numpy as np
 
 from ..mbs.force_elements import ELEMENTS
 from ..mbs.scene import GROUND, SceneError
-from . import pyforces
+from . import pyforces, pyforces_coordinates
 from .reader_common import (BridgeError, CONNECTOR_READERS, NotCompiled, SUPPORTED_LOADS, TorsionData,
                            _orthonormal, _userfunction)
 
@@ -120,7 +120,7 @@ class ForceReaders:
             sc.AddCoordinateSpringDamper(A.body, A.spec, B.body, B.spec, d["stiffness"], d["damping"],
                                          float(d["offset"]) + B.ref - A.ref, name=name)
         else:
-            self._py(sc, pyforces.CoordinateSpringDamperUF(self.mbs, o, d, A, B, uf))
+            self._py(sc, pyforces_coordinates.CoordinateSpringDamperUF(self.mbs, o, d, A, B, uf))
 
     def read_linear_spring_damper(self, sc, o, d, A, B, what, name):
         """CObjectConnectorLinearSpringDamper: along ``A_0 axisMarker0`` (marker 0's orientation)."""
@@ -291,7 +291,7 @@ class ForceReaders:
         uf = _userfunction(d, "loadUserFunction", what)
         if uf is not None:
             sc.itemRows[("load", l)] = ("py", len(sc.pyItems))
-            sc.pyItems.append(pyforces.CoordinateLoadUF(self.mbs, l, load, cm, uf))
+            sc.pyItems.append(pyforces_coordinates.CoordinateLoadUF(self.mbs, l, load, cm, uf))
             return
         if cm.param is not None:        # a node rotation parameter: the generalised force load C (state-dependent)
             sc.itemRows[("load", l)] = ("coordinateLoad", len(sc.coordinateSprings))

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..mbs.scene import GROUND, SceneError, frame_with_axis
-from . import pyforces
+from .pyforces_coordinates import OffsetUserFunction
 from .moving_offsets import MovableOffset
 from .reader_common import BridgeError, JointInfo, NotCompiled, _orthonormal, _userfunction, joint_ae_map
 
@@ -170,7 +170,7 @@ class JointReaders:
             sc.aeZero.extend(aeAll.tolist())
             return
         offset = float(d.get("offset", 0.0))
-        moving = None if uf is None else pyforces.OffsetUserFunction(self.mbs, o, d, uf, key)
+        moving = None if uf is None else OffsetUserFunction(self.mbs, o, d, uf, key)
         if moving is None and not velocityLevel and (self.mbs.GetPreStepUserFunction()
                                                      or self.mbs.GetPostStepUserFunction()):
             # a step function may move the offset (Exudyn's reeving crane): a moving row

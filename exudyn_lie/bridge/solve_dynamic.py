@@ -17,7 +17,7 @@ def _check_index2_rotvec_constraints(mbs, typeName, settings):
     ConnectorCoordinate at velocity level, Exudyn's e_k: on a RotVecLG rotation coordinate that
     is omega_k = 0, another model than the position-level theta_k = const (index 3, Exudyn's
     default) that exudyn_lie integrates (mbs/node_coordinates.py).  Refused (reads only)."""
-    from .evaluated import _describe_object, _rotvec_coordinate_marker
+    from .evaluated_items import _describe_object, _rotvec_coordinate_marker
     if not (typeName == "TrapezoidalIndex2" or settings.timeIntegration.generalizedAlpha.useIndex2Constraints):
         return
     for o in range(mbs.systemData.NumberOfObjects()):

@@ -198,18 +198,9 @@ def resolve_pair(method):
     return get_method(method)
 
 
-def integrate_adaptive(tableau, groups, g0, V0, rhs, t_span, rtol=1e-6, atol=1e-6, *,
-                       t_eval=None, h0=None, h_min=0.0, h_max=np.inf, length_scale=1.0,
-                       time_scale=1.0, max_steps=1_000_000, **controller):
-    """Integrate eq. (ODE2) ``Vdot = rhs(t, g, V)``, ``gdot = g V^`` with adaptive MK steps.
-
-    ``t_eval``: output times in ``t_span`` (dense output on the group; default: the end
-    time only).  ``h0``: first step (default: HINIT).  ``h_min``, ``h_max``: step bounds; a
-    rejected step whose retry would fall below ``h_min`` raises ``StepSizeError`` (with
-    ``.time`` and ``.step``).  ``controller``:
-    keywords of :func:`.control.controller_params` (safety, fac_min, fac_max, beta).
-    Returns an :class:`AdaptiveTrajectory` whose ``stats`` count the steps and evaluations.
-    """
+def _checked_problem(tableau, groups, g0, V0, t_span, t_eval):
+    """(pair, poses, group maps, velocities, t0, t1, output times) of :func:`integrate_adaptive`'s
+    arguments, checked."""
     tab = resolve_pair(tableau)
     if tab.b_hat is None:
         raise ValueError(f"method '{tab.name}' has no embedded weights (b_hat): adaptive "
@@ -228,6 +219,23 @@ def integrate_adaptive(tableau, groups, g0, V0, rhs, t_span, rtol=1e-6, atol=1e-
     if needs_dense and tab.dense is None:
         raise ValueError(f"method '{tab.name}' has no continuous extension: output times "
                          f"inside the interval need dense output")
+    return tab, g, gms, V, t0, t1, t_out
+
+
+def integrate_adaptive(tableau, groups, g0, V0, rhs, t_span, rtol=1e-6, atol=1e-6, *,
+                       t_eval=None, h0=None, h_min=0.0, h_max=np.inf, length_scale=1.0,
+                       time_scale=1.0, max_steps=1_000_000, **controller):
+    """Integrate eq. (ODE2) ``Vdot = rhs(t, g, V)``, ``gdot = g V^`` with adaptive MK steps.
+
+    ``t_eval``: output times in ``t_span`` (dense output on the group; default: the end
+    time only).  ``h0``: first step (default: HINIT).  ``h_min``, ``h_max``: step bounds; a
+    rejected step whose retry would fall below ``h_min`` raises ``StepSizeError`` (with
+    ``.time`` and ``.step``).  ``controller``:
+    keywords of :func:`.control.controller_params` (safety, fac_min, fac_max, beta).
+    Returns an :class:`AdaptiveTrajectory` whose ``stats`` count the steps and evaluations.
+    """
+    tab, g, gms, V, t0, t1, t_out = _checked_problem(tableau, groups, g0, V0, t_span, t_eval)
+    n = len(g)
     tol = C.tolerances(atol, rtol, length_scale, time_scale)
     P = C.controller_params(tab.order_hat, h_min=h_min, h_max=min(h_max, t1 - t0), **controller)
     S = C.controller_state()

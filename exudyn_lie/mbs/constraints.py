@@ -48,6 +48,124 @@ def extra_row(kind, q, j, a, b, gA, gB, RA, RB, rA, rB, VA, VB, rint, rotA, rotB
 extra_row_if = guarded(extra_row)
 
 
+@njit(cache=True, inline="always", _nrt=False)
+def _rotation_row(q, rint, rax, a, b, RA, VA, RB, VB, rotA, rotB, u, w, ax, axd, axb, bx, bxd, bxb, RtA, h, Jr, eta):
+    """A rotation row: ``h = a . b`` of an axis of frame A and one of frame B (Exudyn's
+    ObjectJointGeneric), its Jacobian on both sides' angular velocities and ``eta``."""
+    rbx = rint[q, ROW_BX]
+    for k in range(3):
+        u[k] = rotA[k, rax]
+        w[k] = rotB[k, rbx]
+    body_axis(RA, VA, u, ax, axd, axb)
+    body_axis(RB, VB, w, bx, bxd, bxb)
+    hv = 0.0
+    et = 0.0
+    for k in range(3):
+        hv += ax[k] * bx[k]
+        et += axb[k] * bx[k] + 2.0 * axd[k] * bxd[k] + ax[k] * bxb[k]
+    h[q] = hv
+    eta[q] = -et
+    if a >= 0:
+        _matTvec(RA, bx, RtA)          # u x (RA^T b)
+        c0, c1, c2 = _cross(u[0], u[1], u[2], RtA[0], RtA[1], RtA[2])
+        Jr[q, 0] = c0
+        Jr[q, 1] = c1
+        Jr[q, 2] = c2
+    if b >= 0:
+        _matTvec(RB, ax, RtA)          # w x (RB^T a)
+        c0, c1, c2 = _cross(w[0], w[1], w[2], RtA[0], RtA[1], RtA[2])
+        Jr[q, 6] = c0
+        Jr[q, 7] = c1
+        Jr[q, 8] = c2
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def _world_translation_row(q, rax, a, b, gA, gB, RA, RB, sA, sB, d, bd, h, Jr, eta):
+    """A translation row along world axis ``rax``: ``h = d[rax]`` of the points' distance."""
+    # a = e_ax: the general branch below with its zeros left out (adot = 0, abias = 0,
+    # R^T a = row ax of R); the same values to the bit, in about half the time.  A branch of
+    # its own on purpose: folded into the general branch (R^T a read as a row of R there,
+    # the sums shortened), states bit-identical, the step got slower: heavy top 1.00-1.06 ->
+    # 1.25-1.36 us, double pendulum 2.15-2.18 -> 2.26-2.39 us (bench --sections perstep
+    # --quick --models heavytop,doublependulum, twice interleaved)
+    h[q] = d[rax]
+    eta[q] = -bd[rax]
+    if a >= 0:
+        c0, c1, c2 = _cross(RA[rax, 0], RA[rax, 1], RA[rax, 2], sA[0], sA[1], sA[2])
+        Jr[q, 0] = c0
+        Jr[q, 1] = c1
+        Jr[q, 2] = c2
+        if uses_body_twist(gA):     # v_A: -T_A^T a (translation_dual)
+            Jr[q, 3] = -RA[rax, 0]
+            Jr[q, 4] = -RA[rax, 1]
+            Jr[q, 5] = -RA[rax, 2]
+        else:
+            Jr[q, 3 + rax] = -1.0
+    if b >= 0:
+        c0, c1, c2 = _cross(sB[0], sB[1], sB[2], RB[rax, 0], RB[rax, 1], RB[rax, 2])
+        Jr[q, 6] = c0
+        Jr[q, 7] = c1
+        Jr[q, 8] = c2
+        if uses_body_twist(gB):
+            Jr[q, 9] = RB[rax, 0]
+            Jr[q, 10] = RB[rax, 1]
+            Jr[q, 11] = RB[rax, 2]
+        else:
+            Jr[q, 9 + rax] = 1.0
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def _axis_translation_row(q, kind, rax, a, b, j, gA, gB, RA, VA, RB, sA, sB, rotA, jpar, u, ax, axd, axb, d, dd, bd, dAl,
+                          RtA, h, Jr, eta):
+    """A translation row along an axis of frame A (local), a world axis through the general
+    branch, or a distance row: ``h = a . d``, its Jacobian and ``eta``."""
+    if kind == ROW_TRANS_LOCAL:
+        for k in range(3):
+            u[k] = rotA[k, rax]
+        body_axis(RA, VA, u, ax, axd, axb)
+    elif kind == ROW_DIST:
+        distance_row(q, jpar[j, 0], d, dd, bd, ax, h, eta)    # ax <- e, the row's world direction
+    else:
+        for k in range(3):
+            ax[k] = 0.0
+            axd[k] = 0.0
+            axb[k] = 0.0
+        ax[rax] = 1.0
+    if kind != ROW_DIST:
+        hv = 0.0
+        et = 0.0
+        for k in range(3):
+            hv += ax[k] * d[k]
+            et += axb[k] * d[k] + 2.0 * axd[k] * dd[k] + ax[k] * bd[k]
+        h[q] = hv
+        eta[q] = -et
+    if a >= 0:
+        _matTvec(RA, ax, RtA)          # RA^T a
+        if kind == ROW_TRANS_LOCAL:
+            # -(a . pdot_A) + adot . d -> omega_A . (u x RA^T (pB - rA)) since RA^T a = u
+            c0, c1, c2 = _cross(u[0], u[1], u[2], dAl[0], dAl[1], dAl[2])
+        else:
+            # -(a . pdot_A) -> omega_A . (RA^T a x sA)
+            c0, c1, c2 = _cross(RtA[0], RtA[1], RtA[2], sA[0], sA[1], sA[2])
+        Jr[q, 0] = c0
+        Jr[q, 1] = c1
+        Jr[q, 2] = c2
+        Ta = translation_dual(gA, ax, RtA)     # v_A: -T_A^T a
+        Jr[q, 3] = -Ta[0]
+        Jr[q, 4] = -Ta[1]
+        Jr[q, 5] = -Ta[2]
+    if b >= 0:
+        _matTvec(RB, ax, RtA)          # RB^T a
+        c0, c1, c2 = _cross(sB[0], sB[1], sB[2], RtA[0], RtA[1], RtA[2])
+        Jr[q, 6] = c0
+        Jr[q, 7] = c1
+        Jr[q, 8] = c2
+        Ta = translation_dual(gB, ax, RtA)     # v_B: T_B^T a
+        Jr[q, 9] = Ta[0]
+        Jr[q, 10] = Ta[1]
+        Jr[q, 11] = Ta[2]
+
+
 @njit(cache=True, forceinline=True, _nrt=False)
 def joint_rows(j, gid, jint, jpos, jrot, jpar, rint, rowsAll, bparam, R, r, V, h, Jr, eta, rdrive, v3, ident, zero3, zero6):
     """Residual ``h``, Jacobian rows ``Jr`` (row, 12: 6 for side A, 6 for side B) and
@@ -88,108 +206,13 @@ def joint_rows(j, gid, jint, jpos, jrot, jpar, rint, rowsAll, bparam, R, r, V, h
             extra_row_if(rowsAll, kind, q, j, a, b, gA, gB, RA, RB, rA, rB, VA, VB, rint, rotA, rotB, jpar, bparam, v3,
                          h, Jr, eta, rdrive)
         elif kind == ROW_ROT:
-            rbx = rint[q, ROW_BX]
-            for k in range(3):
-                u[k] = rotA[k, rax]
-                w[k] = rotB[k, rbx]
-            body_axis(RA, VA, u, ax, axd, axb)
-            body_axis(RB, VB, w, bx, bxd, bxb)
-            hv = 0.0
-            et = 0.0
-            for k in range(3):
-                hv += ax[k] * bx[k]
-                et += axb[k] * bx[k] + 2.0 * axd[k] * bxd[k] + ax[k] * bxb[k]
-            h[q] = hv
-            eta[q] = -et
-            if a >= 0:
-                _matTvec(RA, bx, RtA)          # u x (RA^T b)
-                c0, c1, c2 = _cross(u[0], u[1], u[2], RtA[0], RtA[1], RtA[2])
-                Jr[q, 0] = c0
-                Jr[q, 1] = c1
-                Jr[q, 2] = c2
-            if b >= 0:
-                _matTvec(RB, ax, RtA)          # w x (RB^T a)
-                c0, c1, c2 = _cross(w[0], w[1], w[2], RtA[0], RtA[1], RtA[2])
-                Jr[q, 6] = c0
-                Jr[q, 7] = c1
-                Jr[q, 8] = c2
+            _rotation_row(q, rint, rax, a, b, RA, VA, RB, VB, rotA, rotB, u, w, ax, axd, axb, bx, bxd, bxb, RtA, h, Jr,
+                          eta)
         elif kind == ROW_TRANS_WORLD:
-            # a = e_ax: the general branch below with its zeros left out (adot = 0, abias = 0,
-            # R^T a = row ax of R); the same values to the bit, in about half the time.  A branch of
-            # its own on purpose: folded into the general branch (R^T a read as a row of R there,
-            # the sums shortened), states bit-identical, the step got slower: heavy top 1.00-1.06 ->
-            # 1.25-1.36 us, double pendulum 2.15-2.18 -> 2.26-2.39 us (bench --sections perstep
-            # --quick --models heavytop,doublependulum, twice interleaved)
-            h[q] = d[rax]
-            eta[q] = -bd[rax]
-            if a >= 0:
-                c0, c1, c2 = _cross(RA[rax, 0], RA[rax, 1], RA[rax, 2], sA[0], sA[1], sA[2])
-                Jr[q, 0] = c0
-                Jr[q, 1] = c1
-                Jr[q, 2] = c2
-                if uses_body_twist(gA):     # v_A: -T_A^T a (translation_dual)
-                    Jr[q, 3] = -RA[rax, 0]
-                    Jr[q, 4] = -RA[rax, 1]
-                    Jr[q, 5] = -RA[rax, 2]
-                else:
-                    Jr[q, 3 + rax] = -1.0
-            if b >= 0:
-                c0, c1, c2 = _cross(sB[0], sB[1], sB[2], RB[rax, 0], RB[rax, 1], RB[rax, 2])
-                Jr[q, 6] = c0
-                Jr[q, 7] = c1
-                Jr[q, 8] = c2
-                if uses_body_twist(gB):
-                    Jr[q, 9] = RB[rax, 0]
-                    Jr[q, 10] = RB[rax, 1]
-                    Jr[q, 11] = RB[rax, 2]
-                else:
-                    Jr[q, 9 + rax] = 1.0
+            _world_translation_row(q, rax, a, b, gA, gB, RA, RB, sA, sB, d, bd, h, Jr, eta)
         else:
-            if kind == ROW_TRANS_LOCAL:
-                for k in range(3):
-                    u[k] = rotA[k, rax]
-                body_axis(RA, VA, u, ax, axd, axb)
-            elif kind == ROW_DIST:
-                distance_row(q, jpar[j, 0], d, dd, bd, ax, h, eta)    # ax <- e, the row's world direction
-            else:
-                for k in range(3):
-                    ax[k] = 0.0
-                    axd[k] = 0.0
-                    axb[k] = 0.0
-                ax[rax] = 1.0
-            if kind != ROW_DIST:
-                hv = 0.0
-                et = 0.0
-                for k in range(3):
-                    hv += ax[k] * d[k]
-                    et += axb[k] * d[k] + 2.0 * axd[k] * dd[k] + ax[k] * bd[k]
-                h[q] = hv
-                eta[q] = -et
-            if a >= 0:
-                _matTvec(RA, ax, RtA)          # RA^T a
-                if kind == ROW_TRANS_LOCAL:
-                    # -(a . pdot_A) + adot . d -> omega_A . (u x RA^T (pB - rA)) since RA^T a = u
-                    c0, c1, c2 = _cross(u[0], u[1], u[2], dAl[0], dAl[1], dAl[2])
-                else:
-                    # -(a . pdot_A) -> omega_A . (RA^T a x sA)
-                    c0, c1, c2 = _cross(RtA[0], RtA[1], RtA[2], sA[0], sA[1], sA[2])
-                Jr[q, 0] = c0
-                Jr[q, 1] = c1
-                Jr[q, 2] = c2
-                Ta = translation_dual(gA, ax, RtA)     # v_A: -T_A^T a
-                Jr[q, 3] = -Ta[0]
-                Jr[q, 4] = -Ta[1]
-                Jr[q, 5] = -Ta[2]
-            if b >= 0:
-                _matTvec(RB, ax, RtA)          # RB^T a
-                c0, c1, c2 = _cross(sB[0], sB[1], sB[2], RtA[0], RtA[1], RtA[2])
-                Jr[q, 6] = c0
-                Jr[q, 7] = c1
-                Jr[q, 8] = c2
-                Ta = translation_dual(gB, ax, RtA)     # v_B: T_B^T a
-                Jr[q, 9] = Ta[0]
-                Jr[q, 10] = Ta[1]
-                Jr[q, 11] = Ta[2]
+            _axis_translation_row(q, kind, rax, a, b, j, gA, gB, RA, VA, RB, sA, sB, rotA, jpar, u, ax, axd, axb, d, dd, bd,
+                                  dAl, RtA, h, Jr, eta)
 
 
 @njit(cache=True, inline="always", _nrt=False)

@@ -3,6 +3,7 @@ import numpy as np
 from numba import njit
 
 from .bodies import body_twist
+from .codes import BODY_TWIST, ROW_BODY_A, ROW_BODY_B
 from .constraints import joints_rows
 from .force_elements import spring_energy
 
@@ -57,3 +58,54 @@ def stage_stiffness(A, h, jl, K, Vd, nb):
     if den == 0.0 or num == 0.0:
         return 0.0
     return np.sqrt(np.sqrt(num / den))
+
+
+def joint_rows_at(sd, wk, R, r, V, h, Jr, eta):
+    """Residuals ``h``, Jacobian rows ``Jr`` and ``eta`` of every joint at the state (R, r, V):
+    ``all_rows`` without the energies, and without an entry taking the SceneData /
+    Work tuples (a first run compiles none for the initial checks)."""
+    joints_rows(sd.gid, sd.jint, sd.jpos, sd.jrot, sd.jpar, sd.rint, sd.rowsAll, wk.bparam, R, r, V, h, Jr, eta,
+                wk.rdrive, wk.v3, wk.ident, wk.zero3, wk.zero6)
+
+
+def constraint_jacobian(sd, wk, R, r, V):
+    """Residuals h(g), the dense constraint Jacobian J (m, 6 nb) in the bodies' group
+    velocity coordinates, and eta = -Jdot V, at the state (R, r, V)."""
+    m = sd.nrows
+    joint_rows_at(sd, wk, np.ascontiguousarray(R, dtype=float), np.ascontiguousarray(r, dtype=float),
+                  np.ascontiguousarray(V, dtype=float), wk.h, wk.Jr, wk.eta)
+    J = np.zeros((m, 6 * sd.nb))
+    for q in range(m):
+        a, b = sd.rint[q, ROW_BODY_A], sd.rint[q, ROW_BODY_B]
+        if a >= 0:
+            J[q, 6 * a:6 * a + 6] += wk.Jr[q, :6]
+        if b >= 0:
+            J[q, 6 * b:6 * b + 6] += wk.Jr[q, 6:]
+    return wk.h.copy(), J, wk.eta.copy()
+
+
+def schur_complement(sd, wk, R, r, V):
+    """Residuals h(g) and the dense ``S = J M^-1 J^T`` (m, m) at the state (R, r, V), in
+    the bodies' group velocity coordinates (``M^-1`` is ``D M^-1 D^T``, ``D = diag(I, R)``,
+    for SO3xR3 bodies, as in the kernel).  Assembled body by body from the row blocks:
+    O(m^2) memory, no (m, 6 nb) Jacobian.  Used only on the rare singular paths."""
+    m = sd.nrows
+    joint_rows_at(sd, wk, np.ascontiguousarray(R, dtype=float), np.ascontiguousarray(r, dtype=float),
+                  np.ascontiguousarray(V, dtype=float), wk.h, wk.Jr, wk.eta)
+    S = np.zeros((m, m))
+    blocks = {}
+    for q in range(m):
+        for side, col in ((ROW_BODY_A, 0), (ROW_BODY_B, 6)):
+            b = int(sd.rint[q, side])
+            if b >= 0:
+                blocks.setdefault(b, []).append((q, col))
+    for b, lst in blocks.items():
+        Mi = sd.Minv[b]
+        if not BODY_TWIST[sd.gid[b]]:
+            D = np.eye(6)
+            D[3:, 3:] = R[b]
+            Mi = D @ Mi @ D.T
+        rows = np.array([q for q, _ in lst])          # distinct: a row's two sides are different bodies
+        Jb = np.array([wk.Jr[q, c:c + 6] for q, c in lst])
+        S[np.ix_(rows, rows)] += Jb @ Mi @ Jb.T
+    return wk.h.copy(), S

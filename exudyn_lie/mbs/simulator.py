@@ -17,11 +17,9 @@ from ..groups import so3
 from ..integrators.mk_adaptive import resolve_pair
 from ..userwarn import warn_user
 from . import external, kernel
-from .codes import BODY_TWIST
 from .rolling_disc_penalty_forces import D_DATA
 from .presence import is_present
 from .rotation_parameters import update_tracked_bodies
-from .constraints import joints_rows
 from .compiled import compile_scene, compile_tracking, make_work, resolve_groups, with_redundant
 from .linalg import REL_PIVOT_TOL, rows_in_null_space, schur_rank_and_null
 from .row_drives import RowDrives
@@ -33,57 +31,8 @@ from .adaptive_run import AdaptiveRun
 from .initial_state import check_initial_state
 from .outputs import Result, run  # noqa: F401 (Result re-exported)
 from . import step_errors, stiffness
-
-
-def joint_rows_at(sd, wk, R, r, V, h, Jr, eta):
-    """Residuals ``h``, Jacobian rows ``Jr`` and ``eta`` of every joint at the state (R, r, V):
-    ``kernel.all_rows`` without the energies, and without an entry taking the SceneData /
-    Work tuples (a first run compiles none for the initial checks)."""
-    joints_rows(sd.gid, sd.jint, sd.jpos, sd.jrot, sd.jpar, sd.rint, sd.rowsAll, wk.bparam, R, r, V, h, Jr, eta,
-                wk.rdrive, wk.v3, wk.ident, wk.zero3, wk.zero6)
-
-
-def constraint_jacobian(sd, wk, R, r, V):
-    """Residuals h(g), the dense constraint Jacobian J (m, 6 nb) in the bodies' group
-    velocity coordinates, and eta = -Jdot V, at the state (R, r, V)."""
-    m = sd.nrows
-    joint_rows_at(sd, wk, np.ascontiguousarray(R, dtype=float), np.ascontiguousarray(r, dtype=float),
-                  np.ascontiguousarray(V, dtype=float), wk.h, wk.Jr, wk.eta)
-    J = np.zeros((m, 6 * sd.nb))
-    for q in range(m):
-        a, b = sd.rint[q, kernel.ROW_BODY_A], sd.rint[q, kernel.ROW_BODY_B]
-        if a >= 0:
-            J[q, 6 * a:6 * a + 6] += wk.Jr[q, :6]
-        if b >= 0:
-            J[q, 6 * b:6 * b + 6] += wk.Jr[q, 6:]
-    return wk.h.copy(), J, wk.eta.copy()
-
-
-def schur_complement(sd, wk, R, r, V):
-    """Residuals h(g) and the dense ``S = J M^-1 J^T`` (m, m) at the state (R, r, V), in
-    the bodies' group velocity coordinates (``M^-1`` is ``D M^-1 D^T``, ``D = diag(I, R)``,
-    for SO3xR3 bodies, as in the kernel).  Assembled body by body from the row blocks:
-    O(m^2) memory, no (m, 6 nb) Jacobian.  Used only on the rare singular paths."""
-    m = sd.nrows
-    joint_rows_at(sd, wk, np.ascontiguousarray(R, dtype=float), np.ascontiguousarray(r, dtype=float),
-                  np.ascontiguousarray(V, dtype=float), wk.h, wk.Jr, wk.eta)
-    S = np.zeros((m, m))
-    blocks = {}
-    for q in range(m):
-        for side, col in ((kernel.ROW_BODY_A, 0), (kernel.ROW_BODY_B, 6)):
-            b = int(sd.rint[q, side])
-            if b >= 0:
-                blocks.setdefault(b, []).append((q, col))
-    for b, lst in blocks.items():
-        Mi = sd.Minv[b]
-        if not BODY_TWIST[sd.gid[b]]:
-            D = np.eye(6)
-            D[3:, 3:] = R[b]
-            Mi = D @ Mi @ D.T
-        rows = np.array([q for q, _ in lst])          # distinct: a row's two sides are different bodies
-        Jb = np.array([wk.Jr[q, c:c + 6] for q, c in lst])
-        S[np.ix_(rows, rows)] += Jb @ Mi @ Jb.T
-    return wk.h.copy(), S
+from .diagnostics import constraint_jacobian, joint_rows_at, schur_complement
+from .external_seams import ExternalSeams
 
 
 class _RowLevels:
@@ -110,7 +59,7 @@ class _RowLevels:
         return "joints " + ", ".join(self.sim._joints_of_rows(rows))
 
 
-class Simulator:
+class Simulator(ExternalSeams):
     """Explicit Munthe-Kaas integration of a constrained rigid multibody scene.
 
     Parameters
@@ -449,110 +398,6 @@ class Simulator:
                 self.R if R is None else R, self.r if r is None else r, self.V if V is None else V,
                 float(self.vmax)) + self.NoOutputs()
         return call(self._entries, "fixed", kernel.mk_steps, args)
-
-    def _row_drives(self, t):
-        """The row-drive seam (:mod:`.row_drives`, through :mod:`.external`): called by the
-        compiled stepper once per stage (and before a projection at a step's end); writes the
-        moving offsets of the rows and their derivatives at ``t`` into ``wk.rdrive``."""
-        self._drives.evaluate(t, self.wk.rdrive)
-
-    def _drives_at(self, t):
-        """The rows' moving offsets at ``t`` before rows are evaluated from Python."""
-        if self._drives:
-            self._drives.evaluate(t, self.wk.rdrive)
-
-    @property
-    def rates(self):
-        """True if the scene's whole right-hand side comes from outside (Scene.SetRightHandSide)."""
-        return self.sd.hasQext == kernel.EXTERNAL_RATES
-
-    def _external_rates(self, t):
-        """The right-hand side seam with the whole ``Vdot`` from the scene's problem
-        (``Scene.SetRightHandSide``), bound once per work set to the stage state and to
-        ``wk.Qext``, where it writes."""
-        bound = self._extViews
-        if bound is None or bound[0] is not self.wk:
-            wk = self.wk
-            bound = self._extViews = (wk, self.scene.rightHandSide.bind(wk.Rs, wk.rs, wk.Vs, wk.Qext))
-        bound[1](t)
-
-    def _external_forces(self, t):
-        """The right-hand side seam (:mod:`.external`): called by the compiled stepper once
-        per stage; adds the Python forces at the stage state to ``wk.Qext`` as world forces
-        at the frame origins and world torques (the compiled caller turns them into
-        generalised forces and checks them).  Allocates nothing itself: the callbacks see
-        read-only views of the stage state (valid during the call)."""
-        views = self._extViews          # (work set, views); checked here, not in a call: once per stage
-        st, F, T, adders = views[1] if views is not None and views[0] is self.wk else self._external_views()
-        st.t = t
-        for add in adders:
-            add(t, st, F, T)
-
-    def _add_returned(self, pf):
-        """An adder for a callback ``fn(t, st) -> (F, T)`` (checks the shapes; the compiled
-        caller checks that the sums are finite)."""
-        nb = self.sd.nb
-
-        def add(t, st, F, T):
-            Fi, Ti = pf.fn(t, st)
-            Fi = np.asarray(Fi, float)
-            Ti = np.asarray(Ti, float)
-            if Fi.shape != F.shape or Ti.shape != T.shape:
-                raise SimulationError(f"{pf.name} must return finite (F, T) arrays of shape "
-                                      f"({nb}, 3); got {Fi.shape}, {Ti.shape}")
-            F += Fi
-            T += Ti
-        return add
-
-    def _external_views(self):
-        """(BodyStates, F, T, adders) for the external seam, made once per work set: views
-        of the work arrays (the state read-only, so a callback cannot change the stage) and
-        one ``add(t, st, F, T)`` per Python force (its ``add_into`` if it has one)."""
-        wk = self.wk
-        cached = self._extViews
-        if cached is not None and cached[0] is wk:
-            return cached[1]
-
-        def ro(a):
-            v = a.view()
-            v.flags.writeable = False
-            return v
-        st = BodyStates(self.t, ro(wk.Rs), ro(wk.rs), ro(wk.Vw[:, :3]), ro(wk.Vw[:, 3:]))
-        adders = tuple(self._stage_adder(pf, wk) for pf in self.scene.pythonForces)
-        views = (st, wk.Qext[:, :3], wk.Qext[:, 3:], adders)
-        self._extViews = (wk, views)
-        return views
-
-    def _stage_adder(self, pf, wk):
-        """The seam's ``add(t, st, F, T)`` of a Python force: its ``stage_adder(probe, Qext)``
-        if it reads kinematics the compiled stage computed (mbs/external_probes.py), else its
-        ``add_into``, else its returned ``(F, T)`` added."""
-        bind = getattr(pf.fn, "stage_adder", None)
-        if bind is not None:
-            return bind(wk.probe, wk.Qext)
-        return getattr(pf.fn, "add_into", None) or self._add_returned(pf)
-
-    def _python_forces(self, t, R, r, V):
-        """The generalised Python forces (nb, 6) at a state (tests, diagnostics): the same
-        evaluation as the compiled seam, on copies."""
-        omega, vel = twist_to_world_velocity(self.gid, R, V)
-        st = BodyStates(t, R.copy(), r.copy(), omega, vel)
-        F = np.zeros((self.sd.nb, 3))
-        T = np.zeros((self.sd.nb, 3))
-        for pf in self.scene.pythonForces:
-            add_into = getattr(pf.fn, "add_into", None)
-            if add_into is not None:
-                add_into(t, st, F, T)
-            else:
-                Fi, Ti = pf.fn(t, st)
-                F += np.asarray(Fi, float)
-                T += np.asarray(Ti, float)
-        Q = np.zeros((self.sd.nb, 6))
-        for i in range(self.sd.nb):
-            kernel.add_point_force(int(self.gid[i]), R[i], np.zeros(3), F[i], Q[i])
-            kernel.add_world_torque(R[i], T[i], Q[i])
-        return Q
-
     def _raise_status(self, st, h):
         """Raise the error for a kernel status (public as :meth:`RaiseStatus`; mbs/step_errors.py)."""
         step_errors.raise_status(self, st, h)

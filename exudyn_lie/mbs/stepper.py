@@ -401,6 +401,45 @@ def watch_rotation_entries(watchBody, watchEntry, watchMax, R):
             watchMax[w] = a
 
 
+@njit(cache=True, inline="always", _nrt=False)
+def record_accelerations(wk, Vdo, lamo):
+    """An output row's accelerations and multipliers: the first stage of the next step."""
+    for i in range(Vdo.shape[0]):
+        for k in range(6):
+            Vdo[i, k] = wk.Vd[0, i, k]
+    for k in range(lamo.shape[0]):
+        lamo[k] = wk.lam[k]
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def after_accepted_step(sd, wk, R, r, V):
+    """What is tracked from one accepted step to the next: torsion angles, the contacts'
+    data coordinates (Exudyn's PostNewton), the watched rotation entries."""
+    update_torsion_tracking(sd, wk, R, r, V)
+    update_contact_data(sd, wk, R, r, V)
+    if wk.watchBody.shape[0] > 0:
+        watch_rotation_entries(wk.watchBody, wk.watchEntry, wk.watchMax, R)
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def record_output(wk, R, r, V, Ro, ro, Vo, Po, o):
+    """Output row ``o``: the state and, if ``Po`` has rows, the tracked angles and node
+    rotation parameters (rotation_parameters.record_tracked)."""
+    copy_state(R, r, V, Ro[o], ro[o], Vo[o])
+    if Po.shape[0] > 0:
+        record_tracked(wk.btrack, wk.bangle, wk.bparam, Po[o])
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def project_step_end(sd, wk, t, R, r, V):
+    """The projection after a fixed step (``sd.stabilization``) with the rows' moving offsets
+    at the step's end ``t``."""
+    st = update_row_drives(wk.drive, t)
+    if st == STATUS_OK:
+        st = project_state_if(sd.stabilization, sd, wk, sd.stabilization, R, r, V)
+    return st
+
+
 # --------------------------------------------------------------------------- the loop
 @njit(cache=True, _nrt=False)
 def mk_steps(sd, wk, tab, ctl, t0, h, nsteps, R, r, V, vmax, every, Ro, ro, Vo, Po, Vdo, lamo):
@@ -413,13 +452,11 @@ def mk_steps(sd, wk, tab, ctl, t0, h, nsteps, R, r, V, vmax, every, Ro, ro, Vo, 
     (One call site of the inlined right-hand side serves both uses: a second one would
     double the compile time.)
     Outputs: with ``every > 0`` the state after every ``every``-th step goes to row
-    ``o = (n + 1) / every - 1`` of ``Ro, ro, Vo`` and, if ``Po`` has rows, the tracked angles and
-    node rotation parameters (rotation_parameters.record_tracked) to ``Po[o]``; if ``Vdo`` has rows, the accelerations
+    ``o = (n + 1) / every - 1`` (:func:`record_output`); if ``Vdo`` has rows, the accelerations
     and multipliers at that state go to ``Vdo[o], lamo[o]``.  They are the first stage of
     the following step (explicit RK: stage 1 is evaluated at the step's initial state),
     so recording them costs one extra evaluation per call, after the last step.  A failure
-    in that evaluation leaves ``Vdo[o, 0, 0]`` NaN.  (A caller that needs several outputs
-    then enters the compiled code once instead of once per output.)
+    in that evaluation leaves ``Vdo[o, 0, 0]`` NaN.
 
     **Adaptive steps** (``ctl`` an ``adaptive.AdaptiveControl``, ``tab`` an
     ``adaptive.AdaptiveMethod``): from ``ctl.fs[FS_T]`` with the next step ``ctl.fs[FS_H]``
@@ -468,11 +505,7 @@ def mk_steps(sd, wk, tab, ctl, t0, h, nsteps, R, r, V, vmax, every, Ro, ro, Vo, 
                         Vdo[pending, 0, 0] = np.nan
                     return st, n
             if pending >= 0:
-                for i in range(Vdo.shape[1]):
-                    for k in range(6):
-                        Vdo[pending, i, k] = wk.Vd[0, i, k]
-                for k in range(lamo.shape[1]):
-                    lamo[pending, k] = wk.lam[k]
+                record_accelerations(wk, Vdo[pending], lamo[pending])
                 pending = -1
             if evalOnly:
                 return STATUS_OK, nsteps
@@ -493,16 +526,11 @@ def mk_steps(sd, wk, tab, ctl, t0, h, nsteps, R, r, V, vmax, every, Ro, ro, Vo, 
                 copy_state(wk.Rb, wk.rb, wk.Vb, R, r, V)
                 return st, n
             if is_stabilized(sd.stabilization):
-                st = update_row_drives(wk.drive, t + hs)       # the rows' moving offsets at the step's end
-                if st == STATUS_OK:
-                    st = project_state_if(sd.stabilization, sd, wk, sd.stabilization, R, r, V)
+                st = project_step_end(sd, wk, t + hs, R, r, V)
                 if st != STATUS_OK:
                     copy_state(wk.Rb, wk.rb, wk.Vb, R, r, V)
                     return st, n
-        update_torsion_tracking(sd, wk, R, r, V)
-        update_contact_data(sd, wk, R, r, V)
-        if wk.watchBody.shape[0] > 0:
-            watch_rotation_entries(wk.watchBody, wk.watchEntry, wk.watchMax, R)
+        after_accepted_step(sd, wk, R, r, V)
         if adaptive:
             st, n = step_accepted(sd, wk, tab, ctl, R, r, V, t, hs, Ro, ro, Vo, Po, n)
             if st != STATUS_OK:
@@ -511,8 +539,6 @@ def mk_steps(sd, wk, tab, ctl, t0, h, nsteps, R, r, V, vmax, every, Ro, ro, Vo, 
         n += 1
         if every > 0 and n % every == 0:
             o = n // every - 1
-            copy_state(R, r, V, Ro[o], ro[o], Vo[o])
-            if Po.shape[0] > 0:
-                record_tracked(wk.btrack, wk.bangle, wk.bparam, Po[o])
+            record_output(wk, R, r, V, Ro, ro, Vo, Po, o)
             if acc:
                 pending = o

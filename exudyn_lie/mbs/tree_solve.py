@@ -300,6 +300,173 @@ def _articulated(A, K, Psi, t6):
             Psi[c, a] = s
 
 
+@njit(cache=True, inline="always", _nrt=False)
+def _condense_ground_rows(i, plan, trows, rint, Jr, Psi, Phi, beta, y0, lam, Tr, Tl, pivotTol, info):
+    """Body i's rows to the ground: ``T = J_G Psi J_G^T = L L^T``, ``P~ = L^-1 J_G Psi``,
+    ``Phi = Psi - P~^T P~``; the rows' right-hand sides become ``L^-1 b - P~ beta`` and their
+    share of ``y0`` is added.  Returns a status code."""
+    g0 = plan[i, P_G0]
+    ng = plan[i + 1, P_G0] - g0
+    off = plan[i, P_GL]
+    for a in range(ng):
+        q = trows[g0 + a]
+        o = _side(rint, q, i)
+        for c in range(6):
+            s = 0.0
+            for d in range(6):
+                s += Jr[q, o + d] * Psi[d, c]
+            Tr[q, c] = s
+        Tr[q, 6] = lam[q]
+    for a in range(ng):
+        qa = trows[g0 + a]
+        for b in range(a + 1):
+            qb = trows[g0 + b]
+            ob = _side(rint, qb, i)
+            s = 0.0
+            for d in range(6):
+                s += Tr[qa, d] * Jr[qb, ob + d]
+            Tl[off + a * ng + b] = s
+    fail = _chol(Tl, off, ng, pivotTol)
+    if fail >= 0:
+        info[0] = trows[g0 + fail]
+        return STATUS_SINGULAR
+    _lower_solve_rows(Tl, off, ng, trows, g0, Tr, 0, 7)
+    for a in range(6):
+        for c in range(6):
+            s = Psi[a, c]
+            for b in range(ng):
+                q = trows[g0 + b]
+                s -= Tr[q, a] * Tr[q, c]
+            Phi[a, c] = s
+    for b in range(ng):
+        q = trows[g0 + b]
+        s = Tr[q, 6]
+        for d in range(6):
+            s -= Tr[q, d] * beta[d]
+        Tr[q, 6] = s
+        for d in range(6):
+            y0[d] += Tr[q, d] * s
+    return STATUS_OK
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def _condense_parent_edge(i, p, plan, trows, rint, Jr, Phi, y0, lam, Tr, Tl, Tb, Tv, pivotTol, info):
+    """The edge from body i to its parent p: ``S = J_c Phi J_c^T = L L^T``,
+    ``w = S^-1 (b - J_c y0)``, ``Z = L^-1 J_p``; adds ``Z^T Z`` to the parent's K and
+    ``J_p^T w`` to its beta.  Returns a status code."""
+    e0 = plan[i, P_E0]
+    ne = plan[i + 1, P_E0] - e0
+    off = plan[i, P_EL]
+    for a in range(ne):
+        q = trows[e0 + a]
+        o = _side(rint, q, i)
+        s = lam[q]
+        for c in range(6):
+            t = 0.0
+            for d in range(6):
+                t += Jr[q, o + d] * Phi[d, c]
+            Tr[q, c] = t
+            s -= Jr[q, o + c] * y0[c]
+        Tr[q, 6] = s
+    for a in range(ne):
+        qa = trows[e0 + a]
+        for b in range(a + 1):
+            qb = trows[e0 + b]
+            ob = _side(rint, qb, i)
+            s = 0.0
+            for d in range(6):
+                s += Tr[qa, d] * Jr[qb, ob + d]
+            Tl[off + a * ne + b] = s
+    fail = _chol(Tl, off, ne, pivotTol)
+    if fail >= 0:
+        info[0] = trows[e0 + fail]
+        return STATUS_SINGULAR
+    for a in range(ne):
+        q = trows[e0 + a]
+        o = 6 - _side(rint, q, i)
+        for c in range(6):
+            Tr[q, c] = Jr[q, o + c]
+    _lower_solve_rows(Tl, off, ne, trows, e0, Tr, 0, 7)
+    # w = L^-T (L^-1 r): the back substitution on column 6
+    for a in range(ne - 1, -1, -1):
+        qa = trows[e0 + a]
+        s = Tr[qa, 6]
+        for b in range(a + 1, ne):
+            s -= Tl[off + b * ne + a] * Tr[trows[e0 + b], 6]
+        Tr[qa, 6] = s / Tl[off + a * ne + a]
+    Kp = Tb[p, 1]
+    bp = Tv[p, 0]
+    for a in range(ne):
+        q = trows[e0 + a]
+        o = 6 - _side(rint, q, i)
+        w = Tr[q, 6]
+        for c in range(6):
+            bp[c] += Jr[q, o + c] * w
+            z = Tr[q, c]
+            for d in range(6):
+                Kp[c, d] += z * Tr[q, d]
+    return STATUS_OK
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def _back_substitute(i, plan, trows, rint, Jr, Psi, Tv, Tr, Tl, lam):
+    """Body i, its parent's ``y`` known: the multipliers of its parent edge and of its ground
+    rows, and its own ``y_i = Psi u`` (into ``Tv[i, 2]``)."""
+    u = Tv[i, 2]
+    g = Tv[i, 1]                        # the parent edge's force on i (y0 is spent)
+    for a in range(6):
+        g[a] = 0.0
+    p = plan[i, P_PARENT]
+    if p >= 0:
+        e0 = plan[i, P_E0]
+        ne = plan[i + 1, P_E0] - e0
+        off = plan[i, P_EL]
+        yp = Tv[p, 2]
+        t = Tv[i, 3]
+        for a in range(ne):
+            q = trows[e0 + a]
+            s = 0.0
+            for d in range(6):
+                s += Tr[q, d] * yp[d]
+            t[a] = s
+        _upper_solve_vec(Tl, off, ne, t)
+        for a in range(ne):
+            q = trows[e0 + a]
+            lq = Tr[q, 6] - t[a]
+            lam[q] = lq
+            o = _side(rint, q, i)
+            for d in range(6):
+                g[d] += Jr[q, o + d] * lq
+    for a in range(6):
+        u[a] = g[a] + Tv[i, 0, a]
+    g0 = plan[i, P_G0]
+    ng = plan[i + 1, P_G0] - g0
+    if ng > 0:
+        off = plan[i, P_GL]
+        t = Tv[i, 3]
+        for a in range(ng):
+            q = trows[g0 + a]
+            s = Tr[q, 6]
+            for d in range(6):
+                s -= Tr[q, d] * g[d]
+            t[a] = s
+        _upper_solve_vec(Tl, off, ng, t)
+        for a in range(ng):
+            q = trows[g0 + a]
+            lam[q] = t[a]
+            o = _side(rint, q, i)
+            for d in range(6):
+                u[d] += Jr[q, o + d] * t[a]
+    # y_i = Psi u (into Tv[i, 2] through the scratch row g)
+    for a in range(6):
+        s = 0.0
+        for d in range(6):
+            s += Psi[a, d] * u[d]
+        g[a] = s
+    for a in range(6):
+        u[a] = g[a]
+
+
 @njit(cache=True, _nrt=False)
 def tree_solve(gid, Minv, rint, R, Jr, lam, plan, Tw, pivotTol, info):
     """``lam <- S^-1 lam``, ``S = J A J^T``, by the leaves-to-root elimination (module
@@ -344,161 +511,18 @@ def tree_solve(gid, Minv, rint, R, Jr, lam, plan, Tw, pivotTol, info):
                 for c in range(6):
                     s += Psi[a, c] * beta[c]
                 y0[a] = s
-        # ground rows: T = J_G Psi J_G^T, P~ = L^-1 J_G Psi, Phi = Psi - P~^T P~
-        g0 = plan[i, P_G0]
-        ng = plan[i + 1, P_G0] - g0
-        if ng > 0:
-            off = plan[i, P_GL]
-            for a in range(ng):
-                q = trows[g0 + a]
-                o = _side(rint, q, i)
-                for c in range(6):
-                    s = 0.0
-                    for d in range(6):
-                        s += Jr[q, o + d] * Psi[d, c]
-                    Tr[q, c] = s
-                Tr[q, 6] = lam[q]
-            for a in range(ng):
-                qa = trows[g0 + a]
-                for b in range(a + 1):
-                    qb = trows[g0 + b]
-                    ob = _side(rint, qb, i)
-                    s = 0.0
-                    for d in range(6):
-                        s += Tr[qa, d] * Jr[qb, ob + d]
-                    Tl[off + a * ng + b] = s
-            fail = _chol(Tl, off, ng, pivotTol)
-            if fail >= 0:
-                info[0] = trows[g0 + fail]
+        if plan[i + 1, P_G0] > plan[i, P_G0]:
+            if _condense_ground_rows(i, plan, trows, rint, Jr, Psi, Phi, beta, y0, lam, Tr, Tl, pivotTol,
+                                     info) != STATUS_OK:
                 return STATUS_SINGULAR
-            _lower_solve_rows(Tl, off, ng, trows, g0, Tr, 0, 7)
-            for a in range(6):
-                for c in range(6):
-                    s = Psi[a, c]
-                    for b in range(ng):
-                        q = trows[g0 + b]
-                        s -= Tr[q, a] * Tr[q, c]
-                    Phi[a, c] = s
-            for b in range(ng):
-                q = trows[g0 + b]
-                s = Tr[q, 6]
-                for d in range(6):
-                    s -= Tr[q, d] * beta[d]
-                Tr[q, 6] = s
-                for d in range(6):
-                    y0[d] += Tr[q, d] * s
         else:
             Phi = Psi
-        # parent edge: S = J_c Phi J_c^T = L L^T, w = S^-1 (b - J_c y0), Z = L^-1 J_p
         p = plan[i, P_PARENT]
-        if p < 0:
-            continue
-        e0 = plan[i, P_E0]
-        ne = plan[i + 1, P_E0] - e0
-        off = plan[i, P_EL]
-        for a in range(ne):
-            q = trows[e0 + a]
-            o = _side(rint, q, i)
-            s = lam[q]
-            for c in range(6):
-                t = 0.0
-                for d in range(6):
-                    t += Jr[q, o + d] * Phi[d, c]
-                Tr[q, c] = t
-                s -= Jr[q, o + c] * y0[c]
-            Tr[q, 6] = s
-        for a in range(ne):
-            qa = trows[e0 + a]
-            for b in range(a + 1):
-                qb = trows[e0 + b]
-                ob = _side(rint, qb, i)
-                s = 0.0
-                for d in range(6):
-                    s += Tr[qa, d] * Jr[qb, ob + d]
-                Tl[off + a * ne + b] = s
-        fail = _chol(Tl, off, ne, pivotTol)
-        if fail >= 0:
-            info[0] = trows[e0 + fail]
+        if p >= 0 and _condense_parent_edge(i, p, plan, trows, rint, Jr, Phi, y0, lam, Tr, Tl, Tb, Tv, pivotTol,
+                                            info) != STATUS_OK:
             return STATUS_SINGULAR
-        for a in range(ne):
-            q = trows[e0 + a]
-            o = 6 - _side(rint, q, i)
-            for c in range(6):
-                Tr[q, c] = Jr[q, o + c]
-        _lower_solve_rows(Tl, off, ne, trows, e0, Tr, 0, 7)
-        # w = L^-T (L^-1 r): the back substitution on column 6
-        for a in range(ne - 1, -1, -1):
-            qa = trows[e0 + a]
-            s = Tr[qa, 6]
-            for b in range(a + 1, ne):
-                s -= Tl[off + b * ne + a] * Tr[trows[e0 + b], 6]
-            Tr[qa, 6] = s / Tl[off + a * ne + a]
-        Kp = Tb[p, 1]
-        bp = Tv[p, 0]
-        for a in range(ne):
-            q = trows[e0 + a]
-            o = 6 - _side(rint, q, i)
-            w = Tr[q, 6]
-            for c in range(6):
-                bp[c] += Jr[q, o + c] * w
-                z = Tr[q, c]
-                for d in range(6):
-                    Kp[c, d] += z * Tr[q, d]
     # ---- backward: root first, y and lam edge by edge
     for k in range(n - 1, -1, -1):
         i = plan[k, P_ORDER]
-        Psi = _psi_of(gid, Minv, Tb, plan, i)
-        u = Tv[i, 2]
-        g = Tv[i, 1]                        # the parent edge's force on i (y0 is spent)
-        for a in range(6):
-            g[a] = 0.0
-        p = plan[i, P_PARENT]
-        if p >= 0:
-            e0 = plan[i, P_E0]
-            ne = plan[i + 1, P_E0] - e0
-            off = plan[i, P_EL]
-            yp = Tv[p, 2]
-            t = Tv[i, 3]
-            for a in range(ne):
-                q = trows[e0 + a]
-                s = 0.0
-                for d in range(6):
-                    s += Tr[q, d] * yp[d]
-                t[a] = s
-            _upper_solve_vec(Tl, off, ne, t)
-            for a in range(ne):
-                q = trows[e0 + a]
-                lq = Tr[q, 6] - t[a]
-                lam[q] = lq
-                o = _side(rint, q, i)
-                for d in range(6):
-                    g[d] += Jr[q, o + d] * lq
-        for a in range(6):
-            u[a] = g[a] + Tv[i, 0, a]
-        g0 = plan[i, P_G0]
-        ng = plan[i + 1, P_G0] - g0
-        if ng > 0:
-            off = plan[i, P_GL]
-            t = Tv[i, 3]
-            for a in range(ng):
-                q = trows[g0 + a]
-                s = Tr[q, 6]
-                for d in range(6):
-                    s -= Tr[q, d] * g[d]
-                t[a] = s
-            _upper_solve_vec(Tl, off, ng, t)
-            for a in range(ng):
-                q = trows[g0 + a]
-                lam[q] = t[a]
-                o = _side(rint, q, i)
-                for d in range(6):
-                    u[d] += Jr[q, o + d] * t[a]
-        # y_i = Psi u (into Tv[i, 2] through the scratch row g)
-        for a in range(6):
-            s = 0.0
-            for d in range(6):
-                s += Psi[a, d] * u[d]
-            g[a] = s
-        for a in range(6):
-            u[a] = g[a]
+        _back_substitute(i, plan, trows, rint, Jr, _psi_of(gid, Minv, Tb, plan, i), Tv, Tr, Tl, lam)
     return STATUS_OK

@@ -14,7 +14,6 @@ import numpy as np
 
 from ..mbs.entry import call
 from ..mbs.outputs import CHUNK_ROWS, AdaptiveOutputRows, OutputRows
-from ..mbs.rotation_parameters import record_tracked
 from .node_writers import CODE_1D_ROT, CODE_2D, NCOORD_MAX, present_writers, write_rows
 
 
@@ -63,7 +62,7 @@ class OutputChunks:
         number of nodes flagged."""
         o, nt = self.out, self.nodes
         jrow, jae = self.jac
-        a2 = (rows, self.sim.sd.gid, o.Ro, o.ro, o.Vo, o.Vdo, o.lamo, self.doacc, nt.code, nt.body, nt.idx, nt.nq,
+        a2 = (rows, self.sim.gid, o.Ro, o.ro, o.Vo, o.Vdo, o.lamo, self.doacc, nt.code, nt.body, nt.idx, nt.nq,
               nt.qref, nt.prev, self.Q, self.Qt, self.Qtt, nt.flags, jrow, jae, self.AE,
               np.ascontiguousarray(times, dtype=float), o.Po, nt.scratch, nt.present)
         return call(self._ep, "write", write_rows, a2)
@@ -178,11 +177,11 @@ class NodeTable:
         the joint multipliers ``(rows, AE slots, AE buffer)``); returns the number
         of nodes flagged (Rxyz near its singularity)."""
         jrow, jae, ae = multipliers
-        sd = sim.sd
-        if self.tracked is None or self.tracked.shape[1] != sd.nb:
-            self.tracked = np.zeros((1, sd.nb, 4))
-        record_tracked(sim.wk.btrack, sim.wk.bangle, sim.wk.bparam, self.tracked[0])
-        return write_rows(1, sd.gid, sim.R[None], sim.r[None], sim.V[None], Vdot[None], lam[None], bool(doacc),
+        nb = len(sim.gid)
+        if self.tracked is None or self.tracked.shape[1] != nb:
+            self.tracked = np.zeros((1, nb, 4))
+        sim.TrackedParameters(self.tracked[0])
+        return write_rows(1, sim.gid, sim.R[None], sim.r[None], sim.V[None], Vdot[None], lam[None], bool(doacc),
                           self.code, self.body, self.idx, self.nq, self.qref, self.prev, q[None], qt[None], qtt[None],
                           self.flags, jrow, jae, ae[None], np.array([float(sim.t)]), self.tracked, self.scratch,
                           self.present)

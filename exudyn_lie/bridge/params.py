@@ -42,7 +42,7 @@ import numpy as np
 
 from . import items
 from .items import FIXED, IGNORED, INITIAL, ITEMS, LIVE, REFUSED  # noqa: F401 (the statuses)
-from ..mbs.force_elements import element, write_row
+from ..mbs.force_elements import element
 from ..mbs.scene import SceneError
 from .reader import BridgeError, ExudynScene, _userfunction
 
@@ -318,15 +318,14 @@ class ParameterWatch:
             item = sc.pyItems[k]
             item.lv, item.uf, item.mf, item.bodyFixed = lv, uf, mf, bodyFixed
             if getattr(item, "probeIndex", None) is not None:     # its point, read by the compiled stage
-                self.solver.sim.wk.probe[item.probeIndex] = item.probe_row()
+                self.solver.sim.SetProbeRow(item.probeIndex, item.probe_row())
             return
-        sd = self.solver.sim.sd
-        # compile_scene's row: lvec[k] = [vector, point], lint[k] = [body, kind, bodyFixed]
-        sd.lvec[k, 0] = mf.rotation() @ lv if bodyFixed else lv
-        sd.lvec[k, 1] = mf.pos if lt == "ForceVector" else 0.0
-        sd.lint[k, 2] = int(bodyFixed)
+        vector, point, flags = self.solver.sim.LoadRow(k)       # flags: [body, kind, bodyFixed]
+        vector[:] = mf.rotation() @ lv if bodyFixed else lv
+        point[:] = mf.pos if lt == "ForceVector" else 0.0
+        flags[2] = int(bodyFixed)
         # from now on a new loadVector alone takes the short path (a controller's every step)
-        self._fastLoad[l] = (sd.lvec[k, 0], mf.rotation() if bodyFixed else None)
+        self._fastLoad[l] = (vector, mf.rotation() if bodyFixed else None)
 
     def _coordinate_load(self, l, d, t):
         """LoadCoordinate: the new ``load`` (or user function) into its compiled load row, a
@@ -345,12 +344,11 @@ class ParameterWatch:
             item = self.scene.pyItems[k]
             item.load, item.uf = load, uf
             return
-        sd = self.solver.sim.sd
         if table == "coordinateLoad":        # a node rotation parameter: f0 = -load of its coordinate spring row
-            sd.kpar[k, 11] = -load
+            self.solver.sim.SetCoordinateSpringForce(k, -load)
             return
         cm = self.reader.coordinate_marker(d["markerNumber"], what)
-        sd.lvec[k, 0] = load * cm.direction
+        self.solver.sim.LoadRow(k)[0][:] = load * cm.direction
 
     def _load_vector(self, l, row, value, t):
         """Only ``loadVector`` of a compiled load changed: the new vector (the value Exudyn
@@ -412,7 +410,7 @@ class ParameterWatch:
                               f"({table} -> {new and new[0]}); set its parameters before the solve")
         e = element(table)
         try:
-            write_row(e, sc, self.solver.sim.sd, self.solver.sim.wk, k, getattr(scratch, e.sceneList)[0])
+            self.solver.sim.WriteElementRow(e, sc, k, getattr(scratch, e.sceneList)[0])
         except ValueError as err:
             raise BridgeError(f"{what}: changed during the solve at t = {t:.6g} s: {err}") from None
 
@@ -428,4 +426,4 @@ class ParameterWatch:
         item.__dict__.update(keep)
         item.active = bool(d.get("activeConnector", True))
         if getattr(item, "probeIndex", None) is not None:     # its frames, read by the compiled stage
-            self.solver.sim.wk.probe[item.probeIndex] = item.probe_row()
+            self.solver.sim.SetProbeRow(item.probeIndex, item.probe_row())

@@ -355,7 +355,7 @@ class LieGroupSolver(StateIO):
         sim, sc = self.sim, self.scene
         objectOf = {sc.joints[ji.sceneJoint].name: ji.objectIndex for ji in sc.joints_info
                     if ji.sceneJoint is not None}
-        dependent = [objectOf[n] for n in sim.redundantJoints if n in objectOf] if sim.sd.redundant else None
+        dependent = [objectOf[n] for n in sim.redundantJoints if n in objectOf] if sim.hasRedundantRows else None
         check = ConstraintCheck(self.mbs, solver, tol, dependent)
         sceneJoint = {ji.objectIndex: ji.sceneJoint for ji in sc.joints_info}
         rows = []
@@ -451,7 +451,7 @@ class LieGroupSolver(StateIO):
         # function may change the state in between or Python forces (Exudyn user
         # functions) run, so that they are called in step with Exudyn's outputs
         bufs, jac = (self._q, self._qt, self._qtt, self._ae), (self._jrow, self._jae)
-        maxRows = 1 if (self._watch or sim.sd.hasQext) else CHUNK_ROWS
+        maxRows = 1 if (self._watch or sim.hasPythonStage) else CHUNK_ROWS
         k, h, needAcc = plan["k"], plan["h"], plan["needAcc"]
         if plan["adaptive"] is None:
             self._chunks = OutputChunks(sim, self._nodes, vmax, bufs, jac, k, h, needAcc, maxRows=maxRows)

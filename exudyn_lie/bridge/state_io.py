@@ -10,7 +10,6 @@ import time
 
 import numpy as np
 
-from ..mbs.rolling_disc_penalty_forces import D_DATA
 from .fast import AdaptiveOutputChunks, NodeTable
 from .time_loop import off_plan
 
@@ -23,8 +22,7 @@ class StateIO:
         # kernel rows of every joint, and their AE slots in Exudyn
         self._jrows = []
         for ji in sc.joints_info:
-            r0, n = (int(x) for x in sim.sd.jint[ji.sceneJoint, 2:4])
-            self._jrows.append((np.arange(r0, r0 + n), ji.aeRows))
+            self._jrows.append((np.array(sim.JointRows(ji.sceneJoint), np.int64), ji.aeRows))
 
     # ------------------------------------------------------------------ state <-> mbs
     def _views(self):
@@ -76,7 +74,7 @@ class StateIO:
         self._jrow = np.concatenate([x[0] for x in jr]).astype(np.int64) if jr else np.zeros(0, np.int64)
         self._jae = np.concatenate([x[1] for x in jr]).astype(np.int64) if jr else np.zeros(0, np.int64)
         self._Vdot = np.zeros((self.scene.nBodies, 6))
-        self._lam = np.zeros(self.sim.sd.nrows)
+        self._lam = np.zeros(self.sim.nRows)
         self._hasJ = len(self._jrow) > 0
 
     def _watch_singular_nodes(self):
@@ -188,7 +186,7 @@ class StateIO:
             for k, b in enumerate(bodies):          # the rotation parameters in mbs go on from here
                 tr = kind.tracked(k)
                 if tr is not None:
-                    self.sim.wk.bparam[b] = tr[1]
+                    self.sim.SetTrackedParameters(b, tr[1])
         self._seed_torsion()
         self._seed_contact_data()
         self._nodes.prev[:] = NodeTable(self.scene.nodeKinds, self.scene.kindBodies, t).prev
@@ -201,7 +199,7 @@ class StateIO:
         st = None
         for td in self.scene.torsionData:
             if td.spring is not None:
-                out.append(float(self.sim.wk.tphi[td.spring]) + 2.0 * math.pi * td.turns0)
+                out.append(self.sim.TorsionAngle(td.spring) + 2.0 * math.pi * td.turns0)
             else:
                 st = self.sim.states() if st is None else st
                 out.append(float(td.item.angle(st)[0]))
@@ -229,7 +227,7 @@ class StateIO:
         sd = self.mbs.systemData
         data = np.asarray(sd.GetDataCoordinates(configuration=self._exu.ConfigurationType.Current), float)
         for k, (_, node) in enumerate(self.scene.rollingDiscData):
-            self.sim.wk.disc[k, D_DATA:] = data[np.asarray(sd.GetNodeLTGData(node), np.int64)]
+            self.sim.SetContactData(k, data[np.asarray(sd.GetNodeLTGData(node), np.int64)])
 
     def _seed_torsion(self):
         """After the state was re-read from mbs: continue every tracked torsion angle from
@@ -240,12 +238,12 @@ class StateIO:
             return
         sd = self.mbs.systemData
         data = np.asarray(sd.GetDataCoordinates(configuration=self._exu.ConfigurationType.Current), float)
-        tphi = self.sim.wk.tphi
+        sim = self.sim
         for td in tds:
             prev = float(data[int(sd.GetNodeLTGData(td.dataNode)[0])])
             if td.spring is not None:
                 target = prev - 2.0 * math.pi * td.turns0           # in the kernel's frame
-                phi = float(tphi[td.spring])
-                tphi[td.spring] = phi + 2.0 * math.pi * round((target - phi) / (2.0 * math.pi))
+                phi = sim.TorsionAngle(td.spring)
+                sim.SetTorsionAngle(td.spring, phi + 2.0 * math.pi * round((target - phi) / (2.0 * math.pi)))
             else:
                 td.item.prev = prev

@@ -19,7 +19,8 @@ from ..userwarn import warn_user
 from . import external, kernel
 from .rolling_disc_penalty_forces import D_DATA
 from .presence import is_present
-from .rotation_parameters import update_tracked_bodies
+from .force_elements import write_row
+from .rotation_parameters import record_tracked, update_tracked_bodies
 from .compiled import compile_scene, compile_tracking, make_work, resolve_groups, with_redundant
 from .linalg import REL_PIVOT_TOL, rows_in_null_space, schur_rank_and_null
 from .row_drives import RowDrives
@@ -417,6 +418,67 @@ class Simulator(ExternalSeams):
         """Estimate of the spectral radius of the linearised equations of motion at a state
         (default: the current one; :func:`.stiffness.spectral_radius`)."""
         return stiffness.spectral_radius(self, R, r, V, t, iterations, seed)
+
+    # ----------------------------------------------------------------- rows and tracked state (the bridge's API)
+    @property
+    def nRows(self):
+        """Number of constraint rows."""
+        return int(self.sd.nrows)
+
+    @property
+    def hasRedundantRows(self):
+        """True if the constraints were found redundant (the rank-revealing solve runs)."""
+        return bool(self.sd.redundant)
+
+    @property
+    def hasPythonStage(self):
+        """True if every stage calls Python (forces or the whole right-hand side)."""
+        return self.sd.hasQext != kernel.EXTERNAL_NONE
+
+    def JointRows(self, j):
+        """The kernel's rows of scene joint ``j`` (a range)."""
+        r0, n = (int(x) for x in self.sd.jint[j, 2:4])
+        return range(r0, r0 + n)
+
+    def TrackedParameters(self, out):
+        """The angles and node rotation parameters tracked per body (nb, 4) into ``out``
+        (mbs/rotation_parameters.py: what a write-back of node coordinates continues from)."""
+        record_tracked(self.wk.btrack, self.wk.bangle, self.wk.bparam, out)
+
+    def SetTrackedParameters(self, body, p):
+        """Continue the tracked node rotation parameters of ``body`` from ``p`` (4)."""
+        self.wk.bparam[body] = p
+
+    def TorsionAngle(self, k):
+        """The tracked angle (turns included) of compiled torsional spring ``k``."""
+        return float(self.wk.tphi[k])
+
+    def SetTorsionAngle(self, k, phi):
+        self.wk.tphi[k] = phi
+
+    def SetContactData(self, k, data):
+        """The data coordinates (stored slip, gap) of penalty rolling disc ``k``."""
+        self.wk.disc[k, D_DATA:] = data
+
+    def SetProbeRow(self, i, row):
+        """Row ``i`` of the Python items' probes (mbs/external_probes.py) after an item changed."""
+        self.wk.probe[i] = row
+
+    def LoadRow(self, k):
+        """Writable views ``(vector, point, flags)`` of compiled load ``k`` (``SceneData.lvec``,
+        ``lint``: body, force / torque, bodyFixed); a value written takes effect at the next
+        stage (a controller that sets a load every step writes here without a call)."""
+        return self.sd.lvec[k, 0], self.sd.lvec[k, 1], self.sd.lint[k]
+
+    def WriteElementRow(self, element, scene, k, item):
+        """Rewrite row ``k`` of a registered force element from a changed scene item
+        (:func:`.force_elements.write_row`)."""
+        write_row(element, scene, self.sd, self.wk, k, item)
+
+    def SetCoordinateSpringForce(self, k, force):
+        """The constant force of coordinate spring row ``k`` (a coordinate load on a node
+        rotation parameter is such a row: force ``-load``)."""
+        self.sd.kpar[k, 11] = force
 
     def Accelerations(self):
         """``(Vdot, lambda)`` at the current state from the index-1 system (eq. index1):

@@ -2,11 +2,11 @@
 
 Importing the package derives exact (``Fraction``) Taylor coefficients of the group maps
 (:mod:`exudyn_lie.groups._taylor`) and checks every catalogue tableau's order conditions
-(:mod:`exudyn_lie.integrators.tableau`): about 0.2 s of every import, always with the
+(:mod:`exudyn_lie.integrators.butcher`, :mod:`exudyn_lie.integrators.order_conditions`): about 0.2 s of every import, always with the
 same result.  A :class:`DiskMemo` keeps such results in the package's ``__pycache__``
 (numba's user-wide cache directory when that is not writable is not needed: a memo that
 cannot be written is simply recomputed next time), keyed by a hash of the arguments and
-of the source file that computes them: editing that file starts a new memo.  A result is
+of the source files that compute them: editing one of them starts a new memo.  A result is
 stored only after it was computed successfully (a failing check raises and stores
 nothing), and is written once per process (``atexit``).
 """
@@ -26,9 +26,12 @@ def arg_key(*args):
 class DiskMemo:
     """``memo.get(key, compute)``: the stored result for ``key`` or ``compute()`` (stored)."""
 
-    def __init__(self, name, source_file):
-        with open(source_file, "rb") as f:
-            h = hashlib.sha1(f.read()).hexdigest()[:16]
+    def __init__(self, name, *source_files):
+        sha = hashlib.sha1()
+        for source in source_files:
+            with open(source, "rb") as f:
+                sha.update(f.read())
+        h = sha.hexdigest()[:16]
         self.path = os.path.join(_DIR, f"memo_{name}_{h}.pkl")
         self.data = None
         self.dirty = False

@@ -77,7 +77,7 @@ def test_rows_that_change_blocks_are_ordered_again():
     assert np.allclose(kkt.a, a, rtol=1e-9, atol=1e-9) and np.allclose(kkt.lam, lam, rtol=1e-9, atol=1e-9)
 
 
-def test_redundant_rows_at_the_first_solve_take_the_rank_revealing_path():
+def test_redundant_rows_during_the_set_up_take_the_rank_revealing_path():
     rng = np.random.default_rng(3)
     sizes = [4, 5, 3, 6]
     M, Cq, f = _chain(rng, sizes)
@@ -100,10 +100,30 @@ def test_rows_that_become_dependent_during_the_run_raise():
     eta = rng.normal(size=Cq.shape[0])
     kkt = BlockKKT(M.shape[0], Cq.shape[0], _blocks_of(sizes), _no_empty)
     kkt.solve(M, f, Cq, eta)
+    kkt.settle()                             # the set-up is done: the run starts
     Cq2 = Cq.copy()
     Cq2[3] = Cq2[1]
     with pytest.raises(ConstraintError, match="singular constraint Jacobian"):
         kkt.solve(M, f, Cq2, eta)
+
+
+def test_rows_that_become_dependent_before_the_set_up_is_done_switch():
+    """An initial projection's solves come before settle(): rows found dependent there take the
+    rank-revealing path, as at the first solve."""
+    rng = np.random.default_rng(9)
+    sizes = [4, 5, 3]
+    M, Cq, f = _chain(rng, sizes)
+    eta = rng.normal(size=Cq.shape[0])
+    kkt = BlockKKT(M.shape[0], Cq.shape[0], _blocks_of(sizes), _no_empty)
+    kkt.solve(M, f, Cq, eta)
+    assert not kkt.pivoted
+    Cq2 = Cq.copy()
+    Cq2[3] = Cq2[1]
+    eta2 = eta.copy()
+    eta2[3] = eta2[1]
+    kkt.solve(M, f, Cq2, eta2)
+    assert kkt.pivoted
+    assert np.allclose(M @ kkt.a + Cq2.T @ kkt.lam, f, atol=1e-8) and np.allclose(Cq2 @ kkt.a, eta2, atol=1e-8)
 
 
 def test_a_row_without_coordinates_gets_lam_zero_and_is_reported():

@@ -390,7 +390,7 @@ class ConsistencyAccount:
 
 def kernel_explanation(sim, jointRows):
     """The compiled path's explanation (module docstring): ``explain(k, g)`` at the kernel
-    state of output row ``o`` of the output chunk ``ch`` (its ``Ro, ro, Vo``) at time ``t``,
+    state of output row ``o`` of the output chunk ``ch`` (its rows ``ch.out.Ro, ro, Vo``) at time ``t``,
     set by ``at(ch, o, t)``; ``jointRows[k]`` the kernel rows of checked item k (None: no
     compiled rows to compare, e.g. a node's own equation)."""
     state = {}

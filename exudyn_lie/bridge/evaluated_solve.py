@@ -260,6 +260,7 @@ class EvaluatedSolver:
         # the initial accelerations (and a measured estimate of the cost per step)
         problem.write()
         model.accelerations(t0, problem.R, problem.r, problem.prev, problem.qv, True)    # first call: set-up
+        model.kkt.settle()                   # redundant rows are found up to here (BlockKKT)
         tic = time.perf_counter()
         for _ in range(ESTIMATE_EVALUATIONS):
             model.accelerations(t0, problem.R, problem.r, problem.prev, problem.qv, True)

@@ -1,8 +1,8 @@
 """Exudyn output steps on the compiled path: chunks of outputs per call of the kernel.
 
-A Python call of a numba function unboxes every array it receives: the write-back takes
-~20.  Per Exudyn output step that would be most of the bridge's cost at the usual ten steps
-per output.  So :class:`OutputChunks` takes a chunk of the kernel's output rows (state, and
+A Python call of a numba function unboxes every array it receives: the stepper's scene and
+work tuples hold ~60 arrays, the write-back ~20.  Per Exudyn output step that would be most of
+the bridge's cost at the usual ten steps per output.  So :class:`OutputChunks` takes a chunk of the kernel's output rows (state, and
 accelerations / multipliers, at each output: :mod:`exudyn_lie.mbs.outputs`), converts the
 chunk to node coordinates in one call of
 :func:`~exudyn_lie.bridge.node_writers.write_rows`, and per Exudyn step only copies one row into

@@ -329,7 +329,7 @@ class ParameterWatch:
 
     def _coordinate_load(self, l, d, t):
         """LoadCoordinate: the new ``load`` (or user function) into its compiled load row, a
-        world force ``load e_axis`` at the node (reader.read_coordinate_load), or its Python item."""
+        world force ``load e_axis`` at the node (reader_forces.read_coordinate_load), or its Python item."""
         table, k = self.scene.itemRows[("load", l)]
         what = self.what("load", l, d)
         load = float(_finite(d["load"], what, "load"))
@@ -377,7 +377,7 @@ class ParameterWatch:
 
     def _connector(self, o, d, t):
         """A connector (or one of its markers) changed: the reader reads it again with the code
-        that read it before the solve (reader.reread_connector: marker frames, velocityOffset
+        that read it before the solve (reader_forces.reread_connector: marker frames, velocityOffset
         folded, activeConnector, the torsional spring's kept turns), and its compiled row is
         rewritten by its force element's registration (force_elements.write_row: the row
         builders of its SceneData fields, its Work table's ``writeRow``); an item evaluated in

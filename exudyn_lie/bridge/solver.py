@@ -7,7 +7,7 @@ How it works: the model is read into a :class:`~exudyn_lie.mbs.Scene`
 :class:`~exudyn_lie.mbs.Simulator` *inside Exudyn's own time loop*: an
 ``exudyn.MainSolverImplicitSecondOrder`` runs with its Newton iteration replaced by a
 hook (``SetUserFunctionNewton``) that advances the Munthe-Kaas integrator and writes the
-state back into the nodes (:mod:`.nodes`).  Exudyn therefore does everything else as in
+state back into the nodes (:mod:`.node_writers`).  Exudyn therefore does everything else as in
 a native solve: sensors (stored and files), the solution file, pre/post-step user
 functions, the renderer, ``mbs.sys['dynamicSolver']`` and the final state left in
 ``mbs``.

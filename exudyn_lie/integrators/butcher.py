@@ -8,6 +8,7 @@ from typing import Optional, Tuple
 import numpy as np
 
 from .._memo import DiskMemo, arg_key
+from . import order_conditions
 from .order_conditions import (MAX_CHECK_ORDER, _coef_scale, _extended_stage_matrix, _is_exact, _readonly,
                                _residual_ok, _residuals, _to_exact, achieved_order, continuous_order_residuals,
                                quadrature_order)
@@ -65,7 +66,7 @@ class ContinuousExtension:
         return P @ powers
 
 
-_MEMO = DiskMemo("tableau", __file__)
+_MEMO = DiskMemo("tableau", __file__, order_conditions.__file__)     # both compute what it keeps
 
 
 def _checked(args, check):

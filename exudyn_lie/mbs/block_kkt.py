@@ -249,7 +249,9 @@ class BlockKKT:
     workspace.  ``blocks(M)`` gives the block structure ``(blk, blkPtr)`` at the first
     solve (coordinate indices of every block; the caller knows which coordinates belong
     together); ``check_rows(Cq, empty)`` is told of rows without coordinates (it raises if
-    their equation is not ``lam = 0``).  ``a`` and ``lam`` hold the last solution."""
+    their equation is not ``lam = 0``).  ``a`` and ``lam`` hold the last solution.  Until
+    :meth:`settle`, a singular Schur complement means redundant rows (the rank-revealing
+    solve from then on); after it, a ConstraintError."""
 
     def __init__(self, n, m, blocks, check_rows, verbose=False):
         self.n, self.m = n, m
@@ -259,7 +261,7 @@ class BlockKKT:
         self.lam = np.zeros(m)
         self.pivoted = False          # redundant rows: rank-revealing Cholesky
         self.dense = False            # a singular block of M: the whole KKT matrix
-        self.calls = 0
+        self.settled = False          # set-up done: redundant rows from now on are an error
         self.blk = None
         self._nzIdx = np.zeros((m, n), np.int64)
         self._nzCnt = np.zeros(m, np.int64)
@@ -320,7 +322,6 @@ class BlockKKT:
 
     def solve(self, M, f, Cq, eta):
         """``a``, ``lam`` of ``[M C_q^T; C_q 0][a; lam] = [f; eta]`` (M n x n, C_q m x n)."""
-        self.calls += 1
         first = self.blk is None
         if first:
             self._set_up(M)
@@ -334,7 +335,7 @@ class BlockKKT:
             if st != KKT_BEYOND_BAND:
                 break
             self._order_rows(Cq)          # rows act on other blocks now: a new order
-        if st == KKT_SINGULAR_SCHUR and self.calls <= 1:
+        if st == KKT_SINGULAR_SCHUR and not self.settled:
             # redundant constraints at the initial state (e.g. a closed planar loop)
             self.pivoted = True
             if self.verbose:
@@ -357,6 +358,12 @@ class BlockKKT:
                 print("exudyn_lie: the mass matrix has a singular block; solving the dense KKT system from now on")
             return self._dense_solve(M, f, Cq, eta)
         raise SimulationError(f"internal: Schur solve status {st}")
+
+    def settle(self):
+        """The set-up is done (initial projection, first accelerations): rows that are
+        dependent from now on make the constraint Jacobian singular (ConstraintError) instead of
+        switching to the rank-revealing solve."""
+        self.settled = True
 
     def _dense_solve(self, M, f, Cq, eta):
         n = self.n

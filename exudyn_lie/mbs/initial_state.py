@@ -49,3 +49,28 @@ def check_initial_state(levels, projectInitial):
         fixed.append(("velocities", bad, float(np.max(np.abs(gv)))))
         levels.project_velocities()
     return fixed
+
+
+class RowLevels:
+    """The kernel's constraint rows of a :class:`~.simulator.Simulator` as the levels of
+    :func:`check_initial_state` (its own projections on the group)."""
+
+    def __init__(self, sim):
+        self.sim = sim
+
+    def position_residual(self):
+        sim = self.sim
+        return sim._residuals_and_JV()[0], max(1.0, float(np.max(np.abs(sim.r))) if sim.r.size else 1.0)
+
+    def velocity_residual(self):
+        sim = self.sim
+        return sim._residuals_and_JV()[1], max(1.0, float(np.max(np.abs(sim.V))))
+
+    def project_positions(self):
+        self.sim.ProjectPositions()
+
+    def project_velocities(self):
+        self.sim.ProjectVelocities()
+
+    def describe_rows(self, rows):
+        return "joints " + ", ".join(self.sim._joints_of_rows(rows))

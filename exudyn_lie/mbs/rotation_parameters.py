@@ -1,5 +1,5 @@
 """Rotation parameters of the bodies' nodes tracked after every accepted step (for the
-write-back, bridge/nodes.py): the parameters Exudyn's own solver would reach by integrating
+write-back, bridge/node_writers.py): the parameters Exudyn's own solver would reach by integrating
 them continuously, i.e. for a rotation ``R`` the branch nearest to the parameters at the last
 accepted step (one step turns a body by far less than pi):
 

@@ -29,35 +29,11 @@ from .state import BodyStates, twist_to_world_velocity, world_velocity_to_twist
 from .stepper import fixed_step_control, method_arrays
 from .entry import call
 from .adaptive_run import AdaptiveRun
-from .initial_state import check_initial_state
+from .initial_state import RowLevels, check_initial_state
 from .outputs import Result, run  # noqa: F401 (Result re-exported)
 from . import step_errors, stiffness
 from .diagnostics import constraint_jacobian, joint_rows_at, schur_complement
 from .external_seams import ExternalSeams
-
-
-class _RowLevels:
-    """The kernel's constraint rows as the levels of :func:`.initial_state.check_initial_state`."""
-
-    def __init__(self, sim):
-        self.sim = sim
-
-    def position_residual(self):
-        sim = self.sim
-        return sim._residuals_and_JV()[0], max(1.0, float(np.max(np.abs(sim.r))) if sim.r.size else 1.0)
-
-    def velocity_residual(self):
-        sim = self.sim
-        return sim._residuals_and_JV()[1], max(1.0, float(np.max(np.abs(sim.V))))
-
-    def project_positions(self):
-        self.sim.ProjectPositions()
-
-    def project_velocities(self):
-        self.sim.ProjectVelocities()
-
-    def describe_rows(self, rows):
-        return "joints " + ", ".join(self.sim._joints_of_rows(rows))
 
 
 class Simulator(ExternalSeams):
@@ -294,7 +270,7 @@ class Simulator(ExternalSeams):
         if self.sd.nrows == 0:
             return
         R0, r0, V0 = self.R.copy(), self.r.copy(), self.V.copy()
-        fixed = check_initial_state(_RowLevels(self), self.projectInitial)
+        fixed = check_initial_state(RowLevels(self), self.projectInitial)
         if not fixed:
             return
         p = {}

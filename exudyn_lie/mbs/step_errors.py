@@ -16,7 +16,7 @@ def step_size_error(method, h, t, what, why, suggestion):
     """The one StepSizeError: ``what`` happened at time ``t`` with step size ``h`` (method
     name ``method``) because ``why``; the step size to try."""
     return StepSizeError(f"{what} at t = {t:.6g} s with step size {h:.3g} s (method {method}); {why}: "
-                         f"try a step size of {suggestion:.3g} s or smaller (timeIntegration.numberOfSteps)")
+                         f"try a step size of {suggestion:.3g} s or smaller")
 
 
 def raise_status(sim, st, h):

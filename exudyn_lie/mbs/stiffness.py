@@ -115,9 +115,9 @@ def stage_stiffness_of(sim, h, nb=None):
 
 def suggest_step(sim, h):
     """A step size that should be stable: ``0.8 r / rho``, where ``rho`` is the spectral
-    radius of the linearised equations of motion at the state the failed
-    :meth:`Advance` started from (:meth:`SpectralRadius`) and ``r`` the radius of the
-    method's stability half-disk (:func:`~exudyn_lie.integrators.stability.stability_radius`).
+    radius of the linearised equations of motion at the state the failed :meth:`Advance`
+    (or chunk of output rows, :mod:`.outputs`) started from (:meth:`SpectralRadius`) and ``r``
+    the radius of the method's stability half-disk (:func:`~exudyn_lie.integrators.stability.stability_radius`).
     Never more than ``h / 2``; ``h / 10`` if the estimate is not available."""
     start = getattr(sim, "_segmentStart", None)
     try:

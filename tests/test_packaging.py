@@ -133,3 +133,26 @@ def test_no_top_level_models_import():
             if isinstance(node, ast.ImportFrom) and not node.level and (node.module or "").split(".")[0] == "models":
                 bad.append(path)
     assert not bad, bad
+
+
+def test_library_modules_and_functions_stay_small():
+    """One job per module: no library file above 600 lines and no function above 100
+    (the applications in exudyn_lie/apps and the paper's models aside)."""
+    long_files, long_functions = [], []
+    for d, dirs, files in os.walk(PKG):
+        dirs[:] = [x for x in dirs if x not in ("__pycache__", "apps", "models")
+                   and not os.path.islink(os.path.join(d, x))]
+        for f in files:
+            if not f.endswith(".py"):
+                continue
+            path = os.path.join(d, f)
+            src = open(path, encoding="utf-8").read()
+            rel = os.path.relpath(path, PKG)
+            if len(src.splitlines()) > 600:
+                long_files.append((rel, len(src.splitlines())))
+            for node in ast.walk(ast.parse(src)):
+                if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                    n = node.end_lineno - node.lineno + 1
+                    if n > 100:
+                        long_functions.append((rel, node.name, n))
+    assert not long_files and not long_functions, (long_files, long_functions)

@@ -17,13 +17,8 @@ class JointReaders:
     def read_joint(self, sc, o, d):
         t = d["objectType"]
         what = self._what("object", o, d)
-        try:
-            aeAll = np.zeros(0, np.int64) if self.items else np.array(self.sd.GetObjectLTGAE(o), dtype=np.int64)
-        except Exception:
-            aeAll = np.zeros(0, np.int64)
-        if not d.get("activeConnector", True):
-            sc.skipped.append((what, "inactive (activeConnector=False): Exudyn sets its multipliers to 0"))
-            sc.aeZero.extend(aeAll.tolist())
+        aeAll = self._constraint_ae(o, d, what, sc, "multipliers")
+        if aeAll is None:
             return
         for key in ("offsetUserFunction", "offsetUserFunction_t"):
             if _userfunction(d, key, what) is not None:
@@ -76,14 +71,15 @@ class JointReaders:
         # AE rows of unlocked axes (g = lambda) stay 0
         sc.aeZero.extend(sorted(set(aeAll.tolist()) - set(aeRows.tolist())))
 
-    def _constraint_ae(self, o, d, what, sc):
-        """The AE indices of a one-row constraint object; None (skipped) if it is inactive."""
+    def _constraint_ae(self, o, d, what, sc, multipliers="multiplier"):
+        """The AE indices of a constraint object; None (skipped, its AE coordinates 0) if it is
+        inactive."""
         try:
             aeAll = np.zeros(0, np.int64) if self.items else np.array(self.sd.GetObjectLTGAE(o), dtype=np.int64)
         except Exception:
             aeAll = np.zeros(0, np.int64)
         if not d.get("activeConnector", True):
-            sc.skipped.append((what, "inactive (activeConnector=False): Exudyn sets its multiplier to 0"))
+            sc.skipped.append((what, f"inactive (activeConnector=False): Exudyn sets its {multipliers} to 0"))
             sc.aeZero.extend(aeAll.tolist())
             return None
         return aeAll
@@ -149,13 +145,8 @@ class JointReaders:
         then, and the position-level equation ignores ``offsetUserFunction_t``: its index-3
         solve never reads it).  Moving offsets: mbs/row_drives.py."""
         what = self._what("object", o, d)
-        try:
-            aeAll = np.zeros(0, np.int64) if self.items else np.array(self.sd.GetObjectLTGAE(o), dtype=np.int64)
-        except Exception:
-            aeAll = np.zeros(0, np.int64)
-        if not d.get("activeConnector", True):
-            sc.skipped.append((what, "inactive (activeConnector=False): Exudyn sets its multiplier to 0"))
-            sc.aeZero.extend(aeAll.tolist())
+        aeAll = self._constraint_ae(o, d, what, sc)
+        if aeAll is None:
             return
         velocityLevel = bool(d.get("velocityLevel", False))
         key = "offsetUserFunction_t" if velocityLevel else "offsetUserFunction"

@@ -57,16 +57,20 @@ class RowLevels:
 
     def __init__(self, sim):
         self.sim = sim
+        self._rows = None           # (h, J V) at the current state: one evaluation serves both levels
 
     def position_residual(self):
         sim = self.sim
-        return sim._residuals_and_JV()[0], max(1.0, float(np.max(np.abs(sim.r))) if sim.r.size else 1.0)
+        self._rows = sim._residuals_and_JV()
+        return self._rows[0], max(1.0, float(np.max(np.abs(sim.r))) if sim.r.size else 1.0)
 
     def velocity_residual(self):
         sim = self.sim
-        return sim._residuals_and_JV()[1], max(1.0, float(np.max(np.abs(sim.V))))
+        rows = self._rows if self._rows is not None else sim._residuals_and_JV()
+        return rows[1], max(1.0, float(np.max(np.abs(sim.V))))
 
     def project_positions(self):
+        self._rows = None           # the state moved
         self.sim.ProjectPositions()
 
     def project_velocities(self):

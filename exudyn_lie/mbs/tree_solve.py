@@ -301,6 +301,27 @@ def _articulated(A, K, Psi, t6):
 
 
 @njit(cache=True, inline="always", _nrt=False)
+def _factor_rows(i, trows, r0, n, rint, Jr, Tr, Tl, off, pivotTol, info):
+    """``L L^T`` of the ``n`` rows ``trows[r0:r0 + n]`` of body i: the lower triangle of
+    ``Tr J^T`` (``Tr`` holds each row times the body's matrix) into ``Tl[off:]``, factored in
+    place.  Returns a status code (``info[0]``: the failing row)."""
+    for a in range(n):
+        qa = trows[r0 + a]
+        for b in range(a + 1):
+            qb = trows[r0 + b]
+            ob = _side(rint, qb, i)
+            s = 0.0
+            for d in range(6):
+                s += Tr[qa, d] * Jr[qb, ob + d]
+            Tl[off + a * n + b] = s
+    fail = _chol(Tl, off, n, pivotTol)
+    if fail >= 0:
+        info[0] = trows[r0 + fail]
+        return STATUS_SINGULAR
+    return STATUS_OK
+
+
+@njit(cache=True, inline="always", _nrt=False)
 def _condense_ground_rows(i, plan, trows, rint, Jr, Psi, Phi, beta, y0, lam, Tr, Tl, pivotTol, info):
     """Body i's rows to the ground: ``T = J_G Psi J_G^T = L L^T``, ``P~ = L^-1 J_G Psi``,
     ``Phi = Psi - P~^T P~``; the rows' right-hand sides become ``L^-1 b - P~ beta`` and their
@@ -317,18 +338,7 @@ def _condense_ground_rows(i, plan, trows, rint, Jr, Psi, Phi, beta, y0, lam, Tr,
                 s += Jr[q, o + d] * Psi[d, c]
             Tr[q, c] = s
         Tr[q, 6] = lam[q]
-    for a in range(ng):
-        qa = trows[g0 + a]
-        for b in range(a + 1):
-            qb = trows[g0 + b]
-            ob = _side(rint, qb, i)
-            s = 0.0
-            for d in range(6):
-                s += Tr[qa, d] * Jr[qb, ob + d]
-            Tl[off + a * ng + b] = s
-    fail = _chol(Tl, off, ng, pivotTol)
-    if fail >= 0:
-        info[0] = trows[g0 + fail]
+    if _factor_rows(i, trows, g0, ng, rint, Jr, Tr, Tl, off, pivotTol, info) != STATUS_OK:
         return STATUS_SINGULAR
     _lower_solve_rows(Tl, off, ng, trows, g0, Tr, 0, 7)
     for a in range(6):
@@ -368,18 +378,7 @@ def _condense_parent_edge(i, p, plan, trows, rint, Jr, Phi, y0, lam, Tr, Tl, Tb,
             Tr[q, c] = t
             s -= Jr[q, o + c] * y0[c]
         Tr[q, 6] = s
-    for a in range(ne):
-        qa = trows[e0 + a]
-        for b in range(a + 1):
-            qb = trows[e0 + b]
-            ob = _side(rint, qb, i)
-            s = 0.0
-            for d in range(6):
-                s += Tr[qa, d] * Jr[qb, ob + d]
-            Tl[off + a * ne + b] = s
-    fail = _chol(Tl, off, ne, pivotTol)
-    if fail >= 0:
-        info[0] = trows[e0 + fail]
+    if _factor_rows(i, trows, e0, ne, rint, Jr, Tr, Tl, off, pivotTol, info) != STATUS_OK:
         return STATUS_SINGULAR
     for a in range(ne):
         q = trows[e0 + a]

@@ -220,7 +220,7 @@ def compare(mbs, groups, q, qt, t=0.0):
     out = dict(M=rel(pk["M"], Mx), f=rel(pk["Q"], fx), g=0.0, J=0.0, nrows=0)
     sim, sc = pk["sim"], pk["scene"]
     for ji in sc.joints_info:
-        r0, n = (int(x) for x in sim.sd.jint[ji.sceneJoint, 2:4])
+        r0, n = (int(x) for x in sim.sd.jointIndex[ji.sceneJoint, 2:4])
         rows = np.arange(r0, r0 + n)
         out["g"] = max(out["g"], rel(pk["h"][rows], ge[ji.aeRows]))
         out["J"] = max(out["J"], rel(pk["J"][rows], Ce[ji.aeRows] @ P))

@@ -430,8 +430,8 @@ def test_partial_spherical_between_bodies_is_world_axis_rows(axes, group, rng):
         Me, fe, ge, Ce = oracle(mbs, q, qt, 0.3)
         pk = package(mbs, group, q, qt, 0.3)
         ji = pk["scene"].joints_info[0]
-        r0, n = (int(x) for x in pk["sim"].sd.jint[ji.sceneJoint, 2:4])
-        assert n == len(locked) and list(pk["sim"].sd.rint[r0:r0 + n, 0]) == [1] * n    # kernel.ROW_TRANS_WORLD
+        r0, n = (int(x) for x in pk["sim"].sd.jointIndex[ji.sceneJoint, 2:4])
+        assert n == len(locked) and list(pk["sim"].sd.rowIndex[r0:r0 + n, 0]) == [1] * n    # kernel.ROW_TRANS_WORLD
         h, J = pk["h"][r0:r0 + n], pk["J"][r0:r0 + n]
         scale = max(1.0, np.max(np.abs(J)))
         np.testing.assert_allclose(ge[ae[locked]], h, rtol=0, atol=1e-13)

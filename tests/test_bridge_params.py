@@ -757,8 +757,8 @@ def test_re_reading_unchanged_items_reproduces_the_compiled_rows():
     mbs.Assemble()
     solver = exl.LieGroupSolver(mbs)
     sd = solver.sim.sd
-    names = ("lint", "lvec", "sint", "spos", "spar", "cint", "cpos", "cpar", "tint", "trot", "tpar", "bint", "bpos",
-             "brot", "bpar")
+    names = ("loadIndex", "loadVectors", "springBodies", "springPoints", "springLaw", "cartesianBodies", "cartesianPoints", "cartesianLaw", "torsionBodies", "torsionFrames", "torsionLaw", "rigidSpringBodies", "rigidSpringPoints",
+             "rigidSpringFrames", "rigidSpringLaw")
     before = {k: getattr(sd, k).copy() for k in names}
     assert solver.scene.torsionData[0].turns0 == 2
     watch = ParameterWatch(solver)
@@ -768,4 +768,4 @@ def test_re_reading_unchanged_items_reproduces_the_compiled_rows():
     watch._rebuild(items, 0.0)
     for k in names:
         np.testing.assert_array_equal(getattr(sd, k), before[k], err_msg=k)
-    assert all(len(before[k]) for k in ("lvec", "spar", "cpar", "tpar", "bpar"))
+    assert all(len(before[k]) for k in ("loadVectors", "springLaw", "cartesianLaw", "torsionLaw", "rigidSpringLaw"))

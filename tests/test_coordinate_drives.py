@@ -153,7 +153,7 @@ def test_drives_same_as_exudyn(nodes, group, rng):
         JV = J @ sim.V.reshape(-1) - sim.wk.rdrive[1]
         nvel = 0
         for ji in sc.joints_info:
-            q0 = int(sim.sd.jint[ji.sceneJoint, 2])
+            q0 = int(sim.sd.jointIndex[ji.sceneJoint, 2])
             ae = int(ji.aeRows[0])
             vel = bool(mbs.GetObject(ji.objectIndex)["velocityLevel"])
             Ce = (Cqt if vel else Cq)[ae] @ P

@@ -210,7 +210,7 @@ def test_eta_by_differentiation_matches_compiled_eta(seed):
     worst = 0.0
     scale = max(1.0, float(np.max(np.abs(eta))))
     for ji in sc.joints_info:
-        r0, n = (int(x) for x in sim.sd.jint[ji.sceneJoint, 2:4])
+        r0, n = (int(x) for x in sim.sd.jointIndex[ji.sceneJoint, 2:4])
         expect = eta_pkg[r0:r0 + n] + Cq[ji.aeRows] @ pk["PdV"]
         d = np.abs(eta[ji.aeRows] - expect)
         assert np.all(d <= 1e-9 * scale), (d, err[ji.aeRows])

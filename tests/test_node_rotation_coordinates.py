@@ -21,16 +21,16 @@ from exudyn.utilities import (LoadCoordinate, MarkerNodeCoordinate, NodePointGro
 
 import exudyn_lie as exl
 from exudyn_lie.groups import se3, so3, so3xr3
-from exudyn_lie.mbs import GROUND, NodeParameterCoordinate, Scene, Simulator
-from exudyn_lie.mbs.node_coordinates import (PARAM_EP, PARAM_ROTVEC, PARAM_RXYZ, U_SWITCH, _coef_D_dD,
+from exudyn_lie.mbs import GROUND, RotationParameterCoordinate, Scene, Simulator
+from exudyn_lie.mbs.node_coordinates import (PARAM_EULER_PARAMETERS, PARAM_ROTATION_VECTOR, PARAM_TAIT_BRYAN, U_SWITCH, _coef_D_dD,
                                              node_parameter, param_code)
 from exudyn_lie.mbs.oblique_solve import force_direction_rows
-from exudyn_lie.mbs.rotation_parameters import nearest_rxyz, quat_of
+from exudyn_lie.mbs.rotation_parameters import nearest_tait_bryan, quat_of
 from exudyn_lie.mbs.diagnostics import constraint_jacobian
 from test_bridge_common import add_body, compare, new_mbs, oracle, package, quiet_settings, random_state
 
-KINDS = {"RotVecLG": (PARAM_ROTVEC, 3), "EP": (PARAM_EP, 4), "Rxyz": (PARAM_RXYZ, 3)}
-NODE_NAMES = {"RotVecLG": "RigidBodyRotVecLG", "EP": "RigidBodyEP", "Rxyz": "RigidBodyRxyz"}
+KINDS = {"RotVecLG": (PARAM_ROTATION_VECTOR, 3), "EP": (PARAM_EULER_PARAMETERS, 4), "Rxyz": (PARAM_TAIT_BRYAN, 3)}
+PARAMETRISATIONS = {"RotVecLG": "rotationVector", "EP": "eulerParameters", "Rxyz": "taitBryanXYZ"}   # the kernel's names
 TOL = 1e-11
 
 
@@ -51,7 +51,7 @@ def test_parameter_gradient_and_bias_against_finite_differences(kind, rng):
             R = so3.exp(x * angle / np.linalg.norm(x))
             w = rng.normal(size=3)
             prev = np.zeros(4)
-            (nearest_rxyz(R, np.zeros(4), prev) if pk == PARAM_RXYZ else quat_of(R, prev))
+            (nearest_tait_bryan(R, np.zeros(4), prev) if pk == PARAM_TAIT_BRYAN else quat_of(R, prev))
             G, C, tmp = np.zeros(3), np.zeros(3), np.zeros(3)
             v, bias = node_parameter(code, R, prev, w, G, C, tmp)
             e = 1e-6
@@ -64,7 +64,7 @@ def test_parameter_gradient_and_bias_against_finite_differences(kind, rng):
                 return G2 @ w
             bfd = (Gw(e) - Gw(-e)) / (2 * e)
             assert abs(bias - bfd) < 1e-7 * max(1.0, abs(bfd)), (k, angle, bias, bfd)
-            if pk == PARAM_ROTVEC:
+            if pk == PARAM_ROTATION_VECTOR:
                 assert np.array_equal(C, np.eye(3)[k])        # Exudyn's e_k on the local omega
             else:
                 assert np.array_equal(C, G)
@@ -100,8 +100,8 @@ def _two_body_scene(rng, kindA, kindB, kA=1, kB=2):
         sc.AddBody(mass=1.5 + i, inertia=np.diag([0.1, 0.2, 0.3]) * (1 + i), com=rng.normal(size=3) * 0.1,
                    R0=so3.exp(1.2 * x / np.linalg.norm(x)), r0=rng.normal(size=3),
                    omega0=rng.normal(size=3), vel0=rng.normal(size=3))
-    sc.AddCoordinateConstraint(0, NodeParameterCoordinate(NODE_NAMES[kindA], kA), 1,
-                               NodeParameterCoordinate(NODE_NAMES[kindB], kB), factor=-1.3, constant=0.2)
+    sc.AddCoordinateConstraint(0, RotationParameterCoordinate(PARAMETRISATIONS[kindA], kA), 1,
+                               RotationParameterCoordinate(PARAMETRISATIONS[kindB], kB), factor=-1.3, constant=0.2)
     return sc
 
 
@@ -155,7 +155,7 @@ def test_oblique_solve_compiled_only_for_scenes_that_need_it(rng):
         sc.AddBody(mass=2.0, inertia=np.diag([0.1, 0.2, 0.3]), com=[0.1, 0.05, -0.2], R0=so3.exp(np.array([0.3, -0.5, 0.7])),
                    r0=[0, 0, 0], omega0=[0.2, 0.9, -0.4], vel0=[0.1, 0, 0])
         sc.gravity = np.array([0.0, 0.0, -9.81])
-        sc.AddCoordinateConstraint(GROUND, 0, 0, NodeParameterCoordinate(NODE_NAMES[kind], 1), constant=0.0)
+        sc.AddCoordinateConstraint(GROUND, 0, 0, RotationParameterCoordinate(PARAMETRISATIONS[kind], 1), constant=0.0)
         sim = Simulator(sc, "RK4", "SE3", projectInitial=True)
         Vdot = np.zeros((1, 6))
         assert stage(sim.sd, sim.wk, sim.R, sim.r, sim.V, Vdot) == 0
@@ -243,7 +243,7 @@ def test_same_as_exudyn_at_random_states(node, group, userFunction, rng):
             Ck = np.zeros(12)
             Ck[:] = plan.Cr[0]
             Ckd = np.zeros(6 * sim.sd.nb)
-            for side, b in ((0, sim.sd.jint[0, 0]), (6, sim.sd.jint[0, 1])):
+            for side, b in ((0, sim.sd.jointIndex[0, 0]), (6, sim.sd.jointIndex[0, 1])):
                 if b >= 0:
                     Ckd[6 * b:6 * b + 6] += Ck[side:side + 6]
             assert np.abs(Cx[0] - Ckd).max() < TOL
@@ -256,7 +256,7 @@ def _consistent_omega(node, k, R0, omega):
     G . omega_local = 0 for rotation coordinate k: a consistent initial velocity."""
     pk, _ = KINDS[node]
     prev = np.zeros(4)
-    (nearest_rxyz(R0, np.zeros(4), prev) if pk == PARAM_RXYZ else quat_of(R0, prev))
+    (nearest_tait_bryan(R0, np.zeros(4), prev) if pk == PARAM_TAIT_BRYAN else quat_of(R0, prev))
     G = np.zeros(3)
     node_parameter(param_code(pk, k), R0, prev, np.zeros(3), G, np.zeros(3), np.zeros(3))
     w = R0.T @ np.asarray(omega, float)

@@ -105,7 +105,7 @@ def rolling_rows(mbs, group, q, qt):
     for ji in sc.joints_info:
         if ji.objectType != "JointRollingDisc":
             continue
-        r0, n = (int(x) for x in sim.sd.jint[ji.sceneJoint, 2:4])
+        r0, n = (int(x) for x in sim.sd.jointIndex[ji.sceneJoint, 2:4])
         rows = np.arange(r0, r0 + n)
         out.append((pk["J"][rows], pk["J"][rows] @ V, C[ji.aeRows] @ P, g[ji.aeRows]))
         assert np.all(pk["h"][rows] == 0)                    # velocity-level rows: no position residual

@@ -45,17 +45,17 @@ def _state_diff(a, b):
 def test_plan_of_tree_families_and_none_for_loops():
     for kind in ("chain", "star", "tree"):
         sd = _sim(BT.build_scene(kind, 12)).sd
-        plan = tree_plan(sd.nb, sd.rint)
+        plan = tree_plan(sd.nb, sd.rowIndex)
         assert plan is not None, kind
         order = plan[:sd.nb, P_ORDER]
         assert sorted(order) == list(range(sd.nb))
         assert order[-1] == 0, "the grounded bar is the root, eliminated last"
     sd = _sim(BT.build_scene("ladder", 12)).sd
-    assert tree_plan(sd.nb, sd.rint) is None                 # rungs close loops
+    assert tree_plan(sd.nb, sd.rowIndex) is None                 # rungs close loops
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         sd = Simulator(planar_fourbar(joint4="universal-spherical"), "RK4", "SE3").sd
-    assert tree_plan(sd.nb, sd.rint) is None                 # a loop through the ground
+    assert tree_plan(sd.nb, sd.rowIndex) is None                 # a loop through the ground
 
 
 def test_automatic_choice_by_bandwidth():

@@ -12,7 +12,7 @@ from numba import njit
 
 from ..mbs.codes import uses_body_twist
 from ..mbs.presence import guarded
-from ..mbs.rotation_parameters import nearest_quat, nearest_rxyz, quat_of, quat_rotvec
+from ..mbs.rotation_parameters import nearest_quat, nearest_tait_bryan, quat_of, quat_rotvec
 
 CODE_ROTVEC = 0
 CODE_EP = 1
@@ -92,10 +92,10 @@ def ep_row(R, omega, omegad, prev, first, p, p_t, p_tt, tmp):
 
 @njit(cache=True)
 def _wrap_near(x, ref):
-    # np.rint, not np.round: the same value (round half to even), but np.round's numba
+    # np.rowIndex, not np.round: the same value (round half to even), but np.round's numba
     # implementation lives in numba.np.arraymath, which imports scipy.linalg when a
     # cached kernel is loaded (0.12 s of a warm start)
-    return x + TWO_PI * np.rint((ref - x) / TWO_PI)
+    return x + TWO_PI * np.rowIndex((ref - x) / TWO_PI)
 
 
 @njit(cache=True)
@@ -112,7 +112,7 @@ def rxyz_row(R, omega, omegad, prev, first, p, p_t, p_tt):
             p[0] = 0.0
             p[2] = math.atan2(R[1, 0], R[1, 1])
     else:
-        nearest_rxyz(R, prev, p)
+        nearest_tait_bryan(R, prev, p)
     for k in range(3):
         prev[k] = p[k]
     cb, sb = math.cos(p[1]), math.sin(p[1])

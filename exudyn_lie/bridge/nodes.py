@@ -25,7 +25,7 @@ import math
 
 import numpy as np
 
-from ..mbs.rotation_parameters import TRACK_QUAT, TRACK_RXYZ
+from ..mbs.rotation_parameters import TRACK_QUAT, TRACK_TAIT_BRYAN
 from ..userwarn import warn_user
 from . import items
 from . import rotations as rot
@@ -42,6 +42,7 @@ class NodeKind:
     ``rate_from_omega``, ``rate2_from_omega`` (independent of the compiled writer; the
     tests check one against the other)."""
     typeName = ""
+    parametrisation = None      # the rotation parameters' name in the kernel, if it has them
     code = -1
     nrot = 3
     npos = 3                # position coordinates before the rotation parameters
@@ -152,6 +153,7 @@ class RotVecLGNode(NodeKind):
     ROTVEC_TURNOVER of 2 pi the short vector is written instead (Exudyn 1.13.6 evaluates
     |theta| > 2 pi wrongly, even by a rounding error of the norm)."""
     typeName = "RigidBodyRotVecLG"
+    parametrisation = "rotationVector"      # the kernel's name (mbs/node_coordinates.PARAM_KINDS)
     code = CODE_ROTVEC
     nrot = 3
     positionCoordinates = 3
@@ -193,6 +195,7 @@ class EPNode(NodeKind):
     """``NodeRigidBodyEP``: Euler parameters (+ Exudyn's algebraic |ep| = 1 equation, whose
     multiplier is 0), velocities ``[v world, ep_t]``.  The sign of ep is kept continuous."""
     typeName = "RigidBodyEP"
+    parametrisation = "eulerParameters"
     code = CODE_EP
     nrot = 4
     positionCoordinates = 3
@@ -232,10 +235,11 @@ class RxyzNode(NodeKind):
     angle rates ``GR^-1 omega`` grow without bound (the integration itself, done on R, is
     not affected)."""
     typeName = "RigidBodyRxyz"
+    parametrisation = "taitBryanXYZ"
     code = CODE_RXYZ
     nrot = 3
     positionCoordinates = 3
-    trackCode = TRACK_RXYZ
+    trackCode = TRACK_TAIT_BRYAN
     singularity = ((0, 2), math.sqrt(1.0 - RXYZ_WARN_COS ** 2))     # R[0, 2] = sin(beta)
 
     def singular_warning(self, i):

@@ -13,7 +13,7 @@ How the bridge does the same (:class:`ParameterWatch`): while Exudyn's time loop
 ``Modify{Object,Node,Marker,Load}`` are wrapped (class attributes, restored in a
 ``finally``) so that each call on the solved ``mbs`` records the item.  Before the next
 integration step the bridge re-reads only the recorded items and writes the compiled rows
-they own (a load's ``SceneData.lvec / lint`` row; a connector's row of every field of its
+they own (a load's ``SceneData.loadVectors / loadIndex`` row; a connector's row of every field of its
 force element, rewritten by the element's registration from the item the reader reads again,
 :func:`~exudyn_lie.mbs.force_elements.write_row`), or refreshes their Python force items
 (:mod:`.pyforces`).  A controller setting 12 load vectors per step costs 12 dictionary reads
@@ -125,7 +125,7 @@ class ParameterWatch:
         self.late = []               # changes recorded while busy
         self._saved = {}
         self.updates = 0             # items re-read (for the bench and tests)
-        self._fastLoad = {}          # compiled load -> (its lvec row view, marker rotation if bodyFixed)
+        self._fastLoad = {}          # compiled load -> (its loadVectors row view, marker rotation if bodyFixed)
         self._build_maps()
 
     # ------------------------------------------------------------------ set-up

@@ -7,8 +7,8 @@ import math
 
 import numpy as np
 
-from ..mbs.node_coordinates import PARAM_KINDS, PARAM_RXYZ, node_parameter, param_code
-from ..mbs.rotation_parameters import TRACK_QUAT, TRACK_RXYZ, nearest_parameters
+from ..mbs.node_coordinates import PARAM_KINDS, PARAM_TAIT_BRYAN, node_parameter, param_code
+from ..mbs.rotation_parameters import TRACK_QUAT, TRACK_TAIT_BRYAN, nearest_parameters
 from ..mbs.scene import GROUND
 from .pyforces import PyItem, _Connector, _call
 
@@ -44,7 +44,7 @@ def parameter_state(cm, st):
     code = param_code(PARAM_KINDS[cm.param.kind], cm.param.index)
     G, C, tmp = np.zeros(3), np.zeros(3), np.zeros(3)
     v, _ = node_parameter(code, R, cm.paramPrev, w, G, C, tmp)
-    nearest_parameters(TRACK_RXYZ if PARAM_KINDS[cm.param.kind] == PARAM_RXYZ else TRACK_QUAT, R, cm.paramPrev,
+    nearest_parameters(TRACK_TAIT_BRYAN if PARAM_KINDS[cm.param.kind] == PARAM_TAIT_BRYAN else TRACK_QUAT, R, cm.paramPrev,
                        cm.paramPrev)
     return v, float(C @ w), R @ C
 

@@ -52,9 +52,8 @@ from typing import List
 
 import numpy as np
 
-from ..mbs.scene import GROUND, AngleCoordinate, NodeParameterCoordinate, Scene, SceneError
+from ..mbs.scene import GROUND, AngleCoordinate, RotationParameterCoordinate, Scene, SceneError
 from . import items, pyforces
-from ..mbs.node_coordinates import PARAM_KINDS
 from .nodes import NODE_KINDS
 from .reader_common import (BODY_OBJECTS, BridgeError, CONNECTOR_TYPES, CoordinateMarker, JOINT_READERS,
                            JOINT_TYPES, JointInfo, MarkerFrame, NotCompiled, POSITION_MARKERS, ROTOR_BODIES,
@@ -458,14 +457,15 @@ class _Reader(JointReaders, ForceReaders):
             return CoordinateMarker(m, self.rigidNodeBody[n], np.eye(3)[2], ref,
                                     angle=AngleCoordinate(np.eye(3), total))
         nrot = getattr(NODE_KINDS.get(nt), "nrot", 0)
-        if nt in PARAM_KINDS and npos <= k < npos + nrot:
+        param = getattr(NODE_KINDS.get(nt), "parametrisation", None)
+        if param is not None and npos <= k < npos + nrot:
             # a rotation parameter of a 3D rigid node: Exudyn's coordinate (value, rate and
             # Jacobian as CMarkerNodeCoordinate defines them, mbs/node_coordinates.py)
             qref = np.asarray(self.mbs.GetNode(n)["referenceCoordinates"], float).reshape(-1)
             total = qref[npos:npos + nrot] + self.q[self.node_ltg(n)[npos:npos + nrot]]
             return CoordinateMarker(m, self.rigidNodeBody[n], np.zeros(3), float(qref[k]),
-                                    param=NodeParameterCoordinate(nt, k - npos),
-                                    paramPrev=_tracked_start(nt, total))
+                                    param=RotationParameterCoordinate(param, k - npos),
+                                    paramPrev=_tracked_start(param, total))
         if not 0 <= k < npos:
             raise BridgeError(f"{what}: marker {m} (MarkerNodeCoordinate) is on coordinate {k} of node {n} "
                               f"(Node{nt}), not a position coordinate; exudyn_lie supports coordinate items on node "

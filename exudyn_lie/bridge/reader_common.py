@@ -11,7 +11,7 @@ import numpy as np
 
 from ..mbs.compiled import joint_row_descriptors
 from ..mbs.kernel import ROW_ROT
-from ..mbs.scene import AngleCoordinate, NodeParameterCoordinate, SceneError
+from ..mbs.scene import AngleCoordinate, RotationParameterCoordinate, SceneError
 from . import items
 
 # the lists below derive from the one registration per item type (bridge/items.py)
@@ -50,13 +50,13 @@ class CoordinateMarker:
     angle: Optional[AngleCoordinate] = None
     # a rotation parameter of a 3D rigid node (RotVecLG, EP, Rxyz; mbs/node_coordinates.py):
     # value = tracked parameter - ref, direction 0
-    param: Optional[NodeParameterCoordinate] = None
+    param: Optional[RotationParameterCoordinate] = None
     paramPrev: Optional[np.ndarray] = None  # its node's parameters (4) last seen (Python items, pyforces)
 
     @property
     def spec(self):
         """The coordinate for Scene.AddCoordinate*: a direction, the AngleCoordinate or the
-        NodeParameterCoordinate."""
+        RotationParameterCoordinate."""
         if self.param is not None:
             return self.param
         return self.direction if self.angle is None else self.angle
@@ -165,11 +165,11 @@ def joint_ae_map(objectType, constrainedAxes):
     return out
 
 
-def _tracked_start(nodeType, p):
+def _tracked_start(parametrisation, p):
     """The parameters a node's tracking starts from (rotation_parameters: the quaternion of a
     RotVecLG's rotation vector or an EP node's own, of the sign given; Rxyz angles)."""
     out = np.zeros(4)
-    if nodeType == "RigidBodyRotVecLG":
+    if parametrisation == "rotationVector":
         t = float(np.linalg.norm(p))
         out[0] = np.cos(0.5 * t)
         out[1:] = p * (np.sin(0.5 * t) / t if t > 0 else 0.5)

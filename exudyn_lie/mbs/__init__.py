@@ -13,8 +13,8 @@
 See ``docs/ARCHITECTURE.md``.
 """
 from .. import _numba_cache  # noqa: F401  (first: the cache key of every compiled function)
-from .scene import GROUND, JOINT_TYPES, AngleCoordinate, NodeParameterCoordinate, Scene, SceneError, frame_with_axis
+from .scene import GROUND, JOINT_TYPES, AngleCoordinate, RotationParameterCoordinate, Scene, SceneError, frame_with_axis
 from .simulator import (ConstraintError, Result, SimulationError, Simulator, StepSizeError)
 
-__all__ = ["GROUND", "JOINT_TYPES", "AngleCoordinate", "NodeParameterCoordinate", "Scene", "SceneError", "frame_with_axis", "Simulator",
+__all__ = ["GROUND", "JOINT_TYPES", "AngleCoordinate", "RotationParameterCoordinate", "Scene", "SceneError", "frame_with_axis", "Simulator",
            "Result", "SimulationError", "ConstraintError", "StepSizeError"]

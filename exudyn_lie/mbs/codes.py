@@ -36,9 +36,9 @@ ROW_ROLL = 5          # velocity level: e_ax . (contact point velocity B - A) (O
 ROW_COORD_VEL = 6     # velocity level: f qdot_B - qdot_A = w(t) (ObjectConnectorCoordinate velocityLevel=True; h = 0)
 
 # columns of the integer tables of SceneData
-ROW_KIND, ROW_AX, ROW_BX, ROW_BODY_A, ROW_BODY_B = 0, 1, 2, 3, 4      # rint (m, 5)
-J_BODY_A, J_BODY_B, J_ROW0, J_NROW = 0, 1, 2, 3                        # jint (nj, 4)
-L_BODY, L_KIND, L_FIXED = 0, 1, 2                                      # lint (nl, 3)
+ROW_KIND, ROW_AX, ROW_BX, ROW_BODY_A, ROW_BODY_B = 0, 1, 2, 3, 4      # rowIndex (m, 5)
+J_BODY_A, J_BODY_B, J_ROW0, J_NROW = 0, 1, 2, 3                        # jointIndex (nj, 4)
+L_BODY, L_KIND, L_FIXED = 0, 1, 2                                      # loadIndex (nl, 3)
 
 # the right-hand side outside the compiled code (mbs/external.py), SceneData.hasQext
 EXTERNAL_NONE = 0
@@ -50,9 +50,12 @@ STATUS_SINGULAR = 1
 STATUS_NONFINITE = 2
 STATUS_BLOWUP = 3
 STATUS_PROJECTION = 4      # the position projection did not converge
-STATUS_STAGE_ARG = 5       # a stage argument Psi_j left the domain of dexpinv (wk.info[2] = body)
+STATUS_STAGE_ARG = 5       # a stage argument Psi_j left the domain of dexpinv (wk.failInfo[INFO_BODY] = body)
 STATUS_EXTERNAL = 6        # the right-hand side evaluated in Python raised (mbs.external)
 STATUS_STEP_MIN = 7        # adaptive steps: the error control asks for a step below the minimum (mbs.adaptive)
+# what a failed status refers to (Work.failInfo): the failing constraint row, the numerical rank of
+# redundant rows, the body whose stage argument left the domain of dexpinv
+INFO_ROW, INFO_RANK, INFO_BODY = 0, 1, 2
 
 # Domain of the MK stage equation k_j = dexpinv_{-Psi_j} V_j (eq. MK1): dexpinv of SO(3)
 # (and of SE(3), whose blocks share the coefficient) is singular at |rotation part| = 2 pi,

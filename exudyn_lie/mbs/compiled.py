@@ -29,18 +29,18 @@ GROUP_NAMES = {v: k for k, v in GROUP_IDS.items()}
 SceneData = namedtuple("SceneData", [
     "nb", "gid", "mass", "com", "M", "Minv", "gravity", "hasGravity",
     "hasQext",                        # codes.EXTERNAL_*: none, Python forces, or the whole right-hand side
-    "lint", "lvec",                   # loads: [body, 0 force / 1 torque, bodyFixed]; [vector, point]
+    "loadIndex", "loadVectors",                   # loads: [body, 0 force / 1 torque, bodyFixed]; [vector, point]
     # the compiled force elements' fields, from their registrations (mbs/force_elements.py), in this
-    # order: springs sint [A, B], spos [posA, posB], spar [k, d, L0, f0]; Cartesian springs cint, cpos,
-    # cpar [k(3), d(3), offset(3)]; torsional springs tint, trot [rotA, rotB], tpar [k, d, offset, torque];
-    # coordinate springs kint [A, B, rotation A, rotation B], kpar [k, d, offset, direction A (3),
-    # direction B (3), angle A, angle B], krot [frame A, frame B], nangles (rotation coordinates of
-    # coordinate items, tracked: coordinate_angles); linear springs xint, xpos, xaxis (axis on A), xpar
-    # [k, d, offset, force]; rigid-body springs bint [A, B, intrinsic], bpos, brot, bpar (rows K (6),
+    # order: springs springBodies [A, B], springPoints [posA, posB], springLaw [k, d, L0, f0]; Cartesian springs cartesianBodies, cartesianPoints,
+    # cartesianLaw [k(3), d(3), offset(3)]; torsional springs torsionBodies, torsionFrames [rotA, rotB], torsionLaw [k, d, offset, torque];
+    # coordinate springs coordSpringEnds [A, B, rotation A, rotation B], coordSpringLaw [k, d, offset, direction A (3),
+    # direction B (3), angle A, angle B], coordSpringFrames [frame A, frame B], nCoordAngles (rotation coordinates of
+    # coordinate items, tracked: coordinate_angles); linear springs linearBodies, linearPoints, linearAxis (axis on A), linearLaw
+    # [k, d, offset, force]; rigid-body springs rigidSpringBodies [A, B, intrinsic], rigidSpringPoints, rigidSpringFrames, rigidSpringLaw (rows K (6),
     # D (6), offset)
     *scene_fields(),
-    "jint", "jpos", "jrot", "jpar",   # joints: [A, B, first row, rows]; [posA, posB]; [rotA, rotB]; [row parameters]
-    "rint",                           # constraint rows: [kind, axis of A, axis of B, body A, body B]
+    "jointIndex", "jointPoints", "jointFrames", "jointParams",   # joints: [A, B, first row, rows]; [posA, posB]; [rotA, rotB]; [row parameters]
+    "rowIndex",                           # constraint rows: [kind, axis of A, axis of B, body A, body B]
     "nrows", "bandwidth", "redundant", "pivotTol",
     "stabilization",                  # kernel.STAB_*: projection after every step; None: none (no projection
                                       #   compiled into the step loop, projection.project_state_if)
@@ -50,7 +50,7 @@ SceneData = namedtuple("SceneData", [
 
 Work = namedtuple("Work", [
     "Rs", "rs", "Vs", "Rb", "rb", "Vb", "Psi", "K", "Vd", "Q", "Qext",
-    "Jr", "W", "eta", "h", "lam", "Sb", "Sd", "perm", "ytmp", "info",
+    "Jr", "W", "eta", "h", "lam", "Sb", "Sd", "perm", "ytmp", "failInfo",
     "tmp6", "tmp12", "v3", "m3", "ident", "zero3", "zero6",
     "tphi", "watchBody", "watchEntry", "watchMax",
     "ext",                            # [token of the external rhs evaluator (mbs.external), 0: none;
@@ -111,7 +111,7 @@ def point_minv(body):
     return out
 
 
-N_JPAR = 10     # float parameters per joint (ROW_COORD: factor, constant, directions d_A, d_B, tracked angles of
+N_JOINT_PARAMS = 10     # float parameters per joint (ROW_COORD: factor, constant, directions d_A, d_B, tracked angles of
                 # rotation coordinates A, B (coordinate_angles); ROW_DIST: distance;
                 # ROW_ROLL: disc radius, plane normal (3), disc axis (3))
 
@@ -138,16 +138,16 @@ def joint_rows_of(joint):
 
 
 def joint_parameters(joint):
-    """The float parameters of the joint's rows (``SceneData.jpar``)."""
+    """The float parameters of the joint's rows (``SceneData.jointParams``)."""
     if joint.coordinate is not None:
         dA, dB, f, c, _, _, angleA, angleB = joint.coordinate
         return [f, c, *dA, *dB, angleA, angleB]
     if joint.distance is not None:
-        return [joint.distance] + [0.0] * (N_JPAR - 1)
+        return [joint.distance] + [0.0] * (N_JOINT_PARAMS - 1)
     if joint.rollingDisc is not None:
         radius, normal, axis = joint.rollingDisc
-        return [radius, *normal, *axis] + [0.0] * (N_JPAR - 7)
-    return [0.0] * N_JPAR
+        return [radius, *normal, *axis] + [0.0] * (N_JOINT_PARAMS - 7)
+    return [0.0] * N_JOINT_PARAMS
 
 
 #: the planar subgroup of each c-space: a 2D body (Scene.AddBody2D) on c-space 'SE3' is
@@ -336,14 +336,14 @@ def compile_scene(scene: Scene, groups):
         gravity=scene.gravity.astype(float), hasGravity=bool(np.any(scene.gravity != 0)),
         hasQext=(EXTERNAL_RATES if scene.rightHandSide is not None else
                  EXTERNAL_FORCES if scene.pythonForces else EXTERNAL_NONE),
-        lint=arr([[l.body, 0 if l.kind == "force" else 1, int(l.bodyFixed)] for l in L], (-1, 3), np.int64),
-        lvec=arr([[l.vector, l.pos] for l in L], (-1, 2, 3)),
+        loadIndex=arr([[l.body, 0 if l.kind == "force" else 1, int(l.bodyFixed)] for l in L], (-1, 3), np.int64),
+        loadVectors=arr([[l.vector, l.pos] for l in L], (-1, 2, 3)),
         **compile_elements(scene, lean),
-        jint=arr([[j.bodyA, j.bodyB, jrow0[k], jnrow[k]] for k, j in enumerate(J)], (-1, 4), np.int64),
-        jpos=arr([[j.posA, j.posB] for j in J], (-1, 2, 3)),
-        jrot=arr([[j.rotA, j.rotB] for j in J], (-1, 2, 3, 3)),
-        jpar=arr([joint_parameters(j) for j in J], (-1, N_JPAR)),
-        rint=arr([list(x) for x in zip(rkind, rax, rbx, rA, rB)], (-1, 5), np.int64),
+        jointIndex=arr([[j.bodyA, j.bodyB, jrow0[k], jnrow[k]] for k, j in enumerate(J)], (-1, 4), np.int64),
+        jointPoints=arr([[j.posA, j.posB] for j in J], (-1, 2, 3)),
+        jointFrames=arr([[j.rotA, j.rotB] for j in J], (-1, 2, 3, 3)),
+        jointParams=arr([joint_parameters(j) for j in J], (-1, N_JOINT_PARAMS)),
+        rowIndex=arr([list(x) for x in zip(rkind, rax, rbx, rA, rB)], (-1, 5), np.int64),
         nrows=m, bandwidth=bw, redundant=False, pivotTol=REL_PIVOT_TOL, stabilization=None,
         rowsAll=None if lean else True,
     )
@@ -449,7 +449,7 @@ def solve_plan(sd, solve="auto"):
         return oblique
     if sd.redundant or solve == "band":
         return None
-    plan = tree_plan(sd.nb, sd.rint)
+    plan = tree_plan(sd.nb, sd.rowIndex)
     if solve == "tree":
         if plan is None:
             raise SceneError("the constraint rows close a loop (between bodies or through the ground): no tree solve")
@@ -489,13 +489,13 @@ def with_redundant(sd, flag):
 
 def constant_drives(sd):
     """The row drives ``Work.rdrive`` (3, m) of the constant parts: a velocity-level row's
-    constant ``c`` (``jpar[j, 1]``) is its velocity target; rows with a moving offset are
+    constant ``c`` (``jointParams[j, 1]``) is its velocity target; rows with a moving offset are
     filled at every evaluation time (mbs/row_drives.py)."""
     rd = np.zeros((3, sd.nrows))
-    for j in range(sd.jint.shape[0]):
-        q = sd.jint[j, J_ROW0]
-        if sd.jint[j, J_NROW] > 0 and sd.rint[q, ROW_KIND] == ROW_COORD_VEL:
-            rd[1, q] = sd.jpar[j, 1]
+    for j in range(sd.jointIndex.shape[0]):
+        q = sd.jointIndex[j, J_ROW0]
+        if sd.jointIndex[j, J_NROW] > 0 and sd.rowIndex[q, ROW_KIND] == ROW_COORD_VEL:
+            rd[1, q] = sd.jointParams[j, 1]
     return rd
 
 
@@ -514,9 +514,9 @@ def make_work(sd, nstages, solve="auto", track=None):
         Jr=np.zeros((m, 12)), W=np.zeros((m, 12)), eta=np.zeros(m), h=np.zeros(m), lam=np.zeros(m),
         Sb=np.zeros((0 if tree and not sd.redundant else m, sd.bandwidth + 1)),
         Sd=np.zeros((m, m)) if sd.redundant else np.zeros((0, 0)),
-        perm=np.zeros(m, np.int64), ytmp=np.zeros(m), info=np.zeros(4, np.int64),
+        perm=np.zeros(m, np.int64), ytmp=np.zeros(m), failInfo=np.zeros(4, np.int64),
         tmp6=np.zeros(6), tmp12=np.zeros(12), v3=np.zeros((N_SCRATCH3, 3)), m3=np.zeros((4, 3, 3)),
-        ident=np.eye(3), zero3=np.zeros(3), zero6=np.zeros(6), tphi=np.zeros(0 if sd.tint is None else sd.tint.shape[0]),
+        ident=np.eye(3), zero3=np.zeros(3), zero6=np.zeros(6), tphi=np.zeros(0 if sd.torsionBodies is None else sd.torsionBodies.shape[0]),
         watchBody=np.zeros(0, np.int64), watchEntry=np.zeros((0, 2), np.int64), watchMax=np.zeros(0),
         ext=np.zeros(2, np.int64), rdrive=constant_drives(sd), drive=None, Vw=np.zeros((nb, 6) if sd.hasQext else (0, 6)),
         tplan=plan, Tw=np.zeros(work_size(nb, m, plan)) if tree else None,

@@ -19,19 +19,19 @@ from .rolling_disc_rows import rolling_disc_row
 
 # --------------------------------------------------------------------------- constraints
 @njit(cache=True, inline="always", _nrt=False)
-def extra_row(kind, q, j, a, b, gA, gB, RA, RB, rA, rB, VA, VB, rint, rotA, rotB, jpar, bparam, v3, h, Jr, eta, rdrive):
+def extra_row(kind, q, j, a, b, gA, gB, RA, RB, rA, rB, VA, VB, rowIndex, rotA, rotB, jointParams, bparam, v3, h, Jr, eta, rdrive):
     """Row ``q`` of joint ``j`` of a coordinate or rolling-disc kind (:func:`joint_rows`; its
     points and scratch in ``v3``; fewer than 30 arguments: a longer call is a star-argument
     call in Python's bytecode, which numba's inliner refuses)."""
-    rax = rint[q, ROW_AX]
+    rax = rowIndex[q, ROW_AX]
     pA, pB, vB, bA, bB = v3[0], v3[1], v3[3], v3[4], v3[5]
     ax, axd, axb, bx, bxd, bxb = v3[11], v3[12], v3[13], v3[14], v3[15], v3[16]
     u, RtA = v3[17], v3[19]
     if kind == ROW_COORD or kind == ROW_COORD_VEL:
-        coordinate_row(q, a, b, gA, gB, RA, RB, rax, rint[q, ROW_BX], rotA, rotB, jpar[j], pA, pB, bA, bB, u, RtA,
+        coordinate_row(q, a, b, gA, gB, RA, RB, rax, rowIndex[q, ROW_BX], rotA, rotB, jointParams[j], pA, pB, bA, bB, u, RtA,
                        h, Jr, eta)
-        if rax >= PARAM_BASE or rint[q, ROW_BX] >= PARAM_BASE:     # rotation parameters of 3D nodes
-            node_parameter_terms(q, a, b, rax, rint[q, ROW_BX], RA, RB, VA, VB, bparam, jpar[j, 0], h, Jr, eta,
+        if rax >= PARAM_BASE or rowIndex[q, ROW_BX] >= PARAM_BASE:     # rotation parameters of 3D nodes
+            node_parameter_terms(q, a, b, rax, rowIndex[q, ROW_BX], RA, RB, VA, VB, bparam, jointParams[j, 0], h, Jr, eta,
                                  ax, axd, axb)
         if kind == ROW_COORD_VEL:
             # velocity level: J V = w(t) constrains no position (as ROW_ROLL); the same J, and
@@ -41,7 +41,7 @@ def extra_row(kind, q, j, a, b, gA, gB, RA, RB, rA, rB, VA, VB, rint, rotA, rotB
             h[q] -= rdrive[0, q]          # h(g) - c(t)
         eta[q] += rdrive[2, q]            # + cddot(t) (velocity level: + wdot(t))
     elif kind == ROW_ROLL:
-        rolling_disc_row(q, rax, a, b, gA, gB, RA, RB, rA, rB, VA, VB, rotA, rotB, jpar[j], pB, vB, ax, axd, axb,
+        rolling_disc_row(q, rax, a, b, gA, gB, RA, RB, rA, rB, VA, VB, rotA, rotB, jointParams[j], pB, vB, ax, axd, axb,
                          bx, bxd, bxb, u, h, Jr, eta)
 
 
@@ -49,10 +49,10 @@ extra_row_if = guarded(extra_row)
 
 
 @njit(cache=True, inline="always", _nrt=False)
-def _rotation_row(q, rint, rax, a, b, RA, VA, RB, VB, rotA, rotB, u, w, ax, axd, axb, bx, bxd, bxb, RtA, h, Jr, eta):
+def _rotation_row(q, rowIndex, rax, a, b, RA, VA, RB, VB, rotA, rotB, u, w, ax, axd, axb, bx, bxd, bxb, RtA, h, Jr, eta):
     """A rotation row: ``h = a . b`` of an axis of frame A and one of frame B (Exudyn's
     ObjectJointGeneric), its Jacobian on both sides' angular velocities and ``eta``."""
-    rbx = rint[q, ROW_BX]
+    rbx = rowIndex[q, ROW_BX]
     for k in range(3):
         u[k] = rotA[k, rax]
         w[k] = rotB[k, rbx]
@@ -115,7 +115,7 @@ def _world_translation_row(q, rax, a, b, gA, gB, RA, RB, sA, sB, d, bd, h, Jr, e
 
 
 @njit(cache=True, inline="always", _nrt=False)
-def _axis_translation_row(q, kind, rax, a, b, j, gA, gB, RA, VA, RB, sA, sB, rotA, jpar, u, ax, axd, axb, d, dd, bd, dAl,
+def _axis_translation_row(q, kind, rax, a, b, j, gA, gB, RA, VA, RB, sA, sB, rotA, jointParams, u, ax, axd, axb, d, dd, bd, dAl,
                           RtA, h, Jr, eta):
     """A translation row along an axis of frame A (local), a world axis through the general
     branch, or a distance row: ``h = a . d``, its Jacobian and ``eta``."""
@@ -124,7 +124,7 @@ def _axis_translation_row(q, kind, rax, a, b, j, gA, gB, RA, VA, RB, sA, sB, rot
             u[k] = rotA[k, rax]
         body_axis(RA, VA, u, ax, axd, axb)
     elif kind == ROW_DIST:
-        distance_row(q, jpar[j, 0], d, dd, bd, ax, h, eta)    # ax <- e, the row's world direction
+        distance_row(q, jointParams[j, 0], d, dd, bd, ax, h, eta)    # ax <- e, the row's world direction
     else:
         for k in range(3):
             ax[k] = 0.0
@@ -167,20 +167,20 @@ def _axis_translation_row(q, kind, rax, a, b, j, gA, gB, RA, VA, RB, sA, sB, rot
 
 
 @njit(cache=True, forceinline=True, _nrt=False)
-def joint_rows(j, gid, jint, jpos, jrot, jpar, rint, rowsAll, bparam, R, r, V, h, Jr, eta, rdrive, v3, ident, zero3, zero6):
+def joint_rows(j, gid, jointIndex, jointPoints, jointFrames, jointParams, rowIndex, rowsAll, bparam, R, r, V, h, Jr, eta, rdrive, v3, ident, zero3, zero6):
     """Residual ``h``, Jacobian rows ``Jr`` (row, 12: 6 for side A, 6 for side B) and
     ``eta = -Jdot V`` of all rows of joint ``j``, written at the joint's row slots
     (``rowsAll``: SceneData.rowsAll, None compiles no coordinate and rolling-disc rows, mbs/presence.py;
     ``bparam``: the node rotation parameters tracked per body, Work.bparam; ``rdrive``: the
     time-dependent part of a coordinate row, :mod:`.row_drives`)."""
-    a = jint[j, J_BODY_A]
-    b = jint[j, J_BODY_B]
+    a = jointIndex[j, J_BODY_A]
+    b = jointIndex[j, J_BODY_B]
     gA, RA, rA, VA = _side(gid, a, R, r, V, ident, zero3, zero6)
     gB, RB, rB, VB = _side(gid, b, R, r, V, ident, zero3, zero6)
-    sA = jpos[j, 0]
-    sB = jpos[j, 1]
-    rotA = jrot[j, 0]
-    rotB = jrot[j, 1]
+    sA = jointPoints[j, 0]
+    sB = jointPoints[j, 1]
+    rotA = jointFrames[j, 0]
+    rotB = jointFrames[j, 1]
     pA, pB, vA, vB, bA, bB = v3[0], v3[1], v3[2], v3[3], v3[4], v3[5]
     d, dd, bd, dAl, tmp = v3[6], v3[7], v3[8], v3[9], v3[10]
     ax, axd, axb, bx, bxd, bxb = v3[11], v3[12], v3[13], v3[14], v3[15], v3[16]
@@ -195,32 +195,32 @@ def joint_rows(j, gid, jint, jpos, jrot, jpar, rint, rowsAll, bparam, R, r, V, h
     for k in range(3):
         tmp[k] = pB[k] - rA[k]
     _matTvec(RA, tmp, dAl)
-    row0 = jint[j, J_ROW0]
-    for q in range(row0, row0 + jint[j, J_NROW]):
+    row0 = jointIndex[j, J_ROW0]
+    for q in range(row0, row0 + jointIndex[j, J_NROW]):
         for k in range(12):
             Jr[q, k] = 0.0
-        kind = rint[q, ROW_KIND]
-        rax = rint[q, ROW_AX]
+        kind = rowIndex[q, ROW_KIND]
+        rax = rowIndex[q, ROW_AX]
         if kind == ROW_COORD or kind == ROW_COORD_VEL or kind == ROW_ROLL:
             # not in a lean scene: compiled only for full ones (mbs/presence.py)
-            extra_row_if(rowsAll, kind, q, j, a, b, gA, gB, RA, RB, rA, rB, VA, VB, rint, rotA, rotB, jpar, bparam, v3,
+            extra_row_if(rowsAll, kind, q, j, a, b, gA, gB, RA, RB, rA, rB, VA, VB, rowIndex, rotA, rotB, jointParams, bparam, v3,
                          h, Jr, eta, rdrive)
         elif kind == ROW_ROT:
-            _rotation_row(q, rint, rax, a, b, RA, VA, RB, VB, rotA, rotB, u, w, ax, axd, axb, bx, bxd, bxb, RtA, h, Jr,
+            _rotation_row(q, rowIndex, rax, a, b, RA, VA, RB, VB, rotA, rotB, u, w, ax, axd, axb, bx, bxd, bxb, RtA, h, Jr,
                           eta)
         elif kind == ROW_TRANS_WORLD:
             _world_translation_row(q, rax, a, b, gA, gB, RA, RB, sA, sB, d, bd, h, Jr, eta)
         else:
-            _axis_translation_row(q, kind, rax, a, b, j, gA, gB, RA, VA, RB, sA, sB, rotA, jpar, u, ax, axd, axb, d, dd, bd,
+            _axis_translation_row(q, kind, rax, a, b, j, gA, gB, RA, VA, RB, sA, sB, rotA, jointParams, u, ax, axd, axb, d, dd, bd,
                                   dAl, RtA, h, Jr, eta)
 
 
 @njit(cache=True, inline="always", _nrt=False)
-def joints_rows(gid, jint, jpos, jrot, jpar, rint, rowsAll, bparam, R, r, V, h, Jr, eta, rdrive, v3, ident, zero3, zero6):
+def joints_rows(gid, jointIndex, jointPoints, jointFrames, jointParams, rowIndex, rowsAll, bparam, R, r, V, h, Jr, eta, rdrive, v3, ident, zero3, zero6):
     """:func:`joint_rows` of every joint.  ``rdrive`` (3, m): the time-dependent part of the
     coordinate rows at the evaluation time (:mod:`.row_drives`): ``h - c(t)``, ``eta + cddot(t)``
     (the rate ``cdot(t)`` is the velocity target ``J V = cdot`` of the projections).  (Applied
     in the coordinate rows' branch: a loop over all rows here cost the heavy top 0.4 us of its
     2.9 us per step, measured.)"""
-    for j in range(jint.shape[0]):
-        joint_rows(j, gid, jint, jpos, jrot, jpar, rint, rowsAll, bparam, R, r, V, h, Jr, eta, rdrive, v3, ident, zero3, zero6)
+    for j in range(jointIndex.shape[0]):
+        joint_rows(j, gid, jointIndex, jointPoints, jointFrames, jointParams, rowIndex, rowsAll, bparam, R, r, V, h, Jr, eta, rdrive, v3, ident, zero3, zero6)

@@ -9,8 +9,8 @@ the third Tait-Bryan angle of ``F^T R`` as for the torsional spring (``= phi`` e
 ``(F e_z) . omega_world``, whose derivative at frozen V is ``(F e_z) . R (omega x omega) = 0``:
 a rotation coordinate adds nothing to ``eta`` (coordinate_rows).
 
-The tracked angles live in the items' parameter rows (``jpar[j, 8:10]`` of a coordinate
-constraint, ``kpar[s, 9:11]`` of a coordinate spring; frames in ``jrot`` / ``krot``), start at
+The tracked angles live in the items' parameter rows (``jointParams[j, 8:10]`` of a coordinate
+constraint, ``coordSpringLaw[s, 9:11]`` of a coordinate spring; frames in ``jointFrames`` / ``coordSpringFrames``), start at
 the angle of the initial state (``AngleCoordinate.angle0``, Exudyn's total coordinate) and are
 moved on after every accepted step by :func:`update_coordinate_angles`.
 """
@@ -28,10 +28,10 @@ def frame_angle(F, R, prev):
     c = F[0, 0] * R[0, 0] + F[1, 0] * R[1, 0] + F[2, 0] * R[2, 0]
     s = -(F[0, 0] * R[0, 1] + F[1, 0] * R[1, 1] + F[2, 0] * R[2, 1])
     a = np.arctan2(s, c)
-    # np.rint, not np.round: the same value (round half to even), but np.round's numba
+    # np.rowIndex, not np.round: the same value (round half to even), but np.round's numba
     # implementation lives in numba.np.arraymath, which imports scipy.linalg when a
     # cached kernel is loaded (0.12 s of a warm start)
-    return a + TWO_PI * np.rint((prev - a) / TWO_PI)
+    return a + TWO_PI * np.rowIndex((prev - a) / TWO_PI)
 
 
 @njit(cache=True, inline="always", _nrt=False)
@@ -43,18 +43,18 @@ def angle_rate_row(d, R, out):
 
 
 @njit(cache=True, _nrt=False)
-def update_coordinate_angles(jint, jrot, jpar, rint, kint, krot, kpar, R):
+def update_coordinate_angles(jointIndex, jointFrames, jointParams, rowIndex, coordSpringEnds, coordSpringFrames, coordSpringLaw, R):
     """Move every tracked angle to the current state (after an accepted step)."""
-    for j in range(jint.shape[0]):
-        q = jint[j, J_ROW0]
-        if rint[q, ROW_KIND] != ROW_COORD:
+    for j in range(jointIndex.shape[0]):
+        q = jointIndex[j, J_ROW0]
+        if rowIndex[q, ROW_KIND] != ROW_COORD:
             continue
-        if rint[q, ROW_AX] == 1:
-            jpar[j, 8] = frame_angle(jrot[j, 0], R[jint[j, J_BODY_A]], jpar[j, 8])
-        if rint[q, ROW_BX] == 1:
-            jpar[j, 9] = frame_angle(jrot[j, 1], R[jint[j, J_BODY_B]], jpar[j, 9])
-    for s in range(kint.shape[0]):
-        if kint[s, 2] == 1:
-            kpar[s, 9] = frame_angle(krot[s, 0], R[kint[s, 0]], kpar[s, 9])
-        if kint[s, 3] == 1:
-            kpar[s, 10] = frame_angle(krot[s, 1], R[kint[s, 1]], kpar[s, 10])
+        if rowIndex[q, ROW_AX] == 1:
+            jointParams[j, 8] = frame_angle(jointFrames[j, 0], R[jointIndex[j, J_BODY_A]], jointParams[j, 8])
+        if rowIndex[q, ROW_BX] == 1:
+            jointParams[j, 9] = frame_angle(jointFrames[j, 1], R[jointIndex[j, J_BODY_B]], jointParams[j, 9])
+    for s in range(coordSpringEnds.shape[0]):
+        if coordSpringEnds[s, 2] == 1:
+            coordSpringLaw[s, 9] = frame_angle(coordSpringFrames[s, 0], R[coordSpringEnds[s, 0]], coordSpringLaw[s, 9])
+        if coordSpringEnds[s, 3] == 1:
+            coordSpringLaw[s, 10] = frame_angle(coordSpringFrames[s, 1], R[coordSpringEnds[s, 1]], coordSpringLaw[s, 10])

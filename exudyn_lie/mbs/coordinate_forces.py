@@ -8,17 +8,17 @@ parameters in it):
 ``-f`` acts on coordinate ``q_B`` and ``+f`` on ``q_A`` (Exudyn's LHS ``J_B^T f - J_A^T f``).
 A coordinate is a position coordinate ``q_X = d_X . p_X - ref_X`` (the node point ``s = 0``,
 ``d_X`` the coordinate's fixed world direction: ``e_k``, or a Mass1D's axis), on which ``f`` is
-the world force ``f d_X`` at the node, or a rotation coordinate (``kint[s, 2 / 3] = 1``): the
+the world force ``f d_X`` at the node, or a rotation coordinate (``coordSpringEnds[s, 2 / 3] = 1``): the
 angle about ``d_X = F_X e_z`` (:mod:`.coordinate_angles`), on which ``f`` is the world torque
 ``f d_X``.  The references fold into ``c = offset + ref_B - ref_A`` (the bridge).
-A third kind of coordinate is a rotation parameter of a 3D node (``kint[s, 2 / 3] >= 10``,
+A third kind of coordinate is a rotation parameter of a 3D node (``coordSpringEnds[s, 2 / 3] >= 10``,
 :mod:`.node_coordinates`): value ``q_k`` (branch tracked in ``bparam``), rate ``C . omega``
 (Exudyn's velocity coordinate), and ``f`` acts as the local torque ``f C``.
-``kpar[s, 11]`` is a constant ``f0`` added to ``f`` (k = d = 0 and ``f0 = -load`` is
+``coordSpringLaw[s, 11]`` is a constant ``f0`` added to ``f`` (k = d = 0 and ``f0 = -load`` is
 Exudyn's ``LoadCoordinate`` on such a coordinate, whose direction ``C`` depends on the state
 for EP and Rxyz nodes).
-``SceneData.kint`` = [A, B, code A, code B] (0 position, 1 angle, >= 10 node parameter),
-``kpar`` = [k, d, c, d_A (3), d_B (3), angle A, angle B, f0], ``krot`` = [F_A, F_B].
+``SceneData.coordSpringEnds`` = [A, B, code A, code B] (0 position, 1 angle, >= 10 node parameter),
+``coordSpringLaw`` = [k, d, c, d_A (3), d_B (3), angle A, angle B, f0], ``coordSpringFrames`` = [F_A, F_B].
 """
 from numba import njit
 
@@ -58,78 +58,78 @@ def _parameter_side(code, body, R, V, bparam, Cout, G, tmp):
 
 
 @njit(cache=True, _nrt=False)
-def coordinate_spring_value(gid, kint, kpar, krot, bparam, s, R, r, V, v3, ident, zero3, zero6):
+def coordinate_spring_value(gid, coordSpringEnds, coordSpringLaw, coordSpringFrames, bparam, s, R, r, V, v3, ident, zero3, zero6):
     """(q_B - q_A - offset, qdot_B - qdot_A) of coordinate spring ``s``; the directions C of
     node-parameter ends in ``v3[7]`` (A) and ``v3[8]`` (B)."""
     pA, pB, vA, vB, bA, bB = v3[0], v3[1], v3[2], v3[3], v3[4], v3[5]
-    kp = kpar[s]
-    gA, RA, rA, VA = _side(gid, kint[s, 0], R, r, V, ident, zero3, zero6)
-    gB, RB, rB, VB = _side(gid, kint[s, 1], R, r, V, ident, zero3, zero6)
-    _side_state(kint[s, 2], gA, RA, rA, VA, zero3, pA, vA, bA)
-    _side_state(kint[s, 3], gB, RB, rB, VB, zero3, pB, vB, bB)
-    qA, dqA = _coordinate(kint[s, 2], kp, 3, krot[s, 0], RA, pA, vA, kp[9])
-    qB, dqB = _coordinate(kint[s, 3], kp, 6, krot[s, 1], RB, pB, vB, kp[10])
+    kp = coordSpringLaw[s]
+    gA, RA, rA, VA = _side(gid, coordSpringEnds[s, 0], R, r, V, ident, zero3, zero6)
+    gB, RB, rB, VB = _side(gid, coordSpringEnds[s, 1], R, r, V, ident, zero3, zero6)
+    _side_state(coordSpringEnds[s, 2], gA, RA, rA, VA, zero3, pA, vA, bA)
+    _side_state(coordSpringEnds[s, 3], gB, RB, rB, VB, zero3, pB, vB, bB)
+    qA, dqA = _coordinate(coordSpringEnds[s, 2], kp, 3, coordSpringFrames[s, 0], RA, pA, vA, kp[9])
+    qB, dqB = _coordinate(coordSpringEnds[s, 3], kp, 6, coordSpringFrames[s, 1], RB, pB, vB, kp[10])
     # node-parameter ends: their direction d is 0, so _coordinate gave 0 for them
-    xA, dxA = _parameter_side(kint[s, 2], kint[s, 0], R, V, bparam, v3[7], v3[9], v3[10])
-    xB, dxB = _parameter_side(kint[s, 3], kint[s, 1], R, V, bparam, v3[8], v3[9], v3[10])
+    xA, dxA = _parameter_side(coordSpringEnds[s, 2], coordSpringEnds[s, 0], R, V, bparam, v3[7], v3[9], v3[10])
+    xB, dxB = _parameter_side(coordSpringEnds[s, 3], coordSpringEnds[s, 1], R, V, bparam, v3[8], v3[9], v3[10])
     return qB + xB - qA - xA - kp[2], dqB + dxB - dqA - dxA
 
 
 @njit(cache=True, _nrt=False)
-def coordinate_spring_forces(gid, kint, kpar, krot, bparam, R, r, V, Q, v3, ident, zero3, zero6):
+def coordinate_spring_forces(gid, coordSpringEnds, coordSpringLaw, coordSpringFrames, bparam, R, r, V, Q, v3, ident, zero3, zero6):
     F = v3[6]
-    for s in range(kint.shape[0]):
-        a = kint[s, 0]
-        b = kint[s, 1]
-        kp = kpar[s]
-        u, ud = coordinate_spring_value(gid, kint, kpar, krot, bparam, s, R, r, V, v3, ident, zero3, zero6)
+    for s in range(coordSpringEnds.shape[0]):
+        a = coordSpringEnds[s, 0]
+        b = coordSpringEnds[s, 1]
+        kp = coordSpringLaw[s]
+        u, ud = coordinate_spring_value(gid, coordSpringEnds, coordSpringLaw, coordSpringFrames, bparam, s, R, r, V, v3, ident, zero3, zero6)
         f = kp[0] * u + kp[1] * ud + kp[11]
         if a >= 0:
-            if kint[s, 2] >= PARAM_BASE:          # Exudyn's e_k on the node's velocity coordinates
+            if coordSpringEnds[s, 2] >= PARAM_BASE:          # Exudyn's e_k on the node's velocity coordinates
                 for k in range(3):
                     Q[a, k] += f * v3[7, k]
             else:
                 for k in range(3):
                     F[k] = f * kp[3 + k]
-                if kint[s, 2] == 1:
+                if coordSpringEnds[s, 2] == 1:
                     add_world_torque(R[a], F, Q[a])
                 else:
                     add_point_force(gid[a], R[a], zero3, F, Q[a])
         if b >= 0:
-            if kint[s, 3] >= PARAM_BASE:
+            if coordSpringEnds[s, 3] >= PARAM_BASE:
                 for k in range(3):
                     Q[b, k] -= f * v3[8, k]
             else:
                 for k in range(3):
                     F[k] = -f * kp[6 + k]
-                if kint[s, 3] == 1:
+                if coordSpringEnds[s, 3] == 1:
                     add_world_torque(R[b], F, Q[b])
                 else:
                     add_point_force(gid[b], R[b], zero3, F, Q[b])
 
 
 @njit(cache=True, _nrt=False)
-def coordinate_spring_energy(gid, kint, kpar, krot, bparam, R, r, V, v3, ident, zero3, zero6):
+def coordinate_spring_energy(gid, coordSpringEnds, coordSpringLaw, coordSpringFrames, bparam, R, r, V, v3, ident, zero3, zero6):
     """Potential ``k/2 (q_B - q_A - offset)^2`` of every coordinate spring (a potential of
     the force only where it acts along the coordinate's gradient: not on a RotVecLG
     rotation coordinate, whose force acts along C = e_k, see node_coordinates)."""
     e = 0.0
-    for s in range(kint.shape[0]):
-        u, _ = coordinate_spring_value(gid, kint, kpar, krot, bparam, s, R, r, V, v3, ident, zero3, zero6)
-        e += 0.5 * kpar[s, 0] * u * u
+    for s in range(coordSpringEnds.shape[0]):
+        u, _ = coordinate_spring_value(gid, coordSpringEnds, coordSpringLaw, coordSpringFrames, bparam, s, R, r, V, v3, ident, zero3, zero6)
+        e += 0.5 * coordSpringLaw[s, 0] * u * u
     return e
 
 
 # the element's entries (registered in mbs/force_elements.py)
 @njit(cache=True, inline="always", _nrt=False)
 def coordinate_spring_element(sd, wk, R, r, V, Q):
-    coordinate_spring_forces(sd.gid, sd.kint, sd.kpar, sd.krot, wk.bparam, R, r, V, Q, wk.v3, wk.ident, wk.zero3, wk.zero6)
+    coordinate_spring_forces(sd.gid, sd.coordSpringEnds, sd.coordSpringLaw, sd.coordSpringFrames, wk.bparam, R, r, V, Q, wk.v3, wk.ident, wk.zero3, wk.zero6)
 
 
 @njit(cache=True, inline="always", _nrt=False)
 def coordinate_spring_element_energy(sd, wk, R, r, V, e):
     """``e`` plus the coordinate springs' potential (summed on its own, then added)."""
-    if sd.kint.shape[0] > 0:
-        return e + coordinate_spring_energy(sd.gid, sd.kint, sd.kpar, sd.krot, wk.bparam, R, r, V, wk.v3, wk.ident, wk.zero3,
+    if sd.coordSpringEnds.shape[0] > 0:
+        return e + coordinate_spring_energy(sd.gid, sd.coordSpringEnds, sd.coordSpringLaw, sd.coordSpringFrames, wk.bparam, R, r, V, wk.v3, wk.ident, wk.zero3,
                                             wk.zero6)
     return e

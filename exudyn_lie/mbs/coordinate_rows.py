@@ -10,12 +10,12 @@ total minus reference; a ground node's coordinate is 0).  A coordinate is either
   ``q = d . p - ref`` with ``p`` the node position (the body point ``s = 0``), rate
   ``d . pdot = (T^T d) . v`` (``pdot = T v``), bias ``d . beta`` (``beta`` the velocity-product
   acceleration of the node, ``R (omega x v)`` for SE3, 0 else; :func:`~.bodies.body_point`); or
-* a rotation coordinate (``rint[q, ROW_AX / ROW_BX] = 1``): the angle ``phi`` about
-  ``d = F e_z`` tracked over turns (:mod:`.coordinate_angles`, frame ``F`` in ``jrot``), rate
+* a rotation coordinate (``rowIndex[q, ROW_AX / ROW_BX] = 1``): the angle ``phi`` about
+  ``d = F e_z`` tracked over turns (:mod:`.coordinate_angles`, frame ``F`` in ``jointFrames``), rate
   ``(R^T d) . omega``, bias 0.
 
 The references fold into ``c = offset + f ref_B - ref_A`` (the bridge);
-``jpar[j] = (f, c, d_A, d_B, angle A, angle B)``.  Rows (eq. index1): ``J V = f qdot_B - qdot_A``
+``jointParams[j] = (f, c, d_A, d_B, angle A, angle B)``.  Rows (eq. index1): ``J V = f qdot_B - qdot_A``
 and ``eta = -(f bias_B - bias_A)``.
 """
 from numba import njit
@@ -27,7 +27,7 @@ from .coordinate_angles import angle_rate_row, frame_angle
 @njit(cache=True, inline="always", _nrt=False)
 def coordinate_row(q, a, b, gA, gB, RA, RB, rotEndA, rotEndB, FA, FB, par, pA, pB, bA, bB, e, RTe, h, Jr, eta):
     """Row ``q`` of a coordinate constraint from the node points ``pA, pB`` and their bias
-    accelerations ``bA, bB`` (body_point at s = 0); ``par = jpar[j]``; ``rotEndX`` 1 for a
+    accelerations ``bA, bB`` (body_point at s = 0); ``par = jointParams[j]``; ``rotEndX`` 1 for a
     rotation coordinate (frame ``FX``)."""
     f = par[0]
     hv = -par[1]

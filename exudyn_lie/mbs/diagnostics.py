@@ -29,7 +29,7 @@ def kinetic_and_gravity(gid, M, mass, com, gravity, R, r, V, Vb):
 def all_rows(sd, wk, R, r, V, h, Jr, eta, e):
     """Diagnostics at the state (R, r, V): residuals ``h``, Jacobian rows ``Jr`` and
     ``eta`` of every joint, and ``e`` = (kinetic, gravity potential, spring potential)."""
-    joints_rows(sd.gid, sd.jint, sd.jpos, sd.jrot, sd.jpar, sd.rint, sd.rowsAll, wk.bparam, R, r, V, h, Jr, eta, wk.rdrive, wk.v3, wk.ident,
+    joints_rows(sd.gid, sd.jointIndex, sd.jointPoints, sd.jointFrames, sd.jointParams, sd.rowIndex, sd.rowsAll, wk.bparam, R, r, V, h, Jr, eta, wk.rdrive, wk.v3, wk.ident,
                 wk.zero3, wk.zero6)
     ekin, egrav = kinetic_and_gravity(sd.gid, sd.M, sd.mass, sd.com, sd.gravity, R, r, V, wk.tmp6)
     e[0] = ekin
@@ -64,7 +64,7 @@ def joint_rows_at(sd, wk, R, r, V, h, Jr, eta):
     """Residuals ``h``, Jacobian rows ``Jr`` and ``eta`` of every joint at the state (R, r, V):
     ``all_rows`` without the energies, and without an entry taking the SceneData /
     Work tuples (a first run compiles none for the initial checks)."""
-    joints_rows(sd.gid, sd.jint, sd.jpos, sd.jrot, sd.jpar, sd.rint, sd.rowsAll, wk.bparam, R, r, V, h, Jr, eta,
+    joints_rows(sd.gid, sd.jointIndex, sd.jointPoints, sd.jointFrames, sd.jointParams, sd.rowIndex, sd.rowsAll, wk.bparam, R, r, V, h, Jr, eta,
                 wk.rdrive, wk.v3, wk.ident, wk.zero3, wk.zero6)
 
 
@@ -76,7 +76,7 @@ def constraint_jacobian(sd, wk, R, r, V):
                   np.ascontiguousarray(V, dtype=float), wk.h, wk.Jr, wk.eta)
     J = np.zeros((m, 6 * sd.nb))
     for q in range(m):
-        a, b = sd.rint[q, ROW_BODY_A], sd.rint[q, ROW_BODY_B]
+        a, b = sd.rowIndex[q, ROW_BODY_A], sd.rowIndex[q, ROW_BODY_B]
         if a >= 0:
             J[q, 6 * a:6 * a + 6] += wk.Jr[q, :6]
         if b >= 0:
@@ -96,7 +96,7 @@ def schur_complement(sd, wk, R, r, V):
     blocks = {}
     for q in range(m):
         for side, col in ((ROW_BODY_A, 0), (ROW_BODY_B, 6)):
-            b = int(sd.rint[q, side])
+            b = int(sd.rowIndex[q, side])
             if b >= 0:
                 blocks.setdefault(b, []).append((q, col))
     for b, lst in blocks.items():

@@ -18,7 +18,7 @@ from numba import njit
 @njit(cache=True, inline="always", _nrt=False)
 def distance_row(q, L0, d, dd, bd, e, h, eta):
     """``h[q]``, ``eta[q]`` and the row's world direction ``e`` from ``d = p_B - p_A``, its
-    rate ``dd`` and bias acceleration ``bd``; ``L0 = jpar[j, 0]``."""
+    rate ``dd`` and bias acceleration ``bd``; ``L0 = jointParams[j, 0]``."""
     L = np.sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2])
     if L == 0.0:
         L = 1.0          # direction undefined (Exudyn stops with an error there); keep finite

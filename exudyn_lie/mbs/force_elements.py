@@ -83,38 +83,38 @@ def _angles(scene, items):
 
 # ---------------------------------------------------------------- the registrations
 register("spring", "springs", (
-    ("sint", table(lambda s: [s.bodyA, s.bodyB], (-1, 2), np.int64)),
-    ("spos", table(lambda s: [s.posA, s.posB], (-1, 2, 3))),
-    ("spar", table(lambda s: [s.stiffness, s.damping, s.referenceLength, s.force], (-1, 4)))),
+    ("springBodies", table(lambda s: [s.bodyA, s.bodyB], (-1, 2), np.int64)),
+    ("springPoints", table(lambda s: [s.posA, s.posB], (-1, 2, 3))),
+    ("springLaw", table(lambda s: [s.stiffness, s.damping, s.referenceLength, s.force], (-1, 4)))),
          spring_element, spring_element_energy, lean=True)
 register("cartesian", "cartesianSprings", (
-    ("cint", table(lambda s: [s.bodyA, s.bodyB], (-1, 2), np.int64)),
-    ("cpos", table(lambda s: [s.posA, s.posB], (-1, 2, 3))),
-    ("cpar", table(lambda s: [s.stiffness, s.damping, s.offset], (-1, 3, 3)))),
+    ("cartesianBodies", table(lambda s: [s.bodyA, s.bodyB], (-1, 2), np.int64)),
+    ("cartesianPoints", table(lambda s: [s.posA, s.posB], (-1, 2, 3))),
+    ("cartesianLaw", table(lambda s: [s.stiffness, s.damping, s.offset], (-1, 3, 3)))),
          cartesian_element, cartesian_element_energy)
 register("torsional", "torsionalSprings", (
-    ("tint", table(lambda s: [s.bodyA, s.bodyB], (-1, 2), np.int64)),
-    ("trot", table(lambda s: [s.rotA, s.rotB], (-1, 2, 3, 3))),
-    ("tpar", table(lambda s: [s.stiffness, s.damping, s.offset, s.torque], (-1, 4)))),
+    ("torsionBodies", table(lambda s: [s.bodyA, s.bodyB], (-1, 2), np.int64)),
+    ("torsionFrames", table(lambda s: [s.rotA, s.rotB], (-1, 2, 3, 3))),
+    ("torsionLaw", table(lambda s: [s.stiffness, s.damping, s.offset, s.torque], (-1, 4)))),
          torsional_element, torsional_element_energy)
 register("coordinate", "coordinateSprings", (
-    ("kint", table(lambda s: [s.bodyA, s.bodyB, int(s.angleA[0]), int(s.angleB[0])], (-1, 4), np.int64)),
-    ("kpar", table(lambda s: [s.stiffness, s.damping, s.offset, *s.axisA, *s.axisB, s.angleA[2], s.angleB[2],
+    ("coordSpringEnds", table(lambda s: [s.bodyA, s.bodyB, int(s.angleA[0]), int(s.angleB[0])], (-1, 4), np.int64)),
+    ("coordSpringLaw", table(lambda s: [s.stiffness, s.damping, s.offset, *s.axisA, *s.axisB, s.angleA[2], s.angleB[2],
                               s.force], (-1, 12))),
-    ("krot", table(lambda s: [s.angleA[1], s.angleB[1]], (-1, 2, 3, 3))),
-    ("nangles", _angles)),
+    ("coordSpringFrames", table(lambda s: [s.angleA[1], s.angleB[1]], (-1, 2, 3, 3))),
+    ("nCoordAngles", _angles)),
          coordinate_spring_element, coordinate_spring_element_energy)
 register("linear", "linearSprings", (
-    ("xint", table(lambda s: [s.bodyA, s.bodyB], (-1, 2), np.int64)),
-    ("xpos", table(lambda s: [s.posA, s.posB], (-1, 2, 3))),
-    ("xaxis", table(lambda s: s.axisA, (-1, 3))),
-    ("xpar", table(lambda s: [s.stiffness, s.damping, s.offset, s.force], (-1, 4)))),
+    ("linearBodies", table(lambda s: [s.bodyA, s.bodyB], (-1, 2), np.int64)),
+    ("linearPoints", table(lambda s: [s.posA, s.posB], (-1, 2, 3))),
+    ("linearAxis", table(lambda s: s.axisA, (-1, 3))),
+    ("linearLaw", table(lambda s: [s.stiffness, s.damping, s.offset, s.force], (-1, 4)))),
          linear_spring_element)
 register("rigid", "rigidSprings", (
-    ("bint", table(lambda s: [s.bodyA, s.bodyB, int(s.intrinsic)], (-1, 3), np.int64)),
-    ("bpos", table(lambda s: [s.posA, s.posB], (-1, 2, 3))),
-    ("brot", table(lambda s: [s.rotA, s.rotB], (-1, 2, 3, 3))),
-    ("bpar", table(lambda s: np.vstack([s.stiffness, s.damping, s.offset[None]]), (-1, 13, 6)))),
+    ("rigidSpringBodies", table(lambda s: [s.bodyA, s.bodyB, int(s.intrinsic)], (-1, 3), np.int64)),
+    ("rigidSpringPoints", table(lambda s: [s.posA, s.posB], (-1, 2, 3))),
+    ("rigidSpringFrames", table(lambda s: [s.rotA, s.rotB], (-1, 2, 3, 3))),
+    ("rigidSpringLaw", table(lambda s: np.vstack([s.stiffness, s.damping, s.offset[None]]), (-1, 13, 6)))),
          rigid_spring_element)
 # the penalty rolling disc: bodies, flags, law and data coordinates packed into Work.disc (the data
 # change after every accepted step, forces.update_contact_data; one packed array: three separate
@@ -156,7 +156,7 @@ def write_row(e, scene, sd, wk, k, item):
     """Rewrite row ``k`` of element ``e``'s compiled data with ``item``, the new scene item
     (a parameter changed during a run, bridge/params.py), by the registration's own builders:
     each row field's ``row(item)``, then the ``writeRow`` hook (a Work table).  A field built
-    from the whole scene (``nangles``) cannot change during a run: it is recomputed with the
+    from the whole scene (``nCoordAngles``) cannot change during a run: it is recomputed with the
     item replaced and must stay as compiled (ValueError otherwise).  ``scene``'s item ``k`` is
     replaced too, so that scene and compiled rows agree."""
     items = getattr(scene, e.sceneList)
@@ -217,8 +217,8 @@ compute_forces = njit(cache=True, inline="always", _nrt=False)(_generate(
      "F = wk.v3[6]",
      "if sd.hasGravity:",
      "    gravity_forces(sd.gid, sd.mass, sd.com, sd.gravity, R, Q, F)",
-     "if sd.lint.shape[0] > 0:",
-     "    load_forces(sd.gid, sd.lint, sd.lvec, R, Q, F)"]
+     "if sd.loadIndex.shape[0] > 0:",
+     "    load_forces(sd.gid, sd.loadIndex, sd.loadVectors, R, Q, F)"]
     + [x for k, e in enumerate(ELEMENTS) for x in _force_call(k, e)],
     ["inertial_forces(sd.gid, sd.M, sd.mass, sd.com, R, V, Q)"], dict(_ENV),
     """Applied and inertial generalised forces ``Q`` (nb, 6) at the state (R, r, V): gravity,

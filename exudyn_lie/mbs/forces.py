@@ -26,34 +26,34 @@ def gravity_forces(gid, mass, com, gravity, R, Q, F):
 
 
 @njit(cache=True, inline="always", _nrt=False)
-def load_forces(gid, lint, lvec, R, Q, F):
+def load_forces(gid, loadIndex, loadVectors, R, Q, F):
     """Constant forces (at a body point) and torques, world or body-fixed."""
-    for l in range(lint.shape[0]):
-        i = lint[l, L_BODY]
-        if lint[l, L_KIND] == 0:
-            if lint[l, L_FIXED]:
-                _matvec(R[i], lvec[l, 0], F)
+    for l in range(loadIndex.shape[0]):
+        i = loadIndex[l, L_BODY]
+        if loadIndex[l, L_KIND] == 0:
+            if loadIndex[l, L_FIXED]:
+                _matvec(R[i], loadVectors[l, 0], F)
             else:
                 for k in range(3):
-                    F[k] = lvec[l, 0, k]
-            add_point_force(gid[i], R[i], lvec[l, 1], F, Q[i])
+                    F[k] = loadVectors[l, 0, k]
+            add_point_force(gid[i], R[i], loadVectors[l, 1], F, Q[i])
         else:
-            if lint[l, L_FIXED]:
+            if loadIndex[l, L_FIXED]:
                 for k in range(3):
-                    Q[i, k] += lvec[l, 0, k]
+                    Q[i, k] += loadVectors[l, 0, k]
             else:
-                add_world_torque(R[i], lvec[l, 0], Q[i])
+                add_world_torque(R[i], loadVectors[l, 0], Q[i])
 
 
 @njit(cache=True, forceinline=True, _nrt=False)
-def spring_forces(gid, sint, spos, spar, R, r, V, Q, v3, ident, zero3, zero6):
+def spring_forces(gid, springBodies, springPoints, springLaw, R, r, V, Q, v3, ident, zero3, zero6):
     """Point-to-point spring-dampers: tension ``f = k (L - L0) + d Ldot + f0``
-    (``spar`` = k, d, L0, f0)."""
+    (``springLaw`` = k, d, L0, f0)."""
     pA, pB, vA, vB, F = v3[0], v3[1], v3[2], v3[3], v3[6]
-    for s in range(sint.shape[0]):
-        a = sint[s, 0]
-        b = sint[s, 1]
-        gA, RA, gB, RB = connector_ends(gid, a, b, spos[s, 0], spos[s, 1], R, r, V, v3, ident, zero3, zero6)
+    for s in range(springBodies.shape[0]):
+        a = springBodies[s, 0]
+        b = springBodies[s, 1]
+        gA, RA, gB, RB = connector_ends(gid, a, b, springPoints[s, 0], springPoints[s, 1], R, r, V, v3, ident, zero3, zero6)
         L = 0.0
         for k in range(3):
             L += (pB[k] - pA[k]) ** 2
@@ -64,24 +64,24 @@ def spring_forces(gid, sint, spos, spar, R, r, V, Q, v3, ident, zero3, zero6):
         for k in range(3):
             Ld += (pB[k] - pA[k]) * (vB[k] - vA[k])
         Ld /= L
-        f = spar[s, 0] * (L - spar[s, 2]) + spar[s, 1] * Ld + spar[s, 3]
+        f = springLaw[s, 0] * (L - springLaw[s, 2]) + springLaw[s, 1] * Ld + springLaw[s, 3]
         for k in range(3):
             F[k] = f * (pB[k] - pA[k]) / L
-        add_pair_force(gA, RA, spos[s, 0], a, gB, RB, spos[s, 1], b, F, Q)
+        add_pair_force(gA, RA, springPoints[s, 0], a, gB, RB, springPoints[s, 1], b, F, Q)
 
 
 @njit(cache=True, _nrt=False)
-def cartesian_forces(gid, cint, cpos, cpar, R, r, V, Q, v3, ident, zero3, zero6):
+def cartesian_forces(gid, cartesianBodies, cartesianPoints, cartesianLaw, R, r, V, Q, v3, ident, zero3, zero6):
     """Cartesian spring-dampers, world components ``f_i = k_i (d_i - o_i) + c_i ddot_i``
-    (``cpar[s]`` = rows k, c, o)."""
+    (``cartesianLaw[s]`` = rows k, c, o)."""
     pA, pB, vA, vB, F = v3[0], v3[1], v3[2], v3[3], v3[6]
-    for s in range(cint.shape[0]):
-        a = cint[s, 0]
-        b = cint[s, 1]
-        gA, RA, gB, RB = connector_ends(gid, a, b, cpos[s, 0], cpos[s, 1], R, r, V, v3, ident, zero3, zero6)
+    for s in range(cartesianBodies.shape[0]):
+        a = cartesianBodies[s, 0]
+        b = cartesianBodies[s, 1]
+        gA, RA, gB, RB = connector_ends(gid, a, b, cartesianPoints[s, 0], cartesianPoints[s, 1], R, r, V, v3, ident, zero3, zero6)
         for k in range(3):
-            F[k] = cpar[s, 0, k] * (pB[k] - pA[k] - cpar[s, 2, k]) + cpar[s, 1, k] * (vB[k] - vA[k])
-        add_pair_force(gA, RA, cpos[s, 0], a, gB, RB, cpos[s, 1], b, F, Q)
+            F[k] = cartesianLaw[s, 0, k] * (pB[k] - pA[k] - cartesianLaw[s, 2, k]) + cartesianLaw[s, 1, k] * (vB[k] - vA[k])
+        add_pair_force(gA, RA, cartesianPoints[s, 0], a, gB, RB, cartesianPoints[s, 1], b, F, Q)
 
 
 @njit(cache=True, _nrt=False)
@@ -97,10 +97,10 @@ def torsion_angle(rotA, rotB, prev, RA, VA, RB, VB, FA, FB):
     r01 = FA[0, 0] * FB[0, 1] + FA[1, 0] * FB[1, 1] + FA[2, 0] * FB[2, 1]
     r00 = FA[0, 0] * FB[0, 0] + FA[1, 0] * FB[1, 0] + FA[2, 0] * FB[2, 0]
     phi0 = np.arctan2(-r01, r00)
-    # np.rint, not np.round: the same value (round half to even), but np.round's numba
+    # np.rowIndex, not np.round: the same value (round half to even), but np.round's numba
     # implementation lives in numba.np.arraymath, which imports scipy.linalg when a
     # cached kernel is loaded (0.12 s of a warm start)
-    turns = np.rint((prev - phi0) / (2.0 * np.pi))
+    turns = np.rowIndex((prev - phi0) / (2.0 * np.pi))
     phi = phi0 + 2.0 * np.pi * turns
     # phidot = z_A . (omega_B,world - omega_A,world)
     wBw0 = RB[0, 0] * VB[0] + RB[0, 1] * VB[1] + RB[0, 2] * VB[2]
@@ -114,19 +114,19 @@ def torsion_angle(rotA, rotB, prev, RA, VA, RB, VB, FA, FB):
 
 
 @njit(cache=True, _nrt=False)
-def torsional_forces(gid, tint, trot, tpar, tphi, R, r, V, Q, F, m3, ident, zero3, zero6):
-    """Torsional spring-dampers about the z axis of the frame on A (``tpar`` = k, d,
+def torsional_forces(gid, torsionBodies, torsionFrames, torsionLaw, tphi, R, r, V, Q, F, m3, ident, zero3, zero6):
+    """Torsional spring-dampers about the z axis of the frame on A (``torsionLaw`` = k, d,
     offset, torque).  Exudyn's law: ``tau = k (phi - phi0) + d phidot + torque``;
     ``-tau z_A`` acts on B, ``+tau z_A`` on A."""
-    for s in range(tint.shape[0]):
-        a = tint[s, 0]
-        b = tint[s, 1]
+    for s in range(torsionBodies.shape[0]):
+        a = torsionBodies[s, 0]
+        b = torsionBodies[s, 1]
         gA, RA, rA, VA = _side(gid, a, R, r, V, ident, zero3, zero6)
         gB, RB, rB, VB = _side(gid, b, R, r, V, ident, zero3, zero6)
-        phi, phid = torsion_angle(trot[s, 0], trot[s, 1], tphi[s], RA, VA, RB, VB, m3[0], m3[1])
-        tau = -(tpar[s, 0] * (phi - tpar[s, 2]) + tpar[s, 1] * phid + tpar[s, 3])
+        phi, phid = torsion_angle(torsionFrames[s, 0], torsionFrames[s, 1], tphi[s], RA, VA, RB, VB, m3[0], m3[1])
+        tau = -(torsionLaw[s, 0] * (phi - torsionLaw[s, 2]) + torsionLaw[s, 1] * phid + torsionLaw[s, 3])
         for k in range(3):
-            F[k] = tau * (RA[k, 0] * trot[s, 0, 0, 2] + RA[k, 1] * trot[s, 0, 1, 2] + RA[k, 2] * trot[s, 0, 2, 2])
+            F[k] = tau * (RA[k, 0] * torsionFrames[s, 0, 0, 2] + RA[k, 1] * torsionFrames[s, 0, 1, 2] + RA[k, 2] * torsionFrames[s, 0, 2, 2])
         if b >= 0:
             add_world_torque(RB, F, Q[b])
         if a >= 0:
@@ -163,13 +163,13 @@ def tait_bryan_xyz(Rr, out):
 
 
 @njit(cache=True, _nrt=False)
-def rigid_spring_forces(gid, bint, bpos, brot, bpar, R, r, V, Q, v3, m3, ident, zero3, zero6):
+def rigid_spring_forces(gid, rigidSpringBodies, rigidSpringPoints, rigidSpringFrames, rigidSpringLaw, R, r, V, Q, v3, m3, ident, zero3, zero6):
     """Exudyn's ``ObjectConnectorRigidBodySpringDamper`` between the frames ``J0 = R_A rotA``
-    at ``pA`` and ``J1 = R_B rotB`` at ``pB`` (``bpar`` rows: K (6x6), D (6x6), offset):
+    at ``pA`` and ``J1 = R_B rotB`` at ``pB`` (``rigidSpringLaw`` rows: K (6x6), D (6x6), offset):
 
     * Tait-Bryan form: ``u = (J0^T (pB - pA), xyz angles of J0^T J1) - offset``,
       ``udot = (J0^T (vB - vA), J0^T (wB - wA))``, the frame of the law ``Jf = J0``;
-    * intrinsic form (``bint[s, 2]``): ``theta = log(J0^T J1)``, ``u = (V(theta)^-1 J0^T (pB - pA),
+    * intrinsic form (``rigidSpringBodies[s, 2]``): ``theta = log(J0^T J1)``, ``u = (V(theta)^-1 J0^T (pB - pA),
       theta) - offset`` (``V`` the left Jacobian of SO(3), i.e. ``dexp_theta``),
       ``udot`` in the mid frame ``Jf = Jm = J0 exp(theta / 2)``, the force acting at the mid
       point: an extra torque ``1/2 (Jm u_t) x f`` on both sides (``u_t`` before the offset);
@@ -181,22 +181,22 @@ def rigid_spring_forces(gid, bint, bpos, brot, bpar, R, r, V, Q, v3, m3, ident, 
     F, Tq, wA, wB, dp, uT, uR, utT, utR, lever, tmp = (v3[6], v3[7], v3[8], v3[9], v3[10], v3[11], v3[12],
                                                        v3[13], v3[14], v3[15], v3[16])
     J0, J1, Jf, E = m3[0], m3[1], m3[2], m3[3]
-    for s in range(bint.shape[0]):
-        a = bint[s, 0]
-        b = bint[s, 1]
+    for s in range(rigidSpringBodies.shape[0]):
+        a = rigidSpringBodies[s, 0]
+        b = rigidSpringBodies[s, 1]
         gA, RA, rA, VA = _side(gid, a, R, r, V, ident, zero3, zero6)
         gB, RB, rB, VB = _side(gid, b, R, r, V, ident, zero3, zero6)
-        body_point(gA, RA, rA, VA, bpos[s, 0], pA, vA, bA)
-        body_point(gB, RB, rB, VB, bpos[s, 1], pB, vB, bB)
+        body_point(gA, RA, rA, VA, rigidSpringPoints[s, 0], pA, vA, bA)
+        body_point(gB, RB, rB, VB, rigidSpringPoints[s, 1], pB, vB, bB)
         _matvec(RA, VA[:3], wA)                      # world angular velocities
         _matvec(RB, VB[:3], wB)
-        _mat_mat(RA, brot[s, 0], J0)
-        _mat_mat(RB, brot[s, 1], J1)
+        _mat_mat(RA, rigidSpringFrames[s, 0], J0)
+        _mat_mat(RB, rigidSpringFrames[s, 1], J1)
         for i in range(3):                           # E = J0^T J1, the relative rotation
             for j in range(3):
                 E[i, j] = J0[0, i] * J1[0, j] + J0[1, i] * J1[1, j] + J0[2, i] * J1[2, j]
             dp[i] = pB[i] - pA[i]
-        if bint[s, 2]:
+        if rigidSpringBodies[s, 2]:
             so3.log_into(E, uR)                      # theta, principal
             for i in range(3):
                 tmp[i] = 0.5 * uR[i]
@@ -220,14 +220,14 @@ def rigid_spring_forces(gid, bint, bpos, brot, bpar, R, r, V, Q, v3, m3, ident, 
         _matT_vec(Jf, dp, utT)
         _matT_vec(Jf, tmp, utR)
         for i in range(3):
-            uT[i] -= bpar[s, 12, i]
-            uR[i] -= bpar[s, 12, 3 + i]
+            uT[i] -= rigidSpringLaw[s, 12, i]
+            uR[i] -= rigidSpringLaw[s, 12, 3 + i]
         # (f, m) = K u + D udot in the frame Jf
         for i in range(6):
             x = 0.0
             for j in range(3):
-                x += bpar[s, i, j] * uT[j] + bpar[s, i, 3 + j] * uR[j] \
-                    + bpar[s, 6 + i, j] * utT[j] + bpar[s, 6 + i, 3 + j] * utR[j]
+                x += rigidSpringLaw[s, i, j] * uT[j] + rigidSpringLaw[s, i, 3 + j] * uR[j] \
+                    + rigidSpringLaw[s, 6 + i, j] * utT[j] + rigidSpringLaw[s, 6 + i, 3 + j] * utR[j]
             if i < 3:
                 dp[i] = x
             else:
@@ -238,24 +238,24 @@ def rigid_spring_forces(gid, bint, bpos, brot, bpar, R, r, V, Q, v3, m3, ident, 
         c1 = lever[2] * F[0] - lever[0] * F[2]
         c2 = lever[0] * F[1] - lever[1] * F[0]
         if a >= 0:
-            add_point_force(gA, RA, bpos[s, 0], F, Q[a])
+            add_point_force(gA, RA, rigidSpringPoints[s, 0], F, Q[a])
             dp[0], dp[1], dp[2] = Tq[0] + c0, Tq[1] + c1, Tq[2] + c2
             add_world_torque(RA, dp, Q[a])
         if b >= 0:
             for k in range(3):
                 F[k] = -F[k]
-            add_point_force(gB, RB, bpos[s, 1], F, Q[b])
+            add_point_force(gB, RB, rigidSpringPoints[s, 1], F, Q[b])
             dp[0], dp[1], dp[2] = -Tq[0] + c0, -Tq[1] + c1, -Tq[2] + c2
             add_world_torque(RB, dp, Q[b])
 
 
 @njit(cache=True, _nrt=False)
-def torsion_angles(gid, tint, trot, tphi, R, r, V, m3, ident, zero3, zero6):
+def torsion_angles(gid, torsionBodies, torsionFrames, tphi, R, r, V, m3, ident, zero3, zero6):
     """Store the current torsion angles as the branch reference for the next step."""
-    for s in range(tint.shape[0]):
-        gA, RA, rA, VA = _side(gid, tint[s, 0], R, r, V, ident, zero3, zero6)
-        gB, RB, rB, VB = _side(gid, tint[s, 1], R, r, V, ident, zero3, zero6)
-        phi, phid = torsion_angle(trot[s, 0], trot[s, 1], tphi[s], RA, VA, RB, VB, m3[0], m3[1])
+    for s in range(torsionBodies.shape[0]):
+        gA, RA, rA, VA = _side(gid, torsionBodies[s, 0], R, r, V, ident, zero3, zero6)
+        gB, RB, rB, VB = _side(gid, torsionBodies[s, 1], R, r, V, ident, zero3, zero6)
+        phi, phid = torsion_angle(torsionFrames[s, 0], torsionFrames[s, 1], tphi[s], RA, VA, RB, VB, m3[0], m3[1])
         tphi[s] = phi
 
 
@@ -274,62 +274,62 @@ def inertial_forces(gid, M, mass, com, R, V, Q):
 # its forces ``(sd, wk, R, r, V, Q)`` and, if it has a potential, its energy added to ``e``.
 @njit(cache=True, inline="always", _nrt=False)
 def spring_element(sd, wk, R, r, V, Q):
-    spring_forces(sd.gid, sd.sint, sd.spos, sd.spar, R, r, V, Q, wk.v3, wk.ident, wk.zero3, wk.zero6)
+    spring_forces(sd.gid, sd.springBodies, sd.springPoints, sd.springLaw, R, r, V, Q, wk.v3, wk.ident, wk.zero3, wk.zero6)
 
 
 @njit(cache=True, inline="always", _nrt=False)
 def cartesian_element(sd, wk, R, r, V, Q):
-    cartesian_forces(sd.gid, sd.cint, sd.cpos, sd.cpar, R, r, V, Q, wk.v3, wk.ident, wk.zero3, wk.zero6)
+    cartesian_forces(sd.gid, sd.cartesianBodies, sd.cartesianPoints, sd.cartesianLaw, R, r, V, Q, wk.v3, wk.ident, wk.zero3, wk.zero6)
 
 
 @njit(cache=True, inline="always", _nrt=False)
 def torsional_element(sd, wk, R, r, V, Q):
-    torsional_forces(sd.gid, sd.tint, sd.trot, sd.tpar, wk.tphi, R, r, V, Q, wk.v3[6], wk.m3, wk.ident, wk.zero3,
+    torsional_forces(sd.gid, sd.torsionBodies, sd.torsionFrames, sd.torsionLaw, wk.tphi, R, r, V, Q, wk.v3[6], wk.m3, wk.ident, wk.zero3,
                      wk.zero6)
 
 
 @njit(cache=True, inline="always", _nrt=False)
 def rigid_spring_element(sd, wk, R, r, V, Q):
-    rigid_spring_forces(sd.gid, sd.bint, sd.bpos, sd.brot, sd.bpar, R, r, V, Q, wk.v3, wk.m3, wk.ident, wk.zero3,
+    rigid_spring_forces(sd.gid, sd.rigidSpringBodies, sd.rigidSpringPoints, sd.rigidSpringFrames, sd.rigidSpringLaw, R, r, V, Q, wk.v3, wk.m3, wk.ident, wk.zero3,
                         wk.zero6)
 
 
 @njit(cache=True, _nrt=False)
-def spring_potential(gid, sint, spos, spar, R, r, V, v3, ident, zero3, zero6, e):
+def spring_potential(gid, springBodies, springPoints, springLaw, R, r, V, v3, ident, zero3, zero6, e):
     """``e`` plus the potential ``k (L - L0)^2 / 2 + f0 L`` of the point-to-point springs."""
     pA, pB, vA, vB, bA, bB = v3[0], v3[1], v3[2], v3[3], v3[4], v3[5]
-    for s in range(sint.shape[0]):
-        gA, RA, rA, VA = _side(gid, sint[s, 0], R, r, V, ident, zero3, zero6)
-        gB, RB, rB, VB = _side(gid, sint[s, 1], R, r, V, ident, zero3, zero6)
-        body_point(gA, RA, rA, VA, spos[s, 0], pA, vA, bA)
-        body_point(gB, RB, rB, VB, spos[s, 1], pB, vB, bB)
+    for s in range(springBodies.shape[0]):
+        gA, RA, rA, VA = _side(gid, springBodies[s, 0], R, r, V, ident, zero3, zero6)
+        gB, RB, rB, VB = _side(gid, springBodies[s, 1], R, r, V, ident, zero3, zero6)
+        body_point(gA, RA, rA, VA, springPoints[s, 0], pA, vA, bA)
+        body_point(gB, RB, rB, VB, springPoints[s, 1], pB, vB, bB)
         L = np.sqrt((pB[0] - pA[0]) ** 2 + (pB[1] - pA[1]) ** 2 + (pB[2] - pA[2]) ** 2)
-        e += 0.5 * spar[s, 0] * (L - spar[s, 2]) ** 2 + spar[s, 3] * L
+        e += 0.5 * springLaw[s, 0] * (L - springLaw[s, 2]) ** 2 + springLaw[s, 3] * L
     return e
 
 
 @njit(cache=True, _nrt=False)
-def cartesian_potential(gid, cint, cpos, cpar, R, r, V, v3, ident, zero3, zero6, e):
+def cartesian_potential(gid, cartesianBodies, cartesianPoints, cartesianLaw, R, r, V, v3, ident, zero3, zero6, e):
     """``e`` plus the potential of the Cartesian springs."""
     pA, pB, vA, vB, bA, bB = v3[0], v3[1], v3[2], v3[3], v3[4], v3[5]
-    for s in range(cint.shape[0]):
-        gA, RA, rA, VA = _side(gid, cint[s, 0], R, r, V, ident, zero3, zero6)
-        gB, RB, rB, VB = _side(gid, cint[s, 1], R, r, V, ident, zero3, zero6)
-        body_point(gA, RA, rA, VA, cpos[s, 0], pA, vA, bA)
-        body_point(gB, RB, rB, VB, cpos[s, 1], pB, vB, bB)
+    for s in range(cartesianBodies.shape[0]):
+        gA, RA, rA, VA = _side(gid, cartesianBodies[s, 0], R, r, V, ident, zero3, zero6)
+        gB, RB, rB, VB = _side(gid, cartesianBodies[s, 1], R, r, V, ident, zero3, zero6)
+        body_point(gA, RA, rA, VA, cartesianPoints[s, 0], pA, vA, bA)
+        body_point(gB, RB, rB, VB, cartesianPoints[s, 1], pB, vB, bB)
         for k in range(3):
-            e += 0.5 * cpar[s, 0, k] * (pB[k] - pA[k] - cpar[s, 2, k]) ** 2
+            e += 0.5 * cartesianLaw[s, 0, k] * (pB[k] - pA[k] - cartesianLaw[s, 2, k]) ** 2
     return e
 
 
 @njit(cache=True, _nrt=False)
-def torsional_potential(gid, tint, trot, tpar, tphi, R, r, V, m3, ident, zero3, zero6, e):
+def torsional_potential(gid, torsionBodies, torsionFrames, torsionLaw, tphi, R, r, V, m3, ident, zero3, zero6, e):
     """``e`` plus the potential ``k (phi - offset)^2 / 2 + torque phi`` of the torsional springs."""
-    for s in range(tint.shape[0]):
-        gA, RA, rA, VA = _side(gid, tint[s, 0], R, r, V, ident, zero3, zero6)
-        gB, RB, rB, VB = _side(gid, tint[s, 1], R, r, V, ident, zero3, zero6)
-        phi, phid = torsion_angle(trot[s, 0], trot[s, 1], tphi[s], RA, VA, RB, VB, m3[0], m3[1])
-        e += 0.5 * tpar[s, 0] * (phi - tpar[s, 2]) ** 2 + tpar[s, 3] * phi
+    for s in range(torsionBodies.shape[0]):
+        gA, RA, rA, VA = _side(gid, torsionBodies[s, 0], R, r, V, ident, zero3, zero6)
+        gB, RB, rB, VB = _side(gid, torsionBodies[s, 1], R, r, V, ident, zero3, zero6)
+        phi, phid = torsion_angle(torsionFrames[s, 0], torsionFrames[s, 1], tphi[s], RA, VA, RB, VB, m3[0], m3[1])
+        e += 0.5 * torsionLaw[s, 0] * (phi - torsionLaw[s, 2]) ** 2 + torsionLaw[s, 3] * phi
     return e
 
 
@@ -337,24 +337,24 @@ def torsional_potential(gid, tint, trot, tpar, tphi, R, r, V, m3, ident, zero3, 
 # tuples costs compile time steeply; the potentials above receive only their arrays)
 @njit(cache=True, inline="always", _nrt=False)
 def spring_element_energy(sd, wk, R, r, V, e):
-    return spring_potential(sd.gid, sd.sint, sd.spos, sd.spar, R, r, V, wk.v3, wk.ident, wk.zero3, wk.zero6, e)
+    return spring_potential(sd.gid, sd.springBodies, sd.springPoints, sd.springLaw, R, r, V, wk.v3, wk.ident, wk.zero3, wk.zero6, e)
 
 
 @njit(cache=True, inline="always", _nrt=False)
 def cartesian_element_energy(sd, wk, R, r, V, e):
-    return cartesian_potential(sd.gid, sd.cint, sd.cpos, sd.cpar, R, r, V, wk.v3, wk.ident, wk.zero3, wk.zero6, e)
+    return cartesian_potential(sd.gid, sd.cartesianBodies, sd.cartesianPoints, sd.cartesianLaw, R, r, V, wk.v3, wk.ident, wk.zero3, wk.zero6, e)
 
 
 @njit(cache=True, inline="always", _nrt=False)
 def torsional_element_energy(sd, wk, R, r, V, e):
-    return torsional_potential(sd.gid, sd.tint, sd.trot, sd.tpar, wk.tphi, R, r, V, wk.m3, wk.ident, wk.zero3,
+    return torsional_potential(sd.gid, sd.torsionBodies, sd.torsionFrames, sd.torsionLaw, wk.tphi, R, r, V, wk.m3, wk.ident, wk.zero3,
                                wk.zero6, e)
 
 
 @njit(cache=True, inline="always", _nrt=False)
-def _coordinate_angles(nangles, jint, jrot, jpar, rint, kint, krot, kpar, R):
-    if nangles > 0:                 # a count, not a table: the guard's rows check does not apply
-        update_coordinate_angles(jint, jrot, jpar, rint, kint, krot, kpar, R)
+def _coordinate_angles(nCoordAngles, jointIndex, jointFrames, jointParams, rowIndex, coordSpringEnds, coordSpringFrames, coordSpringLaw, R):
+    if nCoordAngles > 0:                 # a count, not a table: the guard's rows check does not apply
+        update_coordinate_angles(jointIndex, jointFrames, jointParams, rowIndex, coordSpringEnds, coordSpringFrames, coordSpringLaw, R)
 
 
 # none of them in a lean scene (their tables None, mbs/presence.py); in a full one only with rows
@@ -375,7 +375,7 @@ def update_contact_data(sd, wk, R, r, V):
 @njit(cache=True, inline="always", _nrt=False)
 def update_torsion_tracking(sd, wk, R, r, V):
     """The tracked angles (torsional springs, rotation coordinates) after an accepted step."""
-    torsion_angles_if(sd.tint, sd.gid, sd.tint, sd.trot, wk.tphi, R, r, V, wk.m3, wk.ident, wk.zero3, wk.zero6)
-    coordinate_angles_if(sd.nangles, sd.nangles, sd.jint, sd.jrot, sd.jpar, sd.rint, sd.kint, sd.krot, sd.kpar, R)
+    torsion_angles_if(sd.torsionBodies, sd.gid, sd.torsionBodies, sd.torsionFrames, wk.tphi, R, r, V, wk.m3, wk.ident, wk.zero3, wk.zero6)
+    coordinate_angles_if(sd.nCoordAngles, sd.nCoordAngles, sd.jointIndex, sd.jointFrames, sd.jointParams, sd.rowIndex, sd.coordSpringEnds, sd.coordSpringFrames, sd.coordSpringLaw, R)
     if wk.nplanar > 0:
         update_tracked_bodies(wk.btrack, wk.bframe, wk.bangle, wk.bparam, R)

@@ -7,8 +7,8 @@
 the force ``f a`` enters Exudyn's LHS through the *position* Jacobians of the two markers
 (``+`` on marker 1, ``-`` on marker 0): the applied forces are ``-f a`` at point 1 and
 ``+f a`` at point 0, and the rotation of the axis ``a`` itself contributes no generalised
-force (as in Exudyn).  ``SceneData``: ``xint`` = [A, B], ``xpos`` = [posA, posB], ``xaxis`` =
-the axis in A's body frame (world if A is ground), ``xpar`` = [k, d, offset, force - d
+force (as in Exudyn).  ``SceneData``: ``linearBodies`` = [A, B], ``linearPoints`` = [posA, posB], ``linearAxis`` =
+the axis in A's body frame (world if A is ground), ``linearLaw`` = [k, d, offset, force - d
 velocityOffset].
 """
 from numba import njit
@@ -17,27 +17,27 @@ from .bodies import add_pair_force, connector_ends
 
 
 @njit(cache=True, _nrt=False)
-def linear_spring_forces(gid, xint, xpos, xaxis, xpar, R, r, V, Q, v3, ident, zero3, zero6):
+def linear_spring_forces(gid, linearBodies, linearPoints, linearAxis, linearLaw, R, r, V, Q, v3, ident, zero3, zero6):
     pA, pB, vA, vB, F, a = v3[0], v3[1], v3[2], v3[3], v3[6], v3[7]
-    for s in range(xint.shape[0]):
-        ia = xint[s, 0]
-        ib = xint[s, 1]
-        gA, RA, gB, RB = connector_ends(gid, ia, ib, xpos[s, 0], xpos[s, 1], R, r, V, v3, ident, zero3, zero6)
+    for s in range(linearBodies.shape[0]):
+        ia = linearBodies[s, 0]
+        ib = linearBodies[s, 1]
+        gA, RA, gB, RB = connector_ends(gid, ia, ib, linearPoints[s, 0], linearPoints[s, 1], R, r, V, v3, ident, zero3, zero6)
         u = 0.0
         v = 0.0
         for k in range(3):
-            a[k] = RA[k, 0] * xaxis[s, 0] + RA[k, 1] * xaxis[s, 1] + RA[k, 2] * xaxis[s, 2]
+            a[k] = RA[k, 0] * linearAxis[s, 0] + RA[k, 1] * linearAxis[s, 1] + RA[k, 2] * linearAxis[s, 2]
         for k in range(3):
             u += a[k] * (pB[k] - pA[k])
             v += a[k] * (vB[k] - vA[k])
-        f = xpar[s, 0] * (u - xpar[s, 2]) + xpar[s, 1] * v + xpar[s, 3]
+        f = linearLaw[s, 0] * (u - linearLaw[s, 2]) + linearLaw[s, 1] * v + linearLaw[s, 3]
         for k in range(3):
             F[k] = f * a[k]
-        add_pair_force(gA, RA, xpos[s, 0], ia, gB, RB, xpos[s, 1], ib, F, Q)
+        add_pair_force(gA, RA, linearPoints[s, 0], ia, gB, RB, linearPoints[s, 1], ib, F, Q)
 
 
 # the element's entry (registered in mbs/force_elements.py)
 @njit(cache=True, inline="always", _nrt=False)
 def linear_spring_element(sd, wk, R, r, V, Q):
-    linear_spring_forces(sd.gid, sd.xint, sd.xpos, sd.xaxis, sd.xpar, R, r, V, Q, wk.v3, wk.ident, wk.zero3,
+    linear_spring_forces(sd.gid, sd.linearBodies, sd.linearPoints, sd.linearAxis, sd.linearLaw, R, r, V, Q, wk.v3, wk.ident, wk.zero3,
                          wk.zero6)

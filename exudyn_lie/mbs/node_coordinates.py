@@ -23,7 +23,7 @@ omega``, groups/so3.py).  A ConnectorCoordinate on it is then Exudyn's index-3 m
 ``M Vdot = Q - C^T lambda``, ``theta_k = const``: force direction ``C`` != gradient ``G``
 (a non-symmetric index-1 solve, :mod:`.oblique_solve`).
 
-The item's end code (``rint`` ROW_AX / ROW_BX of a coordinate row, ``kint`` columns 2 / 3 of
+The item's end code (``rowIndex`` ROW_AX / ROW_BX of a coordinate row, ``coordSpringEnds`` columns 2 / 3 of
 a coordinate spring) is ``10 * kind + k`` (:func:`param_code`); 0 is a position coordinate,
 1 an angle about a fixed axis (:mod:`.coordinate_angles`).
 """
@@ -32,13 +32,15 @@ import math
 from numba import njit
 
 from ..groups import _taylor, so3
-from .rotation_parameters import nearest_rxyz, quat_scalars
+from .rotation_parameters import nearest_tait_bryan, quat_scalars
 
-PARAM_ROTVEC = 1      # NodeRigidBodyRotVecLG: rotation vector (3), omega local
-PARAM_EP = 2          # NodeRigidBodyEP: Euler parameters (4), pdot
-PARAM_RXYZ = 3        # NodeRigidBodyRxyz: Tait-Bryan angles R = Rx Ry Rz (3), angle rates
-PARAM_BASE = 10       # end codes >= PARAM_BASE are node rotation parameters
-PARAM_KINDS = {"RigidBodyRotVecLG": PARAM_ROTVEC, "RigidBodyEP": PARAM_EP, "RigidBodyRxyz": PARAM_RXYZ}
+PARAM_ROTATION_VECTOR = 1    # rotation vector (3); velocity coordinates: the local omega
+PARAM_EULER_PARAMETERS = 2   # Euler parameters (4); velocity coordinates: their rates
+PARAM_TAIT_BRYAN = 3         # Tait-Bryan angles R = Rx Ry Rz (3); velocity coordinates: the angle rates
+PARAM_BASE = 10              # end codes >= PARAM_BASE are rotation parameters of a body
+#: the parametrisations by name (RotationParameterCoordinate.kind)
+PARAM_KINDS = {"rotationVector": PARAM_ROTATION_VECTOR, "eulerParameters": PARAM_EULER_PARAMETERS,
+               "taitBryanXYZ": PARAM_TAIT_BRYAN}
 
 # D = (1 - (t/2) cot(t/2)) / t^2 of dexpinv (so3.coef_D) and dD/du (u = t^2): series below
 # so3's switch point (12 terms: the derivative's truncation error there is below 1e-16 of
@@ -97,7 +99,7 @@ def node_parameter(code, R, prev, w, G, C, tmp):
     k = code - PARAM_BASE * kind
     for i in range(3):
         C[i] = 0.0
-    if kind == PARAM_ROTVEC:
+    if kind == PARAM_ROTATION_VECTOR:
         q0, q1, q2, q3 = _nearest_quat(R, prev)
         t0, t1, t2 = rotvec_of_quat(q0, q1, q2, q3)
         th = (t0, t1, t2)
@@ -127,7 +129,7 @@ def node_parameter(code, R, prev, w, G, C, tmp):
         bias = (0.5 * cross_k + dD * udot * (th[k] * tw - u * w[k])
                 + D * (tmp[k] * tw + th[k] * tdw - udot * w[k]))
         return th[k], bias
-    if kind == PARAM_EP:
+    if kind == PARAM_EULER_PARAMETERS:
         p0, p1, p2, p3 = _nearest_quat(R, prev)
         p = (p0, p1, p2, p3)
         # pdot = P(p) w: pdot_0 = -pv . w / 2, pdot_v = (p0 w + pv x w) / 2 (Exudyn: pdot = GL^T w / 4)
@@ -151,8 +153,8 @@ def node_parameter(code, R, prev, w, G, C, tmp):
         for i in range(3):
             C[i] = G[i]
         return p[k], bias
-    # PARAM_RXYZ: R = Rx(a0) Ry(a1) Rz(a2), w = GR(a) adot (bridge/rotations.rxyz_glocal)
-    nearest_rxyz(R, prev, tmp)
+    # PARAM_TAIT_BRYAN: R = Rx(a0) Ry(a1) Rz(a2), w = GR(a) adot (bridge/rotations.rxyz_glocal)
+    nearest_tait_bryan(R, prev, tmp)
     a1 = tmp[1]
     a2 = tmp[2]
     val = tmp[k]
@@ -200,4 +202,4 @@ def node_parameter_terms(q, a, b, codeA, codeB, RA, RB, VA, VB, bparam, f, h, Jr
 
 def is_oblique(code):
     """True if Exudyn's force direction of an end differs from its gradient (RotVecLG)."""
-    return int(code) // PARAM_BASE == PARAM_ROTVEC
+    return int(code) // PARAM_BASE == PARAM_ROTATION_VECTOR

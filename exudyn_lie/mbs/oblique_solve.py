@@ -36,11 +36,11 @@ def oblique_plan(sd):
     """The :class:`ObliquePlan` of ``sd``, or None if every row's force direction is its
     gradient."""
     pq, pcol, pval = [], [], []
-    for j in range(sd.jint.shape[0]):
-        for q in range(sd.jint[j, J_ROW0], sd.jint[j, J_ROW0] + sd.jint[j, J_NROW]):
-            if sd.rint[q, ROW_KIND] != ROW_COORD:
+    for j in range(sd.jointIndex.shape[0]):
+        for q in range(sd.jointIndex[j, J_ROW0], sd.jointIndex[j, J_ROW0] + sd.jointIndex[j, J_NROW]):
+            if sd.rowIndex[q, ROW_KIND] != ROW_COORD:
                 continue
-            for col, code, s in ((0, sd.rint[q, ROW_AX], -1.0), (6, sd.rint[q, ROW_BX], sd.jpar[j, 0])):
+            for col, code, s in ((0, sd.rowIndex[q, ROW_AX], -1.0), (6, sd.rowIndex[q, ROW_BX], sd.jointParams[j, 0])):
                 if code >= PARAM_BASE and is_oblique(code):
                     v = np.zeros(3)
                     v[code % PARAM_BASE] = s

@@ -12,9 +12,9 @@ from .presence import guarded
 
 
 # the arguments of project, by what they are (built by project_state from SceneData / Work)
-Joints = namedtuple("Joints", ["gid", "jint", "jpos", "jrot", "jpar", "rint", "rowsAll", "bparam"])  # the joint tables
+Joints = namedtuple("Joints", ["gid", "jointIndex", "jointPoints", "jointFrames", "jointParams", "rowIndex", "rowsAll", "bparam"])  # the joint tables
 Schur = namedtuple("Schur", ["Minv", "bw", "redundant", "pivotTol",              # J M^-1 J^T: data...
-                             "W", "lam", "Sb", "Sd", "perm", "ytmp", "info", "tmp12",    # ... and work
+                             "W", "lam", "Sb", "Sd", "perm", "ytmp", "failInfo", "tmp12",    # ... and work
                              "tree"])                                            # index1.TreeSolve
 Rows = namedtuple("Rows", ["h", "Jr", "eta", "rdrive"])    # the rows at a state; row drives (mbs.row_drives)
 Scratch = namedtuple("Scratch", ["Psi", "v3", "m3", "ident", "zero3", "zero6"])
@@ -34,8 +34,8 @@ def project(level, joints, schur, rows, scratch, R, r, V):
 
     The row drives ``rdrive`` must hold their values at the state's time (the caller).
     Returns a status code (STATUS_PROJECTION if max |h| stays above the tolerance)."""
-    gid, jint, jpos, jrot, jpar, rint, rowsAll, bparam = joints
-    Minv, bw, redundant, pivotTol, W, lam, Sb, Sd, perm, ytmp, info, tmp12, tree = schur
+    gid, jointIndex, jointPoints, jointFrames, jointParams, rowIndex, rowsAll, bparam = joints
+    Minv, bw, redundant, pivotTol, W, lam, Sb, Sd, perm, ytmp, failInfo, tmp12, tree = schur
     h, Jr, eta, rdrive = rows
     Psi, v3, m3, ident, zero3, zero6 = scratch
     nb = gid.shape[0]
@@ -48,23 +48,23 @@ def project(level, joints, schur, rows, scratch, R, r, V):
         tol = PROJ_TOL * scale
         hmax = 0.0
         for it in range(PROJ_MAX_ITER + 1):
-            joints_rows(gid, jint, jpos, jrot, jpar, rint, rowsAll, bparam, R, r, V, h, Jr, eta, rdrive, v3, ident, zero3, zero6)
+            joints_rows(gid, jointIndex, jointPoints, jointFrames, jointParams, rowIndex, rowsAll, bparam, R, r, V, h, Jr, eta, rdrive, v3, ident, zero3, zero6)
             hmax = 0.0
-            for q in range(rint.shape[0]):
+            for q in range(rowIndex.shape[0]):
                 if abs(h[q]) > hmax:
                     hmax = abs(h[q])
             if hmax <= tol or it == PROJ_MAX_ITER:
                 break
-            for q in range(rint.shape[0]):
+            for q in range(rowIndex.shape[0]):
                 lam[q] = h[q]
-            st = solve_multipliers(gid, Minv, rint, bw, redundant, pivotTol, R, Jr, W, lam, Sb, Sd, perm, ytmp,
-                                   info, tmp12, tree)
+            st = solve_multipliers(gid, Minv, rowIndex, bw, redundant, pivotTol, R, Jr, W, lam, Sb, Sd, perm, ytmp,
+                                   failInfo, tmp12, tree)
             if st != STATUS_OK:
                 return st
             for i in range(nb):
                 for k in range(6):
                     Psi[i, k] = 0.0
-            apply_correction(rint, W, lam, Psi, tree)
+            apply_correction(rowIndex, W, lam, Psi, tree)
             for i in range(nb):
                 exp_compose(gid[i], R[i], r[i], Psi[i], m3[1], v3[1], m3[0], v3[0])
                 for a in range(3):
@@ -74,18 +74,18 @@ def project(level, joints, schur, rows, scratch, R, r, V):
         if hmax > PROJ_FAIL * tol:
             return STATUS_PROJECTION
     else:
-        joints_rows(gid, jint, jpos, jrot, jpar, rint, rowsAll, bparam, R, r, V, h, Jr, eta, rdrive, v3, ident, zero3, zero6)
-    return schur_correct(gid, Minv, rint, bw, redundant, pivotTol, R, V, -1.0, rdrive[1], Jr, W, lam, Sb, Sd, perm,
-                         ytmp, info, tmp12, tree)
+        joints_rows(gid, jointIndex, jointPoints, jointFrames, jointParams, rowIndex, rowsAll, bparam, R, r, V, h, Jr, eta, rdrive, v3, ident, zero3, zero6)
+    return schur_correct(gid, Minv, rowIndex, bw, redundant, pivotTol, R, V, -1.0, rdrive[1], Jr, W, lam, Sb, Sd, perm,
+                         ytmp, failInfo, tmp12, tree)
 
 
 @njit(cache=True, inline="always", _nrt=False)
 def project_state(sd, wk, level, R, r, V):
     if sd.nrows == 0:
         return STATUS_OK
-    return project(level, Joints(sd.gid, sd.jint, sd.jpos, sd.jrot, sd.jpar, sd.rint, sd.rowsAll, wk.bparam),
+    return project(level, Joints(sd.gid, sd.jointIndex, sd.jointPoints, sd.jointFrames, sd.jointParams, sd.rowIndex, sd.rowsAll, wk.bparam),
                    Schur(sd.Minv, sd.bandwidth, sd.redundant, sd.pivotTol, wk.W, wk.lam, wk.Sb, wk.Sd, wk.perm,
-                         wk.ytmp, wk.info, wk.tmp12, tree_of(sd, wk)),
+                         wk.ytmp, wk.failInfo, wk.tmp12, tree_of(sd, wk)),
                    Rows(wk.h, wk.Jr, wk.eta, wk.rdrive), Scratch(wk.Psi, wk.v3, wk.m3, wk.ident, wk.zero3, wk.zero6),
                    R, r, V)
 
@@ -119,9 +119,9 @@ def constraint_rows_at(sd, wk, R, r, V):
     """Rows h(g), J and eta at (R, r, V) into ``wk.h``, ``wk.Jr``, ``wk.eta``; returns
     (max |h|, max |J V - w|), J V - w computed into ``wk.lam`` (scratch; ``w`` the velocity
     targets of the row drives, at the state's time)."""
-    joints_rows(sd.gid, sd.jint, sd.jpos, sd.jrot, sd.jpar, sd.rint, sd.rowsAll, wk.bparam, R, r, V, wk.h, wk.Jr, wk.eta, wk.rdrive, wk.v3,
+    joints_rows(sd.gid, sd.jointIndex, sd.jointPoints, sd.jointFrames, sd.jointParams, sd.rowIndex, sd.rowsAll, wk.bparam, R, r, V, wk.h, wk.Jr, wk.eta, wk.rdrive, wk.v3,
                 wk.ident, wk.zero3, wk.zero6)
-    rows_times(sd.rint, wk.Jr, V, -1.0, wk.rdrive[1], wk.lam)
+    rows_times(sd.rowIndex, wk.Jr, V, -1.0, wk.rdrive[1], wk.lam)
     hmax = 0.0
     vmax = 0.0
     for q in range(sd.nrows):
@@ -138,8 +138,8 @@ def project_tangent(sd, wk, R, X):
     per-body algebra vector (nb, 6) onto the tangent space ``J X = 0`` of the constraint
     manifold, with J from the last :func:`constraint_rows_at` (same coordinates as V and as
     the increments Phi: the derivative of h along g exp(delta))."""
-    return schur_correct(sd.gid, sd.Minv, sd.rint, sd.bandwidth, sd.redundant, sd.pivotTol, R, X, 0.0, wk.eta,
-                         wk.Jr, wk.W, wk.lam, wk.Sb, wk.Sd, wk.perm, wk.ytmp, wk.info, wk.tmp12, tree_of(sd, wk))
+    return schur_correct(sd.gid, sd.Minv, sd.rowIndex, sd.bandwidth, sd.redundant, sd.pivotTol, R, X, 0.0, wk.eta,
+                         wk.Jr, wk.W, wk.lam, wk.Sb, wk.Sd, wk.perm, wk.ytmp, wk.failInfo, wk.tmp12, tree_of(sd, wk))
 
 
 @njit(cache=True, _nrt=False)

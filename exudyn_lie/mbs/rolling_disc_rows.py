@@ -49,7 +49,7 @@ def _dot(a0, a1, a2, b0, b1, b2):
 @njit(cache=True, _nrt=False)
 def rolling_disc_row(q, axis, a, b, gA, gB, RA, RB, rA, rB, VA, VB, rotA, rotB, par, pB, vB, s, t, uA, uB, bA, bB,
                      w, h, Jr, eta):
-    """Row ``q`` (``axis``: 0 lateral, 1 forward, 2 normal) of a rolling disc; ``par = jpar[j]``
+    """Row ``q`` (``axis``: 0 lateral, 1 forward, 2 normal) of a rolling disc; ``par = jointParams[j]``
     = (radius, planeNormal, discAxis); ``pB, vB`` the disc marker point and its velocity;
     ``s, t, uA, uB, bA, bB, w`` 3-vector scratch."""
     rad = par[0]

@@ -8,7 +8,7 @@ accepted step (one step turns a body by far less than pi):
   behind a NodeRigidBodyRotVecLG: Exudyn's Lie group update (``CompositionRotationVector``,
   RigidBodyMath.h) composes the quaternions of the total rotation vector and of the increment
   and returns ``2 acos(q0) qv / |qv|`` (|theta| <= 2 pi, turning over at 2 pi, not at pi);
-* ``TRACK_RXYZ``: Tait-Bryan angles ``R = Rx(a0) Ry(a1) Rz(a2)`` of a NodeRigidBodyRxyz, the
+* ``TRACK_TAIT_BRYAN``: Tait-Bryan angles ``R = Rx(a0) Ry(a1) Rz(a2)`` of a NodeRigidBodyRxyz, the
   solution of the two (each modulo 2 pi) nearest the previous angles;
 * ``TRACK_ANGLE``: the angle of a 2D body / rotor (coordinate_angles.frame_angle, kept in
   ``Work.bangle``).
@@ -27,7 +27,7 @@ from .coordinate_angles import frame_angle
 TRACK_NONE = 0
 TRACK_ANGLE = 1
 TRACK_QUAT = 2
-TRACK_RXYZ = 3
+TRACK_TAIT_BRYAN = 3
 TWO_PI = 2.0 * math.pi
 
 
@@ -87,14 +87,14 @@ def quat_rotvec(q, out):
 
 @njit(cache=True, inline="always", _nrt=False)
 def wrap_near(x, ref):
-    # np.rint, not np.round: the same value (round half to even), but np.round's numba
+    # np.rowIndex, not np.round: the same value (round half to even), but np.round's numba
     # implementation lives in numba.np.arraymath, which imports scipy.linalg when a
     # cached kernel is loaded (0.12 s of a warm start)
-    return x + TWO_PI * np.rint((ref - x) / TWO_PI)
+    return x + TWO_PI * np.rowIndex((ref - x) / TWO_PI)
 
 
 @njit(cache=True, _nrt=False)
-def nearest_rxyz(R, ref, out):
+def nearest_tait_bryan(R, ref, out):
     """Tait-Bryan angles of ``R = Rx Ry Rz`` (``out`` may be ``ref`` itself): of the two solutions (a0, a1, a2) and
     (a0 + pi, pi - a1, a2 + pi), each shifted by 2 pi turns, the one nearest ``ref``; at the
     gimbal lock (a1 = +-pi/2) only a0 +- a2 is defined: a0 is kept."""
@@ -129,11 +129,11 @@ def nearest_rxyz(R, ref, out):
 
 @njit(cache=True, _nrt=False)
 def nearest_parameters(code, R, ref, out):
-    """The parameters of kind ``code`` of R nearest ``ref`` (TRACK_QUAT / TRACK_RXYZ)."""
+    """The parameters of kind ``code`` of R nearest ``ref`` (TRACK_QUAT / TRACK_TAIT_BRYAN)."""
     if code == TRACK_QUAT:
         nearest_quat(R, ref, out)
-    elif code == TRACK_RXYZ:
-        nearest_rxyz(R, ref, out)
+    elif code == TRACK_TAIT_BRYAN:
+        nearest_tait_bryan(R, ref, out)
 
 
 @njit(cache=True, _nrt=False)
@@ -151,8 +151,8 @@ def update_tracked_bodies(btrack, bframe, bangle, bparam, R):
             if q0 * bparam[i, 0] + q1 * bparam[i, 1] + q2 * bparam[i, 2] + q3 * bparam[i, 3] < 0.0:
                 q0, q1, q2, q3 = -q0, -q1, -q2, -q3
             bparam[i, 0], bparam[i, 1], bparam[i, 2], bparam[i, 3] = q0, q1, q2, q3
-        elif c == TRACK_RXYZ:
-            nearest_rxyz(R[i], bparam[i], bparam[i])
+        elif c == TRACK_TAIT_BRYAN:
+            nearest_tait_bryan(R[i], bparam[i], bparam[i])
 
 
 @njit(cache=True, _nrt=False)

@@ -27,7 +27,7 @@ import numpy as np
 
 from .force_elements import ELEMENTS
 from .scene_items import (AngleCoordinate, Body, CartesianSpringDamper, CoordinateSpringDamper, GROUND,
-                          JOINT_TYPES, Joint, LinearSpringDamper, Load, NodeParameterCoordinate, PythonForce,
+                          JOINT_TYPES, Joint, LinearSpringDamper, Load, RotationParameterCoordinate, PythonForce,
                           RigidBodySpringDamper, RollingDiscPenalty, SceneError, SpringDamper,
                           TorsionalSpringDamper, _check_rolling_disc_penalty, _checked_mass_properties,
                           _checked_point_mass, _coordinate_direction, _finite, _projector, _rot, _vec3,
@@ -387,7 +387,7 @@ class Scene:
         """A generalised force ``load`` on a coordinate of ``body`` (Exudyn's LoadCoordinate):
         a coordinate spring from the ground with ``k = d = 0`` and ``f0 = -load`` (``-f`` acts on
         side B), so the force follows the coordinate's direction (state-dependent for a
-        NodeParameterCoordinate of an EP or Rxyz node)."""
+        RotationParameterCoordinate of an EP or Rxyz node)."""
         label = name or f"coordinateLoad{len(self.coordinateSprings)}"
         self._check_body(body, label, allow_ground=False)
         k = self.AddCoordinateSpringDamper(GROUND, 0, body, axis, 0.0, 0.0, name=label)
@@ -396,7 +396,7 @@ class Scene:
 
     def _coordinate_end(self, body, axis, label):
         """(world direction d, (is rotation, frame, angle0)) of one side of a coordinate item."""
-        if isinstance(axis, NodeParameterCoordinate):
+        if isinstance(axis, RotationParameterCoordinate):
             return np.zeros(3), (self._node_parameter_code(body, axis, label), np.eye(3), 0.0)
         if not isinstance(axis, AngleCoordinate):
             return _coordinate_direction(axis, label), (False, np.eye(3), 0.0)
@@ -407,25 +407,25 @@ class Scene:
         return F[:, 2].copy(), (True, F, _finite(axis.angle0, f"{label}: rotation coordinate angle0"))
 
     def _node_parameter_code(self, body, axis, label):
-        """End code (node_coordinates.param_code) of a NodeParameterCoordinate; the body's
+        """End code (node_coordinates.param_code) of a RotationParameterCoordinate; the body's
         node parameters are tracked (Body.track, from R0 unless already set)."""
-        from .node_coordinates import PARAM_EP, PARAM_KINDS, PARAM_RXYZ, param_code
-        from .rotation_parameters import TRACK_QUAT, TRACK_RXYZ, nearest_rxyz, quat_of
+        from .node_coordinates import PARAM_EULER_PARAMETERS, PARAM_KINDS, PARAM_TAIT_BRYAN, param_code
+        from .rotation_parameters import TRACK_QUAT, TRACK_TAIT_BRYAN, nearest_tait_bryan, quat_of
         kind = PARAM_KINDS.get(axis.kind)
         if kind is None:
             raise SceneError(f"{label}: node parameter coordinate of kind {axis.kind!r}; use one of "
                              f"{sorted(PARAM_KINDS)}")
-        n = 4 if kind == PARAM_EP else 3
+        n = 4 if kind == PARAM_EULER_PARAMETERS else 3
         if not 0 <= int(axis.index) < n:
             raise SceneError(f"{label}: a {axis.kind} node has rotation parameters 0..{n - 1}, not {axis.index}")
         if body == GROUND or self.bodies[body].isPoint or self.bodies[body].planar:
             raise SceneError(f"{label}: a node rotation parameter needs a 3D rigid body")
         b = self.bodies[body]
-        code = TRACK_RXYZ if kind == PARAM_RXYZ else TRACK_QUAT
+        code = TRACK_TAIT_BRYAN if kind == PARAM_TAIT_BRYAN else TRACK_QUAT
         if b.track is None:
             p = np.zeros(4)
-            if code == TRACK_RXYZ:
-                nearest_rxyz(np.asarray(b.R0, float), np.zeros(4), p)
+            if code == TRACK_TAIT_BRYAN:
+                nearest_tait_bryan(np.asarray(b.R0, float), np.zeros(4), p)
             else:
                 quat_of(np.asarray(b.R0, float), p)
             b.track = (code, p)

@@ -78,7 +78,7 @@ class Body:
     freeAxes: tuple = None
     angleFrame: np.ndarray = None
     # rotation parameters of the body's node tracked step by step for the write-back
-    # (rotation_parameters: TRACK_QUAT / TRACK_RXYZ, initial parameters (4)); None: not tracked
+    # (rotation_parameters: TRACK_QUAT / TRACK_TAIT_BRYAN, initial parameters (4)); None: not tracked
     track: tuple = None
 
     @property
@@ -190,7 +190,7 @@ class CoordinateSpringDamper:
     offset: float = 0.0
     name: str = ""
     # rotation coordinates: per side (end code, frame F, angle0): code 1 an AngleCoordinate
-    # (d = F e_z), >= 10 a NodeParameterCoordinate (node_coordinates.param_code; d = 0)
+    # (d = F e_z), >= 10 a RotationParameterCoordinate (node_coordinates.param_code; d = 0)
     angleA: tuple = (False, np.eye(3), 0.0)
     angleB: tuple = (False, np.eye(3), 0.0)
     force: float = 0.0           # a constant f0 added to f (AddCoordinateLoad)
@@ -214,12 +214,12 @@ class AngleCoordinate:
 
 
 @dataclass(frozen=True)
-class NodeParameterCoordinate:
+class RotationParameterCoordinate:
     """A rotation coordinate of a 3D rigid node for the coordinate items (``axis`` argument
     of :meth:`Scene.AddCoordinateConstraint` / :meth:`Scene.AddCoordinateSpringDamper`):
-    rotation parameter ``index`` (0-based) of the body's node of ``kind`` ``'RigidBodyRotVecLG'``
-    (rotation vector), ``'RigidBodyEP'`` (Euler parameters) or ``'RigidBodyRxyz'`` (Tait-Bryan
-    angles), as Exudyn's MarkerNodeCoordinate on coordinate ``3 + index`` (mbs/node_coordinates.py).
+    rotation parameter ``index`` (0-based) of the body's orientation in the parametrisation
+    ``kind``: ``'rotationVector'`` (velocity coordinates: the local omega), ``'eulerParameters'``
+    or ``'taitBryanXYZ'`` (velocity coordinates: the parameters' rates; mbs/node_coordinates.py).
     The value is taken on the branch tracked from the body's ``track`` (set from ``R0`` if
     the body has none)."""
     kind: str

@@ -145,7 +145,7 @@ class Simulator(ExternalSeams):
         load that compiled entry point at all (its cache load and first-call typing are part
         of a warm first solve)."""
         sd, wk = self.sd, self.wk
-        if is_present(sd.tint) or (sd.nangles or 0) > 0:
+        if is_present(sd.torsionBodies) or (sd.nCoordAngles or 0) > 0:
             kernel.update_torsion_tracking(sd, wk, self.R, self.r, self.V)
         elif wk.nplanar > 0:
             # its last part alone: the step loop's own callee, so a first run compiles no
@@ -256,8 +256,8 @@ class Simulator(ExternalSeams):
                       np.ascontiguousarray(V, dtype=float), wk.h, wk.Jr, wk.eta)
         V = np.asarray(V, dtype=float)
         Vz = np.vstack([V, np.zeros((1, 6))])          # row -1: the ground
-        a = sd.rint[:, kernel.ROW_BODY_A]
-        b = sd.rint[:, kernel.ROW_BODY_B]
+        a = sd.rowIndex[:, kernel.ROW_BODY_A]
+        b = sd.rowIndex[:, kernel.ROW_BODY_B]
         JV = np.einsum("qk,qk->q", wk.Jr[:, :6], Vz[a]) + np.einsum("qk,qk->q", wk.Jr[:, 6:], Vz[b])
         return wk.h.copy(), JV - wk.rdrive[1]
 
@@ -413,7 +413,7 @@ class Simulator(ExternalSeams):
 
     def JointRows(self, j):
         """The kernel's rows of scene joint ``j`` (a range)."""
-        r0, n = (int(x) for x in self.sd.jint[j, 2:4])
+        r0, n = (int(x) for x in self.sd.jointIndex[j, 2:4])
         return range(r0, r0 + n)
 
     def TrackedParameters(self, out):
@@ -441,10 +441,10 @@ class Simulator(ExternalSeams):
         self.wk.probe[i] = row
 
     def LoadRow(self, k):
-        """Writable views ``(vector, point, flags)`` of compiled load ``k`` (``SceneData.lvec``,
-        ``lint``: body, force / torque, bodyFixed); a value written takes effect at the next
+        """Writable views ``(vector, point, flags)`` of compiled load ``k`` (``SceneData.loadVectors``,
+        ``loadIndex``: body, force / torque, bodyFixed); a value written takes effect at the next
         stage (a controller that sets a load every step writes here without a call)."""
-        return self.sd.lvec[k, 0], self.sd.lvec[k, 1], self.sd.lint[k]
+        return self.sd.loadVectors[k, 0], self.sd.loadVectors[k, 1], self.sd.loadIndex[k]
 
     def WriteElementRow(self, element, scene, k, item):
         """Rewrite row ``k`` of a registered force element from a changed scene item
@@ -454,7 +454,7 @@ class Simulator(ExternalSeams):
     def SetCoordinateSpringForce(self, k, force):
         """The constant force of coordinate spring row ``k`` (a coordinate load on a node
         rotation parameter is such a row: force ``-load``)."""
-        self.sd.kpar[k, 11] = force
+        self.sd.coordSpringLaw[k, 11] = force
 
     def Accelerations(self):
         """``(Vdot, lambda)`` at the current state from the index-1 system (eq. index1):
@@ -483,7 +483,7 @@ class Simulator(ExternalSeams):
                         h, wk.Jr, wk.eta, e)
         nj = len(self.scene.joints)
         if not hasattr(self, "_rowIsRot"):
-            self._rowIsRot = sd.rint[:, kernel.ROW_KIND] == kernel.ROW_ROT
+            self._rowIsRot = sd.rowIndex[:, kernel.ROW_KIND] == kernel.ROW_ROT
         h2 = h * h
         pv = np.sqrt(np.bincount(self.rowJoint, weights=np.where(self._rowIsRot, 0.0, h2), minlength=nj))
         rv = np.sqrt(np.bincount(self.rowJoint, weights=np.where(self._rowIsRot, h2, 0.0), minlength=nj))

@@ -8,6 +8,7 @@ import numpy as np
 
 from ..errors import ConstraintError, SimulationError, StepSizeError
 from . import external, kernel
+from .codes import INFO_BODY, INFO_ROW
 from .linalg import REL_PIVOT_TOL
 from .stiffness import suggest_step
 
@@ -39,7 +40,7 @@ def raise_status(sim, st, h):
     if st == kernel.STATUS_SINGULAR:
         # the failing stage's state (same rule as the kernel: linalg module docstring)
         rank, dep = sim._dependent_rows(sim.wk.Rs, sim.wk.rs, sim.wk.Vs, forced=True)
-        names = sim._joints_of_rows(dep) if dep else sim._joints_of_rows([int(sim.wk.info[0])])
+        names = sim._joints_of_rows(dep) if dep else sim._joints_of_rows([int(sim.wk.failInfo[INFO_ROW])])
         raise ConstraintError(
             f"singular constraint Jacobian at t = {sim.t:.6g} s: the constraints of joints "
             f"{', '.join(names)} are linearly dependent (a Cholesky pivot of J M^-1 J^T fell to "
@@ -47,7 +48,7 @@ def raise_status(sim, st, h):
             f"joints); remove the redundant constraint axes (e.g. make one joint spherical) or "
             f"check the joint frames")
     if st == kernel.STATUS_STAGE_ARG:
-        i = int(sim.wk.info[2])
+        i = int(sim.wk.failInfo[INFO_BODY])
         psi = float(np.linalg.norm(sim.wk.Psi[i, :3]))
         # the stage arguments scale with h: aim the largest at pi, and keep the
         # stability-based suggestion if that is smaller

@@ -47,7 +47,7 @@ from numba.extending import overload
 from . import external
 from .external_probes import probe_kinematics
 from .bodies import body_dexpinv_stage, body_world_velocity, exp_compose, add_point_force_origin, add_world_torque_row
-from .codes import (EXTERNAL_RATES, STAGE_ARG_MAX2, STATUS_BLOWUP, STATUS_EXTERNAL, STATUS_NONFINITE, STATUS_OK,
+from .codes import (EXTERNAL_RATES, INFO_BODY, STAGE_ARG_MAX2, STATUS_BLOWUP, STATUS_EXTERNAL, STATUS_NONFINITE, STATUS_OK,
                     STATUS_STAGE_ARG)
 from .forces import update_contact_data, update_torsion_tracking
 from .rotation_parameters import record_tracked
@@ -175,10 +175,10 @@ def finish(gid, stages, b, h, R, r, V, K, Vd, Psi, Rn, C, rn, Er):
 @njit(cache=True, inline="always", _nrt=False)
 def mk_stage_state(sd, wk, A, j, h, R, r, V):
     """:func:`stage_state` on the scene tuples; a stage argument out of the domain of
-    dexpinv gives STATUS_STAGE_ARG with the body in ``wk.info[2]``."""
+    dexpinv gives STATUS_STAGE_ARG with the body in ``wk.failInfo[INFO_BODY]``."""
     bad = stage_state(sd.gid, A, j, h, R, r, V, wk.K, wk.Vd, wk.Psi, wk.Rs, wk.rs, wk.Vs, wk.m3[0], wk.v3[0])
     if bad >= 0:
-        wk.info[2] = bad
+        wk.failInfo[INFO_BODY] = bad
         return STATUS_STAGE_ARG
     return STATUS_OK
 

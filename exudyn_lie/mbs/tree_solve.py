@@ -30,7 +30,7 @@ child edges.  Leaves first (forward pass), each subtree is condensed into its ro
 The backward pass (root first) recovers ``y`` and ``lam`` edge by edge.  Cost per body:
 a few 6x6 products and factorisations of blocks of the size of one joint, independent of
 the number of bodies.  A pivot at or below ``pivotTol`` times its own row's diagonal in
-its block returns ``STATUS_SINGULAR`` (row in ``info[0]``), as the band Cholesky does.
+its block returns ``STATUS_SINGULAR`` (row in ``failInfo[INFO_ROW]``), as the band Cholesky does.
 
 The plan (which body is whose parent, the rows of each edge, offsets of the factor
 blocks) is made once by :func:`tree_plan` when the scene is compiled; the stage does no
@@ -40,7 +40,7 @@ band solve.
 import numpy as np
 from numba import njit
 
-from .codes import ROW_BODY_A, ROW_BODY_B, STATUS_OK, STATUS_SINGULAR, uses_body_twist
+from .codes import INFO_ROW, ROW_BODY_A, ROW_BODY_B, STATUS_OK, STATUS_SINGULAR, uses_body_twist
 
 # columns of the plan table (max(nb + 1, rows), 8); row nb holds the ends of the CSR ranges
 # and, in P_ORDER, the number of bodies in the elimination order; column P_ROWS lists the
@@ -51,18 +51,18 @@ from .codes import ROW_BODY_A, ROW_BODY_B, STATUS_OK, STATUS_SINGULAR, uses_body
 P_ORDER, P_PARENT, P_E0, P_G0, P_EL, P_GL, P_NCHILD, P_ROWS = 0, 1, 2, 3, 4, 5, 6, 7
 
 
-def tree_plan(nb, rint):
+def tree_plan(nb, rowIndex):
     """The elimination plan of the tree solve, or ``None`` if the rows close a loop
     between bodies or through the ground (then the band solve is kept).
 
     Returns the int table (``P_*`` columns): the elimination order, parents, the row
     indices of each body's parent edge and ground rows (CSR ranges ``P_E0``, ``P_G0`` into
     column ``P_ROWS``), the offsets of their Cholesky factors (``P_EL``, ``P_GL``)."""
-    m = rint.shape[0]
+    m = rowIndex.shape[0]
     ground = [[] for _ in range(nb)]
     pairs = {}
     for q in range(m):
-        a, b = int(rint[q, ROW_BODY_A]), int(rint[q, ROW_BODY_B])
+        a, b = int(rowIndex[q, ROW_BODY_A]), int(rowIndex[q, ROW_BODY_B])
         if a < 0 and b < 0 or a == b:
             return None
         if a < 0 or b < 0:
@@ -192,9 +192,9 @@ def _upper_solve_vec(L, off, n, x):
 
 
 @njit(cache=True, inline="always", _nrt=False)
-def _side(rint, q, i):
+def _side(rowIndex, q, i):
     """Column offset (0 or 6) of body i's block in row q."""
-    return 0 if rint[q, ROW_BODY_A] == i else 6
+    return 0 if rowIndex[q, ROW_BODY_A] == i else 6
 
 
 @njit(cache=True, _nrt=False)
@@ -301,28 +301,28 @@ def _articulated(A, K, Psi, t6):
 
 
 @njit(cache=True, inline="always", _nrt=False)
-def _factor_rows(i, trows, r0, n, rint, Jr, Tr, Tl, off, pivotTol, info):
+def _factor_rows(i, trows, r0, n, rowIndex, Jr, Tr, Tl, off, pivotTol, failInfo):
     """``L L^T`` of the ``n`` rows ``trows[r0:r0 + n]`` of body i: the lower triangle of
     ``Tr J^T`` (``Tr`` holds each row times the body's matrix) into ``Tl[off:]``, factored in
-    place.  Returns a status code (``info[0]``: the failing row)."""
+    place.  Returns a status code (``failInfo[INFO_ROW]``: the failing row)."""
     for a in range(n):
         qa = trows[r0 + a]
         for b in range(a + 1):
             qb = trows[r0 + b]
-            ob = _side(rint, qb, i)
+            ob = _side(rowIndex, qb, i)
             s = 0.0
             for d in range(6):
                 s += Tr[qa, d] * Jr[qb, ob + d]
             Tl[off + a * n + b] = s
     fail = _chol(Tl, off, n, pivotTol)
     if fail >= 0:
-        info[0] = trows[r0 + fail]
+        failInfo[INFO_ROW] = trows[r0 + fail]
         return STATUS_SINGULAR
     return STATUS_OK
 
 
 @njit(cache=True, inline="always", _nrt=False)
-def _condense_ground_rows(i, plan, trows, rint, Jr, Psi, Phi, beta, y0, lam, Tr, Tl, pivotTol, info):
+def _condense_ground_rows(i, plan, trows, rowIndex, Jr, Psi, Phi, beta, y0, lam, Tr, Tl, pivotTol, failInfo):
     """Body i's rows to the ground: ``T = J_G Psi J_G^T = L L^T``, ``P~ = L^-1 J_G Psi``,
     ``Phi = Psi - P~^T P~``; the rows' right-hand sides become ``L^-1 b - P~ beta`` and their
     share of ``y0`` is added.  Returns a status code."""
@@ -331,14 +331,14 @@ def _condense_ground_rows(i, plan, trows, rint, Jr, Psi, Phi, beta, y0, lam, Tr,
     off = plan[i, P_GL]
     for a in range(ng):
         q = trows[g0 + a]
-        o = _side(rint, q, i)
+        o = _side(rowIndex, q, i)
         for c in range(6):
             s = 0.0
             for d in range(6):
                 s += Jr[q, o + d] * Psi[d, c]
             Tr[q, c] = s
         Tr[q, 6] = lam[q]
-    if _factor_rows(i, trows, g0, ng, rint, Jr, Tr, Tl, off, pivotTol, info) != STATUS_OK:
+    if _factor_rows(i, trows, g0, ng, rowIndex, Jr, Tr, Tl, off, pivotTol, failInfo) != STATUS_OK:
         return STATUS_SINGULAR
     _lower_solve_rows(Tl, off, ng, trows, g0, Tr, 0, 7)
     for a in range(6):
@@ -360,7 +360,7 @@ def _condense_ground_rows(i, plan, trows, rint, Jr, Psi, Phi, beta, y0, lam, Tr,
 
 
 @njit(cache=True, inline="always", _nrt=False)
-def _condense_parent_edge(i, p, plan, trows, rint, Jr, Phi, y0, lam, Tr, Tl, Tb, Tv, pivotTol, info):
+def _condense_parent_edge(i, p, plan, trows, rowIndex, Jr, Phi, y0, lam, Tr, Tl, Tb, Tv, pivotTol, failInfo):
     """The edge from body i to its parent p: ``S = J_c Phi J_c^T = L L^T``,
     ``w = S^-1 (b - J_c y0)``, ``Z = L^-1 J_p``; adds ``Z^T Z`` to the parent's K and
     ``J_p^T w`` to its beta.  Returns a status code."""
@@ -369,7 +369,7 @@ def _condense_parent_edge(i, p, plan, trows, rint, Jr, Phi, y0, lam, Tr, Tl, Tb,
     off = plan[i, P_EL]
     for a in range(ne):
         q = trows[e0 + a]
-        o = _side(rint, q, i)
+        o = _side(rowIndex, q, i)
         s = lam[q]
         for c in range(6):
             t = 0.0
@@ -378,11 +378,11 @@ def _condense_parent_edge(i, p, plan, trows, rint, Jr, Phi, y0, lam, Tr, Tl, Tb,
             Tr[q, c] = t
             s -= Jr[q, o + c] * y0[c]
         Tr[q, 6] = s
-    if _factor_rows(i, trows, e0, ne, rint, Jr, Tr, Tl, off, pivotTol, info) != STATUS_OK:
+    if _factor_rows(i, trows, e0, ne, rowIndex, Jr, Tr, Tl, off, pivotTol, failInfo) != STATUS_OK:
         return STATUS_SINGULAR
     for a in range(ne):
         q = trows[e0 + a]
-        o = 6 - _side(rint, q, i)
+        o = 6 - _side(rowIndex, q, i)
         for c in range(6):
             Tr[q, c] = Jr[q, o + c]
     _lower_solve_rows(Tl, off, ne, trows, e0, Tr, 0, 7)
@@ -397,7 +397,7 @@ def _condense_parent_edge(i, p, plan, trows, rint, Jr, Phi, y0, lam, Tr, Tl, Tb,
     bp = Tv[p, 0]
     for a in range(ne):
         q = trows[e0 + a]
-        o = 6 - _side(rint, q, i)
+        o = 6 - _side(rowIndex, q, i)
         w = Tr[q, 6]
         for c in range(6):
             bp[c] += Jr[q, o + c] * w
@@ -408,7 +408,7 @@ def _condense_parent_edge(i, p, plan, trows, rint, Jr, Phi, y0, lam, Tr, Tl, Tb,
 
 
 @njit(cache=True, inline="always", _nrt=False)
-def _back_substitute(i, plan, trows, rint, Jr, Psi, Tv, Tr, Tl, lam):
+def _back_substitute(i, plan, trows, rowIndex, Jr, Psi, Tv, Tr, Tl, lam):
     """Body i, its parent's ``y`` known: the multipliers of its parent edge and of its ground
     rows, and its own ``y_i = Psi u`` (into ``Tv[i, 2]``)."""
     u = Tv[i, 2]
@@ -433,7 +433,7 @@ def _back_substitute(i, plan, trows, rint, Jr, Psi, Tv, Tr, Tl, lam):
             q = trows[e0 + a]
             lq = Tr[q, 6] - t[a]
             lam[q] = lq
-            o = _side(rint, q, i)
+            o = _side(rowIndex, q, i)
             for d in range(6):
                 g[d] += Jr[q, o + d] * lq
     for a in range(6):
@@ -453,7 +453,7 @@ def _back_substitute(i, plan, trows, rint, Jr, Psi, Tv, Tr, Tl, lam):
         for a in range(ng):
             q = trows[g0 + a]
             lam[q] = t[a]
-            o = _side(rint, q, i)
+            o = _side(rowIndex, q, i)
             for d in range(6):
                 u[d] += Jr[q, o + d] * t[a]
     # y_i = Psi u (into Tv[i, 2] through the scratch row g)
@@ -467,7 +467,7 @@ def _back_substitute(i, plan, trows, rint, Jr, Psi, Tv, Tr, Tl, lam):
 
 
 @njit(cache=True, _nrt=False)
-def tree_solve(gid, Minv, rint, R, Jr, lam, plan, Tw, pivotTol, info):
+def tree_solve(gid, Minv, rowIndex, R, Jr, lam, plan, Tw, pivotTol, failInfo):
     """``lam <- S^-1 lam``, ``S = J A J^T``, by the leaves-to-root elimination (module
     docstring), and ``y = A J^T lam`` per body in ``Tv[:, 2]`` (the correction the callers
     subtract, :func:`tree_correction`).  Work ``Tw`` (flat, ``work_size``), viewed as
@@ -475,7 +475,7 @@ def tree_solve(gid, Minv, rint, R, Jr, lam, plan, Tw, pivotTol, info):
     ``Tr`` (m, 7) = per row Z or P~ (6) and w or L^-1 b - P~ beta; ``Tl`` the factors.
     Returns a status code."""
     nb = gid.shape[0]
-    m = rint.shape[0]
+    m = rowIndex.shape[0]
     Tb = Tw[0:nb * 108].reshape((nb, 3, 6, 6))
     Tv = Tw[nb * 108:nb * 132].reshape((nb, 4, 6))
     Tr = Tw[nb * 132:nb * 132 + m * 7].reshape((m, 7))
@@ -511,17 +511,17 @@ def tree_solve(gid, Minv, rint, R, Jr, lam, plan, Tw, pivotTol, info):
                     s += Psi[a, c] * beta[c]
                 y0[a] = s
         if plan[i + 1, P_G0] > plan[i, P_G0]:
-            if _condense_ground_rows(i, plan, trows, rint, Jr, Psi, Phi, beta, y0, lam, Tr, Tl, pivotTol,
-                                     info) != STATUS_OK:
+            if _condense_ground_rows(i, plan, trows, rowIndex, Jr, Psi, Phi, beta, y0, lam, Tr, Tl, pivotTol,
+                                     failInfo) != STATUS_OK:
                 return STATUS_SINGULAR
         else:
             Phi = Psi
         p = plan[i, P_PARENT]
-        if p >= 0 and _condense_parent_edge(i, p, plan, trows, rint, Jr, Phi, y0, lam, Tr, Tl, Tb, Tv, pivotTol,
-                                            info) != STATUS_OK:
+        if p >= 0 and _condense_parent_edge(i, p, plan, trows, rowIndex, Jr, Phi, y0, lam, Tr, Tl, Tb, Tv, pivotTol,
+                                            failInfo) != STATUS_OK:
             return STATUS_SINGULAR
     # ---- backward: root first, y and lam edge by edge
     for k in range(n - 1, -1, -1):
         i = plan[k, P_ORDER]
-        _back_substitute(i, plan, trows, rint, Jr, _psi_of(gid, Minv, Tb, plan, i), Tv, Tr, Tl, lam)
+        _back_substitute(i, plan, trows, rowIndex, Jr, _psi_of(gid, Minv, Tb, plan, i), Tv, Tr, Tl, lam)
     return STATUS_OK

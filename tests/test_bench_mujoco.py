@@ -112,7 +112,7 @@ def test_heavy_top_spring_force_is_c_times_p0_minus_r(mujoco):
     q = rng.normal(size=4)
     run.d.qpos[:] = q / np.linalg.norm(q)
     mujoco.mj_forward(run.m, run.d)
-    r = run.d.linearPoints[1].copy()
+    r = run.d.xpos[1].copy()
     F = STIFFNESS * (P0 - r)
     # generalised force of a world force F at the COM on the ball joint: torque (r - pivot) x F in body axes
     R = run.d.xmat[1].reshape(3, 3)

@@ -757,8 +757,9 @@ def test_re_reading_unchanged_items_reproduces_the_compiled_rows():
     mbs.Assemble()
     solver = exl.LieGroupSolver(mbs)
     sd = solver.sim.sd
-    names = ("loadIndex", "loadVectors", "springBodies", "springPoints", "springLaw", "cartesianBodies", "cartesianPoints", "cartesianLaw", "torsionBodies", "torsionFrames", "torsionLaw", "rigidSpringBodies", "rigidSpringPoints",
-             "rigidSpringFrames", "rigidSpringLaw")
+    names = ("loadIndex", "loadVectors", "springBodies", "springPoints", "springLaw", "cartesianBodies",
+             "cartesianPoints", "cartesianLaw", "torsionBodies", "torsionFrames", "torsionLaw", "rigidSpringBodies",
+             "rigidSpringPoints", "rigidSpringFrames", "rigidSpringLaw")
     before = {k: getattr(sd, k).copy() for k in names}
     assert solver.scene.torsionData[0].turns0 == 2
     watch = ParameterWatch(solver)

@@ -15,7 +15,7 @@ What is built (:func:`mjcf_from_info`): the MJCF of a model of :mod:`models`, re
 same :class:`models.ModelInfo` data the package integrates (masses, inertia about the COM,
 COM offsets, initial poses and velocities, joint anchors, springs, gravity):
 
-* every body a MuJoCo ``<body>`` whose frame is the Exudyn node frame (so ``linearPoints`` /
+* every body a MuJoCo ``<body>`` whose frame is the Exudyn node frame (so ``xpos`` /
   ``xmat`` are the states the package reports), ``<inertial>`` with ``pos`` = the COM and
   ``fullinertia`` = the inertia about the COM; only trees of spherical joints rooted at the
   ground are accepted (MuJoCo closes loops with soft equality constraints: not the same
@@ -237,9 +237,9 @@ class MujocoRun:
 
     def state(self):
         """(R, r) of every body: the body frames (= Exudyn node frames) at ``d.time``."""
-        self.mj.mj_kinematics(self.m, self.d)     # mj_step leaves linearPoints at the start of its last step
+        self.mj.mj_kinematics(self.m, self.d)     # mj_step leaves xpos at the start of its last step
         R = np.array([self.d.xmat[i + 1].reshape(3, 3) for i in range(self.nb)])
-        r = np.array([self.d.linearPoints[i + 1] for i in range(self.nb)])
+        r = np.array([self.d.xpos[i + 1] for i in range(self.nb)])
         return R, r
 
 

@@ -92,10 +92,10 @@ def ep_row(R, omega, omegad, prev, first, p, p_t, p_tt, tmp):
 
 @njit(cache=True)
 def _wrap_near(x, ref):
-    # np.rowIndex, not np.round: the same value (round half to even), but np.round's numba
+    # np.rint, not np.round: the same value (round half to even), but np.round's numba
     # implementation lives in numba.np.arraymath, which imports scipy.linalg when a
     # cached kernel is loaded (0.12 s of a warm start)
-    return x + TWO_PI * np.rowIndex((ref - x) / TWO_PI)
+    return x + TWO_PI * np.rint((ref - x) / TWO_PI)
 
 
 @njit(cache=True)

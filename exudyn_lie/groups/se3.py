@@ -90,10 +90,10 @@ def closed_dexp(u):
     t = math.sqrt(u)
     s = math.sin(0.5 * t)
     c = math.cos(0.5 * t)
-    springBodies = 2.0 * s * c
-    A = springBodies / t
+    sint = 2.0 * s * c
+    A = sint / t
     B = 2.0 * s * s / u
-    C = (t - springBodies) / (u * t)
+    C = (t - sint) / (u * t)
     return B, C, (A - 2.0 * B) / u, (B - 3.0 * C) / u
 
 
@@ -137,10 +137,10 @@ def closed_selig(u):
     t = math.sqrt(u)
     s = math.sin(0.5 * t)
     c = math.cos(0.5 * t)
-    springBodies = 2.0 * s * c
+    sint = 2.0 * s * c
     cm1 = -2.0 * s * s                         # cos t - 1
-    return (2.0 / u + (t + 3.0 * springBodies) / (4.0 * t * cm1),
-            1.0 / (u * u) + (t + springBodies) / (4.0 * u * t * cm1))
+    return (2.0 / u + (t + 3.0 * sint) / (4.0 * t * cm1),
+            1.0 / (u * u) + (t + sint) / (4.0 * u * t * cm1))
 
 
 @njit(cache=True, fastmath=_FM, forceinline=False)

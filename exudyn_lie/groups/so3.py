@@ -82,8 +82,8 @@ def closed_ABC(u):
     t = math.sqrt(u)
     s = math.sin(0.5 * t)
     c = math.cos(0.5 * t)
-    springBodies = 2.0 * s * c
-    return springBodies / t, 2.0 * s * s / u, (t - springBodies) / (u * t)
+    sint = 2.0 * s * c
+    return sint / t, 2.0 * s * s / u, (t - sint) / (u * t)
 
 
 @njit(cache=True, fastmath=_FM, forceinline=False)

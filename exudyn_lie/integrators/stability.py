@@ -154,22 +154,22 @@ def tolerance_limit(method, periods, growth, ymax_search=10.0):
     return lo
 
 
-def stability_radius(method, tol=1e-3, nCoordAngles=181):
+def stability_radius(method, tol=1e-3, nangles=181):
     """Largest ``r`` with ``|R(z)| <= 1 + tol`` for every ``z`` in the closed left half-disk
-    of radius ``r`` (sampled on ``nCoordAngles`` rays).  ``tol > 0`` gives methods whose
+    of radius ``r`` (sampled on ``nangles`` rays).  ``tol > 0`` gives methods whose
     region misses the imaginary axis (Euler, the two-stage order-2 methods, Butcher's RK6)
     a practical, slowly growing limit instead of zero.
 
     ``method``: a catalogue name or any :class:`~exudyn_lie.integrators.ButcherTableau`
     (a user's own too): the radius is computed from the tableau's coefficients."""
     coeffs = tuple(float(x) for x in stability_coefficients(method))
-    return _stability_radius_of_polynomial(coeffs, float(tol), int(nCoordAngles))
+    return _stability_radius_of_polynomial(coeffs, float(tol), int(nangles))
 
 
 @lru_cache(maxsize=None)
-def _stability_radius_of_polynomial(coeffs, tol, nCoordAngles):
+def _stability_radius_of_polynomial(coeffs, tol, nangles):
     c = np.array(coeffs[::-1])
-    theta = np.linspace(0.5 * np.pi, 1.5 * np.pi, nCoordAngles)
+    theta = np.linspace(0.5 * np.pi, 1.5 * np.pi, nangles)
     rays = np.exp(1j * theta)
 
     def ok(r):

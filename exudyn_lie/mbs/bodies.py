@@ -23,10 +23,13 @@ body's velocity coordinates, the configuration update ``g exp(X)`` and the MK st
 ``dexp^-1``.  The last two are generated from the registry ``groups.GROUPS`` (below): a new
 group needs no branch here; the velocity-representation maps branch on its ``TWIST``.
 """
+import sys
+
 from numba import njit
 
 from ..groups import GROUPS
 from ..groups.interface import algebra_axes
+from .codegen import generate
 from .codes import uses_body_twist, GID_R3, GID_SE3
 
 
@@ -254,20 +257,16 @@ def composition_of(module):
 def _generated_dispatch(name, params, branch, doc):
     """An njit function ``name(gid, params)`` with one ``if gid == k:`` branch per registered
     group (``branch(k, module)``: its source lines), compiled as part of this file."""
-    lines = [f"def {name}(gid, {params}):"]
+    lines = []
     env = {"compose_body_twist": compose_body_twist, "compose_mixed": compose_mixed,
            "compose_translation": compose_translation}
     for k, module in enumerate(GROUPS.values()):
         env[f"group{k}_exp_into"] = module.exp_into
         env[f"group{k}_dexpinv_apply_into"] = module.dexpinv_apply_into
-        lines.append(f"    if gid == {k}:")
-        lines += ["        " + x for x in branch(k, module)]
-        lines.append("        return")
-    exec(compile("\n".join(lines) + "\n", __file__, "exec"), env)
-    fn = env[name]
-    fn.__doc__ = doc
-    fn.__module__ = __name__
-    return fn
+        lines.append(f"if gid == {k}:")
+        lines += ["    " + x for x in branch(k, module)]
+        lines.append("    return")
+    return generate(name, f"def {name}(gid, {params}):", lines, [], env, doc, sys.modules[__name__])
 
 
 _EXP_COMPOSE_DOC = """``(Rout, rout) = (R, r) exp(X)`` in the body's group (eqs. expX / expSO3xR3, and

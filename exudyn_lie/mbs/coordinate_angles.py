@@ -28,10 +28,10 @@ def frame_angle(F, R, prev):
     c = F[0, 0] * R[0, 0] + F[1, 0] * R[1, 0] + F[2, 0] * R[2, 0]
     s = -(F[0, 0] * R[0, 1] + F[1, 0] * R[1, 1] + F[2, 0] * R[2, 1])
     a = np.arctan2(s, c)
-    # np.rowIndex, not np.round: the same value (round half to even), but np.round's numba
+    # np.rint, not np.round: the same value (round half to even), but np.round's numba
     # implementation lives in numba.np.arraymath, which imports scipy.linalg when a
     # cached kernel is loaded (0.12 s of a warm start)
-    return a + TWO_PI * np.rowIndex((prev - a) / TWO_PI)
+    return a + TWO_PI * np.rint((prev - a) / TWO_PI)
 
 
 @njit(cache=True, inline="always", _nrt=False)

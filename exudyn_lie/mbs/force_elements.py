@@ -23,11 +23,13 @@ it is kept as it was (a changed SceneData layout changes the per-step speed, see
 its scene dataclass and ``Add*`` (:mod:`.scene`), its own file with the force function and
 the entries, and one :func:`register` line here.
 """
+import sys
 from collections import namedtuple
 
 import numpy as np
 from numba import njit
 
+from .codegen import generate
 from .coordinate_forces import coordinate_spring_element, coordinate_spring_element_energy
 from .forces import (cartesian_element, cartesian_element_energy, gravity_forces, inertial_forces, load_forces,
                      rigid_spring_element, spring_element, spring_element_energy, torsional_element,
@@ -181,14 +183,7 @@ def write_row(e, scene, sd, wk, k, item):
 
 # ---------------------------------------------------------------- generated from the registrations
 def _generate(name, header, lines, footer, env, doc):
-    """An njit source generated from the registrations, compiled under this file's name so
-    numba caches it (its cache key, exudyn_lie._numba_cache, hashes this file)."""
-    src = "\n".join([header] + ["    " + x for x in lines] + ["    " + x for x in footer]) + "\n"
-    exec(compile(src, __file__, "exec"), env)
-    fn = env[name]
-    fn.__module__ = __name__
-    fn.__doc__ = doc
-    return fn
+    return generate(name, header, lines, footer, env, doc, sys.modules[__name__])
 
 
 # a lean element is called when its table has rows; any other through a guard that compiles to

@@ -9,10 +9,6 @@ from ..groups import so3
 from .bodies import (_matvec, _side, add_pair_force, add_point_force, add_world_torque, body_inertial_forces,
                      body_point, connector_ends)
 from .codes import L_BODY, L_FIXED, L_KIND
-from .coordinate_angles import update_coordinate_angles
-from .presence import guarded
-from .rotation_parameters import update_tracked_bodies
-from .rolling_disc_penalty_forces import update_rolling_disc_penalty_data
 
 
 # --------------------------------------------------------------------------- forces
@@ -97,10 +93,10 @@ def torsion_angle(rotA, rotB, prev, RA, VA, RB, VB, FA, FB):
     r01 = FA[0, 0] * FB[0, 1] + FA[1, 0] * FB[1, 1] + FA[2, 0] * FB[2, 1]
     r00 = FA[0, 0] * FB[0, 0] + FA[1, 0] * FB[1, 0] + FA[2, 0] * FB[2, 0]
     phi0 = np.arctan2(-r01, r00)
-    # np.rowIndex, not np.round: the same value (round half to even), but np.round's numba
+    # np.rint, not np.round: the same value (round half to even), but np.round's numba
     # implementation lives in numba.np.arraymath, which imports scipy.linalg when a
     # cached kernel is loaded (0.12 s of a warm start)
-    turns = np.rowIndex((prev - phi0) / (2.0 * np.pi))
+    turns = np.rint((prev - phi0) / (2.0 * np.pi))
     phi = phi0 + 2.0 * np.pi * turns
     # phidot = z_A . (omega_B,world - omega_A,world)
     wBw0 = RB[0, 0] * VB[0] + RB[0, 1] * VB[1] + RB[0, 2] * VB[2]
@@ -349,33 +345,3 @@ def cartesian_element_energy(sd, wk, R, r, V, e):
 def torsional_element_energy(sd, wk, R, r, V, e):
     return torsional_potential(sd.gid, sd.torsionBodies, sd.torsionFrames, sd.torsionLaw, wk.tphi, R, r, V, wk.m3, wk.ident, wk.zero3,
                                wk.zero6, e)
-
-
-@njit(cache=True, inline="always", _nrt=False)
-def _coordinate_angles(nCoordAngles, jointIndex, jointFrames, jointParams, rowIndex, coordSpringEnds, coordSpringFrames, coordSpringLaw, R):
-    if nCoordAngles > 0:                 # a count, not a table: the guard's rows check does not apply
-        update_coordinate_angles(jointIndex, jointFrames, jointParams, rowIndex, coordSpringEnds, coordSpringFrames, coordSpringLaw, R)
-
-
-# none of them in a lean scene (their tables None, mbs/presence.py); in a full one only with rows
-rolling_disc_penalty_data_if = guarded(update_rolling_disc_penalty_data, rows=True)
-torsion_angles_if = guarded(torsion_angles, rows=True)
-coordinate_angles_if = guarded(_coordinate_angles)
-
-
-@njit(cache=True, inline="always", _nrt=False)
-def update_contact_data(sd, wk, R, r, V):
-    """Data coordinates that Exudyn updates after a step (its PostNewtonStep), after an accepted
-    step: the penalty rolling discs' slip velocity and gap.  (Not in update_torsion_tracking:
-    that one also sets the tracked angles at an initial state, where the data keep their
-    initial values, as in Exudyn.)"""
-    rolling_disc_penalty_data_if(wk.disc, sd.gid, wk.disc, R, r, V, wk.v3, wk.ident, wk.zero3, wk.zero6)
-
-
-@njit(cache=True, inline="always", _nrt=False)
-def update_torsion_tracking(sd, wk, R, r, V):
-    """The tracked angles (torsional springs, rotation coordinates) after an accepted step."""
-    torsion_angles_if(sd.torsionBodies, sd.gid, sd.torsionBodies, sd.torsionFrames, wk.tphi, R, r, V, wk.m3, wk.ident, wk.zero3, wk.zero6)
-    coordinate_angles_if(sd.nCoordAngles, sd.nCoordAngles, sd.jointIndex, sd.jointFrames, sd.jointParams, sd.rowIndex, sd.coordSpringEnds, sd.coordSpringFrames, sd.coordSpringLaw, R)
-    if wk.nplanar > 0:
-        update_tracked_bodies(wk.btrack, wk.bframe, wk.bangle, wk.bparam, R)

@@ -40,8 +40,7 @@ from .codes import *  # noqa: F401,F403
 from .constraints import joint_rows, joints_rows  # noqa: F401
 from .diagnostics import all_rows, kinetic_and_gravity  # noqa: F401
 from .force_elements import compute_forces, spring_energy  # noqa: F401
-from .forces import update_torsion_tracking  # noqa: F401
 from .index1 import rhs, schur_correct, schur_solve  # noqa: F401
 from .projection import project, project_state  # noqa: F401
-from .stepper import (copy_state, mk_finish, mk_stage_k, mk_stage_state, mk_steps, state_is_finite,  # noqa: F401
-                      watch_rotation_entries)
+from .step_observers import after_accepted_step, observe_initial_state, watch_rotation_entries  # noqa: F401
+from .stepper import copy_state, mk_finish, mk_stage_k, mk_stage_state, mk_steps, state_is_finite  # noqa: F401

@@ -18,9 +18,9 @@ from ..integrators.mk_adaptive import resolve_pair
 from ..userwarn import warn_user
 from . import external, kernel
 from .rolling_disc_penalty_forces import D_DATA
-from .presence import is_present
 from .force_elements import write_row
 from .rotation_parameters import record_tracked, update_tracked_bodies
+from .step_observers import observe_initial_state, observed_at_start
 from .compiled import compile_scene, compile_tracking, make_work, resolve_groups, with_redundant
 from .linalg import REL_PIVOT_TOL, rows_in_null_space, schur_rank_and_null
 from .row_drives import RowDrives
@@ -134,23 +134,23 @@ class Simulator(ExternalSeams):
         self._segmentStart = (self.t, self.R.copy(), self.r.copy(), self.V.copy())
         if len(sc.torsionalSprings):
             self.wk.tphi[:] = 0.0
-        for k, e in enumerate(sc.rollingDiscPenalties):     # data coordinates: as given (Exudyn's initial data)
+        for k, e in enumerate(sc.rollingDiscPenalties):     # data coordinates: as given
             self.wk.disc[k, D_DATA:] = e.data0
         # the tracked angles (torsional springs, rotation coordinates, 2D bodies) at this state
         self._update_tracking()
 
     def _update_tracking(self):
-        """``kernel.update_torsion_tracking`` at the current state, if the scene tracks an angle
-        (the same three conditions as the compiled function): a scene without one does not
-        load that compiled entry point at all (its cache load and first-call typing are part
-        of a warm first solve)."""
+        """The step observers that are set at an initial state (``step_observers.atStart``), at
+        the current state.  A scene without any does not load that compiled entry point at
+        all (its cache load and first-call typing are part of a warm first solve)."""
         sd, wk = self.sd, self.wk
-        if is_present(sd.torsionBodies) or (sd.nCoordAngles or 0) > 0:
-            kernel.update_torsion_tracking(sd, wk, self.R, self.r, self.V)
-        elif wk.nplanar > 0:
-            # its last part alone: the step loop's own callee, so a first run compiles no
-            # separate entry taking the SceneData / Work tuples for it (1.5 s)
+        present = observed_at_start(sd, wk)
+        if present == ["trackedBodies"]:
+            # its update alone: the step loop's own callee, so a first run compiles no
+            # separate entry taking the SceneData / Work tuples for it
             update_tracked_bodies(wk.btrack, wk.bframe, wk.bangle, wk.bparam, self.R)
+        elif present:
+            observe_initial_state(sd, wk, self.R, self.r, self.V)
 
     def states(self):
         omega, vel = twist_to_world_velocity(self.gid, self.R, self.V)

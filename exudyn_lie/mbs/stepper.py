@@ -49,12 +49,12 @@ from .external_probes import probe_kinematics
 from .bodies import body_dexpinv_stage, body_world_velocity, exp_compose, add_point_force_origin, add_world_torque_row
 from .codes import (EXTERNAL_RATES, INFO_BODY, STAGE_ARG_MAX2, STATUS_BLOWUP, STATUS_EXTERNAL, STATUS_NONFINITE, STATUS_OK,
                     STATUS_STAGE_ARG)
-from .forces import update_contact_data, update_torsion_tracking
 from .rotation_parameters import record_tracked
 from .index1 import rhs
 from .presence import guarded
 from .projection import is_stabilized, project_state_if
 from .row_drives import update_row_drives
+from .step_observers import after_accepted_step
 
 # A tableau as the stepper uses it: A, b, c, the indices of the evaluated stages and the
 # embedded weights (no rows without a pair).
@@ -391,16 +391,6 @@ def copy_state(R, r, V, Rto, rto, Vto):
             Vto[i, k] = V[i, k]
 
 
-@njit(cache=True, _nrt=False)
-def watch_rotation_entries(watchBody, watchEntry, watchMax, R):
-    """Largest |R[body][i, j]| of the watched entries over the accepted steps (cheap
-    monitoring between outputs, e.g. of a coordinate singularity; none by default)."""
-    for w in range(watchBody.shape[0]):
-        a = abs(R[watchBody[w], watchEntry[w, 0], watchEntry[w, 1]])
-        if a > watchMax[w]:
-            watchMax[w] = a
-
-
 @njit(cache=True, inline="always", _nrt=False)
 def record_accelerations(wk, Vdo, lamo):
     """An output row's accelerations and multipliers: the first stage of the next step."""
@@ -409,16 +399,6 @@ def record_accelerations(wk, Vdo, lamo):
             Vdo[i, k] = wk.Vd[0, i, k]
     for k in range(lamo.shape[0]):
         lamo[k] = wk.lam[k]
-
-
-@njit(cache=True, inline="always", _nrt=False)
-def after_accepted_step(sd, wk, R, r, V):
-    """What is tracked from one accepted step to the next: torsion angles, the contacts'
-    data coordinates (Exudyn's PostNewton), the watched rotation entries."""
-    update_torsion_tracking(sd, wk, R, r, V)
-    update_contact_data(sd, wk, R, r, V)
-    if wk.watchBody.shape[0] > 0:
-        watch_rotation_entries(wk.watchBody, wk.watchEntry, wk.watchMax, R)
 
 
 @njit(cache=True, inline="always", _nrt=False)

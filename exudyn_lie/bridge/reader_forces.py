@@ -173,7 +173,8 @@ class ForceReaders:
                               f"supported by exudyn_lie")
         rotA = A.rot @ np.asarray(d.get("rotationMarker0", np.eye(3)), float)
         rotB = B.rot @ np.asarray(d.get("rotationMarker1", np.eye(3)), float)
-        if uf is None:             # compiled (mbs/forces.rigid_spring_forces: the same law)
+        if uf is None:             # compiled (mbs/forces.rigid_spring_forces: Exudyn's law, angles as
+            #                        RotationMatrix2RotXYZ, checked by tests/test_bridge_oracle.py)
             sc.AddRigidBodySpringDamper(A.body, B.body, posA=A.pos, rotA=_orthonormal(rotA), posB=B.pos,
                                         rotB=_orthonormal(rotB), stiffness=np.asarray(d["stiffness"], float),
                                         damping=np.asarray(d["damping"], float),
@@ -186,7 +187,12 @@ class ForceReaders:
         """CObjectConnectorRollingDiscPenalty (mbs/rolling_disc_penalty_forces.py): marker 0 the
         plane (ground or a 3D rigid body, normal ``A0 planeNormal``), marker 1 the disc centre
         (axis ``A1 discAxis``); the three data coordinates of its NodeGenericData (slip velocity,
-        gap of the last step) start as stored in mbs."""
+        gap of the last step) start as stored in mbs.  The kernel's law is Exudyn's (its
+        documentation's "Geometric relations" and "Computation of normal and tangential forces",
+        ComputeSlipForce for the friction; the rolling friction is added after the torques, as
+        there); Exudyn's PostNewtonStep, which writes the data after a step and skips an
+        inactive connector (whose data node then keeps the values of its last active step,
+        measured), is the kernel's contact-data step observer."""
         if B.body == GROUND:
             raise BridgeError(f"{what}: marker 1 (the disc) is on the ground; Exudyn's rolling disc has the disc "
                               f"on marker 1 and the plane (ground or body) on marker 0")

@@ -168,17 +168,17 @@ def axes_minv(M, axes):
 
 
 def planar_minv(M):
-    """``M^-1`` of a 2D body in its 6-vector velocity (Exudyn's 2D body has exactly the 3
+    """``M^-1`` of a 2D body in its 6-vector velocity (a 2D body has exactly the 3
     coordinates ``PLANAR_AXES``)."""
     return axes_minv(M, PLANAR_AXES)
 
 
 def joint_row_descriptors(constrainedAxes, worldTranslation=False):
-    """Rows of Exudyn's ObjectJointGeneric for the given locks, as (kind, ax, bx):
+    """Rows of a joint with the given locks, as (kind, ax, bx):
 
     * translations: in the A joint frame (``ROW_TRANS_LOCAL``), or in world
       coordinates (``ROW_TRANS_WORLD``) when all three translations are locked or
-      ``worldTranslation`` (Exudyn's ObjectJointSpherical: world components of the locked axes);
+      ``worldTranslation`` (world components of the locked axes);
     * rotations: 3 locked -> z0.y1, z0.x1, x0.y1; 2 locked (free axis f) -> f0 . l1 for
       both locked axes l; 1 locked (universal, free axes f1 < f2) -> f1_0 . f2_1.
     """
@@ -442,7 +442,7 @@ def solve_plan(sd, solve="auto"):
         # of J M^-1 C^T; neither the symmetric band / pivoted Cholesky nor the tree solve applies
         if sd.redundant or solve == "tree":
             raise SceneError("the scene has coordinate constraints on rotation-vector coordinates (force direction "
-                             "e_k, as Exudyn's RotVecLG Jacobian, != gradient) together with "
+                             "e_k on the local angular velocity, != gradient) together with "
                              + ("redundant constraints" if sd.redundant else "solve='tree'")
                              + ": exudyn_lie's non-symmetric solve has no rank-revealing / tree variant; remove the "
                              "redundant constraint axes")

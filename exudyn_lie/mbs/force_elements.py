@@ -52,7 +52,7 @@ ELEMENTS = []
 def register(name, sceneList, fields, forces, energy=None, table=None, writeRow=None, lean=False):
     """Register one compiled force element (module docstring).  ``table``: the array whose rows
     say whether the scene has the element, as an expression on the scene tuples (default: its
-    first SceneData field); an element whose data Exudyn updates after a step keeps them in
+    first SceneData field); an element whose data change after each step keeps them in
     ``Work`` (e.g. ``wk.disc``), registers no SceneData field and gives ``writeRow(sd, wk, k,
     item)``, which rewrites its row ``k`` from a changed scene item (:func:`write_row`).
     ``lean``: part of a lean scene (:mod:`.presence`); the fields of any other element are None

@@ -85,7 +85,7 @@ def torsion_angle(rotA, rotB, prev, RA, VA, RB, VB, FA, FB):
     """Relative rotation angle about z of frame A (tracked continuously through turns
     from the angle ``prev`` at the last accepted step) and its rate."""
     # relative rotation Rrel = (RA rotA)^T (RB rotB); phi is its third Tait-Bryan (x-y-z)
-    # angle, atan2(-Rrel[0,1], Rrel[0,0]), as in Exudyn's TorsionalSpringDamper
+    # angle, atan2(-Rrel[0,1], Rrel[0,0])
     for i in range(3):
         for j in range(3):
             FA[i, j] = RA[i, 0] * rotA[0, j] + RA[i, 1] * rotA[1, j] + RA[i, 2] * rotA[2, j]
@@ -112,7 +112,7 @@ def torsion_angle(rotA, rotB, prev, RA, VA, RB, VB, FA, FB):
 @njit(cache=True, _nrt=False)
 def torsional_forces(gid, torsionBodies, torsionFrames, torsionLaw, tphi, R, r, V, Q, F, m3, ident, zero3, zero6):
     """Torsional spring-dampers about the z axis of the frame on A (``torsionLaw`` = k, d,
-    offset, torque).  Exudyn's law: ``tau = k (phi - phi0) + d phidot + torque``;
+    offset, torque): ``tau = k (phi - phi0) + d phidot + torque``;
     ``-tau z_A`` acts on B, ``+tau z_A`` on A."""
     for s in range(torsionBodies.shape[0]):
         a = torsionBodies[s, 0]
@@ -146,8 +146,8 @@ def _matT_vec(A, x, out):
 
 @njit(cache=True, _nrt=False)
 def tait_bryan_xyz(Rr, out):
-    """The principal Tait-Bryan angles ``Rr = Rx(a0) Ry(a1) Rz(a2)`` (Exudyn's
-    RotationMatrix2RotXYZ; at cos a1 = 0 only a0 + a2 is defined, a0 = 0)."""
+    """The principal Tait-Bryan angles ``Rr = Rx(a0) Ry(a1) Rz(a2)`` (at cos a1 = 0 only
+    a0 + a2 is defined: a0 = 0)."""
     c1 = np.sqrt(Rr[1, 2] * Rr[1, 2] + Rr[2, 2] * Rr[2, 2])
     out[1] = np.arctan2(Rr[0, 2], c1)
     if c1 < 1e-14:
@@ -160,7 +160,7 @@ def tait_bryan_xyz(Rr, out):
 
 @njit(cache=True, _nrt=False)
 def rigid_spring_forces(gid, rigidSpringBodies, rigidSpringPoints, rigidSpringFrames, rigidSpringLaw, R, r, V, Q, v3, m3, ident, zero3, zero6):
-    """Exudyn's ``ObjectConnectorRigidBodySpringDamper`` between the frames ``J0 = R_A rotA``
+    """6-dof spring-dampers between the frames ``J0 = R_A rotA``
     at ``pA`` and ``J1 = R_B rotB`` at ``pB`` (``rigidSpringLaw`` rows: K (6x6), D (6x6), offset):
 
     * Tait-Bryan form: ``u = (J0^T (pB - pA), xyz angles of J0^T J1) - offset``,
@@ -171,8 +171,8 @@ def rigid_spring_forces(gid, rigidSpringBodies, rigidSpringPoints, rigidSpringFr
       point: an extra torque ``1/2 (Jm u_t) x f`` on both sides (``u_t`` before the offset);
 
     ``(f, m) = K u + D udot`` in the frame ``Jf``; ``Jf f`` at ``pA`` and ``-Jf f`` at ``pB``,
-    torques ``Jf m + c`` on A and ``-Jf m + c`` on B.  Checked against Exudyn's
-    ``ComputeODE2RHS`` in ``tests/test_bridge_oracle.py``."""
+    torques ``Jf m + c`` on A and ``-Jf m + c`` on B (the bridge's oracle tests compare
+    them with the modelling system's own right-hand side, ``tests/test_bridge_oracle.py``)."""
     pA, pB, vA, vB, bA, bB = v3[0], v3[1], v3[2], v3[3], v3[4], v3[5]
     F, Tq, wA, wB, dp, uT, uR, utT, utR, lever, tmp = (v3[6], v3[7], v3[8], v3[9], v3[10], v3[11], v3[12],
                                                        v3[13], v3[14], v3[15], v3[16])

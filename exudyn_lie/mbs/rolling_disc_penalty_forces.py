@@ -1,22 +1,21 @@
-"""The penalty rolling disc: Exudyn's ``ObjectConnectorRollingDiscPenalty``
-(CObjectConnectorRollingDiscPenalty, its documentation "ObjectConnectorRollingDiscPenalty").
+"""The penalty rolling disc: a disc that rolls on a plane with a penalty contact and
+regularised friction (the bridge maps its item onto it, bridge/reader_forces.py).
 
-A disc (marker 1: the disc centre on body B, axis ``w1 = A1 discAxis``) on the plane of
-marker 0 (a rigid body A or the ground, normal ``n0 = A0 planeNormal``, through the marker
-point ``p0``).  Geometry (Exudyn's "Geometric relations"):
+A disc (end 1: the disc centre on body B, axis ``w1 = A1 discAxis``) on the plane of
+end 0 (a rigid body A or the ground, normal ``n0 = A0 planeNormal``, through the end's
+point ``p0``).  Geometry:
 
     w2 = (w1 x n0) / |w1 x n0|   (longitudinal),   w3 = w1 x w2   (centre -> contact point),
     wLat = n0 x w2,
     pC = p1 + r w3 - p0,         vC = v1 + omega1 x (r w3) - (v0 + omega0 x pC),
     vt = (vC . wLat, vC . w2)    (slip velocity in the joint frame J1).
 
-Forces ("Computation of normal and tangential forces"), with the data coordinates
-``x = (x0, x1, x2)`` of the item's NodeGenericData: ``(x0, x1)`` the slip velocity and ``x2``
-the gap of the last PostNewton step (Exudyn updates them only after a step):
+Forces, with the data coordinates ``x = (x0, x1, x2)``: ``(x0, x1)`` the slip velocity and
+``x2`` the gap at the last accepted step (they change only after a step):
 
 * contact only if the *stored* gap ``x2 < 0``; then ``fn = -(k pC . n0 + d vC . n0)``
   (with the current ``pC``, ``vC``), else ``fn = 0`` and no friction;
-* friction (Exudyn's ComputeSlipForce): none if ``|vt| = 0`` or ``|x01| = 0``; else the
+* friction (:func:`slip_force`): none if ``|vt| = 0`` or ``|x01| = 0``; else the
   direction is the stored one ``x01 / |x01|`` with ``phi = 1``, except in the proportional zone
   ``|x01| <= v_mu`` (``v_mu != 0``): there the current direction ``vt / |vt|`` and
   ``phi = f (2 - f)`` (or ``phi = f`` with useLinearProportionalZone), ``f = |vt| / v_mu``;
@@ -28,11 +27,9 @@ the gap of the last PostNewton step (Exudyn updates them only after a step):
   ``+mu_r |fn| vg`` at ``p0`` (no torque), ``vg = v1 - (v0 + omega0 x pC)`` without its normal part.
 
 After each accepted step, :func:`update_rolling_disc_penalty_data` stores ``(vt, pC . n0)`` of the
-new state in the data coordinates, as Exudyn's PostNewtonStep does.  (Exudyn's own solvers may
-repeat a step with the updated data, its discontinuous iteration; the explicit steps here use
-the data of the last accepted step throughout the step.)  ``activeConnector=False`` gives no
-force and keeps the data as they are (Exudyn calls no PostNewtonStep of an inactive connector:
-its data node keeps the values of the last active step, measured).
+new state in the data coordinates (a step observer, mbs/step_observers.py); the explicit steps
+use the data of the last accepted step throughout the step.  A switched-off disc gives no
+force and keeps its data as they are.
 
 Layout: ``Work.disc``, one row per disc, columns ``D_*`` below: A (plane, -1 ground), B (disc),
 active, useLinearProportionalZone (integers stored as floats), the parameters, and the data
@@ -119,7 +116,7 @@ def disc_contact(gA, RA, rA, VA, gB, RB, rB, VB, par, v3):
 
 @njit(cache=True, _nrt=False)
 def slip_force(par, linear, s0, s1, d0, d1, fn):
-    """Exudyn's ComputeSlipForce: the tangential force (J1 coordinates) at slip velocity
+    """The tangential force (J1 coordinates) at slip velocity
     ``(s0, s1)``, stored slip velocity ``(d0, d1)`` and normal force ``fn``."""
     v = np.sqrt(s0 * s0 + s1 * s1)
     dv = np.sqrt(d0 * d0 + d1 * d1)
@@ -160,7 +157,7 @@ def rolling_disc_penalty_forces(gid, disc, R, r, V, Q, v3, ident, zero3, zero6):
         gA, RA, rA, VA = _side(gid, a, R, r, V, ident, zero3, zero6)
         gB, RB, rB, VB = _side(gid, b, R, r, V, ident, zero3, zero6)
         gap, gapRate, s0, s1 = disc_contact(gA, RA, rA, VA, gB, RB, rB, VB, par, v3)
-        if not par[D_DATA + 2] < 0.0:            # Exudyn: contact by the stored gap only
+        if not par[D_DATA + 2] < 0.0:            # contact by the stored gap only
             continue
         fn = -(par[D_K] * gap + par[D_D] * gapRate)
         ft0, ft1 = slip_force(par, par[D_LINEAR] != 0.0, s0, s1, par[D_DATA], par[D_DATA + 1], fn)
@@ -171,7 +168,7 @@ def rolling_disc_penalty_forces(gid, disc, R, r, V, Q, v3, ident, zero3, zero6):
         _cross_into(pC, F, T)                                    # pC x f (about p0; -T on A)
         muR = par[D_ROLL]
         if muR != 0.0:
-            # rolling friction at the disc centre and at p0, no torque (Exudyn adds it after the torques)
+            # rolling friction at the disc centre and at p0, no torque (added after the torques)
             _cross_into(om0, pC, tmp)
             for k in range(3):
                 tmp[k] = v1[k] - v0[k] - tmp[k]
@@ -190,12 +187,12 @@ def rolling_disc_penalty_forces(gid, disc, R, r, V, Q, v3, ident, zero3, zero6):
 
 @njit(cache=True, _nrt=False)
 def update_rolling_disc_penalty_data(gid, disc, R, r, V, v3, ident, zero3, zero6):
-    """Exudyn's PostNewtonStep after an accepted step: the data coordinates of every active disc
-    become the slip velocity and the gap of the new state."""
+    """After an accepted step: the data coordinates of every active disc become the slip
+    velocity and the gap of the new state."""
     for s in range(disc.shape[0]):
         par = disc[s]
         if par[D_ACTIVE] == 0.0:
-            continue                            # Exudyn skips inactive connectors in PostNewton
+            continue                            # a switched-off disc keeps its data
         gA, RA, rA, VA = _side(gid, int(par[D_A]), R, r, V, ident, zero3, zero6)
         gB, RB, rB, VB = _side(gid, int(par[D_B]), R, r, V, ident, zero3, zero6)
         gap, gapRate, s0, s1 = disc_contact(gA, RA, rA, VA, gB, RB, rB, VB, par, v3)

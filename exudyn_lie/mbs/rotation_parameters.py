@@ -1,15 +1,15 @@
-"""Rotation parameters of the bodies' nodes tracked after every accepted step (for the
-write-back, bridge/node_writers.py): the parameters Exudyn's own solver would reach by integrating
-them continuously, i.e. for a rotation ``R`` the branch nearest to the parameters at the last
-accepted step (one step turns a body by far less than pi):
+"""Rotation parameters of the bodies tracked after every accepted step (a step observer, for
+the coordinate items on rotation parameters and for a write-back of node coordinates,
+bridge/node_writers.py): the parameters reached by integrating them continuously, i.e. for a
+rotation ``R`` the branch nearest to the parameters at the last accepted step (one step turns a
+body by far less than pi):
 
-* ``TRACK_QUAT``: the unit quaternion of ``R`` with the sign nearest the previous one - the
-  Euler parameters of a NodeRigidBodyEP (integrated continuously by Exudyn) and the quaternion
-  behind a NodeRigidBodyRotVecLG: Exudyn's Lie group update (``CompositionRotationVector``,
-  RigidBodyMath.h) composes the quaternions of the total rotation vector and of the increment
-  and returns ``2 acos(q0) qv / |qv|`` (|theta| <= 2 pi, turning over at 2 pi, not at pi);
-* ``TRACK_TAIT_BRYAN``: Tait-Bryan angles ``R = Rx(a0) Ry(a1) Rz(a2)`` of a NodeRigidBodyRxyz, the
-  solution of the two (each modulo 2 pi) nearest the previous angles;
+* ``TRACK_QUAT``: the unit quaternion of ``R`` with the sign nearest the previous one - Euler
+  parameters integrated continuously, and the quaternion behind a rotation vector that is
+  updated by composing quaternions: ``2 acos(q0) qv / |qv|`` (:func:`quat_rotvec`; |theta| <=
+  2 pi, turning over at 2 pi, not at pi);
+* ``TRACK_TAIT_BRYAN``: Tait-Bryan angles ``R = Rx(a0) Ry(a1) Rz(a2)``, the solution of the two
+  (each modulo 2 pi) nearest the previous angles;
 * ``TRACK_ANGLE``: the angle of a 2D body / rotor (coordinate_angles.frame_angle, kept in
   ``Work.bangle``).
 
@@ -71,8 +71,8 @@ def nearest_quat(R, ref, out):
 
 @njit(cache=True, _nrt=False)
 def quat_rotvec(q, out):
-    """Exudyn's rotation vector of the quaternion q (either sign): ``2 acos(q0) qv / |qv|``,
-    |theta| in [0, 2 pi] (CompositionRotationVector's result)."""
+    """The rotation vector of the quaternion q (either sign): ``2 acos(q0) qv / |qv|``,
+    |theta| in [0, 2 pi] (what a composition of quaternions returns)."""
     s = math.sqrt(q[1] ** 2 + q[2] ** 2 + q[3] ** 2)
     w = 2.0 * math.atan2(s, q[0])
     if s > 1e-12:
@@ -140,7 +140,7 @@ def nearest_parameters(code, R, ref, out):
 def update_tracked_bodies(btrack, bframe, bangle, bparam, R):
     """Move what is tracked of every body to its rotation after an accepted step: the angle of
     a 2D body / rotor (continued over turns, coordinate_angles.frame_angle) and the node
-    rotation parameters (the quaternion case, every rigid body of an EP / RotVecLG model, with
+    rotation parameters (the quaternion case, every tracked body of most models, with
     scalars only: it runs every step).  One call, not inlined into the stepper."""
     for i in range(btrack.shape[0]):
         c = btrack[i]

@@ -24,7 +24,7 @@ Two seams:
   ``sd.hasQext`` the stage calls the registered Python evaluator once
   (:func:`~.external.call`), which fills the extra generalised forces ``wk.Qext`` at the stage state
   (``EXTERNAL_FORCES``), or the whole ``Vdot`` (``EXTERNAL_RATES``: a problem evaluated outside the
-  kernel, such as Exudyn's evaluation of a whole model); no Python stage loop.  An exception there
+  kernel, such as the bridge's evaluation of a whole model); no Python stage loop.  An exception there
   ends the call with ``STATUS_EXTERNAL``.
 * the **step controller** (``ctl``): a namedtuple whose *type* is the controller.
   ``Control`` with ``CONTROL_FIXED`` (:func:`fixed_step_control`): fixed steps, every step

@@ -15,8 +15,8 @@ Mapping (Exudyn -> scene):
 * markers ``MarkerBodyRigid / MarkerNodeRigid`` (localHT), ``MarkerBodyPosition /
   MarkerNodePosition`` (localPosition), ``MarkerBodyMass`` (mass-proportional loads);
 * ``ObjectJointSpherical / RevoluteZ / PrismaticX / Generic`` -> ``Scene.AddJoint`` with the
-  joint frame ``marker localHT rotation @ rotationMarker`` (Exudyn's equations = the
-  kernel's ``ObjectJointGeneric`` rows, row by row, see :func:`joint_ae_map`);
+  joint frame ``marker localHT rotation @ rotationMarker`` (Exudyn's equations, those of
+  ``ObjectJointGeneric``, = the kernel's joint rows, row by row, see :func:`joint_ae_map`);
 * ``ObjectConnectorSpringDamper / CartesianSpringDamper / TorsionalSpringDamper /
   RigidBodySpringDamper`` -> compiled springs (``velocityOffset`` folded into the constant
   force / torque; an inactive one with zero coefficients, so that a user function can
@@ -322,6 +322,8 @@ class _Reader(JointReaders, ForceReaders):
         label = d.get("name", "") or f"object{o}"
         try:
             if d["objectType"] == "RigidBody2D":
+                # inertia about the node (Exudyn's reference point); Exudyn's 2D bodies take no
+                # force or reaction off the plane, as the kernel's planar body
                 b = sc.AddBody2D(mass=float(d["mass"]), inertia=float(d["inertia"]), position=r[:2],
                                  angle=angle, omega=float(om[2]),
                                  velocity=vel[:2], com=np.asarray(d.get("centerOfMass", [0, 0]), float),
@@ -460,7 +462,9 @@ class _Reader(JointReaders, ForceReaders):
         param = getattr(NODE_KINDS.get(nt), "parametrisation", None)
         if param is not None and npos <= k < npos + nrot:
             # a rotation parameter of a 3D rigid node: Exudyn's coordinate (value, rate and
-            # Jacobian as CMarkerNodeCoordinate defines them, mbs/node_coordinates.py)
+            # Jacobian as CMarkerNodeCoordinate defines them, mbs/node_coordinates.py: the value on
+            # the branch Exudyn's continuous integration reaches, the Jacobian e_k on the node's
+            # velocity coordinates, the local omega for RotVecLG, mbs/oblique_solve.py)
             qref = np.asarray(self.mbs.GetNode(n)["referenceCoordinates"], float).reshape(-1)
             total = qref[npos:npos + nrot] + self.q[self.node_ltg(n)[npos:npos + nrot]]
             return CoordinateMarker(m, self.rigidNodeBody[n], np.zeros(3), float(qref[k]),

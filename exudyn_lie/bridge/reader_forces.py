@@ -114,7 +114,9 @@ class ForceReaders:
             self._py(sc, pyforces.CartesianSpringDamperUF(self.mbs, o, d, A, B, uf))
 
     def read_coordinate_spring_damper(self, sc, o, d, A, B, what, name):
-        """CObjectConnectorCoordinateSpringDamper: f = k (q_B - q_A - offset) + d (rates)."""
+        """CObjectConnectorCoordinateSpringDamper: f = k (q_B - q_A - offset) + d (rates), Exudyn's
+        LHS ``J_B^T f - J_A^T f`` (Exudyn 1.13.6 has no friction parameters in it) ->
+        Scene.AddCoordinateSpringDamper (mbs/coordinate_forces.py)."""
         uf = _userfunction(d, "springForceUserFunction", what)
         if uf is None:
             sc.AddCoordinateSpringDamper(A.body, A.spec, B.body, B.spec, d["stiffness"], d["damping"],
@@ -123,7 +125,9 @@ class ForceReaders:
             self._py(sc, pyforces_coordinates.CoordinateSpringDamperUF(self.mbs, o, d, A, B, uf))
 
     def read_linear_spring_damper(self, sc, o, d, A, B, what, name):
-        """CObjectConnectorLinearSpringDamper: along ``A_0 axisMarker0`` (marker 0's orientation)."""
+        """CObjectConnectorLinearSpringDamper: along ``A_0 axisMarker0`` (marker 0's orientation) ->
+        Scene.AddLinearSpringDamper (mbs/linear_spring_forces.py): Exudyn adds ``f a`` to the LHS
+        through the markers' position Jacobians only (+ on marker 1, - on marker 0)."""
         if _userfunction(d, "springForceUserFunction", what) is not None:
             raise NotCompiled(f"{what}: springForceUserFunction is not supported by exudyn_lie yet; solve with "
                               f"exudyn.SolveDynamic")
@@ -187,12 +191,13 @@ class ForceReaders:
         """CObjectConnectorRollingDiscPenalty (mbs/rolling_disc_penalty_forces.py): marker 0 the
         plane (ground or a 3D rigid body, normal ``A0 planeNormal``), marker 1 the disc centre
         (axis ``A1 discAxis``); the three data coordinates of its NodeGenericData (slip velocity,
-        gap of the last step) start as stored in mbs.  The kernel's law is Exudyn's (its
-        documentation's "Geometric relations" and "Computation of normal and tangential forces",
-        ComputeSlipForce for the friction; the rolling friction is added after the torques, as
-        there); Exudyn's PostNewtonStep, which writes the data after a step and skips an
-        inactive connector (whose data node then keeps the values of its last active step,
-        measured), is the kernel's contact-data step observer."""
+        gap of the last step) start as stored in mbs.  -> Scene.AddRollingDiscPenalty (its parameters
+        by Exudyn's names).  The kernel's law is Exudyn's (its documentation's "Geometric
+        relations" and "Computation of normal and tangential forces", ComputeSlipForce for the
+        friction, the rolling friction added after the torques): contact only where the stored gap
+        is negative.  Exudyn's PostNewtonStep, which writes the data after a step and skips an
+        inactive connector (whose data node keeps the values of its last active step, measured),
+        is the kernel's contact-data step observer (mbs/step_observers.py)."""
         if B.body == GROUND:
             raise BridgeError(f"{what}: marker 1 (the disc) is on the ground; Exudyn's rolling disc has the disc "
                               f"on marker 1 and the plane (ground or body) on marker 0")
@@ -285,7 +290,8 @@ class ForceReaders:
 
     def read_coordinate_load(self, sc, l, d, what):
         """LoadCoordinate: a generalised force ``load`` on a node position coordinate, i.e. the
-        world force ``load e_axis`` at the node."""
+        world force ``load e_axis`` at the node; on a rotation parameter of a RotVecLG, EP or Rxyz
+        node Scene.AddCoordinateLoad (mbs/coordinate_forces.py, Exudyn's Jacobian direction C)."""
         load = float(d["load"])
         if not np.isfinite(load):
             raise BridgeError(f"{what}: load is not finite: {load}")

@@ -85,7 +85,8 @@ class JointReaders:
         return aeAll
 
     def read_distance_constraint(self, sc, o, d):
-        """ObjectConnectorDistance: ``|p_1 - p_0| - distance = 0`` (CObjectConnectorDistance)."""
+        """ObjectConnectorDistance: ``|p_1 - p_0| - distance = 0`` (CObjectConnectorDistance, which
+        stops with an error at ``p_1 = p_0``) -> Scene.AddDistanceConstraint (mbs/distance_rows.py)."""
         what = self._what("object", o, d)
         aeAll = self._constraint_ae(o, d, what, sc)
         if aeAll is None:
@@ -108,7 +109,9 @@ class JointReaders:
         """ObjectJointRollingDisc (CObjectJointRollingDisc): velocity-level rows, the velocity of
         the disc's contact point relative to the plane in (lateral, forward, normal) directions
         for the locked ``constrainedAxes``; marker 0 the plane (a 3D rigid body or ground), marker
-        1 the disc centre on a 3D rigid body; free axes keep their multiplier 0 (as Exudyn)."""
+        1 the disc centre on a 3D rigid body; free axes keep their multiplier 0 (as Exudyn) ->
+        Scene.AddRollingDisc (mbs/rolling_disc_rows.py: Exudyn's row order, its plane normal used
+        unnormalised, the rows its jacobian_ODE2_t ``vJacPos + vJacRot x (p_C - p_X)`` on ``e_k``)."""
         what = self._what("object", o, d)
         aeAll = self._constraint_ae(o, d, what, sc)
         if aeAll is None:

@@ -6,7 +6,7 @@ depends on the group of a body (``gid``, see :mod:`.codes` and :mod:`exudyn_lie.
 * ``SE2`` / ``SO2xR2``: the planar subgroups, with the velocity representation of SE3 /
   SO3xR3 (``codes.uses_body_twist``, from each group's ``TWIST``).  A planar body keeps 6-vector
   velocities whose off-plane entries stay zero: its ``M^-1`` is zero off the plane
-  (``compiled.planar_minv``), so off-plane forces do nothing, as for Exudyn's 2D bodies;
+  (``compiled.planar_minv``), so off-plane forces do nothing, as for any planar body;
 * ``R3`` (2): point masses (``groups/rn.py``): ``R = I`` and ``omega = 0`` for all time,
   ``v = rdot``; the rotation block of ``Minv`` is 0 and the translation block the (pseudo-)
   inverse of the mass on the free directions.  Every map that does not branch on ``R3``

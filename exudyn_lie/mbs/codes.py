@@ -30,10 +30,10 @@ def uses_body_twist(gid):
 ROW_TRANS_LOCAL = 0   # a = (R_A rotA)[:, ax] ; h = a . (pB - pA)
 ROW_TRANS_WORLD = 1   # a = e_ax (world)       ; h = a . (pB - pA)
 ROW_ROT = 2           # h = (R_A rotA)[:, ax] . (R_B rotB)[:, bx]
-ROW_DIST = 4          # h = |p_B - p_A| - L0 (Exudyn's ObjectConnectorDistance, mbs/distance_rows.py)
-ROW_COORD = 3         # h = f p_B[bx] - p_A[ax] - c (Exudyn's ObjectConnectorCoordinate, mbs/coordinate_rows.py)
-ROW_ROLL = 5          # velocity level: e_ax . (contact point velocity B - A) (ObjectJointRollingDisc, mbs/rolling_disc_rows.py)
-ROW_COORD_VEL = 6     # velocity level: f qdot_B - qdot_A = w(t) (ObjectConnectorCoordinate velocityLevel=True; h = 0)
+ROW_DIST = 4          # h = |p_B - p_A| - L0 (distance constraint, mbs/distance_rows.py)
+ROW_COORD = 3         # h = f p_B[bx] - p_A[ax] - c (coordinate constraint, mbs/coordinate_rows.py)
+ROW_ROLL = 5          # velocity level: e_ax . (contact point velocity B - A) (rolling disc, mbs/rolling_disc_rows.py)
+ROW_COORD_VEL = 6     # velocity level: f qdot_B - qdot_A = w(t) (coordinate constraint on rates; h = 0)
 
 # columns of the integer tables of SceneData
 ROW_KIND, ROW_AX, ROW_BX, ROW_BODY_A, ROW_BODY_B = 0, 1, 2, 3, 4      # rowIndex (m, 5)

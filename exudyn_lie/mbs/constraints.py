@@ -1,5 +1,5 @@
 """Constraint rows of the joints: residual ``h``, Jacobian rows ``J`` and ``eta = -Jdot V``
-(eq. index1) for the row kinds of Exudyn's ObjectJointGeneric (:mod:`.codes` ROW_*).
+(eq. index1) for the row kinds of the generic joint (:mod:`.codes` ROW_*).
 
 For a row ``h(g) = 0``, ``J V`` is its time derivative and ``eta`` is minus the bias part
 of ``hddot``: for ``h = a . d`` (a an axis, d a point difference)
@@ -30,7 +30,7 @@ def extra_row(kind, q, j, a, b, gA, gB, RA, RB, rA, rB, VA, VB, rowIndex, rotA, 
     if kind == ROW_COORD or kind == ROW_COORD_VEL:
         coordinate_row(q, a, b, gA, gB, RA, RB, rax, rowIndex[q, ROW_BX], rotA, rotB, jointParams[j], pA, pB, bA, bB, u, RtA,
                        h, Jr, eta)
-        if rax >= PARAM_BASE or rowIndex[q, ROW_BX] >= PARAM_BASE:     # rotation parameters of 3D nodes
+        if rax >= PARAM_BASE or rowIndex[q, ROW_BX] >= PARAM_BASE:     # rotation parameters of 3D bodies
             node_parameter_terms(q, a, b, rax, rowIndex[q, ROW_BX], RA, RB, VA, VB, bparam, jointParams[j, 0], h, Jr, eta,
                                  ax, axd, axb)
         if kind == ROW_COORD_VEL:
@@ -50,8 +50,9 @@ extra_row_if = guarded(extra_row)
 
 @njit(cache=True, inline="always", _nrt=False)
 def _rotation_row(q, rowIndex, rax, a, b, RA, VA, RB, VB, rotA, rotB, u, w, ax, axd, axb, bx, bxd, bxb, RtA, h, Jr, eta):
-    """A rotation row: ``h = a . b`` of an axis of frame A and one of frame B (Exudyn's
-    ObjectJointGeneric), its Jacobian on both sides' angular velocities and ``eta``."""
+    """A rotation row: ``h = a . b`` of an axis of frame A and one of frame B (a locked
+    relative rotation of the generic joint), its Jacobian on both sides' angular velocities
+    and ``eta``."""
     rbx = rowIndex[q, ROW_BX]
     for k in range(3):
         u[k] = rotA[k, rax]

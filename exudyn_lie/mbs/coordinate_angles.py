@@ -11,7 +11,7 @@ a rotation coordinate adds nothing to ``eta`` (coordinate_rows).
 
 The tracked angles live in the items' parameter rows (``jointParams[j, 8:10]`` of a coordinate
 constraint, ``coordSpringLaw[s, 9:11]`` of a coordinate spring; frames in ``jointFrames`` / ``coordSpringFrames``), start at
-the angle of the initial state (``AngleCoordinate.angle0``, Exudyn's total coordinate) and are
+the angle of the initial state (``AngleCoordinate.angle0``, the total angle over all turns) and are
 moved on after every accepted step by :func:`update_coordinate_angles`.
 """
 import numpy as np

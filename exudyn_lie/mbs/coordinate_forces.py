@@ -1,22 +1,21 @@
-"""The coordinate spring-damper: Exudyn's ``ObjectConnectorCoordinateSpringDamper`` on node
-coordinates (``MarkerNodeCoordinate``: current coordinate = total - reference, 0 on a ground
-node).  Exudyn's law (CObjectConnectorCoordinateSpringDamper, Exudyn 1.13.6 has no friction
-parameters in it):
+"""The coordinate spring-damper: a spring-damper between two body coordinates ``q_A``, ``q_B``
+(each the current coordinate = total - reference, 0 on ground), with the law (no friction term)
 
     f = k (q_B - q_A - offset) + d (qdot_B - qdot_A),
 
-``-f`` acts on coordinate ``q_B`` and ``+f`` on ``q_A`` (Exudyn's LHS ``J_B^T f - J_A^T f``).
-A coordinate is a position coordinate ``q_X = d_X . p_X - ref_X`` (the node point ``s = 0``,
-``d_X`` the coordinate's fixed world direction: ``e_k``, or a Mass1D's axis), on which ``f`` is
-the world force ``f d_X`` at the node, or a rotation coordinate (``coordSpringEnds[s, 2 / 3] = 1``): the
-angle about ``d_X = F_X e_z`` (:mod:`.coordinate_angles`), on which ``f`` is the world torque
-``f d_X``.  The references fold into ``c = offset + ref_B - ref_A`` (the bridge).
-A third kind of coordinate is a rotation parameter of a 3D node (``coordSpringEnds[s, 2 / 3] >= 10``,
+``-f`` acts on coordinate ``q_B`` and ``+f`` on ``q_A`` (the generalised force ``J_A^T f - J_B^T f``).
+A coordinate is a position coordinate ``q_X = d_X . p_X - ref_X`` (the body point ``s = 0``,
+``d_X`` the coordinate's fixed world direction: ``e_k``, or the axis of a mass moving along one
+axis), on which ``f`` is the world force ``f d_X`` at that point, or a rotation coordinate
+(``coordSpringEnds[s, 2 / 3] = 1``): the angle about ``d_X = F_X e_z`` (:mod:`.coordinate_angles`),
+on which ``f`` is the world torque ``f d_X``.  The references fold into
+``c = offset + ref_B - ref_A`` (the bridge).
+A third kind of coordinate is a rotation parameter of a 3D rigid body (``coordSpringEnds[s, 2 / 3] >= 10``,
 :mod:`.node_coordinates`): value ``q_k`` (branch tracked in ``bparam``), rate ``C . omega``
-(Exudyn's velocity coordinate), and ``f`` acts as the local torque ``f C``.
-``coordSpringLaw[s, 11]`` is a constant ``f0`` added to ``f`` (k = d = 0 and ``f0 = -load`` is
-Exudyn's ``LoadCoordinate`` on such a coordinate, whose direction ``C`` depends on the state
-for EP and Rxyz nodes).
+(the parametrisation's velocity coordinate for ``q_k``), and ``f`` acts as the local torque ``f C``.
+``coordSpringLaw[s, 11]`` is a constant ``f0`` added to ``f`` (k = d = 0 and ``f0 = -load`` is a
+generalised force ``load`` on such a coordinate, :meth:`Scene.AddCoordinateLoad`, whose direction
+``C`` depends on the state for 'eulerParameters' and 'taitBryanXYZ').
 ``SceneData.coordSpringEnds`` = [A, B, code A, code B] (0 position, 1 angle, >= 10 node parameter),
 ``coordSpringLaw`` = [k, d, c, d_A (3), d_B (3), angle A, angle B, f0], ``coordSpringFrames`` = [F_A, F_B].
 """
@@ -40,7 +39,7 @@ def _coordinate(rot, kp, i0, F, R, p, v, prev):
 
 @njit(cache=True, inline="always", _nrt=False)
 def _side_state(rot, g, R, r, V, zero3, p, v, b):
-    """Node point, and its velocity (position coordinate) or the world omega (rotation)."""
+    """Body origin, and its velocity (position coordinate) or the world omega (rotation)."""
     body_point(g, R, r, V, zero3, p, v, b)
     if rot == 1:
         for i in range(3):
@@ -49,7 +48,7 @@ def _side_state(rot, g, R, r, V, zero3, p, v, b):
 
 @njit(cache=True, inline="always", _nrt=False)
 def _parameter_side(code, body, R, V, bparam, Cout, G, tmp):
-    """(value, rate) of a node-parameter end (rate = Exudyn's velocity coordinate C . omega);
+    """(value, rate) of a node-parameter end (rate = the velocity coordinate C . omega);
     its direction C into ``Cout``."""
     if body < 0 or code < PARAM_BASE:
         return 0.0, 0.0
@@ -85,7 +84,7 @@ def coordinate_spring_forces(gid, coordSpringEnds, coordSpringLaw, coordSpringFr
         u, ud = coordinate_spring_value(gid, coordSpringEnds, coordSpringLaw, coordSpringFrames, bparam, s, R, r, V, v3, ident, zero3, zero6)
         f = kp[0] * u + kp[1] * ud + kp[11]
         if a >= 0:
-            if coordSpringEnds[s, 2] >= PARAM_BASE:          # Exudyn's e_k on the node's velocity coordinates
+            if coordSpringEnds[s, 2] >= PARAM_BASE:          # e_k on the parametrisation's velocity coordinates
                 for k in range(3):
                     Q[a, k] += f * v3[7, k]
             else:
@@ -111,8 +110,8 @@ def coordinate_spring_forces(gid, coordSpringEnds, coordSpringLaw, coordSpringFr
 @njit(cache=True, _nrt=False)
 def coordinate_spring_energy(gid, coordSpringEnds, coordSpringLaw, coordSpringFrames, bparam, R, r, V, v3, ident, zero3, zero6):
     """Potential ``k/2 (q_B - q_A - offset)^2`` of every coordinate spring (a potential of
-    the force only where it acts along the coordinate's gradient: not on a RotVecLG
-    rotation coordinate, whose force acts along C = e_k, see node_coordinates)."""
+    the force only where it acts along the coordinate's gradient: not on a rotation-vector
+    parameter ('rotationVector'), whose force acts along C = e_k, see node_coordinates)."""
     e = 0.0
     for s in range(coordSpringEnds.shape[0]):
         u, _ = coordinate_spring_value(gid, coordSpringEnds, coordSpringLaw, coordSpringFrames, bparam, s, R, r, V, v3, ident, zero3, zero6)

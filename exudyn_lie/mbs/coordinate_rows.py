@@ -1,15 +1,15 @@
-"""The coordinate-constraint row (``ROW_COORD``): Exudyn's ``ObjectConnectorCoordinate``,
+"""The coordinate-constraint row (``ROW_COORD``): a coordinate constraint,
 
     h = f q_B - q_A - offset,
 
-on two node coordinates ``q_A``, ``q_B`` (``MarkerNodeCoordinate``: the *current* coordinate,
-total minus reference; a ground node's coordinate is 0).  A coordinate is either
+on two body coordinates ``q_A``, ``q_B`` (each the *current* coordinate, total minus
+reference; a coordinate of ground is 0).  A coordinate is either
 
 * a position coordinate along a fixed world direction ``d`` (``e_k`` for coordinate k of a point
-  or rigid node, the axis ``referenceRotation e_x`` of a Mass1D's Node1D):
-  ``q = d . p - ref`` with ``p`` the node position (the body point ``s = 0``), rate
+  mass or rigid body, the fixed axis of a mass moving along one axis):
+  ``q = d . p - ref`` with ``p`` the body origin (the body point ``s = 0``), rate
   ``d . pdot = (T^T d) . v`` (``pdot = T v``), bias ``d . beta`` (``beta`` the velocity-product
-  acceleration of the node, ``R (omega x v)`` for SE3, 0 else; :func:`~.bodies.body_point`); or
+  acceleration of that point, ``R (omega x v)`` for SE3, 0 else; :func:`~.bodies.body_point`); or
 * a rotation coordinate (``rowIndex[q, ROW_AX / ROW_BX] = 1``): the angle ``phi`` about
   ``d = F e_z`` tracked over turns (:mod:`.coordinate_angles`, frame ``F`` in ``jointFrames``), rate
   ``(R^T d) . omega``, bias 0.
@@ -26,7 +26,7 @@ from .coordinate_angles import angle_rate_row, frame_angle
 
 @njit(cache=True, inline="always", _nrt=False)
 def coordinate_row(q, a, b, gA, gB, RA, RB, rotEndA, rotEndB, FA, FB, par, pA, pB, bA, bB, e, RTe, h, Jr, eta):
-    """Row ``q`` of a coordinate constraint from the node points ``pA, pB`` and their bias
+    """Row ``q`` of a coordinate constraint from the body origins ``pA, pB`` and their bias
     accelerations ``bA, bB`` (body_point at s = 0); ``par = jointParams[j]``; ``rotEndX`` 1 for a
     rotation coordinate (frame ``FX``)."""
     f = par[0]

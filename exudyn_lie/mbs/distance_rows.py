@@ -1,8 +1,8 @@
-"""The distance-constraint row (``ROW_DIST``): Exudyn's ``ObjectConnectorDistance``,
+"""The distance-constraint row (``ROW_DIST``): a distance constraint at position level,
 
-    h = |p_B - p_A| - L0        (CObjectConnectorDistance, position level),
+    h = |p_B - p_A| - L0,
 
-with ``p_A, p_B`` the marker points.  With ``d = p_B - p_A``, ``L = |d|`` and ``e = d / L``:
+with ``p_A, p_B`` the two body points.  With ``d = p_B - p_A``, ``L = |d|`` and ``e = d / L``:
 ``hdot = e . ddot`` and ``hddot = e . dddot + (|ddot|^2 - (e . ddot)^2) / L``, so the row's
 Jacobian is that of a world-direction row along ``e`` (the columns of ``ROW_TRANS_WORLD``
 with the axis ``e``, :mod:`.constraints`) and (eq. index1)
@@ -21,7 +21,7 @@ def distance_row(q, L0, d, dd, bd, e, h, eta):
     rate ``dd`` and bias acceleration ``bd``; ``L0 = jointParams[j, 0]``."""
     L = np.sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2])
     if L == 0.0:
-        L = 1.0          # direction undefined (Exudyn stops with an error there); keep finite
+        L = 1.0          # direction undefined (the model is singular there); keep finite
     for k in range(3):
         e[k] = d[k] / L
     ed = e[0] * dd[0] + e[1] * dd[1] + e[2] * dd[2]

@@ -18,18 +18,17 @@ them through ``fn.stage_adder(probe, Qext)`` (``Simulator._external_views``).
 Kinds (the arithmetic is the Python item's, in its order, so the results are the same to
 the bit):
 
-* :data:`PROBE_TORSION`: a torsional spring about the z axis of frame ``A`` (Exudyn's
-  ``ObjectTorsionalSpringDamper``), inputs the x, z columns of ``A``'s marker frame in body
-  ``A`` coordinates and the x, y columns of ``B``'s in body ``B`` coordinates (for the ground:
-  in world coordinates); outputs the principal angle ``phi = atan2(-(x_A . y_B), x_A . x_B)``
-  of the relative rotation ``J_A^T J_B`` (world columns), ``phidot = z_A . (w_B - w_A)``
-  (world angular velocities) and the world ``z_A`` (``TorsionalSpringDamperUF.angle``);
-* :data:`PROBE_SPRING`: a spring-damper between two points (``ObjectConnectorSpringDamper``),
-  inputs the points in body coordinates; outputs the length ``L``, its rate ``(v_B - v_A) . e``,
-  the unit vector ``e`` from A to B and the world arms ``R s`` of both points
-  (``SpringDamperUF.add``);
+* :data:`PROBE_TORSION`: a torsional spring about the z axis of frame ``A``, inputs the x, z
+  columns of frame ``A`` in body ``A`` coordinates and the x, y columns of frame ``B`` in body
+  ``B`` coordinates (for the ground: in world coordinates); outputs the principal angle
+  ``phi = atan2(-(x_A . y_B), x_A . x_B)`` of the relative rotation ``J_A^T J_B`` (world
+  columns), ``phidot = z_A . (w_B - w_A)`` (world angular velocities) and the world ``z_A``
+  (the bridge's ``TorsionalSpringDamperUF.angle``);
+* :data:`PROBE_SPRING`: a point-to-point spring-damper, inputs the points in body coordinates;
+  outputs the length ``L``, its rate ``(v_B - v_A) . e``, the unit vector ``e`` from A to B and
+  the world arms ``R s`` of both points (the bridge's ``SpringDamperUF.add``);
 * :data:`PROBE_ARM`: a point of a body (a load's point of application), output its world
-  arm ``R s`` (``pyforces._add_force``).
+  arm ``R s`` (the bridge's ``pyforces._add_force``).
 """
 import math
 
@@ -49,7 +48,7 @@ TORSION_COLS_B = 9    # x_B (3), y_B (3) in body B coordinates
 TORSION_PHI = 15      # outputs: principal angle, rate, world z_A (3)
 TORSION_PHID = 16
 TORSION_Z = 17
-SPRING_POS_A = 3      # inputs: the marker points in body coordinates
+SPRING_POS_A = 3      # inputs: the spring's end points in body coordinates
 SPRING_POS_B = 6
 SPRING_L = 9          # outputs: length, its rate, world unit vector A -> B (3), world arms R s (3, 3)
 SPRING_LD = 10
@@ -71,12 +70,12 @@ def _row(kind, bodyA, bodyB, *groups):
 
 def torsion_probe_row(bodyA, bodyB, colsA, colsB):
     """The input row of a :data:`PROBE_TORSION` probe: ``colsA`` = (x_A, z_A), ``colsB`` =
-    (x_B, y_B) as six floats each (marker frame columns in body coordinates)."""
+    (x_B, y_B) as six floats each (frame columns in body coordinates)."""
     return _row(PROBE_TORSION, bodyA, bodyB, colsA, colsB)
 
 
 def spring_probe_row(bodyA, bodyB, posA, posB):
-    """The input row of a :data:`PROBE_SPRING` probe: the marker points ``posA``, ``posB``
+    """The input row of a :data:`PROBE_SPRING` probe: the end points ``posA``, ``posB``
     in body coordinates (world coordinates on the ground)."""
     return _row(PROBE_SPRING, bodyA, bodyB, posA, posB)
 

@@ -189,8 +189,8 @@ def schur_solve(gid, Minv, rowIndex, bw, redundant, pivotTol, R, Jr, W, lam, Sb,
 def oblique_schur_solve(gid, Minv, rowIndex, pivotTol, R, Jr, W, lam, plan, failInfo, tmp12):
     """``W = M^-1 C^T`` (row blocks; C the force-direction rows, :mod:`.oblique_solve`) and
     ``lam <- (J M^-1 C^T)^-1 lam`` by a dense LU with partial pivoting: the non-symmetric
-    index-1 solve of rows whose force direction C differs from their gradient J (Exudyn's
-    coordinate constraint on a RotVecLG rotation coordinate).  A pivot at or below
+    index-1 solve of rows whose force direction C differs from their gradient J (a coordinate
+    constraint on a rotation-vector parameter, parametrisation 'rotationVector').  A pivot at or below
     ``pivotTol * max |diag S|`` is STATUS_SINGULAR (failInfo[INFO_ROW] = its column)."""
     force_direction_rows(plan, Jr)
     minv_rows(gid, Minv, rowIndex, R, plan.Cr, W, tmp12)

@@ -1,13 +1,13 @@
 """The check of an initial state against the constraints and its projection, for any
-problem (the compiled kernel's rows, or Exudyn's own equations on the evaluated path): one
-rule, one order, one error text.
+problem (the compiled kernel's rows, or the equations the bridge evaluates in the modelling
+system it reads, on the evaluated path): one rule, one order, one error text.
 
 The rule: a position residual above ``INITIAL_TOL`` relative to the configuration's scale
 (``max(1, max |position|)``), then a velocity residual above ``INITIAL_TOL`` relative to
 ``max(1, max |velocity|)``, is either a :class:`~exudyn_lie.errors.ConstraintError`
 (``projectInitial=False``) or projected away: the positions first (Gauss-Newton steps on the
 group, mass-weighted), then the velocities (mass-orthogonal), each by the problem's own
-projection.  Exudyn's own solvers start from an inconsistent state unchanged.
+projection.
 """
 from __future__ import annotations
 

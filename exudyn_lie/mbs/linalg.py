@@ -20,7 +20,7 @@ is (nearly) a combination of them, whatever the scale of the other rows.  This i
 ``pivot <= REL_PIVOT_TOL`` on the Jacobi-scaled ``D^-1/2 S D^-1/2`` (D = diag S; unit
 diagonal, entries of size at most 1), which the row scaling of a model cannot change.  A
 rule relative to ``max(diag S)`` is not: a body with a tiny inertia (scaled by 1e-10 in
-Exudyn's slider-crank example) makes its rotation rows 1e11 times larger than a point
+a slider-crank example) makes its rotation rows 1e11 times larger than a point
 mass's rail row, and that rail row, independent of every other row, was taken for
 redundant and dropped.
 
@@ -47,7 +47,7 @@ from numba import njit
 # is round-off, about m eps S_ii (2e-14 for 100 rows): 1e-12 is 50 times above that.  It
 # stays below regular but ill-conditioned mechanisms: the ratio is the squared sine of the
 # angle between row i of J M^-1/2 and the rows before it, which a body of tiny inertia
-# makes small.  Exudyn's slider-crank example (crank and rod inertias scaled by 1e-10) has
+# makes small.  A slider-crank example (crank and rod inertias scaled by 1e-10) has
 # pivots down to 1.3e-10 S_ii and a smallest eigenvalue of the scaled S of 3e-11 over its
 # run: a rule at 1e-10 stopped it at t = 0.29 s as "singular".  A redundant joint whose
 # dependency a position drift d (relative to the mechanism's size) breaks has a pivot of

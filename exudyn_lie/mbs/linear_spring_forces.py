@@ -1,15 +1,13 @@
-"""The linear spring-damper along an axis of the marker-0 frame: Exudyn's
-``ObjectConnectorLinearSpringDamper`` (CObjectConnectorLinearSpringDamper):
+"""The linear spring-damper along an axis fixed in the frame of side 0 (body A):
 
-    a = A_0 axisMarker0 (world),  u = a . (p_1 - p_0),  v = a . (pdot_1 - pdot_0),
+    a = A_0 axis0 (world),  u = a . (p_1 - p_0),  v = a . (pdot_1 - pdot_0),
     f = k (u - offset) + d (v - velocityOffset) + force,
 
-the force ``f a`` enters Exudyn's LHS through the *position* Jacobians of the two markers
-(``+`` on marker 1, ``-`` on marker 0): the applied forces are ``-f a`` at point 1 and
-``+f a`` at point 0, and the rotation of the axis ``a`` itself contributes no generalised
-force (as in Exudyn).  ``SceneData``: ``linearBodies`` = [A, B], ``linearPoints`` = [posA, posB], ``linearAxis`` =
-the axis in A's body frame (world if A is ground), ``linearLaw`` = [k, d, offset, force - d
-velocityOffset].
+the force ``f a`` acts through the *position* Jacobians of the two points only (``-f a``
+applied at point 1, ``+f a`` at point 0): the rotation of the axis ``a`` itself
+contributes no generalised force.  ``SceneData``: ``linearBodies`` = [A, B], ``linearPoints`` =
+[posA, posB], ``linearAxis`` = the axis in A's body frame (world if A is ground), ``linearLaw`` =
+[k, d, offset, force - d velocityOffset].
 """
 from numba import njit
 

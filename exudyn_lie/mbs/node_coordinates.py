@@ -1,26 +1,27 @@
-"""Rotation coordinates of 3D rigid nodes for the coordinate items (``MarkerNodeCoordinate`` on
-coordinate 3.. of a NodeRigidBodyRotVecLG, NodeRigidBodyEP or NodeRigidBodyRxyz), as Exudyn
-defines them (CMarkerNodeCoordinate): the marker's value is the node's coordinate ``q_k``
-(a rotation parameter), its rate is the node's *velocity coordinate* k, and its Jacobian is
-``e_k`` on the node's velocity coordinates.  In the kernel's body velocity (local omega)
-that is, per node type, with ``p`` the node's rotation parameters of the body's ``R``:
+"""Rotation parameters of 3D rigid bodies as coordinates of the coordinate items
+(:class:`~.scene_items.RotationParameterCoordinate`: parameter k of a body whose orientation is
+parametrised by a rotation vector ('rotationVector'), Euler parameters ('eulerParameters') or
+Tait-Bryan angles R = Rx Ry Rz ('taitBryanXYZ')).  The coordinate's value is the parameter
+``q_k``, its rate is the parametrisation's *velocity coordinate* k, and its Jacobian is ``e_k``
+on the parametrisation's velocity coordinates.  In the kernel's body velocity (local omega)
+that is, per parametrisation, with ``p`` the rotation parameters of the body's ``R``:
 
-* value ``q_k = p_k(R)`` on the branch Exudyn's continuous integration reaches, taken
-  nearest to the parameters tracked at the last accepted step (``Work.bparam``,
+* value ``q_k = p_k(R)`` on the branch a continuous integration of the parameters reaches,
+  taken nearest to the parameters tracked at the last accepted step (``Work.bparam``,
   :mod:`.rotation_parameters`);
 * ``G``, the gradient of ``q_k`` on omega: ``qdot_k = G . omega`` (the chain rule through the
-  node's parametrisation, ``pdot = P(p) omega``, ``G`` = row k of ``P``), and the bias
+  parametrisation, ``pdot = P(p) omega``, ``G`` = row k of ``P``), and the bias
   ``Gdot . omega`` (``qddot_k = G . omegadot + Gdot . omega``);
-* ``C``, the direction on omega of Exudyn's Jacobian ``e_k`` (the generalised force ``f e_k``
-  is the local torque ``C f``, the marker's rate is ``C . omega``).
+* ``C``, the direction on omega of the Jacobian ``e_k`` (the generalised force ``f e_k``
+  is the local torque ``C f``, the coordinate's rate is ``C . omega``).
 
-For **EP** (velocity coordinates ``pdot``) and **Rxyz** (angle rates) the velocity coordinate
-*is* the parameter's rate, so ``C = G``: Exudyn's Jacobian is the chain-rule row.
-For **RotVecLG** the velocity coordinates are the local omega itself: ``C = e_k`` (a local
-torque about body axis k; rate ``omega_k``), while the position-level value is the rotation
-vector component with ``G`` = row k of ``dexpinv_{-theta}`` (``thetadot = dexpinv_{-theta}
-omega``, groups/so3.py).  A ConnectorCoordinate on it is then Exudyn's index-3 model
-``M Vdot = Q - C^T lambda``, ``theta_k = const``: force direction ``C`` != gradient ``G``
+For **'eulerParameters'** (velocity coordinates ``pdot``) and **'taitBryanXYZ'** (angle rates)
+the velocity coordinate *is* the parameter's rate, so ``C = G``: the Jacobian is the chain-rule
+row.  For **'rotationVector'** the velocity coordinates are the local omega itself: ``C = e_k``
+(a local torque about body axis k; rate ``omega_k``), while the position-level value is the
+rotation vector component with ``G`` = row k of ``dexpinv_{-theta}`` (``thetadot =
+dexpinv_{-theta} omega``, groups/so3.py).  A coordinate constraint on it is then the index-3
+model ``M Vdot = Q - C^T lambda``, ``theta_k = const``: force direction ``C`` != gradient ``G``
 (a non-symmetric index-1 solve, :mod:`.oblique_solve`).
 
 The item's end code (``rowIndex`` ROW_AX / ROW_BX of a coordinate row, ``coordSpringEnds`` columns 2 / 3 of
@@ -78,8 +79,9 @@ def _nearest_quat(R, prev):
 
 @njit(cache=True, inline="always", _nrt=False)
 def rotvec_of_quat(q0, q1, q2, q3):
-    """Exudyn's rotation vector of a quaternion of either sign (CompositionRotationVector:
-    ``2 acos(q0) qv / |qv|``, |theta| <= 2 pi; as rotation_parameters.quat_rotvec)."""
+    """The rotation vector of a quaternion of either sign, ``2 acos(q0) qv / |qv|`` (the branch
+    that composing quaternions step by step reaches, |theta| <= 2 pi; as
+    rotation_parameters.quat_rotvec)."""
     s = math.sqrt(q1 * q1 + q2 * q2 + q3 * q3)
     if s > 1e-12:
         fac = 2.0 * math.atan2(s, q0) / s
@@ -93,7 +95,7 @@ def rotvec_of_quat(q0, q1, q2, q3):
 @njit(cache=True, _nrt=False)
 def node_parameter(code, R, prev, w, G, C, tmp):
     """Value ``q_k`` of the node rotation parameter with end ``code`` at ``R`` (branch nearest
-    the tracked ``prev``), its gradient ``G`` and Exudyn's direction ``C`` on the local omega
+    the tracked ``prev``), its gradient ``G`` and the force direction ``C`` on the local omega
     (written), and the bias ``Gdot . w`` at the body's local omega ``w``.  ``tmp``: 3 scratch."""
     kind = code // PARAM_BASE
     k = code - PARAM_BASE * kind
@@ -132,7 +134,7 @@ def node_parameter(code, R, prev, w, G, C, tmp):
     if kind == PARAM_EULER_PARAMETERS:
         p0, p1, p2, p3 = _nearest_quat(R, prev)
         p = (p0, p1, p2, p3)
-        # pdot = P(p) w: pdot_0 = -pv . w / 2, pdot_v = (p0 w + pv x w) / 2 (Exudyn: pdot = GL^T w / 4)
+        # pdot = P(p) w: pdot_0 = -pv . w / 2, pdot_v = (p0 w + pv x w) / 2 (= GL^T w / 4, GL the local G of p)
         pd0 = -0.5 * (p1 * w[0] + p2 * w[1] + p3 * w[2])
         pd1 = 0.5 * (p0 * w[0] + p2 * w[2] - p3 * w[1])
         pd2 = 0.5 * (p0 * w[1] + p3 * w[0] - p1 * w[2])
@@ -201,5 +203,5 @@ def node_parameter_terms(q, a, b, codeA, codeB, RA, RB, VA, VB, bparam, f, h, Jr
 
 
 def is_oblique(code):
-    """True if Exudyn's force direction of an end differs from its gradient (RotVecLG)."""
+    """True if the force direction C of an end differs from its gradient G ('rotationVector')."""
     return int(code) // PARAM_BASE == PARAM_ROTATION_VECTOR

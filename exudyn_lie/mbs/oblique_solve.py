@@ -1,15 +1,16 @@
 """The index-1 solve for rows whose force direction differs from their gradient.
 
-Exudyn's ``ObjectConnectorCoordinate`` on a rotation coordinate of a NodeRigidBodyRotVecLG
-constrains the rotation-vector component ``theta_k`` (its gradient on the body omega is the
-row ``G`` = row k of ``dexpinv_{-theta}``, node_coordinates.py), while its Jacobian, which
-Exudyn uses for the reaction force, is ``e_k`` on the local omega (``C``).  Exudyn's model is
+A coordinate constraint on a rotation parameter of a body parametrised by a rotation vector
+('rotationVector', whose velocity coordinates are the local omega) constrains the
+rotation-vector component ``theta_k`` (its gradient on the body omega is the row ``G`` = row k
+of ``dexpinv_{-theta}``, node_coordinates.py), while its Jacobian on the velocity coordinates,
+which carries the reaction force, is ``e_k`` on the local omega (``C``).  The model is
 
     M Vdot = Q - C^T lambda,    G Vdot = eta    (eta = -Gdot V; the index-1 form of eq. index1)
 
 so ``lambda`` solves the non-symmetric Schur complement ``(G M^-1 C^T) lambda = G M^-1 Q - eta``
 and ``Vdot = M^-1 (Q - C^T lambda)``.  ``C`` is ``G`` with the rotation columns of the
-RotVecLG ends replaced by ``s e_k`` (``s = -1`` on side A, the factor on side B): the patches
+'rotationVector' ends replaced by ``s e_k`` (``s = -1`` on side A, the factor on side B): the patches
 of :class:`ObliquePlan`, fixed when the scene is compiled.
 
 A scene with such a row is given this plan as ``Work.tplan`` (compiled.solve_plan); numba

@@ -7,8 +7,8 @@ output, the state, the tracked rotation parameters and, if asked, the accelerati
 multipliers.  :class:`OutputRows` holds those rows for outputs every ``nsub`` fixed steps of
 ``h``; :class:`AdaptiveOutputRows` for outputs at given times on adaptive steps (dense output
 on the group, no step shortened).  Their consumers: :func:`run` (the loop of :meth:`Simulator.Run`, a
-:class:`Result` with diagnostics at every output) and the Exudyn bridge (node coordinates,
-bridge/fast.py).
+:class:`Result` with diagnostics at every output) and the bridge (the coordinates of
+the modelling system it reads, bridge/fast.py).
 """
 import time as _time
 from dataclasses import dataclass

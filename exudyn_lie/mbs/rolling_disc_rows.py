@@ -1,24 +1,24 @@
-"""The rolling-disc rows (``ROW_ROLL``): Exudyn's ``ObjectJointRollingDisc``
-(CObjectJointRollingDisc, local constraints), nonholonomic rows at velocity level.
+"""The rolling-disc rows (``ROW_ROLL``): a disc rolling without slip on a plane, constrained in
+local directions (lateral, forward, normal), nonholonomic rows at velocity level.
 
-Geometry (all world vectors; marker 0 on the plane body A or ground, marker 1 on the disc B):
+Geometry (all world vectors; frame 0 on the plane body A or ground, frame 1 on the disc B):
 
-    n  = R_A rotA planeNormal              (plane normal, used unnormalised, as Exudyn)
+    n  = R_A rotA planeNormal              (plane normal, used unnormalised)
     w1 = R_B rotB discAxis                 (disc axis)
     wF = (w1 x n) / |w1 x n|               (forward, rolling direction)
     w3 = w1 x wF                           (from the disc centre to the contact point)
     wL = n x wF                            (lateral)
-    p_C = p_1 + r w3                       (contact point; p_1 the disc marker point)
+    p_C = p_1 + r w3                       (contact point; p_1 the disc centre)
 
-The row ``k`` (``constrainedAxes`` lateral / forward / normal, Exudyn's row order) is
+The row ``k`` (``constrainedAxes`` lateral / forward / normal, in this order) is
 
     g_k = e_k . c,   c = u_B(p_C) - u_A(p_C),   e = (wL, wF, n)
 
 with ``u_X(p_C)`` the velocity of body X's material point at ``p_C``.  It is linear in V:
 ``g_k = J_k V`` (eq. index1 with a velocity-level row: there is no position residual, ``h = 0``;
 the kernel's J V check / velocity projection see ``g_k``).  ``J_k`` is the world-direction row of
-``e_k`` with both points at ``p_C`` (``s_X = R_X^T (p_C - r_X)`` in X's coordinates); this is
-Exudyn's jacobian_ODE2_t (``vJacPos + vJacRot x (p_C - p_X)``, projected on ``e_k``).
+``e_k`` with both points at ``p_C`` (``s_X = R_X^T (p_C - r_X)`` in X's coordinates): the
+velocity Jacobian of body X's material point at ``p_C``, projected on ``e_k``.
 
 Acceleration level: ``J V' = eta = -Jdot V`` with ``Jdot V = d/dt (J(g(t)) V)`` at frozen V:
 
@@ -50,7 +50,7 @@ def _dot(a0, a1, a2, b0, b1, b2):
 def rolling_disc_row(q, axis, a, b, gA, gB, RA, RB, rA, rB, VA, VB, rotA, rotB, par, pB, vB, s, t, uA, uB, bA, bB,
                      w, h, Jr, eta):
     """Row ``q`` (``axis``: 0 lateral, 1 forward, 2 normal) of a rolling disc; ``par = jointParams[j]``
-    = (radius, planeNormal, discAxis); ``pB, vB`` the disc marker point and its velocity;
+    = (radius, planeNormal, discAxis); ``pB, vB`` the disc centre and its velocity;
     ``s, t, uA, uB, bA, bB, w`` 3-vector scratch."""
     rad = par[0]
     # plane normal and disc axis in world coordinates, world angular velocities

@@ -1,6 +1,6 @@
 """Time-dependent constraint rows (rheonomic rows): the moving offset of a row and the
-velocity-level rows, Exudyn's ``ObjectConnectorCoordinate`` with ``offsetUserFunction``,
-``velocityLevel`` and ``offsetUserFunction_t`` (CObjectConnectorCoordinate::ComputeAlgebraicEquations).
+velocity-level rows, e.g. a coordinate constraint with a prescribed offset ``c(t)`` or a
+prescribed rate ``w(t)`` of the coordinates.
 
 A row with a moving offset ``c(t)`` (the scene's ``Joint.offset``) is
 
@@ -23,8 +23,8 @@ function is evaluated at every time the rows are evaluated at: once per stage
 seam of :mod:`.external` (one call to the registered evaluator, its handle in
 ``Work.drive``, None without offset functions; no Python stage loop): :func:`update_row_drives`.
 
-**Derivatives of an offset function** (a Python function, e.g. Exudyn's user function, which
-gives the value only): fourth-order central differences on time with the step
+**Derivatives of an offset function** (a Python function, e.g. a user function the bridge
+reads, which gives the value only): fourth-order central differences on time with the step
 ``DRIVE_STEP = 2^-10 s`` (about 1e-3 s),
 
     cdot  = (c(t-2d) - 8 c(t-d) + 8 c(t+d) - c(t+2d)) / (12 d)

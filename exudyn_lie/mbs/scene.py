@@ -1,6 +1,6 @@
 """The multibody scene: bodies, joints and forces, described in plain Python.
 
-A :class:`Scene` is what the user (or the Exudyn bridge) builds.  It knows nothing of
+A :class:`Scene` is what the user (or the bridge) builds.  It knows nothing of
 time integration; :func:`exudyn_lie.mbs.compiled.compile_scene` turns it into the flat
 arrays the numba kernel works on.
 
@@ -10,14 +10,15 @@ Conventions (see ``exudyn_lie/groups``):
   mass may sit at ``com`` (body coordinates) away from that origin;
 * twists are ``(omega, v)``, rotation first.  ``omega`` is always body-fixed; ``v`` is
   body-fixed for SE3 bodies and spatial (``rdot``) for SO3xR3 bodies (mixed velocity);
-* joints follow Exudyn's ``ObjectJointGeneric`` equations so that the constraint
-  Jacobians can be compared with Exudyn's own (``ComputeJacobianAE``).
+* a joint locks any subset of the six relative axes of its joint frame, one row per locked
+  axis (:mod:`.constraints`), so that its constraint Jacobian can be compared row by row with
+  that of the modelling system the bridge reads.
 
 The dataclass of every compiled force element (the lists of the registrations in
 ``mbs/force_elements.py``) has ``validate()``, which re-checks its mutable fields
 (:meth:`Scene.validate` calls it for every item of every registered element), and
-``switch_off()``, which leaves it without force (an inactive connector: the bridge's
-``activeConnector=False``).
+``switch_off()``, which leaves it without force (an inactive connector, e.g. one the bridge
+reads as switched off).
 """
 from __future__ import annotations
 
@@ -87,7 +88,7 @@ class Scene:
 
         ``freeDirections``: the 3x3 orthogonal projector onto the world directions the
         point moves in (default: all three); forces along the others have no effect, as
-        for Exudyn's ``NodePoint2D`` (x, y) or a ``Node1D`` mass (one axis)."""
+        for a point mass moving in a plane (x, y) or along one axis."""
         idx = len(self.bodies)
         label = name or f"point{idx}"
         m = _checked_point_mass(label, mass)
@@ -99,11 +100,10 @@ class Scene:
 
     def AddBody2D(self, mass, inertia, position=(0, 0), angle=0.0, omega=0.0, velocity=(0, 0), com=(0, 0),
                   name: str = "") -> int:
-        """Add a planar rigid body (Exudyn's ObjectRigidBody2D): 3 DOF, moving in the world
-        x-y plane; ``inertia`` about the z axis through the body frame origin (Exudyn's
-        reference point), ``com`` the centre of mass in body x-y coordinates.
-        It is integrated on the planar subgroup (SE2 / SO2xR2) of the chosen c-space; forces
-        and constraint reactions off the plane do not act on it, as in Exudyn."""
+        """Add a planar rigid body: 3 DOF, moving in the world x-y plane; ``inertia`` about
+        the z axis through the body frame origin (its reference point), ``com`` the centre of
+        mass in body x-y coordinates.  It is integrated on the planar subgroup (SE2 / SO2xR2)
+        of the chosen c-space; forces and constraint reactions off the plane do not act on it."""
         idx = len(self.bodies)
         label = name or f"body{idx}"
         J = _finite(float(inertia), f"{label}: inertia")
@@ -126,7 +126,7 @@ class Scene:
         return idx
 
     def AddRotor(self, inertia, frame=None, position=(0, 0, 0), angle=0.0, omega=0.0, name: str = "") -> int:
-        """Add a rotor (Exudyn's ObjectRotationalMass1D): a rigid body ``R = frame Rz(angle)`` at
+        """Add a rotor: a rigid body ``R = frame Rz(angle)`` at
         ``position`` turning about ``frame e_z`` only (its velocity is omega_z; M^-1 is zero on the
         other axes, compiled.axes_minv), ``inertia`` about that axis.  ``angle`` is the total angle,
         turns included (SceneData.bangle tracks it)."""
@@ -147,7 +147,7 @@ class Scene:
         return idx
 
     def describe_body(self, i):
-        """Body ``i`` as errors name it (a scene read from Exudyn names Exudyn's object and node)."""
+        """Body ``i`` as errors name it (a scene read by the bridge names the items it was read from)."""
         return "the ground" if i == GROUND else f"body {i} ('{self.bodies[i].name}')"
 
     def _check_body(self, b, what, allow_ground=True):
@@ -163,11 +163,10 @@ class Scene:
         """Generic joint: lock any subset of the six relative axes of the joint frame.
 
         The joint frame sits at ``posA``/``rotA`` on body A (world data if A is GROUND)
-        and ``posB``/``rotB`` on B.  Equations are Exudyn's ``ObjectJointGeneric``:
-        translations in A's joint frame (global if all three are locked), rotations by
-        dot products of joint frame axes.  ``worldTranslation=True``: the locked
-        translations are the world components of ``pB - pA`` whatever the lock (Exudyn's
-        ``ObjectJointSpherical`` with some ``constrainedAxes`` free)."""
+        and ``posB``/``rotB`` on B.  Equations: translations in A's joint frame (global if
+        all three are locked), rotations by dot products of joint frame axes.
+        ``worldTranslation=True``: the locked translations are the world components of
+        ``pB - pA`` whatever the lock (a spherical joint with some translation axes free)."""
         idx = len(self.joints)
         label = name or f"joint{idx}({kind})"
         self._check_body(bodyA, label)
@@ -189,15 +188,15 @@ class Scene:
                                 velocityLevel=False, offset=None) -> int:
         """One row ``h = factor * d_B . p_B - d_A . p_A - constant`` on position coordinates of
         the body frame origins (0 for GROUND) along world directions ``d = axis`` (an index
-        0, 1, 2: the world axis; or a 3-vector, e.g. a Mass1D's axis); Exudyn's
-        ``ObjectConnectorCoordinate`` on node position coordinates (the bridge folds the
-        node reference coordinates into ``constant``).
+        0, 1, 2: the world axis; or a 3-vector, e.g. the axis of a mass moving along one axis):
+        a coordinate constraint on position coordinates (the bridge folds the reference
+        coordinates into ``constant``).
 
         ``offset``: a Python callable ``offset(t) -> float``, the moving part of the right-hand
         side: ``h = ... - constant - offset(t)`` (a prescribed motion; its first and second
         time derivatives enter the velocity and acceleration levels, mbs/row_drives.py).
         ``velocityLevel``: the row is ``factor qdot_B - qdot_A = constant + offset(t)`` on the
-        coordinates' rates (no position-level equation; Exudyn's ``velocityLevel=True``)."""
+        coordinates' rates (no position-level equation)."""
         idx = len(self.joints)
         label = name or f"joint{idx}(coordinate)"
         self._check_body(bodyA, label)
@@ -219,8 +218,8 @@ class Scene:
         return idx
 
     def AddDistanceConstraint(self, bodyA, posA, bodyB, posB, distance, name="") -> int:
-        """One row ``h = |p_B - p_A| - distance`` between body points (world points on
-        GROUND); Exudyn's ``ObjectConnectorDistance``."""
+        """A distance constraint: one row ``h = |p_B - p_A| - distance`` between body points
+        (world points on GROUND)."""
         idx = len(self.joints)
         label = name or f"joint{idx}(distance)"
         self._check_body(bodyA, label)
@@ -237,12 +236,12 @@ class Scene:
 
     def AddRollingDisc(self, bodyA, bodyB, discRadius, posA=(0, 0, 0), rotA=None, posB=(0, 0, 0), rotB=None,
                        planeNormal=(0, 0, 1), discAxis=(1, 0, 0), constrainedAxes=(1, 1, 1), name="") -> int:
-        """Exudyn's ``ObjectJointRollingDisc``: a disc (body B, centre ``posB``, axis
+        """A rolling-disc constraint: a disc (body B, centre ``posB``, axis
         ``rotB discAxis`` in B's coordinates) rolls on the plane of body A (or GROUND) through
         ``posA`` with normal ``rotA planeNormal``.  Velocity-level rows (nonholonomic): the
         velocity of the disc's material contact point relative to A's, in the (lateral,
         forward, normal) directions locked by ``constrainedAxes`` (mbs/rolling_disc_rows.py).
-        ``planeNormal`` and ``discAxis`` are used as given (Exudyn does not normalise them)."""
+        ``planeNormal`` and ``discAxis`` are used as given (not normalised)."""
         idx = len(self.joints)
         label = name or f"joint{idx}(rollingDisc)"
         self._check_body(bodyA, label)
@@ -273,7 +272,7 @@ class Scene:
 
     def _joint_at(self, kind, bodyA, bodyB, position, rotation, name):
         """Joint whose frame coincides on both bodies at a world ``position``/``rotation``
-        in the initial configuration (like Exudyn's Create*Joint helpers)."""
+        in the initial configuration."""
         p = _vec3(position, f"{kind} joint position")
         Rw = _rot(rotation, f"{kind} joint rotation")
         frames = []
@@ -384,10 +383,10 @@ class Scene:
         return len(self.coordinateSprings) - 1
 
     def AddCoordinateLoad(self, body, axis, load, name="") -> int:
-        """A generalised force ``load`` on a coordinate of ``body`` (Exudyn's LoadCoordinate):
-        a coordinate spring from the ground with ``k = d = 0`` and ``f0 = -load`` (``-f`` acts on
-        side B), so the force follows the coordinate's direction (state-dependent for a
-        RotationParameterCoordinate of an EP or Rxyz node)."""
+        """A generalised force ``load`` on a coordinate of ``body``: a coordinate spring from
+        the ground with ``k = d = 0`` and ``f0 = -load`` (``-f`` acts on side B), so the force
+        follows the coordinate's direction (state-dependent for a RotationParameterCoordinate
+        of 'eulerParameters' or 'taitBryanXYZ')."""
         label = name or f"coordinateLoad{len(self.coordinateSprings)}"
         self._check_body(body, label, allow_ground=False)
         k = self.AddCoordinateSpringDamper(GROUND, 0, body, axis, 0.0, 0.0, name=label)
@@ -408,18 +407,19 @@ class Scene:
 
     def _node_parameter_code(self, body, axis, label):
         """End code (node_coordinates.param_code) of a RotationParameterCoordinate; the body's
-        node parameters are tracked (Body.track, from R0 unless already set)."""
+        rotation parameters are tracked (Body.track, from R0 unless already set)."""
         from .node_coordinates import PARAM_EULER_PARAMETERS, PARAM_KINDS, PARAM_TAIT_BRYAN, param_code
         from .rotation_parameters import TRACK_QUAT, TRACK_TAIT_BRYAN, nearest_tait_bryan, quat_of
         kind = PARAM_KINDS.get(axis.kind)
         if kind is None:
-            raise SceneError(f"{label}: node parameter coordinate of kind {axis.kind!r}; use one of "
+            raise SceneError(f"{label}: rotation parameter coordinate of kind {axis.kind!r}; use one of "
                              f"{sorted(PARAM_KINDS)}")
         n = 4 if kind == PARAM_EULER_PARAMETERS else 3
         if not 0 <= int(axis.index) < n:
-            raise SceneError(f"{label}: a {axis.kind} node has rotation parameters 0..{n - 1}, not {axis.index}")
+            raise SceneError(f"{label}: the parametrisation {axis.kind} has rotation parameters 0..{n - 1}, "
+                             f"not {axis.index}")
         if body == GROUND or self.bodies[body].isPoint or self.bodies[body].planar:
-            raise SceneError(f"{label}: a node rotation parameter needs a 3D rigid body")
+            raise SceneError(f"{label}: a rotation parameter coordinate needs a 3D rigid body")
         b = self.bodies[body]
         code = TRACK_TAIT_BRYAN if kind == PARAM_TAIT_BRYAN else TRACK_QUAT
         if b.track is None:
@@ -436,8 +436,7 @@ class Scene:
 
     def AddLinearSpringDamper(self, bodyA, posA, axisA, bodyB, posB, stiffness, damping=0.0, offset=0.0, force=0.0,
                               name="") -> int:
-        """Spring-damper along the axis ``axisA`` fixed in body A (Exudyn's
-        ObjectConnectorLinearSpringDamper)."""
+        """Spring-damper along the axis ``axisA`` fixed in body A (mbs/linear_spring_forces.py)."""
         label = name or f"linearSpring{len(self.linearSprings)}"
         self._check_body(bodyA, label)
         self._check_body(bodyB, label)
@@ -453,17 +452,17 @@ class Scene:
                               dryFrictionAngle=0.0, rollingViscousFriction=0.0, useLinearProportionalZone=False,
                               posA=(0, 0, 0), planeNormal=(0, 0, 1), posB=(0, 0, 0), discAxis=(1, 0, 0),
                               active=True, data0=(0.0, 0.0, 0.0), name="") -> int:
-        """Exudyn's ``ObjectConnectorRollingDiscPenalty`` (its parameters by Exudyn's names):
-        the disc on body B (centre ``posB``, ``discAxis`` in B's coordinates) on the plane of
-        body A or GROUND (``posA``, ``planeNormal`` in A's coordinates); ``data0``: the initial
-        data coordinates (slip velocity lateral, longitudinal; gap), contact only where the
-        stored gap is negative (Exudyn's rule)."""
+        """A penalty rolling disc (mbs/rolling_disc_penalty_forces.py): the disc on body B
+        (centre ``posB``, ``discAxis`` in B's coordinates) on the plane of body A or GROUND
+        (``posA``, ``planeNormal`` in A's coordinates); ``data0``: the initial data coordinates
+        (slip velocity lateral, longitudinal; gap), contact only where the stored gap is
+        negative."""
         label = name or f"rollingDiscPenalty{len(self.rollingDiscPenalties)}"
         self._check_body(bodyA, label)
         self._check_body(bodyB, label, allow_ground=False)
         if bodyA == bodyB:
             raise SceneError(f"{label}: the disc and the plane are the same body")
-        for b, side in ((bodyA, "plane (marker 0)"), (bodyB, "disc (marker 1)")):
+        for b, side in ((bodyA, "plane (A)"), (bodyB, "disc (B)")):
             if b != GROUND and (self.bodies[b].isPoint or self.bodies[b].planar):
                 raise SceneError(f"{label}: the {side} must be a 3D rigid body or the ground, "
                                  f"not {'a point mass' if self.bodies[b].isPoint else 'a 2D body'}")
@@ -507,7 +506,7 @@ class Scene:
     def SetRightHandSide(self, rhs):
         """Let ``rhs`` give the bodies' whole right-hand side ``Vdot = F(t, g, V)`` (eq. ODE2)
         instead of the compiled forces and joints: a problem evaluated outside the kernel (the
-        Exudyn-evaluated model, bridge/evaluated_problem.py).  ``rhs.bind(Rs, rs, Vs, Vdot)`` gets
+        bridge's evaluated model, bridge/evaluated_problem.py).  ``rhs.bind(Rs, rs, Vs, Vdot)`` gets
         the stage state and the output (arrays the compiled stepper shares, valid while the
         simulator's work arrays live) and returns ``f(t)``, which fills ``Vdot`` (nBodies, 6) at the
         stage state.  Such a scene has bodies only (their mass properties are not used)."""

@@ -69,7 +69,7 @@ class Body:
     vel0: np.ndarray             # initial velocity of the body frame origin, world frame
     name: str = ""
     # a point mass (group R3, groups/rn.py): the projector (3x3, world) onto the directions it
-    # moves in (I for NodePoint, diag(1, 1, 0) for NodePoint2D, e e^T for Node1D); None: rigid
+    # moves in (I in space, diag(1, 1, 0) in the x-y plane, e e^T along an axis e); None: rigid
     freeDirections: np.ndarray = None
     planar: bool = False         # a 2D body: 3 DOF in the x-y plane (AddBody2D)
     angle0: float = 0.0          # a 2D body / rotor: its initial angle, turns included (SceneData.bangle tracks it)
@@ -77,7 +77,7 @@ class Body:
     # (velocity axes ``freeAxes`` of (omega body, v)); None: all axes
     freeAxes: tuple = None
     angleFrame: np.ndarray = None
-    # rotation parameters of the body's node tracked step by step for the write-back
+    # rotation parameters of the body tracked step by step for the write-back
     # (rotation_parameters: TRACK_QUAT / TRACK_TAIT_BRYAN, initial parameters (4)); None: not tracked
     track: tuple = None
 
@@ -97,15 +97,15 @@ class Joint:
     constrainedAxes: tuple       # (tx, ty, tz, rx, ry, rz) in {0, 1}
     kind: str = "generic"
     name: str = ""
-    worldTranslation: bool = False   # translation rows along world axes (Exudyn's spherical joint)
-    # kind 'coordinate' (Exudyn's ObjectConnectorCoordinate): (d_A, d_B, f, c, rotation A, rotation B,
+    worldTranslation: bool = False   # translation rows along world axes (a spherical joint's)
+    # kind 'coordinate' (a coordinate constraint): (d_A, d_B, f, c, rotation A, rotation B,
     # angle0 A, angle0 B), h = f q_B - q_A - c with q_X = d_X . p_X (position coordinate along the
     # world direction d_X) or the angle of X about the z axis of the frame rotX (rotation coordinate,
     # d_X = rotX e_z, tracked over turns from angle0 X; mbs/coordinate_angles.py)
     coordinate: tuple = None
-    distance: float = None           # kind 'distance' (ObjectConnectorDistance): h = |p_B - p_A| - distance
-    # kind 'rollingDisc' (ObjectJointRollingDisc, velocity-level rows, mbs/rolling_disc_rows.py):
-    # (discRadius, planeNormal in A's marker frame rotA, discAxis in B's marker frame rotB)
+    distance: float = None           # kind 'distance' (a distance constraint): h = |p_B - p_A| - distance
+    # kind 'rollingDisc' (a rolling-disc constraint, velocity-level rows, mbs/rolling_disc_rows.py):
+    # (discRadius, planeNormal in A's joint frame rotA, discAxis in B's joint frame rotB)
     rollingDisc: tuple = None
     # a coordinate constraint's time dependence (mbs/row_drives.py): velocity level (``velocityLevel``:
     # f qdot_B - qdot_A = c + offset(t), no position-level row) and the moving part ``offset(t)`` of
@@ -136,7 +136,7 @@ class SpringDamper:
 
 @dataclass
 class TorsionalSpringDamper:
-    """Exudyn's torsional law ``tau = k (phi - offset) + d phidot + torque`` about the z
+    """Torsional spring-damper: ``tau = k (phi - offset) + d phidot + torque`` about the z
     axis of the frame on A; ``-tau z_A`` acts on B, ``+tau z_A`` on A.  ``phi`` is the
     third Tait-Bryan angle of the relative rotation, tracked over turns."""
     bodyA: int
@@ -178,8 +178,8 @@ class CartesianSpringDamper:
 
 @dataclass
 class CoordinateSpringDamper:
-    """Exudyn's ``ObjectConnectorCoordinateSpringDamper`` on position coordinates of the body
-    frame origins along world directions: ``f = k (d_B . p_B - d_A . p_A - offset) + d (rates)``,
+    """A coordinate spring-damper on position coordinates of the body frame origins along
+    world directions: ``f = k (d_B . p_B - d_A . p_A - offset) + d (rates)``,
     ``+f`` on A's coordinate, ``-f`` on B's (mbs/coordinate_forces.py)."""
     bodyA: int
     axisA: np.ndarray            # world direction d_A of A's coordinate (e_k: world axis k)
@@ -215,7 +215,7 @@ class AngleCoordinate:
 
 @dataclass(frozen=True)
 class RotationParameterCoordinate:
-    """A rotation coordinate of a 3D rigid node for the coordinate items (``axis`` argument
+    """A rotation coordinate of a 3D rigid body for the coordinate items (``axis`` argument
     of :meth:`Scene.AddCoordinateConstraint` / :meth:`Scene.AddCoordinateSpringDamper`):
     rotation parameter ``index`` (0-based) of the body's orientation in the parametrisation
     ``kind``: ``'rotationVector'`` (velocity coordinates: the local omega), ``'eulerParameters'``
@@ -228,7 +228,7 @@ class RotationParameterCoordinate:
 
 @dataclass
 class LinearSpringDamper:
-    """Exudyn's ``ObjectConnectorLinearSpringDamper``: along the world axis ``a = R_A axisA``,
+    """A linear spring-damper along the world axis ``a = R_A axisA``,
     ``f = k (a . (p_B - p_A) - offset) + d a . (pdot_B - pdot_A) + force``; ``+f a`` at the
     point on A, ``-f a`` at the point on B (mbs/linear_spring_forces.py)."""
     bodyA: int
@@ -252,9 +252,9 @@ class LinearSpringDamper:
 
 @dataclass
 class RigidBodySpringDamper:
-    """6-dof spring between two frames, Exudyn's ``ObjectConnectorRigidBodySpringDamper``:
-    ``(f, m) = K u + D udot`` in the frame on A (Tait-Bryan form) or in the mid frame
-    (``intrinsic``); the exact law is :func:`exudyn_lie.mbs.forces.rigid_spring_forces`."""
+    """6-dof spring-damper between two frames: ``(f, m) = K u + D udot`` in the frame on A
+    (Tait-Bryan form) or in the mid frame (``intrinsic``); the exact law is
+    :func:`exudyn_lie.mbs.forces.rigid_spring_forces`."""
     bodyA: int
     posA: np.ndarray
     rotA: np.ndarray
@@ -265,7 +265,7 @@ class RigidBodySpringDamper:
     damping: np.ndarray          # 6x6
     offset: np.ndarray           # 6
     name: str = ""
-    intrinsic: bool = False      # Exudyn's useIntrinsicFormulation
+    intrinsic: bool = False      # the law in the mid frame (intrinsic formulation)
 
     def validate(self):
         if not all(np.all(np.isfinite(np.asarray(getattr(self, what), float))) and np.size(getattr(self, what)) == n
@@ -278,11 +278,11 @@ class RigidBodySpringDamper:
 
 @dataclass
 class RollingDiscPenalty:
-    """Exudyn's ``ObjectConnectorRollingDiscPenalty``: a disc (body B, centre ``posB``, axis
+    """A penalty rolling disc: a disc (body B, centre ``posB``, axis
     ``axisB`` in B's coordinates) on the plane of body A or GROUND (through ``posA``, normal
     ``normalA`` in A's coordinates, world for GROUND), penalty contact and regularised friction;
-    ``data0`` the initial data coordinates (slip velocity, gap) of its NodeGenericData
-    (mbs/rolling_disc_penalty_forces.py has the law)."""
+    ``data0`` the initial data coordinates (slip velocity, gap), updated after each accepted
+    step (mbs/rolling_disc_penalty_forces.py has the law)."""
     bodyA: int
     posA: np.ndarray
     normalA: np.ndarray
@@ -306,7 +306,7 @@ class RollingDiscPenalty:
         _check_rolling_disc_penalty(self)
 
     def switch_off(self):
-        self.active = False             # no force, data kept (Exudyn skips it in PostNewton)
+        self.active = False             # no force; an inactive disc keeps its data
 
 
 @dataclass

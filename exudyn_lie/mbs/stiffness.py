@@ -3,9 +3,9 @@ simulator's ``StageStiffness``, ``suggest_step`` and ``SpectralRadius`` call the
 rules that turn them into a stable step size:
 
 * the eigenvalues ``lambda`` of the linearised equations (a problem's own linearisation, e.g.
-  Exudyn's Jacobians on the evaluated path) and the method's stability polynomial ``R``:
-  the largest ``h`` with ``|R(h lambda)| <= 1`` (:func:`largest_stable_step`), the check
-  before a run (:func:`check_linear_stability`);
+  the Jacobians of the modelling system the bridge reads, on the evaluated path) and the
+  method's stability polynomial ``R``: the largest ``h`` with ``|R(h lambda)| <= 1``
+  (:func:`largest_stable_step`), the check before a run (:func:`check_linear_stability`);
 * the spectral radius ``rho`` of the linearised equations (power iteration on
   Jacobian-vector products of the stepper's own vector field, :func:`spectral_radius`) and
   the radius of the method's stability half-disk: the step suggested after a blow-up

@@ -5,6 +5,7 @@ the paper's models (``exudyn_lie.models``, the repository's ``models/`` folder) 
 applications (``exudyn_lie.apps``: paper, bench, stress); an import from a lower layer
 into a higher one would make a cycle."""
 import ast
+import re
 import os
 import subprocess
 import sys
@@ -156,3 +157,24 @@ def test_library_modules_and_functions_stay_small():
                     if n > 100:
                         long_functions.append((rel, node.name, n))
     assert not long_files and not long_functions, (long_files, long_functions)
+
+
+# Exudyn's item and node type names, its functions and the word itself (the package's own name
+# exudyn_lie aside); LoadRow is the simulator's own method
+EXUDYN_WORDS = (r"(?<![\w.])[Ee]xudyn(?!_lie)|RotVecLG|Rxyz|PostNewton|\bEP\b|\bC?(Object|Node|Marker|Sensor)[A-Z0-9]\w*"
+                r"|\bLoad(?!Row\b)[A-Z]\w*")
+
+
+def test_the_kernel_names_nothing_of_exudyn():
+    """mbs/ is the kernel: it describes its models in its own terms; what an Exudyn item is
+    and how it maps onto the kernel is the bridge's (bridge/reader*.py, bridge/nodes.py)."""
+
+    found = []
+    mbs = os.path.join(PKG, "mbs")
+    for name in sorted(os.listdir(mbs)):
+        if name.endswith(".py"):
+            for i, line in enumerate(open(os.path.join(mbs, name), encoding="utf-8"), 1):
+                m = re.search(EXUDYN_WORDS, line)
+                if m:
+                    found.append(f"mbs/{name}:{i}: {m.group(0)!r} in {line.strip()[:100]}")
+    assert not found, "\n".join(found)

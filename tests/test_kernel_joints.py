@@ -13,7 +13,7 @@ import pytest
 
 from exudyn_lie.groups import se3, so3, so3xr3
 from exudyn_lie.mbs import GROUND, JOINT_TYPES, Scene
-from exudyn_lie.mbs.compiled import compile_scene, make_work
+from exudyn_lie.mbs.compiled import compile_carried, compile_scene, make_work
 from exudyn_lie.mbs.diagnostics import constraint_jacobian
 
 
@@ -57,7 +57,7 @@ def finite_differences(sc, group, rng, eps=1e-6):
     direction g exp(+-eps e_k) of each body, eta against the central difference of J V
     along the motion g exp(tau V)."""
     sd, _ = compile_scene(sc, [group, group])
-    wk = make_work(sd, 4)
+    wk = make_work(sd, 4, carried=compile_carried(sc))
     R = np.array([b.R0 for b in sc.bodies])
     r = np.array([b.r0 for b in sc.bodies])
     V = rng.normal(size=(2, 6))
@@ -131,7 +131,7 @@ def test_joint_frames_of_helpers_satisfy_constraints_initially(group, rng):
     sc.AddFixedJoint(b0, b1, p)
     sc.AddSphericalJoint(b0, b1, p)
     sd, _ = compile_scene(sc, [group, group])
-    wk = make_work(sd, 4)
+    wk = make_work(sd, 4, carried=compile_carried(sc))
     R = np.array([b.R0 for b in sc.bodies])
     r = np.array([b.r0 for b in sc.bodies])
     h, J, eta = constraint_jacobian(sd, wk, R, r, np.zeros((2, 6)))

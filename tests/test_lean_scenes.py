@@ -55,9 +55,9 @@ def test_lean_scene_has_every_lean_feature():
 def test_lean_and_full_give_identical_states(group, monkeypatch):
     sc = lean_scene()
     a = run(sc, True, group, monkeypatch)
-    assert a.sd.rowsAll is None and a.sd.cartesianBodies is None and a.wk.disc is None
+    assert a.sd.rowsAll is None and a.sd.cartesianBodies is None and a.wk.path.rollingDiscs is None
     b = run(sc, False, group, monkeypatch)
-    assert b.sd.rowsAll is True and b.sd.cartesianBodies is not None and b.wk.disc is not None
+    assert b.sd.rowsAll is True and b.sd.cartesianBodies is not None and b.wk.path.rollingDiscs is not None
     for x, y in ((a.R, b.R), (a.r, b.r), (a.V, b.V), (a.wk.lam, b.wk.lam)):
         assert np.array_equal(x, y)
     # a real motion, constrained: the check is not vacuous

@@ -111,9 +111,9 @@ def test_rows_against_finite_differences(group, kinds, rng):
     """h = f q_B - q_A - c with q the node parameters; J = d h / d(twist) by central
     differences along g exp(s X), eta = -(d/dt J) V along the motion at frozen V."""
     sc = _two_body_scene(rng, *kinds)
-    from exudyn_lie.mbs.compiled import compile_scene, compile_tracking, make_work
+    from exudyn_lie.mbs.compiled import compile_carried, compile_scene, make_work
     sd, _ = compile_scene(sc, [group, group])
-    wk = make_work(sd, 4, track=compile_tracking(sc))
+    wk = make_work(sd, 4, carried=compile_carried(sc))
     R = np.array([b.R0 for b in sc.bodies])
     r = np.array([b.r0 for b in sc.bodies])
     V = rng.normal(size=(2, 6))

@@ -21,7 +21,7 @@ from exudyn.utilities import (LoadForceVector, LoadMassProportional, LoadTorqueV
 
 from exudyn_lie.groups import GROUPS, se2, se3, so2xr2, so3, so3xr3
 from exudyn_lie.mbs import GROUND, Scene, Simulator
-from exudyn_lie.mbs.compiled import compile_scene, make_work
+from exudyn_lie.mbs.compiled import compile_carried, compile_scene, make_work
 from exudyn_lie.mbs.diagnostics import constraint_jacobian
 
 from test_bridge_common import NODE_TYPES, add_body, compare, new_mbs, random_state
@@ -157,7 +157,7 @@ def test_2d_rows_against_finite_differences(space, rng):
     sc = planar_scene(rng)
     sd, _ = compile_scene(sc, [space, space])
     G = se2 if space == "SE3" else so2xr2
-    wk = make_work(sd, 4)
+    wk = make_work(sd, 4, carried=compile_carried(sc))
     R = np.array([b.R0 for b in sc.bodies])
     r = np.array([b.r0 for b in sc.bodies])
     V = np.zeros((2, 6))

@@ -164,7 +164,7 @@ def test_smooth_rolling_coin_is_compiled_and_converges_at_order_4():
         sd = m.mbs.systemData
         dataMbs = np.asarray(sd.GetDataCoordinates(), float)[np.asarray(sd.GetNodeLTGData(
             m.mbs.GetObject(m.foreignIndex)["nodeNumber"]), np.int64)]
-        np.testing.assert_allclose(m.mbs.sys["lieGroupSolver"].sim.wk.disc[0, D_DATA:], dataMbs, rtol=0, atol=1e-12)
+        np.testing.assert_allclose(m.mbs.sys["lieGroupSolver"].sim.wk.path.rollingDiscs[0, D_DATA:], dataMbs, rtol=0, atol=1e-12)
         assert dataMbs[2] < 0                                                  # in contact at the end
         if h == 2e-3:
             m2 = FM.rolling_disc(h=h)

@@ -18,7 +18,7 @@ from exudyn.utilities import (LoadCoordinate, MarkerBodyRigid, MarkerNodeCoordin
 
 import exudyn_lie as exl
 from exudyn_lie.mbs import GROUND, AngleCoordinate, Scene
-from exudyn_lie.mbs.compiled import compile_scene, make_work
+from exudyn_lie.mbs.compiled import compile_carried, compile_scene, make_work
 from exudyn_lie.mbs.diagnostics import constraint_jacobian
 from test_bridge_common import compare, new_mbs, quiet_settings, random_state
 
@@ -50,7 +50,7 @@ def test_rotation_coordinate_row_against_finite_differences(group, rng):
         axB = AngleCoordinate(None, angles[1]) if endB == "angle" else 0
         sc.AddCoordinateConstraint(0, AngleCoordinate(None, angles[0]), 1, axB, factor=-1.7, constant=0.3)
         sd, _ = compile_scene(sc, [group, group])
-        wk = make_work(sd, 4)
+        wk = make_work(sd, 4, carried=compile_carried(sc))
         R = np.array([b.R0 for b in sc.bodies])
         r = np.array([b.r0 for b in sc.bodies])
         V = np.zeros((2, 6))
@@ -165,7 +165,7 @@ def test_spinning_angle_spring_tracks_turns_as_exudyn():
     """phi reaches 10.7 rad (more than 1.5 turns; Exudyn's coordinate is the total angle, and
     only the final state is written back): exl RK4 at h = 1e-3 agrees with native
     generalized-alpha at 1e-5 (difference to 2e-5: 6.7e-10) to 2.2e-10 (measured), turns
-    included (the angle spring sees the total angle, and the write-back keeps it: Work.bangle)."""
+    included (the angle spring sees the total angle, and the write-back keeps it: Work.bodyAngles)."""
     T = 1.0
     qa, _ = _final(spinner(), 2e-5, T, False)
     qn, vn = _final(spinner(), 1e-5, T, False)

@@ -137,7 +137,7 @@ def rxyz_row(R, omega, omegad, prev, first, p, p_t, p_tt):
 def planar_row(R, omega, omegad, prev, first, p, p_t, p_tt, t, tracked):
     """NodeRigidBody2D: the angle phi of R = Rz(phi) at time ``t``, continued over turns: the
     2 pi shift nearest to ``tracked`` if that is finite (the kernel's angle tracked step by step,
-    Work.bangle: exact, given for the simulator's current state), else nearest to the
+    Work.bodyAngles: exact, given for the simulator's current state), else nearest to the
     last written angle ``prev[0]`` advanced by the trapezoidal integral of omega_z since its
     time ``prev[2]`` (``prev[1]`` its omega_z), for outputs inside a chunk;
     phi_t = omega_z, phi_tt = omegadot_z."""

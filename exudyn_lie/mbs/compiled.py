@@ -48,11 +48,44 @@ SceneData = namedtuple("SceneData", [
                                       #   row kinds are not compiled (mbs/presence.py); True otherwise
 ])
 
+# The path-dependent state (mbs/step_observers.py): what depends on the path, not only on the
+# current configuration, moved on after every accepted step, left as it was by a rejected one.
+# One tuple per simulator, shared by every Work it makes (a new Work keeps it).
+PathState = namedtuple("PathState", [
+    "torsionAngles",                  # (ns,) torsional springs' angles, turns included
+    "bodyAngles",                     # (nb,) angle of each 2D body / rotor about angleFrames[i] e_z, turns included
+    "bodyParameters",                 # (nb, 4) rotation parameters of each tracked body (rotation_parameters)
+    "rollingDiscs",                   # penalty rolling discs (rolling_disc_penalty_forces.D_*): bodies, flags and
+                                      #   law packed with their data coordinates, which change after every step
+                                      #   (one array: three separate ones made the heavy top's step 3.0 -> 3.6 us,
+                                      #   measured); None in a lean scene
+    "watchMax",                       # largest |R[body][i, j]| of each watched entry over the accepted steps
+    "jointAngles",                    # (nj, 2) the rotation coordinates of the coordinate constraints' ends
+    "springAngles",                   # (ns, 2) those of the coordinate springs (coordinate_angles)
+])
+
+# What is tracked and watched per body: constants of a run, kept with the path state they
+# describe.  In Work, not SceneData: in SceneData these fields made the heavy top's step 0.6 us
+# slower although it tracks nothing (measured interleaved).
+TrackPlan = namedtuple("TrackPlan", [
+    "trackCodes",                     # (nb,) rotation_parameters.TRACK_*: what is tracked of each body
+    "angleFrames",                    # (nb, 3, 3) the frame whose e_z a body's angle turns about
+    "nTracked",                       # number of tracked bodies
+    "watchBody", "watchEntry",        # watched rotation entries R[body][i, j] (Simulator.WatchRotationEntries)
+])
+
+# The workspace: scratch of a step (its content between calls means nothing), the constants of
+# the solve, and the path state (``path``, shared).
 Work = namedtuple("Work", [
-    "Rs", "rs", "Vs", "Rb", "rb", "Vb", "Psi", "K", "Vd", "Q", "Qext",
-    "Jr", "W", "eta", "h", "lam", "Sb", "Sd", "perm", "ytmp", "failInfo",
-    "tmp6", "tmp12", "v3", "m3", "ident", "zero3", "zero6",
-    "tphi", "watchBody", "watchEntry", "watchMax",
+    "Rs", "rs", "Vs",                 # the stage state (g_j, V_j of eq. MK1)
+    "Rb", "rb", "Vb",                 # the step's start, restored when a step fails
+    "Psi", "K", "Vd",                 # Psi_j, k_j and Vdot_j of the stages (eq. MK1)
+    "Q", "Qext",                      # generalised forces of a stage: compiled, and evaluated in Python
+    "Jr", "W", "eta", "h", "lam",     # constraint rows (eq. index1): Jacobian, M^-1 J^T, eta, h, multipliers
+    "Sb", "Sd", "perm", "ytmp",       # the Schur complement: band, dense (redundant rows), pivots, scratch
+    "failInfo",                       # what a failed status refers to (codes.INFO_*)
+    "tmp6", "tmp12", "v3", "m3",      # scratch vectors and matrices
+    "ident", "zero3", "zero6",        # constants: the ground's rotation, position and velocity
     "ext",                            # [token of the external rhs evaluator (mbs.external), 0: none;
                                       #  1 if the forces it returned were not finite]
     "rdrive",                         # (3, m): the time-dependent part of each row (mbs.row_drives): value,
@@ -65,21 +98,12 @@ Work = namedtuple("Work", [
                                       # In Work, not SceneData: one more SceneData field made the heavy
                                       # top's step 0.5 us slower (2.85 -> 3.35 us, measured), one more
                                       # Work field did not
-    "bangle", "bframe", "btrack",     # angle of each 2D body / rotor about bframe e_z, turns included (tracked
-                                      #   after every accepted step; their node write-back reads it)
-    "bparam",                         # node rotation parameters of each body tracked after every accepted step
-                                      #   (rotation_parameters; btrack: 1 angle, 2 quaternion, 3 Tait-Bryan)
-    "nplanar",                        # number of tracked bodies (bangle or bparam).  In Work, not SceneData,
-                                      #   for the reason above: in SceneData these fields made the heavy top's
-                                      #   step 0.6 us slower although it tracks nothing (measured interleaved)
-    "disc",                           # penalty rolling discs (rolling_disc_penalty_forces.D_*): bodies, flags,
-                                      #   parameters, data coordinates (updated after every accepted step)
+    "track",                          # the TrackPlan
+    "path",                           # the PathState
     "probe",                          # kinematics of the Python forces' items, computed before the external
                                       #   call of each stage (mbs/external_probes.py); None without them
 ])
 
-# the per-body tracking of a scene (compile_tracking), carried into every Work of its simulator
-Tracking = namedtuple("Tracking", ["bangle", "bframe", "btrack", "bparam", "nplanar", "disc", "probe"])
 N_SCRATCH3 = 20
 
 
@@ -111,9 +135,8 @@ def point_minv(body):
     return out
 
 
-N_JOINT_PARAMS = 10     # float parameters per joint (ROW_COORD: factor, constant, directions d_A, d_B, tracked angles of
-                # rotation coordinates A, B (coordinate_angles); ROW_DIST: distance;
-                # ROW_ROLL: disc radius, plane normal (3), disc axis (3))
+N_JOINT_PARAMS = 8      # float parameters per joint (ROW_COORD: factor, constant, directions d_A, d_B;
+                        # ROW_DIST: distance; ROW_ROLL: disc radius, plane normal (3), disc axis (3))
 
 
 def body_track(body):
@@ -140,8 +163,8 @@ def joint_rows_of(joint):
 def joint_parameters(joint):
     """The float parameters of the joint's rows (``SceneData.jointParams``)."""
     if joint.coordinate is not None:
-        dA, dB, f, c, _, _, angleA, angleB = joint.coordinate
-        return [f, c, *dA, *dB, angleA, angleB]
+        dA, dB, f, c = joint.coordinate[:4]
+        return [f, c, *dA, *dB]
     if joint.distance is not None:
         return [joint.distance] + [0.0] * (N_JOINT_PARAMS - 1)
     if joint.rollingDisc is not None:
@@ -457,30 +480,50 @@ def solve_plan(sd, solve="auto"):
     return plan if sd.bandwidth >= TREE_MIN_BANDWIDTH else None
 
 
-def compile_tracking(scene: Scene):
-    """What :func:`make_work` carries per body and updates after every accepted step: the
-    angles of 2D bodies / rotors over turns and the nodes' rotation parameters; and the
-    probes of the Python forces (kept, like these, by every Work of the simulator)."""
-    def arr(rows, shape, dtype=float):
-        a = np.array(rows, dtype)
-        return a.reshape(shape) if a.size else np.zeros(tuple(0 if d == -1 else d for d in shape), dtype)
-    return Tracking(
-        bangle=np.array([b.angle0 if (b.planar or b.angleFrame is not None) else 0.0 for b in scene.bodies], float),
-        bframe=arr([np.eye(3) if b.angleFrame is None else b.angleFrame for b in scene.bodies], (-1, 3, 3)),
-        btrack=arr([body_track(b) for b in scene.bodies], (-1,), np.int64),
-        bparam=arr([np.zeros(4) if b.track is None else b.track[1] for b in scene.bodies], (-1, 4)),
-        nplanar=int(sum(body_track(b) > 0 for b in scene.bodies)),
-        disc=None if scene_is_lean(scene) else arr([rolling_disc_penalty_row(e) + list(e.data0)
-                                                    for e in scene.rollingDiscPenalties], (-1, N_DISC)),
-        probe=probe_table(scene))
+# what every Work of a simulator carries over from the one before (compile_carried)
+Carried = namedtuple("Carried", ["track", "path", "probe"])
 
 
-def no_tracking(nb, lean=False):
-    """Nothing tracked (bodies whose scene did not go through :func:`compile_tracking`); ``lean``:
-    for a lean scene's SceneData (no penalty discs: ``disc`` None, mbs/presence.py)."""
-    return Tracking(bangle=np.zeros(nb), bframe=np.zeros((nb, 3, 3)), btrack=np.zeros(nb, np.int64),
-                    bparam=np.zeros((nb, 4)), nplanar=0, disc=None if lean else np.zeros((0, N_DISC)),
-                    probe=np.zeros((0, N_PROBE)))
+def _rows(rows, shape, dtype=float):
+    a = np.array(rows, dtype)
+    return a.reshape(shape) if a.size else np.zeros(tuple(0 if d == -1 else d for d in shape), dtype)
+
+
+def compile_carried(scene: Scene):
+    """The :class:`TrackPlan`, the initial :class:`PathState` and the probes of the Python
+    forces' items of a scene, carried by every Work of its simulator (:func:`make_work`)."""
+    lean = scene_is_lean(scene)
+    track = TrackPlan(
+        trackCodes=_rows([body_track(b) for b in scene.bodies], (-1,), np.int64),
+        angleFrames=_rows([np.eye(3) if b.angleFrame is None else b.angleFrame for b in scene.bodies], (-1, 3, 3)),
+        nTracked=int(sum(body_track(b) > 0 for b in scene.bodies)),
+        watchBody=np.zeros(0, np.int64), watchEntry=np.zeros((0, 2), np.int64))
+    path = PathState(
+        torsionAngles=np.zeros(0 if lean else len(scene.torsionalSprings)),
+        bodyAngles=np.array([b.angle0 if (b.planar or b.angleFrame is not None) else 0.0 for b in scene.bodies],
+                            float),
+        bodyParameters=_rows([np.zeros(4) if b.track is None else b.track[1] for b in scene.bodies], (-1, 4)),
+        rollingDiscs=None if lean else _rows([rolling_disc_penalty_row(e) + list(e.data0)
+                                              for e in scene.rollingDiscPenalties], (-1, N_DISC)),
+        watchMax=np.zeros(0),
+        jointAngles=_rows([j.coordinate[6:8] if j.coordinate is not None else (0.0, 0.0) for j in scene.joints],
+                          (-1, 2)),
+        springAngles=_rows([(s.angleA[2], s.angleB[2]) for s in scene.coordinateSprings], (-1, 2)))
+    return Carried(track, path, probe_table(scene))
+
+
+def nothing_carried(sd):
+    """Nothing tracked (bodies whose scene did not go through :func:`compile_carried`); for a
+    lean scene's SceneData no penalty discs (``rollingDiscs`` None, mbs/presence.py)."""
+    nb, lean = sd.nb, sd.rowsAll is None
+    track = TrackPlan(trackCodes=np.zeros(nb, np.int64), angleFrames=np.zeros((nb, 3, 3)), nTracked=0,
+                      watchBody=np.zeros(0, np.int64), watchEntry=np.zeros((0, 2), np.int64))
+    nt = 0 if sd.torsionBodies is None else sd.torsionBodies.shape[0]
+    path = PathState(torsionAngles=np.zeros(nt), bodyAngles=np.zeros(nb), bodyParameters=np.zeros((nb, 4)),
+                     rollingDiscs=None if lean else np.zeros((0, N_DISC)), watchMax=np.zeros(0),
+                     jointAngles=np.zeros((sd.jointIndex.shape[0], 2)),
+                     springAngles=np.zeros((0 if sd.coordSpringEnds is None else sd.coordSpringEnds.shape[0], 2)))
+    return Carried(track, path, np.zeros((0, N_PROBE)))
 
 
 def with_redundant(sd, flag):
@@ -499,11 +542,11 @@ def constant_drives(sd):
     return rd
 
 
-def make_work(sd, nstages, solve="auto", track=None):
-    """Scratch and per-step state of a simulator; ``track`` (:func:`compile_tracking`): the
-    tracked per-body arrays, shared (not copied) so that a new Work keeps their state."""
+def make_work(sd, nstages, solve="auto", carried=None):
+    """The workspace of a simulator; ``carried`` (:func:`compile_carried`): its track plan, path
+    state and probes, shared (not copied) so that a new Work keeps their state."""
     nb = sd.nb
-    track = no_tracking(nb, sd.rowsAll is None) if track is None else track
+    carried = nothing_carried(sd) if carried is None else carried
     m = sd.nrows
     plan = solve_plan(sd, solve)
     tree = isinstance(plan, np.ndarray)        # tree_solve's plan (an ObliquePlan is no tree)
@@ -516,12 +559,11 @@ def make_work(sd, nstages, solve="auto", track=None):
         Sd=np.zeros((m, m)) if sd.redundant else np.zeros((0, 0)),
         perm=np.zeros(m, np.int64), ytmp=np.zeros(m), failInfo=np.zeros(4, np.int64),
         tmp6=np.zeros(6), tmp12=np.zeros(12), v3=np.zeros((N_SCRATCH3, 3)), m3=np.zeros((4, 3, 3)),
-        ident=np.eye(3), zero3=np.zeros(3), zero6=np.zeros(6), tphi=np.zeros(0 if sd.torsionBodies is None else sd.torsionBodies.shape[0]),
-        watchBody=np.zeros(0, np.int64), watchEntry=np.zeros((0, 2), np.int64), watchMax=np.zeros(0),
+        ident=np.eye(3), zero3=np.zeros(3), zero6=np.zeros(6),
         ext=np.zeros(2, np.int64), rdrive=constant_drives(sd), drive=None, Vw=np.zeros((nb, 6) if sd.hasQext else (0, 6)),
         tplan=plan, Tw=np.zeros(work_size(nb, m, plan)) if tree else None,
-        bangle=track.bangle, bframe=track.bframe, btrack=track.btrack, bparam=track.bparam, nplanar=track.nplanar,
+        track=carried.track, path=carried.path,
         # None without probes: external_forces then compiles without probe_kinematics (about 2 s of
         # a first run; the call of external_forces itself stays, see stepper.stage_rhs)
-        disc=track.disc, probe=track.probe if track.probe.shape[0] > 0 else None,
+        probe=carried.probe if carried.probe.shape[0] > 0 else None,
     )

@@ -19,7 +19,7 @@ from .rolling_disc_rows import rolling_disc_row
 
 # --------------------------------------------------------------------------- constraints
 @njit(cache=True, inline="always", _nrt=False)
-def extra_row(kind, q, j, a, b, gA, gB, RA, RB, rA, rB, VA, VB, rowIndex, rotA, rotB, jointParams, bparam, v3, h, Jr, eta, rdrive):
+def extra_row(kind, q, j, a, b, gA, gB, RA, RB, rA, rB, VA, VB, rowIndex, rotA, rotB, jointParams, bodyParameters, jointAngles, v3, h, Jr, eta, rdrive):
     """Row ``q`` of joint ``j`` of a coordinate or rolling-disc kind (:func:`joint_rows`; its
     points and scratch in ``v3``; fewer than 30 arguments: a longer call is a star-argument
     call in Python's bytecode, which numba's inliner refuses)."""
@@ -28,10 +28,10 @@ def extra_row(kind, q, j, a, b, gA, gB, RA, RB, rA, rB, VA, VB, rowIndex, rotA, 
     ax, axd, axb, bx, bxd, bxb = v3[11], v3[12], v3[13], v3[14], v3[15], v3[16]
     u, RtA = v3[17], v3[19]
     if kind == ROW_COORD or kind == ROW_COORD_VEL:
-        coordinate_row(q, a, b, gA, gB, RA, RB, rax, rowIndex[q, ROW_BX], rotA, rotB, jointParams[j], pA, pB, bA, bB, u, RtA,
+        coordinate_row(q, a, b, gA, gB, RA, RB, rax, rowIndex[q, ROW_BX], rotA, rotB, jointParams[j], jointAngles[j], pA, pB, bA, bB, u, RtA,
                        h, Jr, eta)
         if rax >= PARAM_BASE or rowIndex[q, ROW_BX] >= PARAM_BASE:     # rotation parameters of 3D bodies
-            node_parameter_terms(q, a, b, rax, rowIndex[q, ROW_BX], RA, RB, VA, VB, bparam, jointParams[j, 0], h, Jr, eta,
+            node_parameter_terms(q, a, b, rax, rowIndex[q, ROW_BX], RA, RB, VA, VB, bodyParameters, jointParams[j, 0], h, Jr, eta,
                                  ax, axd, axb)
         if kind == ROW_COORD_VEL:
             # velocity level: J V = w(t) constrains no position (as ROW_ROLL); the same J, and
@@ -168,11 +168,11 @@ def _axis_translation_row(q, kind, rax, a, b, j, gA, gB, RA, VA, RB, sA, sB, rot
 
 
 @njit(cache=True, forceinline=True, _nrt=False)
-def joint_rows(j, gid, jointIndex, jointPoints, jointFrames, jointParams, rowIndex, rowsAll, bparam, R, r, V, h, Jr, eta, rdrive, v3, ident, zero3, zero6):
+def joint_rows(j, gid, jointIndex, jointPoints, jointFrames, jointParams, rowIndex, rowsAll, bodyParameters, jointAngles, R, r, V, h, Jr, eta, rdrive, v3, ident, zero3, zero6):
     """Residual ``h``, Jacobian rows ``Jr`` (row, 12: 6 for side A, 6 for side B) and
     ``eta = -Jdot V`` of all rows of joint ``j``, written at the joint's row slots
     (``rowsAll``: SceneData.rowsAll, None compiles no coordinate and rolling-disc rows, mbs/presence.py;
-    ``bparam``: the node rotation parameters tracked per body, Work.bparam; ``rdrive``: the
+    ``bodyParameters``: the node rotation parameters tracked per body, Work.bodyParameters; ``rdrive``: the
     time-dependent part of a coordinate row, :mod:`.row_drives`)."""
     a = jointIndex[j, J_BODY_A]
     b = jointIndex[j, J_BODY_B]
@@ -204,7 +204,7 @@ def joint_rows(j, gid, jointIndex, jointPoints, jointFrames, jointParams, rowInd
         rax = rowIndex[q, ROW_AX]
         if kind == ROW_COORD or kind == ROW_COORD_VEL or kind == ROW_ROLL:
             # not in a lean scene: compiled only for full ones (mbs/presence.py)
-            extra_row_if(rowsAll, kind, q, j, a, b, gA, gB, RA, RB, rA, rB, VA, VB, rowIndex, rotA, rotB, jointParams, bparam, v3,
+            extra_row_if(rowsAll, kind, q, j, a, b, gA, gB, RA, RB, rA, rB, VA, VB, rowIndex, rotA, rotB, jointParams, bodyParameters, jointAngles, v3,
                          h, Jr, eta, rdrive)
         elif kind == ROW_ROT:
             _rotation_row(q, rowIndex, rax, a, b, RA, VA, RB, VB, rotA, rotB, u, w, ax, axd, axb, bx, bxd, bxb, RtA, h, Jr,
@@ -217,11 +217,11 @@ def joint_rows(j, gid, jointIndex, jointPoints, jointFrames, jointParams, rowInd
 
 
 @njit(cache=True, inline="always", _nrt=False)
-def joints_rows(gid, jointIndex, jointPoints, jointFrames, jointParams, rowIndex, rowsAll, bparam, R, r, V, h, Jr, eta, rdrive, v3, ident, zero3, zero6):
+def joints_rows(gid, jointIndex, jointPoints, jointFrames, jointParams, rowIndex, rowsAll, bodyParameters, jointAngles, R, r, V, h, Jr, eta, rdrive, v3, ident, zero3, zero6):
     """:func:`joint_rows` of every joint.  ``rdrive`` (3, m): the time-dependent part of the
     coordinate rows at the evaluation time (:mod:`.row_drives`): ``h - c(t)``, ``eta + cddot(t)``
     (the rate ``cdot(t)`` is the velocity target ``J V = cdot`` of the projections).  (Applied
     in the coordinate rows' branch: a loop over all rows here cost the heavy top 0.4 us of its
     2.9 us per step, measured.)"""
     for j in range(jointIndex.shape[0]):
-        joint_rows(j, gid, jointIndex, jointPoints, jointFrames, jointParams, rowIndex, rowsAll, bparam, R, r, V, h, Jr, eta, rdrive, v3, ident, zero3, zero6)
+        joint_rows(j, gid, jointIndex, jointPoints, jointFrames, jointParams, rowIndex, rowsAll, bodyParameters, jointAngles, R, r, V, h, Jr, eta, rdrive, v3, ident, zero3, zero6)

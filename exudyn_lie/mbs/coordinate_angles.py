@@ -9,8 +9,9 @@ the third Tait-Bryan angle of ``F^T R`` as for the torsional spring (``= phi`` e
 ``(F e_z) . omega_world``, whose derivative at frozen V is ``(F e_z) . R (omega x omega) = 0``:
 a rotation coordinate adds nothing to ``eta`` (coordinate_rows).
 
-The tracked angles live in the items' parameter rows (``jointParams[j, 8:10]`` of a coordinate
-constraint, ``coordSpringLaw[s, 9:11]`` of a coordinate spring; frames in ``jointFrames`` / ``coordSpringFrames``), start at
+The tracked angles are path state (``PathState.jointAngles[j]`` of a coordinate constraint,
+``PathState.springAngles[s]`` of a coordinate spring; frames in ``jointFrames`` /
+``coordSpringFrames``), start at
 the angle of the initial state (``AngleCoordinate.angle0``, the total angle over all turns) and are
 moved on after every accepted step by :func:`update_coordinate_angles`.
 """
@@ -43,18 +44,19 @@ def angle_rate_row(d, R, out):
 
 
 @njit(cache=True, _nrt=False)
-def update_coordinate_angles(jointIndex, jointFrames, jointParams, rowIndex, coordSpringEnds, coordSpringFrames, coordSpringLaw, R):
+def update_coordinate_angles(jointIndex, jointFrames, jointAngles, rowIndex, coordSpringEnds, coordSpringFrames,
+                             springAngles, R):
     """Move every tracked angle to the current state (after an accepted step)."""
     for j in range(jointIndex.shape[0]):
         q = jointIndex[j, J_ROW0]
         if rowIndex[q, ROW_KIND] != ROW_COORD:
             continue
         if rowIndex[q, ROW_AX] == 1:
-            jointParams[j, 8] = frame_angle(jointFrames[j, 0], R[jointIndex[j, J_BODY_A]], jointParams[j, 8])
+            jointAngles[j, 0] = frame_angle(jointFrames[j, 0], R[jointIndex[j, J_BODY_A]], jointAngles[j, 0])
         if rowIndex[q, ROW_BX] == 1:
-            jointParams[j, 9] = frame_angle(jointFrames[j, 1], R[jointIndex[j, J_BODY_B]], jointParams[j, 9])
+            jointAngles[j, 1] = frame_angle(jointFrames[j, 1], R[jointIndex[j, J_BODY_B]], jointAngles[j, 1])
     for s in range(coordSpringEnds.shape[0]):
         if coordSpringEnds[s, 2] == 1:
-            coordSpringLaw[s, 9] = frame_angle(coordSpringFrames[s, 0], R[coordSpringEnds[s, 0]], coordSpringLaw[s, 9])
+            springAngles[s, 0] = frame_angle(coordSpringFrames[s, 0], R[coordSpringEnds[s, 0]], springAngles[s, 0])
         if coordSpringEnds[s, 3] == 1:
-            coordSpringLaw[s, 10] = frame_angle(coordSpringFrames[s, 1], R[coordSpringEnds[s, 1]], coordSpringLaw[s, 10])
+            springAngles[s, 1] = frame_angle(coordSpringFrames[s, 1], R[coordSpringEnds[s, 1]], springAngles[s, 1])

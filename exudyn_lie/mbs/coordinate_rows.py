@@ -15,7 +15,8 @@ reference; a coordinate of ground is 0).  A coordinate is either
   ``(R^T d) . omega``, bias 0.
 
 The references fold into ``c = offset + f ref_B - ref_A`` (the bridge);
-``jointParams[j] = (f, c, d_A, d_B, angle A, angle B)``.  Rows (eq. index1): ``J V = f qdot_B - qdot_A``
+``jointParams[j] = (f, c, d_A, d_B)``, the tracked angles of rotation ends in the path state
+(``PathState.jointAngles[j]``).  Rows (eq. index1): ``J V = f qdot_B - qdot_A``
 and ``eta = -(f bias_B - bias_A)``.
 """
 from numba import njit
@@ -25,16 +26,16 @@ from .coordinate_angles import angle_rate_row, frame_angle
 
 
 @njit(cache=True, inline="always", _nrt=False)
-def coordinate_row(q, a, b, gA, gB, RA, RB, rotEndA, rotEndB, FA, FB, par, pA, pB, bA, bB, e, RTe, h, Jr, eta):
+def coordinate_row(q, a, b, gA, gB, RA, RB, rotEndA, rotEndB, FA, FB, par, angles, pA, pB, bA, bB, e, RTe, h, Jr, eta):
     """Row ``q`` of a coordinate constraint from the body origins ``pA, pB`` and their bias
-    accelerations ``bA, bB`` (body_point at s = 0); ``par = jointParams[j]``; ``rotEndX`` 1 for a
+    accelerations ``bA, bB`` (body_point at s = 0); ``par = jointParams[j]``, ``angles = jointAngles[j]``; ``rotEndX`` 1 for a
     rotation coordinate (frame ``FX``)."""
     f = par[0]
     hv = -par[1]
     et = 0.0
     if a >= 0:
         if rotEndA == 1:
-            hv -= frame_angle(FA, RA, par[8])
+            hv -= frame_angle(FA, RA, angles[0])
             _rotation_column(RA, par, 2, -1.0, e, RTe, Jr, q, 0)
         else:
             for k in range(3):
@@ -43,7 +44,7 @@ def coordinate_row(q, a, b, gA, gB, RA, RB, rotEndA, rotEndB, FA, FB, par, pA, p
             _translation_column(gA, RA, par, 2, -1.0, e, RTe, Jr, q, 3)
     if b >= 0:
         if rotEndB == 1:
-            hv += f * frame_angle(FB, RB, par[9])
+            hv += f * frame_angle(FB, RB, angles[1])
             _rotation_column(RB, par, 5, f, e, RTe, Jr, q, 6)
         else:
             for k in range(3):

@@ -53,7 +53,7 @@ def register(name, sceneList, fields, forces, energy=None, table=None, writeRow=
     """Register one compiled force element (module docstring).  ``table``: the array whose rows
     say whether the scene has the element, as an expression on the scene tuples (default: its
     first SceneData field); an element whose data change after each step keeps them in
-    ``Work`` (e.g. ``wk.disc``), registers no SceneData field and gives ``writeRow(sd, wk, k,
+    ``Work`` (e.g. ``wk.path.rollingDiscs``), registers no SceneData field and gives ``writeRow(sd, wk, k,
     item)``, which rewrites its row ``k`` from a changed scene item (:func:`write_row`).
     ``lean``: part of a lean scene (:mod:`.presence`); the fields of any other element are None
     in a lean scene and its code is compiled only for full scenes."""
@@ -101,8 +101,7 @@ register("torsional", "torsionalSprings", (
          torsional_element, torsional_element_energy)
 register("coordinate", "coordinateSprings", (
     ("coordSpringEnds", table(lambda s: [s.bodyA, s.bodyB, int(s.angleA[0]), int(s.angleB[0])], (-1, 4), np.int64)),
-    ("coordSpringLaw", table(lambda s: [s.stiffness, s.damping, s.offset, *s.axisA, *s.axisB, s.angleA[2], s.angleB[2],
-                              s.force], (-1, 12))),
+    ("coordSpringLaw", table(lambda s: [s.stiffness, s.damping, s.offset, *s.axisA, *s.axisB, s.force], (-1, 10))),
     ("coordSpringFrames", table(lambda s: [s.angleA[1], s.angleB[1]], (-1, 2, 3, 3))),
     ("nCoordAngles", _angles)),
          coordinate_spring_element, coordinate_spring_element_energy)
@@ -121,7 +120,7 @@ register("rigid", "rigidSprings", (
 # the penalty rolling disc: bodies, flags, law and data coordinates packed into Work.disc (the data
 # change after every accepted step, forces.update_contact_data; one packed array: three separate
 # ones cost the heavy top's step 3.0 -> 3.6 us, measured)
-register("rollingDiscPenalty", "rollingDiscPenalties", (), rolling_disc_penalty_element, table="wk.disc",
+register("rollingDiscPenalty", "rollingDiscPenalties", (), rolling_disc_penalty_element, table="wk.path.rollingDiscs",
          writeRow=write_rolling_disc_penalty_row)
 
 

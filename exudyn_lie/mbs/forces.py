@@ -110,7 +110,7 @@ def torsion_angle(rotA, rotB, prev, RA, VA, RB, VB, FA, FB):
 
 
 @njit(cache=True, _nrt=False)
-def torsional_forces(gid, torsionBodies, torsionFrames, torsionLaw, tphi, R, r, V, Q, F, m3, ident, zero3, zero6):
+def torsional_forces(gid, torsionBodies, torsionFrames, torsionLaw, torsionAngles, R, r, V, Q, F, m3, ident, zero3, zero6):
     """Torsional spring-dampers about the z axis of the frame on A (``torsionLaw`` = k, d,
     offset, torque): ``tau = k (phi - phi0) + d phidot + torque``;
     ``-tau z_A`` acts on B, ``+tau z_A`` on A."""
@@ -119,7 +119,7 @@ def torsional_forces(gid, torsionBodies, torsionFrames, torsionLaw, tphi, R, r, 
         b = torsionBodies[s, 1]
         gA, RA, rA, VA = _side(gid, a, R, r, V, ident, zero3, zero6)
         gB, RB, rB, VB = _side(gid, b, R, r, V, ident, zero3, zero6)
-        phi, phid = torsion_angle(torsionFrames[s, 0], torsionFrames[s, 1], tphi[s], RA, VA, RB, VB, m3[0], m3[1])
+        phi, phid = torsion_angle(torsionFrames[s, 0], torsionFrames[s, 1], torsionAngles[s], RA, VA, RB, VB, m3[0], m3[1])
         tau = -(torsionLaw[s, 0] * (phi - torsionLaw[s, 2]) + torsionLaw[s, 1] * phid + torsionLaw[s, 3])
         for k in range(3):
             F[k] = tau * (RA[k, 0] * torsionFrames[s, 0, 0, 2] + RA[k, 1] * torsionFrames[s, 0, 1, 2] + RA[k, 2] * torsionFrames[s, 0, 2, 2])
@@ -246,13 +246,13 @@ def rigid_spring_forces(gid, rigidSpringBodies, rigidSpringPoints, rigidSpringFr
 
 
 @njit(cache=True, _nrt=False)
-def torsion_angles(gid, torsionBodies, torsionFrames, tphi, R, r, V, m3, ident, zero3, zero6):
+def torsion_angles(gid, torsionBodies, torsionFrames, torsionAngles, R, r, V, m3, ident, zero3, zero6):
     """Store the current torsion angles as the branch reference for the next step."""
     for s in range(torsionBodies.shape[0]):
         gA, RA, rA, VA = _side(gid, torsionBodies[s, 0], R, r, V, ident, zero3, zero6)
         gB, RB, rB, VB = _side(gid, torsionBodies[s, 1], R, r, V, ident, zero3, zero6)
-        phi, phid = torsion_angle(torsionFrames[s, 0], torsionFrames[s, 1], tphi[s], RA, VA, RB, VB, m3[0], m3[1])
-        tphi[s] = phi
+        phi, phid = torsion_angle(torsionFrames[s, 0], torsionFrames[s, 1], torsionAngles[s], RA, VA, RB, VB, m3[0], m3[1])
+        torsionAngles[s] = phi
 
 
 @njit(cache=True, forceinline=True, _nrt=False)
@@ -280,7 +280,7 @@ def cartesian_element(sd, wk, R, r, V, Q):
 
 @njit(cache=True, inline="always", _nrt=False)
 def torsional_element(sd, wk, R, r, V, Q):
-    torsional_forces(sd.gid, sd.torsionBodies, sd.torsionFrames, sd.torsionLaw, wk.tphi, R, r, V, Q, wk.v3[6], wk.m3, wk.ident, wk.zero3,
+    torsional_forces(sd.gid, sd.torsionBodies, sd.torsionFrames, sd.torsionLaw, wk.path.torsionAngles, R, r, V, Q, wk.v3[6], wk.m3, wk.ident, wk.zero3,
                      wk.zero6)
 
 
@@ -319,12 +319,12 @@ def cartesian_potential(gid, cartesianBodies, cartesianPoints, cartesianLaw, R, 
 
 
 @njit(cache=True, _nrt=False)
-def torsional_potential(gid, torsionBodies, torsionFrames, torsionLaw, tphi, R, r, V, m3, ident, zero3, zero6, e):
+def torsional_potential(gid, torsionBodies, torsionFrames, torsionLaw, torsionAngles, R, r, V, m3, ident, zero3, zero6, e):
     """``e`` plus the potential ``k (phi - offset)^2 / 2 + torque phi`` of the torsional springs."""
     for s in range(torsionBodies.shape[0]):
         gA, RA, rA, VA = _side(gid, torsionBodies[s, 0], R, r, V, ident, zero3, zero6)
         gB, RB, rB, VB = _side(gid, torsionBodies[s, 1], R, r, V, ident, zero3, zero6)
-        phi, phid = torsion_angle(torsionFrames[s, 0], torsionFrames[s, 1], tphi[s], RA, VA, RB, VB, m3[0], m3[1])
+        phi, phid = torsion_angle(torsionFrames[s, 0], torsionFrames[s, 1], torsionAngles[s], RA, VA, RB, VB, m3[0], m3[1])
         e += 0.5 * torsionLaw[s, 0] * (phi - torsionLaw[s, 2]) ** 2 + torsionLaw[s, 3] * phi
     return e
 
@@ -343,5 +343,5 @@ def cartesian_element_energy(sd, wk, R, r, V, e):
 
 @njit(cache=True, inline="always", _nrt=False)
 def torsional_element_energy(sd, wk, R, r, V, e):
-    return torsional_potential(sd.gid, sd.torsionBodies, sd.torsionFrames, sd.torsionLaw, wk.tphi, R, r, V, wk.m3, wk.ident, wk.zero3,
+    return torsional_potential(sd.gid, sd.torsionBodies, sd.torsionFrames, sd.torsionLaw, wk.path.torsionAngles, R, r, V, wk.m3, wk.ident, wk.zero3,
                                wk.zero6, e)

@@ -280,7 +280,7 @@ def rhs(sd, wk, t, R, r, V, Qext, Vdot):
     free_accelerations(sd.gid, sd.Minv, R, Q, Vdot, wk.tmp12)
     if sd.nrows == 0:
         return STATUS_OK
-    joints_rows(sd.gid, sd.jointIndex, sd.jointPoints, sd.jointFrames, sd.jointParams, sd.rowIndex, sd.rowsAll, wk.bparam, R, r, V, wk.h, wk.Jr, wk.eta, wk.rdrive,
+    joints_rows(sd.gid, sd.jointIndex, sd.jointPoints, sd.jointFrames, sd.jointParams, sd.rowIndex, sd.rowsAll, wk.path.bodyParameters, wk.path.jointAngles, R, r, V, wk.h, wk.Jr, wk.eta, wk.rdrive,
                 wk.v3, wk.ident, wk.zero3, wk.zero6)
     return schur_correct(sd.gid, sd.Minv, sd.rowIndex, sd.bandwidth, sd.redundant, sd.pivotTol, R, Vdot, -1.0, wk.eta,
                          wk.Jr, wk.W, wk.lam, wk.Sb, wk.Sd, wk.perm, wk.ytmp, wk.failInfo, wk.tmp12, tree_of(sd, wk))

@@ -7,7 +7,7 @@ on the parametrisation's velocity coordinates.  In the kernel's body velocity (l
 that is, per parametrisation, with ``p`` the rotation parameters of the body's ``R``:
 
 * value ``q_k = p_k(R)`` on the branch a continuous integration of the parameters reaches,
-  taken nearest to the parameters tracked at the last accepted step (``Work.bparam``,
+  taken nearest to the parameters tracked at the last accepted step (``Work.bodyParameters``,
   :mod:`.rotation_parameters`);
 * ``G``, the gradient of ``q_k`` on omega: ``qdot_k = G . omega`` (the chain rule through the
   parametrisation, ``pdot = P(p) omega``, ``G`` = row k of ``P``), and the bias
@@ -183,19 +183,19 @@ def node_parameter(code, R, prev, w, G, C, tmp):
 
 
 @njit(cache=True, _nrt=False)
-def node_parameter_terms(q, a, b, codeA, codeB, RA, RB, VA, VB, bparam, f, h, Jr, eta, G, C, tmp):
+def node_parameter_terms(q, a, b, codeA, codeB, RA, RB, VA, VB, bodyParameters, f, h, Jr, eta, G, C, tmp):
     """Add the node-parameter ends of coordinate row ``q`` (``h = f q_B - q_A - c``; the
     position terms of such an end are zero, coordinate_rows): ``h``, ``J`` on the rotation
     columns (the gradient ``G``) and ``eta = -Gdot omega``.  The force direction ``C`` of the
     row is :func:`force_direction_patch`'s business (oblique_solve)."""
     if a >= 0 and codeA >= PARAM_BASE:
-        v, bias = node_parameter(codeA, RA, bparam[a], VA, G, C, tmp)
+        v, bias = node_parameter(codeA, RA, bodyParameters[a], VA, G, C, tmp)
         h[q] -= v
         eta[q] += bias
         for i in range(3):
             Jr[q, i] = -G[i]
     if b >= 0 and codeB >= PARAM_BASE:
-        v, bias = node_parameter(codeB, RB, bparam[b], VB, G, C, tmp)
+        v, bias = node_parameter(codeB, RB, bodyParameters[b], VB, G, C, tmp)
         h[q] += f * v
         eta[q] -= f * bias
         for i in range(3):

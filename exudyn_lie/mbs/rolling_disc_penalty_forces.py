@@ -62,7 +62,7 @@ def write_rolling_disc_penalty_row(sd, wk, k, e):
     """The registration's ``writeRow`` (mbs/force_elements.py): disc ``k``'s bodies, flags and
     parameters from the scene item ``e`` (changed during a run); its data coordinates (slip
     velocity and gap of the last step, columns ``D_DATA:``) go on as they are."""
-    wk.disc[k, :D_DATA] = rolling_disc_penalty_row(e)
+    wk.path.rollingDiscs[k, :D_DATA] = rolling_disc_penalty_row(e)
 
 
 @njit(cache=True, inline="always", _nrt=False)
@@ -204,4 +204,4 @@ def update_rolling_disc_penalty_data(gid, disc, R, r, V, v3, ident, zero3, zero6
 @njit(cache=True, inline="always", _nrt=False)
 def rolling_disc_penalty_element(sd, wk, R, r, V, Q):
     """The element's forces entry (mbs/force_elements.py); its table lives in ``Work.disc``."""
-    rolling_disc_penalty_forces(sd.gid, wk.disc, R, r, V, Q, wk.v3, wk.ident, wk.zero3, wk.zero6)
+    rolling_disc_penalty_forces(sd.gid, wk.path.rollingDiscs, R, r, V, Q, wk.v3, wk.ident, wk.zero3, wk.zero6)

@@ -11,10 +11,10 @@ body by far less than pi):
 * ``TRACK_TAIT_BRYAN``: Tait-Bryan angles ``R = Rx(a0) Ry(a1) Rz(a2)``, the solution of the two
   (each modulo 2 pi) nearest the previous angles;
 * ``TRACK_ANGLE``: the angle of a 2D body / rotor (coordinate_angles.frame_angle, kept in
-  ``Work.bangle``).
+  ``Work.bodyAngles``).
 
 :func:`update_tracked_bodies` moves them on after every accepted step; the node parameters
-live in ``Work.bparam`` (``btrack`` the code per body), and all are recorded with every output row (stepper.mk_steps, adaptive.serve_outputs) by
+live in ``Work.bodyParameters`` (``trackCodes`` the code per body), and all are recorded with every output row (stepper.mk_steps, adaptive.serve_outputs) by
 :func:`record_tracked`.
 """
 import math
@@ -137,44 +137,44 @@ def nearest_parameters(code, R, ref, out):
 
 
 @njit(cache=True, _nrt=False)
-def update_tracked_bodies(btrack, bframe, bangle, bparam, R):
+def update_tracked_bodies(trackCodes, angleFrames, bodyAngles, bodyParameters, R):
     """Move what is tracked of every body to its rotation after an accepted step: the angle of
     a 2D body / rotor (continued over turns, coordinate_angles.frame_angle) and the node
     rotation parameters (the quaternion case, every tracked body of most models, with
     scalars only: it runs every step).  One call, not inlined into the stepper."""
-    for i in range(btrack.shape[0]):
-        c = btrack[i]
+    for i in range(trackCodes.shape[0]):
+        c = trackCodes[i]
         if c == TRACK_ANGLE:
-            bangle[i] = frame_angle(bframe[i], R[i], bangle[i])
+            bodyAngles[i] = frame_angle(angleFrames[i], R[i], bodyAngles[i])
         elif c == TRACK_QUAT:
             q0, q1, q2, q3 = quat_scalars(R[i])
-            if q0 * bparam[i, 0] + q1 * bparam[i, 1] + q2 * bparam[i, 2] + q3 * bparam[i, 3] < 0.0:
+            if q0 * bodyParameters[i, 0] + q1 * bodyParameters[i, 1] + q2 * bodyParameters[i, 2] + q3 * bodyParameters[i, 3] < 0.0:
                 q0, q1, q2, q3 = -q0, -q1, -q2, -q3
-            bparam[i, 0], bparam[i, 1], bparam[i, 2], bparam[i, 3] = q0, q1, q2, q3
+            bodyParameters[i, 0], bodyParameters[i, 1], bodyParameters[i, 2], bodyParameters[i, 3] = q0, q1, q2, q3
         elif c == TRACK_TAIT_BRYAN:
-            nearest_tait_bryan(R[i], bparam[i], bparam[i])
+            nearest_tait_bryan(R[i], bodyParameters[i], bodyParameters[i])
 
 
 @njit(cache=True, _nrt=False)
-def record_tracked(btrack, bangle, bparam, out):
+def record_tracked(trackCodes, bodyAngles, bodyParameters, out):
     """The tracked values at the current state into an output row ``out`` (nb, 4): the
     angle (TRACK_ANGLE) in column 0, node parameters otherwise."""
-    for i in range(btrack.shape[0]):
-        c = btrack[i]
+    for i in range(trackCodes.shape[0]):
+        c = trackCodes[i]
         if c == TRACK_ANGLE:
-            out[i, 0] = bangle[i]
+            out[i, 0] = bodyAngles[i]
         elif c != TRACK_NONE:
             for k in range(4):
-                out[i, k] = bparam[i, k]
+                out[i, k] = bodyParameters[i, k]
 
 
 @njit(cache=True, _nrt=False)
-def tracked_at(btrack, bframe, bangle, bparam, R, out):
+def tracked_at(trackCodes, angleFrames, bodyAngles, bodyParameters, R, out):
     """The tracked values at a state ``R`` near the tracked one (a dense output inside the
     last accepted step) into ``out`` (nb, 4): each nearest its value at the step's end."""
-    for i in range(btrack.shape[0]):
-        c = btrack[i]
+    for i in range(trackCodes.shape[0]):
+        c = trackCodes[i]
         if c == TRACK_ANGLE:
-            out[i, 0] = frame_angle(bframe[i], R[i], bangle[i])
+            out[i, 0] = frame_angle(angleFrames[i], R[i], bodyAngles[i])
         elif c != TRACK_NONE:
-            nearest_parameters(c, R[i], bparam[i], out[i])
+            nearest_parameters(c, R[i], bodyParameters[i], out[i])

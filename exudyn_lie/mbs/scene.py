@@ -129,7 +129,7 @@ class Scene:
         """Add a rotor: a rigid body ``R = frame Rz(angle)`` at
         ``position`` turning about ``frame e_z`` only (its velocity is omega_z; M^-1 is zero on the
         other axes, compiled.axes_minv), ``inertia`` about that axis.  ``angle`` is the total angle,
-        turns included (SceneData.bangle tracks it)."""
+        turns included (SceneData.bodyAngles tracks it)."""
         idx = len(self.bodies)
         label = name or f"rotor{idx}"
         J = _finite(inertia, f"{label}: inertia")

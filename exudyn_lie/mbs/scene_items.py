@@ -72,7 +72,7 @@ class Body:
     # moves in (I in space, diag(1, 1, 0) in the x-y plane, e e^T along an axis e); None: rigid
     freeDirections: np.ndarray = None
     planar: bool = False         # a 2D body: 3 DOF in the x-y plane (AddBody2D)
-    angle0: float = 0.0          # a 2D body / rotor: its initial angle, turns included (SceneData.bangle tracks it)
+    angle0: float = 0.0          # a 2D body / rotor: its initial angle, turns included (SceneData.bodyAngles tracks it)
     # a rotor (AddRotor): turns about the z axis of the world frame ``angleFrame`` through r0 only
     # (velocity axes ``freeAxes`` of (omega body, v)); None: all axes
     freeAxes: tuple = None

@@ -21,7 +21,8 @@ from .rolling_disc_penalty_forces import D_DATA
 from .force_elements import write_row
 from .rotation_parameters import record_tracked, update_tracked_bodies
 from .step_observers import observe_initial_state, observed_at_start
-from .compiled import compile_scene, compile_tracking, make_work, resolve_groups, with_redundant
+from .coordinate_forces import COORD_SPRING_FORCE
+from .compiled import compile_carried, compile_scene, make_work, resolve_groups, with_redundant
 from .linalg import REL_PIVOT_TOL, rows_in_null_space, schur_rank_and_null
 from .row_drives import RowDrives
 from .scene import Scene, SceneError
@@ -68,7 +69,7 @@ class Simulator(ExternalSeams):
         self.stabilization = None if stabilization == "none" else stabilization
         self.verbose = verbose
         self.sd, self.rowJoint = compile_scene(scene, self.groups)
-        self._track = compile_tracking(scene)
+        self._carried = compile_carried(scene)       # track plan, path state, probes: kept by every Work
         self.sd = self.sd._replace(stabilization={None: None, "velocity": kernel.STAB_VELOCITY,
                                                   "position": kernel.STAB_POSITION}[self.stabilization])
         self.method = method_arrays(self.tableau)
@@ -97,7 +98,7 @@ class Simulator(ExternalSeams):
         dense = self.tableau.dense
         # room for the dense-output extra stages of an embedded pair (adaptive steps)
         extra = dense.extra_stages if (dense is not None and self.tableau.b_hat is not None) else 0
-        wk = make_work(self.sd, len(self.method.b) + extra, solve, self._track)
+        wk = make_work(self.sd, len(self.method.b) + extra, solve, self._carried)
         wk.ext[0] = external.handle(self._extToken) if self._extToken else 0
         if self._driveToken:
             wk = wk._replace(drive=np.array([external.handle(self._driveToken)], np.int64))
@@ -133,9 +134,9 @@ class Simulator(ExternalSeams):
         self.t = float(t0)
         self._segmentStart = (self.t, self.R.copy(), self.r.copy(), self.V.copy())
         if len(sc.torsionalSprings):
-            self.wk.tphi[:] = 0.0
+            self.wk.path.torsionAngles[:] = 0.0
         for k, e in enumerate(sc.rollingDiscPenalties):     # data coordinates: as given
-            self.wk.disc[k, D_DATA:] = e.data0
+            self.wk.path.rollingDiscs[k, D_DATA:] = e.data0
         # the tracked angles (torsional springs, rotation coordinates, 2D bodies) at this state
         self._update_tracking()
 
@@ -148,7 +149,7 @@ class Simulator(ExternalSeams):
         if present == ["trackedBodies"]:
             # its update alone: the step loop's own callee, so a first run compiles no
             # separate entry taking the SceneData / Work tuples for it
-            update_tracked_bodies(wk.btrack, wk.bframe, wk.bangle, wk.bparam, self.R)
+            update_tracked_bodies(wk.track.trackCodes, wk.track.angleFrames, wk.path.bodyAngles, wk.path.bodyParameters, self.R)
         elif present:
             observe_initial_state(sd, wk, self.R, self.r, self.V)
 
@@ -166,18 +167,21 @@ class Simulator(ExternalSeams):
         if not (0 <= int(i) < 3 and 0 <= int(j) < 3):
             raise SceneError(f"WatchRotationEntries: entry ({i}, {j}) is not in a 3x3 matrix")
         entry = np.tile(np.array([[int(i), int(j)]], np.int64), (len(b), 1))
-        self.wk = self.wk._replace(watchBody=b.copy(), watchEntry=entry, watchMax=np.zeros(len(b)))
+        c = self._carried
+        self._carried = c._replace(track=c.track._replace(watchBody=b.copy(), watchEntry=entry),
+                                   path=c.path._replace(watchMax=np.zeros(len(b))))
+        self.wk = self.wk._replace(track=self._carried.track, path=self._carried.path)
         self._entries = {}
         self.ResetWatch()
 
     @property
     def watchedMaxima(self):
-        return self.wk.watchMax
+        return self.wk.path.watchMax
 
     def ResetWatch(self):
         """Restart the watched maxima from the current state."""
-        for w, b in enumerate(self.wk.watchBody):
-            self.wk.watchMax[w] = abs(self.R[b, self.wk.watchEntry[w, 0], self.wk.watchEntry[w, 1]])
+        for w, b in enumerate(self.wk.track.watchBody):
+            self.wk.path.watchMax[w] = abs(self.R[b, self.wk.track.watchEntry[w, 0], self.wk.track.watchEntry[w, 1]])
 
     # ----------------------------------------------------------------- constraints
     def jacobian(self, R=None, r=None, V=None):
@@ -419,22 +423,22 @@ class Simulator(ExternalSeams):
     def TrackedParameters(self, out):
         """The angles and node rotation parameters tracked per body (nb, 4) into ``out``
         (mbs/rotation_parameters.py: what a write-back of node coordinates continues from)."""
-        record_tracked(self.wk.btrack, self.wk.bangle, self.wk.bparam, out)
+        record_tracked(self.wk.track.trackCodes, self.wk.path.bodyAngles, self.wk.path.bodyParameters, out)
 
     def SetTrackedParameters(self, body, p):
         """Continue the tracked node rotation parameters of ``body`` from ``p`` (4)."""
-        self.wk.bparam[body] = p
+        self.wk.path.bodyParameters[body] = p
 
     def TorsionAngle(self, k):
         """The tracked angle (turns included) of compiled torsional spring ``k``."""
-        return float(self.wk.tphi[k])
+        return float(self.wk.path.torsionAngles[k])
 
     def SetTorsionAngle(self, k, phi):
-        self.wk.tphi[k] = phi
+        self.wk.path.torsionAngles[k] = phi
 
     def SetContactData(self, k, data):
         """The data coordinates (stored slip, gap) of penalty rolling disc ``k``."""
-        self.wk.disc[k, D_DATA:] = data
+        self.wk.path.rollingDiscs[k, D_DATA:] = data
 
     def SetProbeRow(self, i, row):
         """Row ``i`` of the Python items' probes (mbs/external_probes.py) after an item changed."""
@@ -454,7 +458,7 @@ class Simulator(ExternalSeams):
     def SetCoordinateSpringForce(self, k, force):
         """The constant force of coordinate spring row ``k`` (a coordinate load on a node
         rotation parameter is such a row: force ``-load``)."""
-        self.sd.coordSpringLaw[k, 11] = force
+        self.sd.coordSpringLaw[k, COORD_SPRING_FORCE] = force
 
     def Accelerations(self):
         """``(Vdot, lambda)`` at the current state from the index-1 system (eq. index1):

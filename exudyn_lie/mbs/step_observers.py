@@ -50,16 +50,16 @@ _disc_data_if = guarded(update_rolling_disc_penalty_data, rows=True)
 @njit(cache=True, inline="always", _nrt=False)
 def observe_torsion_turns(sd, wk, R, r, V):
     """The torsional springs' angles, continued over turns (their force reads the branch)."""
-    _torsion_angles_if(sd.torsionBodies, sd.gid, sd.torsionBodies, sd.torsionFrames, wk.tphi, R, r, V, wk.m3,
+    _torsion_angles_if(sd.torsionBodies, sd.gid, sd.torsionBodies, sd.torsionFrames, wk.path.torsionAngles, R, r, V, wk.m3,
                        wk.ident, wk.zero3, wk.zero6)
 
 
 @njit(cache=True, inline="always", _nrt=False)
-def _coordinate_angles(nCoordAngles, jointIndex, jointFrames, jointParams, rowIndex, coordSpringEnds,
-                       coordSpringFrames, coordSpringLaw, R):
+def _coordinate_angles(nCoordAngles, jointIndex, jointFrames, jointAngles, rowIndex, coordSpringEnds,
+                       coordSpringFrames, springAngles, R):
     if nCoordAngles > 0:                 # a count, not a table: the guard's rows check does not apply
-        update_coordinate_angles(jointIndex, jointFrames, jointParams, rowIndex, coordSpringEnds,
-                                 coordSpringFrames, coordSpringLaw, R)
+        update_coordinate_angles(jointIndex, jointFrames, jointAngles, rowIndex, coordSpringEnds,
+                                 coordSpringFrames, springAngles, R)
 
 
 _coordinate_angles_if = guarded(_coordinate_angles)
@@ -68,21 +68,21 @@ _coordinate_angles_if = guarded(_coordinate_angles)
 @njit(cache=True, inline="always", _nrt=False)
 def observe_coordinate_angles(sd, wk, R, r, V):
     """The rotation coordinates of the coordinate items (springs and constraints)."""
-    _coordinate_angles_if(sd.nCoordAngles, sd.nCoordAngles, sd.jointIndex, sd.jointFrames, sd.jointParams,
-                          sd.rowIndex, sd.coordSpringEnds, sd.coordSpringFrames, sd.coordSpringLaw, R)
+    _coordinate_angles_if(sd.nCoordAngles, sd.nCoordAngles, sd.jointIndex, sd.jointFrames, wk.path.jointAngles,
+                          sd.rowIndex, sd.coordSpringEnds, sd.coordSpringFrames, wk.path.springAngles, R)
 
 
 @njit(cache=True, inline="always", _nrt=False)
 def observe_tracked_bodies(sd, wk, R, r, V):
     """The angle of each 2D body / rotor and the rotation parameters of each tracked body."""
-    if wk.nplanar > 0:
-        update_tracked_bodies(wk.btrack, wk.bframe, wk.bangle, wk.bparam, R)
+    if wk.track.nTracked > 0:
+        update_tracked_bodies(wk.track.trackCodes, wk.track.angleFrames, wk.path.bodyAngles, wk.path.bodyParameters, R)
 
 
 @njit(cache=True, inline="always", _nrt=False)
 def observe_contact_data(sd, wk, R, r, V):
     """The penalty rolling discs' data coordinates: slip velocity and gap of the new state."""
-    _disc_data_if(wk.disc, sd.gid, wk.disc, R, r, V, wk.v3, wk.ident, wk.zero3, wk.zero6)
+    _disc_data_if(wk.path.rollingDiscs, sd.gid, wk.path.rollingDiscs, R, r, V, wk.v3, wk.ident, wk.zero3, wk.zero6)
 
 
 @njit(cache=True, _nrt=False)
@@ -97,8 +97,8 @@ def watch_rotation_entries(watchBody, watchEntry, watchMax, R):
 
 @njit(cache=True, inline="always", _nrt=False)
 def observe_watched_entries(sd, wk, R, r, V):
-    if wk.watchBody.shape[0] > 0:
-        watch_rotation_entries(wk.watchBody, wk.watchEntry, wk.watchMax, R)
+    if wk.track.watchBody.shape[0] > 0:
+        watch_rotation_entries(wk.track.watchBody, wk.track.watchEntry, wk.path.watchMax, R)
 
 
 def _has_rows(table):
@@ -108,9 +108,9 @@ def _has_rows(table):
 # ---------------------------------------------------------------- the registrations
 register_observer("torsionTurns", observe_torsion_turns, True, lambda sd, wk: _has_rows(sd.torsionBodies))
 register_observer("coordinateAngles", observe_coordinate_angles, True, lambda sd, wk: (sd.nCoordAngles or 0) > 0)
-register_observer("trackedBodies", observe_tracked_bodies, True, lambda sd, wk: wk.nplanar > 0)
-register_observer("contactData", observe_contact_data, False, lambda sd, wk: _has_rows(wk.disc))
-register_observer("watchedEntries", observe_watched_entries, False, lambda sd, wk: wk.watchBody.shape[0] > 0)
+register_observer("trackedBodies", observe_tracked_bodies, True, lambda sd, wk: wk.track.nTracked > 0)
+register_observer("contactData", observe_contact_data, False, lambda sd, wk: _has_rows(wk.path.rollingDiscs))
+register_observer("watchedEntries", observe_watched_entries, False, lambda sd, wk: wk.track.watchBody.shape[0] > 0)
 
 
 # ---------------------------------------------------------------- generated from the registrations

@@ -407,7 +407,7 @@ def record_output(wk, R, r, V, Ro, ro, Vo, Po, o):
     rotation parameters (rotation_parameters.record_tracked)."""
     copy_state(R, r, V, Ro[o], ro[o], Vo[o])
     if Po.shape[0] > 0:
-        record_tracked(wk.btrack, wk.bangle, wk.bparam, Po[o])
+        record_tracked(wk.track.trackCodes, wk.path.bodyAngles, wk.path.bodyParameters, Po[o])
 
 
 @njit(cache=True, inline="always", _nrt=False)

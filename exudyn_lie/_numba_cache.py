@@ -8,8 +8,8 @@ caller's cached machine code in place and it silently ran the old callee.
 This module registers two cache locators, in front of numba's own, for the functions
 defined in this package: they store where numba would (the ``__pycache__`` beside the
 module, or numba's user-wide cache directory when that is not writable) but add
-:func:`source_key` to the stamp - a hash of every module of the package that uses
-numba.  Editing any of them invalidates every cached function of the package (numba
+:func:`source_key` to the stamp - a hash of every module of the solver library and of the
+application modules that import numba (:func:`compiled_sources`).  Editing any of them invalidates every cached function of the package (numba
 then recompiles on first use and overwrites the stale entries); other packages' numba
 functions are not affected.  Imported by ``exudyn_lie/__init__.py`` before any
 compiled function is defined.

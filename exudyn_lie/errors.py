@@ -18,6 +18,29 @@ class StepSizeError(SimulationError):
     would fall below the minimum step (``.time``, ``.step``)."""
 
 
+def step_size_error(method, h, t, what, why, advice):
+    """The one StepSizeError text: ``what`` happened at time ``t`` with step size ``h`` (method
+    name ``method``) because ``why``; ``advice``: the step size to try (a number) or what to
+    change (a text).  ``.time`` and ``.step`` carry ``t`` and ``h``."""
+    if not isinstance(advice, str):
+        advice = f"try a step size of {advice:.3g} s or smaller"
+    exc = StepSizeError(f"{what} at t = {t:.6g} s with step size {h:.3g} s (method {method}); {why}: {advice}")
+    exc.time = float(t)
+    exc.step = float(h)
+    return exc
+
+
+def minimum_step_error(method, t, h, hMin, err):
+    """The StepSizeError of adaptive steps whose error control asks for a step ``h`` below the
+    minimum ``hMin`` (``err``: the scaled error of the rejected step)."""
+    exc = step_size_error(method, h, t, "adaptive steps stopped",
+                          f"the error control asks for a step below the minimum step {hMin:.3g} s (scaled "
+                          f"error {err:.3g} of the rejected step)",
+                          "increase the tolerances or decrease the minimum step size")
+    exc.setting = "minimumStep"          # the setting to change (a bridge names it in its own terms)
+    return exc
+
+
 def raised_at_boundary(errors):
     """Decorator for the package's entry points: an error of the classes ``errors`` (input
     refused, a run that cannot go on) is raised again with a traceback that ends at the

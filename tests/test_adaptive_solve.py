@@ -124,6 +124,7 @@ def test_minimum_step_size_stops_with_step_size_error():
     with pytest.raises(StepSizeError) as ei:
         exl.SolveDynamic(mbs, ss, method="DOPRI5", showProgress=False)
     assert ei.value.step < 0.05 and 0.0 <= ei.value.time < 1.0
+    assert "(Exudyn: timeIntegration.minimumStepSize)" in str(ei.value)
 
 
 @pytest.mark.parametrize("field,value", [("absoluteTolerance", 0.0), ("stepSizeSafety", 1.5),

@@ -23,8 +23,8 @@ interleaved repetitions:
   (:func:`_timing_solver_class`), per method.
 
 Per stage = per step / 4 (RK4).  ``overhead`` = evaluated per stage - calls: what the path
-adds around Exudyn's calls (Python, the index-1 solve, the Lie group update).  Targets
-(issue 17): overhead <= 30 us per stage for one body; linear growth with N (exponent of the
+adds around Exudyn's calls (Python, the index-1 solve, the Lie group update).  Targets:
+overhead <= 30 us per stage for one body; linear growth with N (exponent of the
 evaluated cost per step over N = 10 ... 50 <= 1.2).
 """
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""MuJoCo as a peer in ``python -m exudyn_lie bench --sections mujoco`` (issue 19, section 4).
+"""MuJoCo as a peer in ``python -m exudyn_lie bench --sections mujoco``.
 
 Since 4.0.0 MuJoCo's RK4 applies the Munthe-Kaas correction on ball and free joints: a ball
 joint's quaternion is advanced by ``q exp(h k)`` with the stage slopes mapped by ``dexp^-1``
@@ -52,7 +52,7 @@ import numpy as np
 
 MIN_VERSION = (4, 0, 0)
 MODELS = {"heavytop": "heavy_top", "doublependulum": "spherical_double_pendulum"}
-# issue 19, section 4: exudyn_lie's MK-RK4 step at least this many times cheaper than MuJoCo's RK4 step
+# exudyn_lie's MK-RK4 step at least this many times cheaper than MuJoCo's RK4 step
 TARGET_RATIO = {"heavytop": 3.0, "doublependulum": 2.0}
 PERSTEP_H = (1e-3, 1e-4)
 TITLES = {"heavytop": "heavy top: 1 body, ball joint + spring", "doublependulum": "spherical double pendulum: 2 ball joints"}

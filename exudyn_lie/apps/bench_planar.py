@@ -1,4 +1,4 @@
-"""Bench section ``planar``: planar mechanisms of 2D bodies (issue 16).
+"""Bench section ``planar``: planar mechanisms of 2D bodies.
 
 * per step: the paper's planar four-bar made of 2D bodies (``models.planar_2d.four_bar``:
   ObjectRigidBody2D, four ObjectJointRevolute2D, 8 constraint rows) against the paper's 3D

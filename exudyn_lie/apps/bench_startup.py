@@ -1,4 +1,4 @@
-"""Bench section ``startup``: the fixed cost a script pays before its first step (issue 19, 3).
+"""Bench section ``startup``: the fixed cost a script pays before its first step.
 
 Each run is a fresh interpreter (:data:`STARTUP_SCRIPT`) that does what a short user script
 does: import numpy and Exudyn (the script's own imports, not counted), import
@@ -10,7 +10,7 @@ compiled kernel from numba's cache, typing the arguments of the compiled entry p
 the first calls' set-up.  The kernel path does the same with ``Simulator(SceneFromExudyn(mbs))``
 and ``Advance``.
 
-Targets (issue 19): warm cache (numba's cache beside the sources filled by an earlier run)
+Targets: warm cache (numba's cache beside the sources filled by an earlier run)
 import <= 0.1 s and first-solve fixed cost <= 0.05 s; a first run ever (an empty
 ``NUMBA_CACHE_DIR``, everything compiled) <= 20 s wall on an idle machine (<= 30 s on a
 loaded one; the load average is reported with it).  The children run with bytecode caching

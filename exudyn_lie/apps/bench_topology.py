@@ -1,5 +1,5 @@
 """Cost per step against the topology of the joint graph: ``python -m exudyn_lie bench
---sections topology`` (issue 19, section 1).
+--sections topology``.
 
 Four families of N rigid bars (mass 1 kg, length 0.5 m, slender-rod inertia about the
 COM, the body frame at the COM) joined by spherical joints, gravity along -z, integrated
@@ -18,7 +18,7 @@ Cholesky for the chain (bandwidth 5) and the ladder (loops); the ``solve`` colum
 
 Reported: us per step and per body, the exponent fitted to log(us per step) against
 log N (least squares over N >= 20), the star's cost per body against the chain's at
-N = 160, and the ladder's cost against its number of loops.  Targets (issue 19): exponent
+N = 160, and the ladder's cost against its number of loops.  Targets: exponent
 <= 1.1 for every tree (chain, star, binary tree), star per body <= 2x chain per body at
 N = 160.  Times: medians of interleaved repetitions (``time.perf_counter``).
 """

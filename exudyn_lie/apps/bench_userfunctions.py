@@ -1,5 +1,4 @@
-"""Python user functions in ``python -m exudyn_lie bench --sections userfunctions`` (issue 19,
-section 2).
+"""Python user functions in ``python -m exudyn_lie bench --sections userfunctions``.
 
 The heavy top (:mod:`exudyn_lie.models.heavy_top`) integrated with MK-RK4 on SE(3) by the
 compiled stepper (``Simulator.Advance``), three ways, interleaved inside every repetition:
@@ -22,7 +21,7 @@ the torsional spring's angle and rate come from the compiled stage (``mbs/extern
 Reported: the cost per step of each, the user function's own cost per call (the same Python
 function called on its own with the same arguments, ``timeit``), and the **overhead per
 call** = (step with the user function - compiled step - calls x own cost) / calls.
-Target (issue 19): overhead <= 2 us per call.  Times are the thread's CPU time
+Target: overhead <= 2 us per call.  Times are the thread's CPU time
 (``time.thread_time``: the stepper and the user functions run in the calling thread), medians
 of the interleaved repetitions; on a machine shared with other jobs the wall clock also
 counts the time the scheduler gives to others, which CPU time leaves out.

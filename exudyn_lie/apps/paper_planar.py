@@ -1,4 +1,4 @@
-"""Paper reproduction, extension section: the c-space claims in the plane (issue 16).
+"""Paper reproduction, extension section: the c-space claims in the plane.
 
 The planar mechanisms of 2D bodies (``models.planar_2d``) with MK-RK4 on SE(2) and on
 SO(2) x R^2 (the planar subgroups of the paper's SE(3) and SO(3) x R^3), no stabilisation,

@@ -12,8 +12,8 @@ Everything else derives from :data:`ITEMS`:
   again during a solve (the connectors; a moved marker of a joint stops the solve);
 * the items that keep a model on the compiled path (:mod:`.evaluated_dispatch`: any other
   type makes Exudyn evaluate the model);
-* the README's list of supported items (``python -m exudyn_lie items --readme README.md``;
-  ``tests/test_readme_items.py`` checks the README against this registry).
+* the list of supported items in docs/USING.md (``python -m exudyn_lie items --readme docs/USING.md``;
+  ``tests/test_readme_items.py`` checks it against this registry).
 
 Roles and what they need:
 
@@ -48,7 +48,7 @@ class ItemType:
     kind: str
     typeName: str
     role: str
-    compiles: str                       # what it becomes (the README's list)
+    compiles: str                       # what it becomes (the list in docs/USING.md)
     fields: dict = field(default_factory=dict)      # field -> (status, reason)
     reader: Optional[str] = None
     nodes: tuple = ()
@@ -288,7 +288,7 @@ def supported_names(kind):
 
 
 def readme_lines():
-    """The README's list of supported items, one table row per registered type."""
+    """The list of supported items (docs/USING.md), one table row per registered type."""
     title = {"node": "nodes", "object": "objects", "marker": "markers", "load": "loads"}
     out = ["| Exudyn item | kind | what exudyn_lie makes of it |", "|---|---|---|"]
     for kind in PREFIX:

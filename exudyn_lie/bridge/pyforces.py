@@ -33,7 +33,7 @@ import math
 import numpy as np
 
 from ..mbs.external_probes import (ARM_HAS, ARM_WORLD, N_PROBE, SPRING_ARM_A, SPRING_ARM_B, SPRING_E, SPRING_L, SPRING_LD, TORSION_PHI,
-                                   TORSION_PHID, TORSION_Z, arm_probe_row, spring_probe_row,
+                                   TORSION_PHID, TORSION_Z, arm_probe_row, spring_probe, spring_probe_row,
                                    torsion_probe_row)
 from ..mbs.scene import GROUND
 from . import rotations as rot
@@ -109,18 +109,14 @@ class SpringDamperUF(_Connector):
         self.uf = uf
 
     def add(self, t, st, F, T):
-        # scalar arithmetic on floats: this runs once per stage, and numpy's per-call cost on
-        # 3-vectors was most of it (heavy top + spring with a linear user law: 64.3 -> 22.2 us
-        # per step, 4 calls, measured)
-        pA, vA, aA = point_state(self.A, st)
-        pB, vB, aB = point_state(self.B, st)
-        d0, d1, d2 = pB[0] - pA[0], pB[1] - pA[1], pB[2] - pA[2]
-        L = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
-        e0, e1, e2 = d0 / L, d1 / L, d2 / L
-        Ld = (vB[0] - vA[0]) * e0 + (vB[1] - vA[1]) * e1 + (vB[2] - vA[2]) * e2
-        f = self.force(t, L, Ld)
-        force_at(self.A, aA, f * e0, f * e1, f * e2, F, T)
-        force_at(self.B, aB, -f * e0, -f * e1, -f * e2, F, T)
+        # the spring's kinematics are its probe's (mbs/external_probes.spring_probe), also where
+        # no Work holds the probe: one computation of length, rate, direction and arms
+        p = np.array(self.probe_row(), float)
+        spring_probe(st.R, st.r, np.ascontiguousarray(np.hstack((st.omega, st.vel))), p)
+        f = self.force(t, float(p[SPRING_L]), float(p[SPRING_LD]))
+        e0, e1, e2 = p[SPRING_E:SPRING_E + 3].tolist()
+        force_at(self.A, p[SPRING_ARM_A:SPRING_ARM_A + 3].tolist(), f * e0, f * e1, f * e2, F, T)
+        force_at(self.B, p[SPRING_ARM_B:SPRING_ARM_B + 3].tolist(), -f * e0, -f * e1, -f * e2, F, T)
 
     def force(self, t, L, Ld):
         """The user function's tension at length ``L`` and rate ``Ld``."""
@@ -147,26 +143,6 @@ class SpringDamperUF(_Connector):
             _force_flat(Q, 6 * a, P, j + SPRING_ARM_A, f * e0, f * e1, f * e2)
         if b != GROUND:
             _force_flat(Q, 6 * b, P, j + SPRING_ARM_B, -f * e0, -f * e1, -f * e2)
-
-
-def point_state(mf, st):
-    """(p, v, arm) of a marker's point as float triples: world position, velocity and the
-    arm ``R_b s`` from the body's frame origin (``marker_state`` in scalar arithmetic)."""
-    s0, s1, s2 = mf.pos.tolist()
-    if mf.body == GROUND:
-        return (s0, s1, s2), (0.0, 0.0, 0.0), None
-    b = mf.body
-    (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = st.R[b].tolist()
-    w0, w1, w2 = st.omega[b].tolist()
-    x0, x1, x2 = st.r[b].tolist()
-    u0, u1, u2 = st.vel[b].tolist()
-    a0 = r00 * s0 + r01 * s1 + r02 * s2
-    a1 = r10 * s0 + r11 * s1 + r12 * s2
-    a2 = r20 * s0 + r21 * s1 + r22 * s2
-    c0, c1, c2 = w1 * s2 - w2 * s1, w2 * s0 - w0 * s2, w0 * s1 - w1 * s0          # omega x s (body)
-    return ((x0 + a0, x1 + a1, x2 + a2),
-            (u0 + r00 * c0 + r01 * c1 + r02 * c2, u1 + r10 * c0 + r11 * c1 + r12 * c2,
-             u2 + r20 * c0 + r21 * c1 + r22 * c2), (a0, a1, a2))
 
 
 def force_at(mf, arm, f0, f1, f2, F, T):

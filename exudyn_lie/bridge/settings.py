@@ -72,6 +72,19 @@ SETTINGS = (
 )
 
 
+# the kernel's step-size limits by their Exudyn settings (StepSizeError.setting)
+EXUDYN_SETTING_OF = {"minimumStep": "timeIntegration.minimumStepSize"}
+
+
+def name_exudyn_setting(e):
+    """``e`` with the Exudyn setting behind its limit added to its message (a StepSizeError of
+    the kernel names its own limit, e.g. the minimum step size, not Exudyn's setting)."""
+    name = EXUDYN_SETTING_OF.get(getattr(e, "setting", None))
+    if name is not None and e.args and name not in str(e.args[0]):
+        e.args = (f"{e.args[0]} (Exudyn: {name})",) + tuple(e.args[1:])
+    return e
+
+
 def setting_status(path):
     """``(status, reason)`` of a settings field (dotted path), or None if not covered."""
     best = None

@@ -31,6 +31,7 @@ import time
 import numpy as np
 
 from .reader import BridgeError
+from .settings import name_exudyn_setting
 
 PROGRESS_FIRST = 2.0         # seconds before the first progress check (it measures the rate, prints nothing)
 PROGRESS_EVERY = 2.0         # seconds between progress lines
@@ -197,7 +198,7 @@ class TimeLoop:
                 self._remember()
             return True
         except BaseException as e:      # noqa: BLE001 - re-raised after Exudyn unwinds
-            self.hookError = e
+            self.hookError = name_exudyn_setting(e)
             raise
 
     def output(self, t1):

@@ -67,7 +67,7 @@ import math
 import numpy as np
 from numba import njit
 
-from ..errors import StepSizeError
+from ..errors import minimum_step_error
 
 __all__ = [
     "P_SAFETY", "P_FAC_MIN", "P_FAC_MAX", "P_BETA", "P_EXPO", "P_H_MIN", "P_H_MAX", "P_Q",
@@ -262,11 +262,4 @@ def hinit_second(h0, d1, d2, q, h_max):
 def raise_step_size_error(t, h, h_min, err, method=""):
     """Raise :class:`~exudyn_lie.errors.StepSizeError` for a step below the minimum,
     with ``.time`` and ``.step`` attributes (Python side of STATUS_H_MIN)."""
-    exc = StepSizeError(
-        f"adaptive step{' (' + method + ')' if method else ''} at t = {t:.17g}: the error "
-        f"control asks for h = {h:.6g} < minimum step {h_min:.6g} (scaled error {err:.3g} of "
-        f"the rejected step); increase the tolerances or decrease the minimum step size "
-        f"(Exudyn: timeIntegration.minimumStepSize)")
-    exc.time = float(t)
-    exc.step = float(h)
-    raise exc
+    raise minimum_step_error(method or "?", t, h, h_min, err)

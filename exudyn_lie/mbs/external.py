@@ -2,11 +2,11 @@
 
 The compiled stepper (:mod:`.stepper`) calls the registered evaluator once per evaluated
 stage when the scene has an external part (``SceneData.hasQext``), through :func:`call`
-(one call through the C API): no Python stage loop, one Python call per stage.  Today the
-external part is the generalised forces of Python callbacks (``Scene.AddPythonForce``, the
+(one call through the C API): no Python stage loop, one Python call per stage.  The external
+part is the generalised forces of Python callbacks (``Scene.AddPythonForce``, the
 bridge's user functions), added to the compiled forces, and the moving offsets of rows
-(:mod:`.row_drives`); a right-hand side evaluated by the modelling system the bridge reads
-plugs in here as another kind of evaluator.
+(:mod:`.row_drives`) and a whole right-hand side (``Scene.SetRightHandSide``, ``EXTERNAL_RATES``:
+a problem implementation such as the bridge's evaluation of a whole model).
 
 An evaluator is a Python callable ``f(t)``: the stage state and the output are arrays
 of the evaluator's owner that the compiled code shares (``wk.Rs, wk.rs``, the world

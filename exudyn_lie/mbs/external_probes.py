@@ -26,7 +26,8 @@ the bit):
   (the bridge's ``TorsionalSpringDamperUF.angle``);
 * :data:`PROBE_SPRING`: a point-to-point spring-damper, inputs the points in body coordinates;
   outputs the length ``L``, its rate ``(v_B - v_A) . e``, the unit vector ``e`` from A to B and
-  the world arms ``R s`` of both points (the bridge's ``SpringDamperUF.add``);
+  the world arms ``R s`` of both points (the only kinematics of the bridge's Python
+  spring-damper, in a stage or not);
 * :data:`PROBE_ARM`: a point of a body (a load's point of application), output its world
   arm ``R s`` (the bridge's ``pyforces._add_force``).
 """
@@ -109,8 +110,7 @@ def _world_column(R, p, c):
 @njit(cache=True, inline="always", _nrt=False)
 def _point(Rs, rs, Vw, b, p, c):
     """World position, velocity and arm ``R s`` (nine floats) of the body point ``s =
-    p[c:c+3]`` of body ``b`` (the ground: ``s`` itself, at rest, no arm), in the order of
-    operations of the Python items (``bridge.pyforces.point_state``)."""
+    p[c:c+3]`` of body ``b`` (the ground: ``s`` itself, at rest, no arm)."""
     s0, s1, s2 = p[c], p[c + 1], p[c + 2]
     if b == GROUND:
         return s0, s1, s2, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
@@ -167,8 +167,8 @@ def torsion_probe(Rs, Vw, p):
 
 @njit(cache=True, inline="always", _nrt=False)
 def spring_probe(Rs, rs, Vw, p):
-    """:data:`PROBE_SPRING`: as ``SpringDamperUF.add`` up to the user function: ``L = |p_B -
-    p_A|``, ``e = (p_B - p_A) / L``, ``Ldot = (v_B - v_A) . e`` and the arms."""
+    """:data:`PROBE_SPRING`: ``L = |p_B - p_A|``, ``e = (p_B - p_A) / L``, ``Ldot = (v_B - v_A) . e``
+    and the arms."""
     pA0, pA1, pA2, vA0, vA1, vA2, aA0, aA1, aA2 = _point(Rs, rs, Vw, int(p[P_BODY_A]), p, SPRING_POS_A)
     pB0, pB1, pB2, vB0, vB1, vB2, aB0, aB1, aB2 = _point(Rs, rs, Vw, int(p[P_BODY_B]), p, SPRING_POS_B)
     d0, d1, d2 = pB0 - pA0, pB1 - pA1, pB2 - pA2

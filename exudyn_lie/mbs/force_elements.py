@@ -117,9 +117,8 @@ register("rigid", "rigidSprings", (
     ("rigidSpringFrames", table(lambda s: [s.rotA, s.rotB], (-1, 2, 3, 3))),
     ("rigidSpringLaw", table(lambda s: np.vstack([s.stiffness, s.damping, s.offset[None]]), (-1, 13, 6)))),
          rigid_spring_element)
-# the penalty rolling disc: bodies, flags, law and data coordinates packed into Work.disc (the data
-# change after every accepted step, forces.update_contact_data; one packed array: three separate
-# ones cost the heavy top's step 3.0 -> 3.6 us, measured)
+# the penalty rolling disc: bodies, flags, law and data coordinates packed into one path-state table,
+# PathState.rollingDiscs (the data change after every accepted step: the contact-data step observer)
 register("rollingDiscPenalty", "rollingDiscPenalties", (), rolling_disc_penalty_element, table="wk.path.rollingDiscs",
          writeRow=write_rolling_disc_penalty_row)
 

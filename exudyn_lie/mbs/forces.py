@@ -41,6 +41,22 @@ def load_forces(gid, loadIndex, loadVectors, R, Q, F):
                 add_world_torque(R[i], loadVectors[l, 0], Q[i])
 
 
+@njit(cache=True, inline="always", _nrt=False)
+def spring_length_rate(pA, pB, vA, vB):
+    """The length ``L = |p_B - p_A|`` of a point-to-point spring and its rate ``Ldot = (p_B -
+    p_A) . (v_B - v_A) / L``; ``Ldot = 0`` where ``L = 0`` (the direction is undefined there)."""
+    L = 0.0
+    for k in range(3):
+        L += (pB[k] - pA[k]) ** 2
+    L = np.sqrt(L)
+    if L < 1e-300:
+        return L, 0.0
+    Ld = 0.0
+    for k in range(3):
+        Ld += (pB[k] - pA[k]) * (vB[k] - vA[k])
+    return L, Ld / L
+
+
 @njit(cache=True, forceinline=True, _nrt=False)
 def spring_forces(gid, springBodies, springPoints, springLaw, R, r, V, Q, v3, ident, zero3, zero6):
     """Point-to-point spring-dampers: tension ``f = k (L - L0) + d Ldot + f0``
@@ -49,17 +65,11 @@ def spring_forces(gid, springBodies, springPoints, springLaw, R, r, V, Q, v3, id
     for s in range(springBodies.shape[0]):
         a = springBodies[s, 0]
         b = springBodies[s, 1]
-        gA, RA, gB, RB = connector_ends(gid, a, b, springPoints[s, 0], springPoints[s, 1], R, r, V, v3, ident, zero3, zero6)
-        L = 0.0
-        for k in range(3):
-            L += (pB[k] - pA[k]) ** 2
-        L = np.sqrt(L)
+        gA, RA, gB, RB = connector_ends(gid, a, b, springPoints[s, 0], springPoints[s, 1], R, r, V, v3, ident, zero3,
+                                        zero6)
+        L, Ld = spring_length_rate(pA, pB, vA, vB)
         if L < 1e-300:
             continue  # direction undefined: zero-length spring exerts no force
-        Ld = 0.0
-        for k in range(3):
-            Ld += (pB[k] - pA[k]) * (vB[k] - vA[k])
-        Ld /= L
         f = springLaw[s, 0] * (L - springLaw[s, 2]) + springLaw[s, 1] * Ld + springLaw[s, 3]
         for k in range(3):
             F[k] = f * (pB[k] - pA[k]) / L
@@ -293,13 +303,11 @@ def rigid_spring_element(sd, wk, R, r, V, Q):
 @njit(cache=True, _nrt=False)
 def spring_potential(gid, springBodies, springPoints, springLaw, R, r, V, v3, ident, zero3, zero6, e):
     """``e`` plus the potential ``k (L - L0)^2 / 2 + f0 L`` of the point-to-point springs."""
-    pA, pB, vA, vB, bA, bB = v3[0], v3[1], v3[2], v3[3], v3[4], v3[5]
+    pA, pB, vA, vB = v3[0], v3[1], v3[2], v3[3]
     for s in range(springBodies.shape[0]):
-        gA, RA, rA, VA = _side(gid, springBodies[s, 0], R, r, V, ident, zero3, zero6)
-        gB, RB, rB, VB = _side(gid, springBodies[s, 1], R, r, V, ident, zero3, zero6)
-        body_point(gA, RA, rA, VA, springPoints[s, 0], pA, vA, bA)
-        body_point(gB, RB, rB, VB, springPoints[s, 1], pB, vB, bB)
-        L = np.sqrt((pB[0] - pA[0]) ** 2 + (pB[1] - pA[1]) ** 2 + (pB[2] - pA[2]) ** 2)
+        connector_ends(gid, springBodies[s, 0], springBodies[s, 1], springPoints[s, 0], springPoints[s, 1], R, r, V, v3,
+                       ident, zero3, zero6)
+        L, _ = spring_length_rate(pA, pB, vA, vB)
         e += 0.5 * springLaw[s, 0] * (L - springLaw[s, 2]) ** 2 + springLaw[s, 3] * L
     return e
 
@@ -307,12 +315,10 @@ def spring_potential(gid, springBodies, springPoints, springLaw, R, r, V, v3, id
 @njit(cache=True, _nrt=False)
 def cartesian_potential(gid, cartesianBodies, cartesianPoints, cartesianLaw, R, r, V, v3, ident, zero3, zero6, e):
     """``e`` plus the potential of the Cartesian springs."""
-    pA, pB, vA, vB, bA, bB = v3[0], v3[1], v3[2], v3[3], v3[4], v3[5]
+    pA, pB = v3[0], v3[1]
     for s in range(cartesianBodies.shape[0]):
-        gA, RA, rA, VA = _side(gid, cartesianBodies[s, 0], R, r, V, ident, zero3, zero6)
-        gB, RB, rB, VB = _side(gid, cartesianBodies[s, 1], R, r, V, ident, zero3, zero6)
-        body_point(gA, RA, rA, VA, cartesianPoints[s, 0], pA, vA, bA)
-        body_point(gB, RB, rB, VB, cartesianPoints[s, 1], pB, vB, bB)
+        connector_ends(gid, cartesianBodies[s, 0], cartesianBodies[s, 1], cartesianPoints[s, 0], cartesianPoints[s, 1],
+                       R, r, V, v3, ident, zero3, zero6)
         for k in range(3):
             e += 0.5 * cartesianLaw[s, 0, k] * (pB[k] - pA[k] - cartesianLaw[s, 2, k]) ** 2
     return e

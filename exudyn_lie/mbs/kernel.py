@@ -12,7 +12,7 @@ Everything is numba-compiled and allocation-free; it works on the flat arrays of
 * :mod:`.constraints` - joint rows ``h``, ``J`` and ``eta = -Jdot V``;
 * :mod:`.index1` - the index-1 solve (Schur complement) and the stage right-hand side;
 * :mod:`.projection` - position / velocity projection on the group;
-* :mod:`.stepper` - the Munthe-Kaas stepper ``mk_steps`` with its two seams
+* :mod:`.stepper` - the Munthe-Kaas stepper ``mk_steps`` with its seams
   (step controller: fixed, or :mod:`.adaptive`; right-hand side evaluated in Python);
 * :mod:`.diagnostics` - energies and the rows of all joints at a state.
 
@@ -33,7 +33,7 @@ compile time grows steeply with the size of the tuples a function receives: the 
 working functions (joint rows, spring forces, ...) are compiled and cached once with
 short signatures; the light per-stage ones are inlined (``inline="always"``), which
 keeps the stage free of call overhead.  Scratch vectors are rows of ``wk.v3`` (20, 3)
-and ``wk.m3`` (2, 3, 3).
+and ``wk.m3`` (4, 3, 3).
 """
 from .bodies import add_point_force, add_world_torque, apply_minv, body_axis, body_point, exp_compose  # noqa: F401
 from .codes import *  # noqa: F401,F403

@@ -31,7 +31,7 @@ new state in the data coordinates (a step observer, mbs/step_observers.py); the 
 use the data of the last accepted step throughout the step.  A switched-off disc gives no
 force and keeps its data as they are.
 
-Layout: ``Work.disc``, one row per disc, columns ``D_*`` below: A (plane, -1 ground), B (disc),
+Layout: ``PathState.rollingDiscs`` (``wk.path``), one row per disc, columns ``D_*`` below: A (plane, -1 ground), B (disc),
 active, useLinearProportionalZone (integers stored as floats), the parameters, and the data
 coordinates (x0, x1, x2) at ``D_DATA``.  One array in Work, not SceneData, and not three: with
 three arrays (integers, parameters, data) passed to these functions in the stepper's loop the heavy
@@ -51,7 +51,7 @@ N_DISC = 29
 
 
 def rolling_disc_penalty_row(e):
-    """``Work.disc`` row of a Scene.RollingDiscPenalty without its data coordinates (columns
+    """``PathState.rollingDiscs`` row of a Scene.RollingDiscPenalty without its data coordinates (columns
     ``D_A`` ... ``D_DATA - 1``)."""
     return [float(e.bodyA), float(e.bodyB), float(e.active), float(e.useLinearProportionalZone), *e.posA, *e.posB,
             *e.normalA, *e.axisB, e.discRadius, e.contactStiffness, e.contactDamping, *e.dryFriction,
@@ -203,5 +203,5 @@ def update_rolling_disc_penalty_data(gid, disc, R, r, V, v3, ident, zero3, zero6
 
 @njit(cache=True, inline="always", _nrt=False)
 def rolling_disc_penalty_element(sd, wk, R, r, V, Q):
-    """The element's forces entry (mbs/force_elements.py); its table lives in ``Work.disc``."""
+    """The element's forces entry (mbs/force_elements.py); its table lives in ``wk.path.rollingDiscs``."""
     rolling_disc_penalty_forces(sd.gid, wk.path.rollingDiscs, R, r, V, Q, wk.v3, wk.ident, wk.zero3, wk.zero6)

@@ -11,10 +11,11 @@ body by far less than pi):
 * ``TRACK_TAIT_BRYAN``: Tait-Bryan angles ``R = Rx(a0) Ry(a1) Rz(a2)``, the solution of the two
   (each modulo 2 pi) nearest the previous angles;
 * ``TRACK_ANGLE``: the angle of a 2D body / rotor (coordinate_angles.frame_angle, kept in
-  ``Work.bodyAngles``).
+  ``PathState.bodyAngles``).
 
 :func:`update_tracked_bodies` moves them on after every accepted step; the node parameters
-live in ``Work.bodyParameters`` (``trackCodes`` the code per body), and all are recorded with every output row (stepper.mk_steps, adaptive.serve_outputs) by
+live in ``PathState.bodyParameters`` (``TrackPlan.trackCodes`` the code per body), and all are
+recorded with every output row (stepper.mk_steps, adaptive.serve_outputs) by
 :func:`record_tracked`.
 """
 import math

@@ -1,23 +1,15 @@
-"""What a simulator says when a step fails: the one ``StepSizeError`` text
-(:func:`step_size_error`) and the errors of a kernel status (:func:`raise_status`, a free
+"""What a simulator says when a step fails: the errors of a kernel status (:func:`raise_status`, a free
 function of a :class:`~.simulator.Simulator` ``sim``, whose ``RaiseStatus`` calls it).  The
 estimates behind a suggested step live in :mod:`.stiffness`."""
 from __future__ import annotations
 
 import numpy as np
 
-from ..errors import ConstraintError, SimulationError, StepSizeError
+from ..errors import ConstraintError, SimulationError, step_size_error
 from . import external, kernel
 from .codes import INFO_BODY, INFO_ROW
 from .linalg import REL_PIVOT_TOL
 from .stiffness import suggest_step
-
-
-def step_size_error(method, h, t, what, why, suggestion):
-    """The one StepSizeError: ``what`` happened at time ``t`` with step size ``h`` (method
-    name ``method``) because ``why``; the step size to try."""
-    return StepSizeError(f"{what} at t = {t:.6g} s with step size {h:.3g} s (method {method}); {why}: "
-                         f"try a step size of {suggestion:.3g} s or smaller")
 
 
 def raise_status(sim, st, h):

@@ -18,7 +18,7 @@ Only the stages in ``tab.stages`` are evaluated: a stage whose weight and all la
 coefficients are zero cannot change the step (e.g. DOPRI5's 7th, FSAL stage; its
 ``k_j``, ``Vdot_j`` stay zero and the weighted sums are unchanged bit for bit).
 
-Two seams:
+Three seams (the third, the step observers after each accepted step, is :mod:`.step_observers`):
 
 * the **right-hand side outside the compiled code** (:mod:`.external`): when
   ``sd.hasQext`` the stage calls the registered Python evaluator once

@@ -65,7 +65,7 @@ def check_linear_stability(tableau, h, t, ev, source, refuse=True):
     """Raise the StepSizeError (with ``refuse``) if ``h`` is beyond the largest stable step
     for the eigenvalues ``ev`` of the linearised equations at time ``t`` (``source`` says
     where they come from); returns (fastest rate |lambda|, largest stable step)."""
-    from .step_errors import step_size_error
+    from ..errors import step_size_error
     ev = np.asarray(ev, complex)
     hmax = largest_stable_step(tableau, ev)
     rate = float(np.max(np.abs(ev))) if ev.size else 0.0
@@ -88,7 +88,7 @@ class StageStiffnessWatch:
         self.count = 0
 
     def check(self, sim, h, nb=None):
-        from .step_errors import step_size_error
+        from ..errors import step_size_error
         rho = stage_stiffness_of(sim, h, nb)
         if h * rho <= self.radius:
             self.count = 0

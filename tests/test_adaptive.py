@@ -6,8 +6,8 @@ import pytest
 
 from exudyn_lie.groups import se3, so3, so3xr3
 from exudyn_lie.integrators import control as C
-from exudyn_lie.integrators import mk
-from exudyn_lie.integrators import mk_adaptive as MA
+import reference_mk as mk
+import reference_mk_adaptive as MA
 from exudyn_lie.integrators.tableau import BS3, DOPRI5, RK4, Vern6
 from exudyn_lie.mbs.simulator import StepSizeError
 from exudyn_lie.models._torque_free import TorqueFreeRotation

@@ -1,5 +1,5 @@
 """Adaptive steps on the compiled path (mbs/adaptive.py, Simulator.Run(rtol=, atol=)):
-agreement with the Python oracle (integrators/mk_adaptive.py), the controller (rejection,
+agreement with the Python oracle (tests/reference_mk_adaptive.py), the controller (rejection,
 minimum step, HINIT, FSAL counts), the orders of the embedded pairs and of their dense
 output, tolerance proportionality on the paper's heavy top, and a ground joint under SE3
 exact at dense outputs."""
@@ -8,7 +8,7 @@ import pytest
 
 from exudyn_lie.groups import so3
 from exudyn_lie.integrators import control as C
-from exudyn_lie.integrators import mk_adaptive as MA
+import reference_mk_adaptive as MA
 from exudyn_lie.integrators.tableau import BS3, DOPRI5, Vern6
 from exudyn_lie.mbs import GROUND, Scene, Simulator
 from exudyn_lie.mbs.simulator import StepSizeError

@@ -28,7 +28,8 @@ import numpy as np
 import pytest
 
 from exudyn_lie.groups import se3, so3, so3xr3
-from exudyn_lie.integrators import METHODS, get_method, mk
+from exudyn_lie.integrators import METHODS, get_method
+import reference_mk as mk
 from test_mk_convergence import memo, step_counts
 
 XI = np.array([1.0, 2.0, 2.0]) / 3.0          # unit axis, not a coordinate axis

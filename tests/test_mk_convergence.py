@@ -16,7 +16,8 @@ import numpy as np
 import pytest
 
 from exudyn_lie.groups import se3, so3xr3
-from exudyn_lie.integrators import METHODS, mk
+from exudyn_lie.integrators import METHODS
+import reference_mk as mk
 from exudyn_lie.integrators.tableau import extrapolated_euler
 from vector_space_oracle import rk_integrate, rk_step
 

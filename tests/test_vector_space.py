@@ -10,7 +10,8 @@ import pytest
 
 import dualquat_oracle as dualquat
 from exudyn_lie.groups import quaternion
-from exudyn_lie.integrators import METHODS, mk
+from exudyn_lie.integrators import METHODS
+import reference_mk as mk
 import vector_space_oracle as vs
 from test_mk_convergence import memo, step_counts
 

@@ -54,7 +54,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from exudyn_lie.integrators.mk import _as_velocity, _run, _translate, as_poses, resolve_groups
+from reference_mk import _as_velocity, _run, _translate, as_poses, resolve_groups
 from exudyn_lie.integrators.tableau import get_method
 
 __all__ = [
@@ -278,7 +278,7 @@ def canonical_step_kinematic(tableau, groups, state, t, h, vel, recenter_angle=R
 
 def canonical_integrate(tableau, groups, g0, V0, rhs, t_span, n_steps, every=1,
                         recenter_angle=RECENTER_ANGLE):
-    """Integrate eq. (ODEvec1) with fixed RK steps; returns a :class:`~exudyn_lie.integrators.mk.Trajectory`.
+    """Integrate eq. (ODEvec1) with fixed RK steps; returns a :class:`~reference_mk.Trajectory`.
 
     ``info['n_recentred']`` is the total number of chart re-centrings,
     ``info['max_stage_angle']`` the largest ``|xi|`` of any stage value or step end.
@@ -497,7 +497,7 @@ def dependent_step_kinematic(tableau, groups, state, t, h, vel, normalize=True):
 
 def dependent_integrate(tableau, groups, g0, V0, rhs, t_span, n_steps, every=1,
                         normalize=True):
-    """Integrate eq. (ODEvec2) with fixed RK steps; returns a :class:`~exudyn_lie.integrators.mk.Trajectory`.
+    """Integrate eq. (ODEvec2) with fixed RK steps; returns a :class:`~reference_mk.Trajectory`.
 
     ``info['x']`` holds the final dependent coordinates.
     """

@@ -37,7 +37,7 @@ import numpy as np
 
 from .. import __version__
 from ..compiling import compile_timer
-from ..integrators.mk_adaptive import resolve_pair
+from ..integrators.tableau import resolve_pair
 from ..integrators.tableau import ButcherTableau, method_names
 from ..mbs.compiled import auto_groups
 from ..mbs.simulator import Simulator

@@ -20,7 +20,7 @@ Convention: dexp is RIGHT-trivialised, d/de exp(x + e y) = hat(dexp_x y) exp(x);
 the body-fixed angular velocity of R = exp(xi(t)) is omega = dexp_{-xi} xidot.
 dexpinv_xi is singular at |xi| = 2 pi (dexp_xi is: its smallest singular value is
 |sin(t/2)|/(t/2)); the Munthe-Kaas stepper refuses stage arguments that close to
-2 pi (:data:`DEXP_ANGLE_MAX`, used by the reference stepper ``integrators.mk`` and the
+2 pi (:data:`DEXP_ANGLE_MAX`, used by the reference stepper ``tests/reference_mk.py`` and the
 compiled time loop ``mbs.kernel`` alike).
 
 Group operations: compose = R1 R2, inverse = R^T, Ad_R = R (hat(R x) = R hat(x) R^T);

@@ -2,9 +2,10 @@
 
 * :mod:`.tableau` -- frozen, self-checking Butcher tableaus and the method catalogue.
 * :mod:`.stability` -- stability polynomial and radius of any tableau (from its coefficients).
-* :mod:`.mk` -- TEST ORACLE ONLY: the Python reference MK stepper (clear, slow), against
-  which tests check the compiled stepper (:mod:`exudyn_lie.mbs.stepper`, the one every
-  solver path runs) and the vector-space formulations.
+* :mod:`.control` -- step-size control (error norm in the algebra, PI controller, HINIT).
+* the Python reference MK steppers (clear, slow), against which tests check the compiled
+  stepper (:mod:`exudyn_lie.mbs.stepper`, the one every solver path runs), are test oracles
+  (``tests/reference_mk.py``, ``tests/reference_mk_adaptive.py``).
 * the vector-space formulations (ODEvec1, ODEvec2) the paper compares with are a test oracle
   (``tests/vector_space_oracle.py``).
 """

@@ -2,7 +2,7 @@
 
 Everything here is a small ``@njit`` function over scalars and float64 arrays, so that the
 compiled stepper can call it inside its time loop, and the Python reference stepper
-(:mod:`.mk_adaptive`) calls the very same functions.  The controller state is one float64
+(``tests/reference_mk_adaptive.py``) calls the very same functions.  The controller state is one float64
 array (indices ``S_*``), its parameters another (indices ``P_*``): no objects, no
 allocation per step.
 

@@ -459,3 +459,13 @@ def get_method(name):
     raise ValueError(f"unknown integration method '{name}'; available: "
                      + ", ".join(method_names()) + " (case-insensitive; aliases: "
                      + ", ".join(f"{a} = {m.name}" for m in METHODS for a in m.aliases) + ")")
+
+
+def resolve_pair(method):
+    """A tableau object, or the name / alias of an embedded pair (PAIRS, which holds pairs
+    not yet in METHODS), or any catalogue name (get_method)."""
+    if isinstance(method, str):
+        for m in PAIRS:
+            if m.matches(method):
+                return m
+    return get_method(method)

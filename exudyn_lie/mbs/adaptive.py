@@ -7,7 +7,7 @@ with the same stage loop (``mk_stage_state``, ``stage_rhs``, ``mk_stage_k``, ``m
 eq. MK1) as the fixed steps, driven by the PI controller, HINIT and the Lie-algebra error norm
 of :mod:`~exudyn_lie.integrators.control`.  The fixed steps' specialisation of ``mk_steps``
 holds none of this code (the overloads are chosen by the controller's type at compile time),
-so the paper's fixed-step runs stay bit-identical; ``integrators/mk_adaptive.py`` is its
+so the paper's fixed-step runs stay bit-identical; ``tests/reference_mk_adaptive.py`` is its
 oracle.
 
 One attempt from ``(t, g, V)`` with step ``h`` (eq. MK1 per body)::

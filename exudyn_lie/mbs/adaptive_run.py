@@ -66,7 +66,7 @@ class AdaptiveRun:
         self.started = False
 
     def _hinit(self):
-        """Hairer's HINIT on the group (``integrators/control.py``; as ``mk_adaptive.initial_step``):
+        """Hairer's HINIT on the group (``integrators/control.py``; as ``tests/reference_mk_adaptive.initial_step``):
         two evaluations; the first is kept as the first step's stage 1."""
         sim, tol, P = self.sim, self.tol, self.par
         R, r, V, t = sim.R, sim.r, sim.V, sim.t

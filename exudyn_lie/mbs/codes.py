@@ -65,7 +65,7 @@ INFO_ROW, INFO_RANK, INFO_BODY = 0, 1, 2
 # number of D(t) itself.  The time loop stops a step whose stage argument exceeds
 # STAGE_ARG_MAX = so3.DEXP_ANGLE_MAX = 2 pi (1 - sqrt(eps)) (condition number <= 1/sqrt(eps):
 # at most half the digits of the stage velocity lost), before evaluating that stage - the
-# same rule as the Python reference stepper (integrators/mk.py), so SE3's exactness for
+# same rule as the Python reference stepper (tests/reference_mk.py), so SE3's exactness for
 # motions in a subgroup holds on the same domain in both.  The test is one squared-norm
 # compare per body and stage.
 STAGE_ARG_MAX = so3.DEXP_ANGLE_MAX

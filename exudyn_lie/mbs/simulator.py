@@ -14,7 +14,7 @@ import numpy as np
 from ..compiling import announce_cold_compile
 from ..errors import ConstraintError, SimulationError, StepSizeError  # noqa: F401 (re-exported)
 from ..groups import so3
-from ..integrators.mk_adaptive import resolve_pair
+from ..integrators.tableau import resolve_pair
 from ..userwarn import warn_user
 from . import external, kernel
 from .rolling_disc_penalty_forces import D_DATA

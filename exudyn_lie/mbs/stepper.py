@@ -5,7 +5,7 @@
 fixed-step loop of :class:`~exudyn_lie.mbs.Simulator` (``Advance`` / ``Run``), the
 accelerations at a state (``nsteps = 0``), and the bridge's output chunks
 (:class:`~exudyn_lie.bridge.fast.OutputChunks`), with or without forces evaluated in
-Python.  (The Python reference stepper ``integrators/mk.py`` is kept as a test oracle.)
+Python.  (The Python reference stepper ``tests/reference_mk.py`` is kept as a test oracle.)
 
 One step, per body::
 

@@ -55,8 +55,8 @@ from typing import Optional
 
 import numpy as np
 
-from ..groups import so3
-from .tableau import get_method
+from exudyn_lie.groups import so3
+from exudyn_lie.integrators.tableau import get_method
 
 __all__ = [
     "STAGE_ANGLE_MAX",
@@ -80,7 +80,7 @@ STAGE_ANGLE_MAX = so3.DEXP_ANGLE_MAX
 
 # --------------------------------------------------------------------------- helpers
 def _groups_table():
-    from ..groups import GROUPS, interface  # imported lazily: groups/ is a sibling package
+    from exudyn_lie.groups import GROUPS, interface
     # the reference stepper integrates 3D poses: the groups whose algebra spans all six axes
     # (not the planar subgroups SE2 / SO2xR2 of the 2D bodies)
     return {k: m for k, m in GROUPS.items() if interface.algebra_axes(m) == tuple(range(6))}

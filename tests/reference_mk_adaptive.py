@@ -42,9 +42,9 @@ from typing import Optional
 
 import numpy as np
 
-from . import control as C
-from .mk import STAGE_ANGLE_MAX, as_poses, resolve_groups
-from .tableau import PAIRS, get_method
+from exudyn_lie.integrators import control as C
+from exudyn_lie.integrators.tableau import resolve_pair
+from reference_mk import STAGE_ANGLE_MAX, as_poses, resolve_groups
 
 __all__ = ["AdaptiveStats", "AdaptiveTrajectory", "integrate_adaptive", "initial_step",
            "resolve_pair"]
@@ -188,16 +188,6 @@ def initial_step(tab, gms, g, V, t, rhs, tol, h_max, Vd0=None):
 
 
 # ------------------------------------------------------------------------- the driver
-def resolve_pair(method):
-    """A tableau object, or the name / alias of an embedded pair (PAIRS, which holds pairs
-    not yet in METHODS), or any catalogue name (get_method)."""
-    if isinstance(method, str):
-        for m in PAIRS:
-            if m.matches(method):
-                return m
-    return get_method(method)
-
-
 def _checked_problem(tableau, groups, g0, V0, t_span, t_eval):
     """(pair, poses, group maps, velocities, t0, t1, output times) of :func:`integrate_adaptive`'s
     arguments, checked."""

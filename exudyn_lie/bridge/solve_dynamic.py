@@ -30,6 +30,18 @@ def _check_index2_rotvec_constraints(mbs, typeName, settings):
                               f"(index-3) model: use Exudyn's default index-3 setting, or solve with exudyn.SolveDynamic")
 
 
+def _before_solve(mbs, replacedType, methodName, where, assemble):
+    """What both paths say and do before their solve: the implicit solver type the explicit
+    method replaces (``replacedType``, or False), and the assembly of an unassembled ``mbs``."""
+    if replacedType:
+        warn_user(f"exudyn_lie.SolveDynamic: DynamicSolverType.{replacedType} (Exudyn's implicit solver) is replaced, "
+                  f"like GeneralizedAlpha, by the explicit Munthe-Kaas method {methodName}{where}; method= or an "
+                  f"explicit solverType chooses the method, liegroup= the groups")
+    if assemble:
+        warn_user("exudyn_lie.SolveDynamic: mbs is not assembled; calling mbs.Assemble()")
+        mbs.Assemble()
+
+
 @raised_at_boundary((SceneError, SimulationError))
 def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialValues=False, storeSolver=True,
                  showHints=False, showCausingItems=True, autoAssemble=True, *, method=None, liegroup="auto",
@@ -102,13 +114,7 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
             if constraintTolerance is not None:
                 raise BridgeError("exudyn_lie.SolveDynamic: constraintTolerance is available on the compiled path only "
                                   "(adaptive steps); this model is evaluated by Exudyn: leave constraintTolerance=None")
-            if replaced:
-                warn_user(f"exudyn_lie.SolveDynamic: DynamicSolverType.{typeName} (Exudyn's implicit solver) is "
-                          f"replaced, like GeneralizedAlpha, by the explicit Munthe-Kaas method {path.tableau.name}; "
-                          f"method= or an explicit solverType chooses the method, liegroup= the groups")
-            if assemble:
-                warn_user("exudyn_lie.SolveDynamic: mbs is not assembled; calling mbs.Assemble()")
-                mbs.Assemble()
+            _before_solve(mbs, replaced and typeName, path.tableau.name, "", assemble)
             return path.Solve(simulationSettings, updateInitialValues=updateInitialValues, storeSolver=storeSolver,
                               showProgress=showProgress, substeps=substeps, accelerations=accelerations,
                               constraintCheck=constraintCheck)
@@ -119,15 +125,9 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
                             _configuration="items" if assemble else "initial", _scene=scene)
     solver._check_run(settings, substeps)
     _check_index2_rotvec_constraints(mbs, typeName, settings)
-    if replaced:
-        groups = ", ".join(f"{g} ({solver.groups.count(g)})" for g in dict.fromkeys(solver.groups)) or "none"
-        warn_user(f"exudyn_lie.SolveDynamic: DynamicSolverType.{typeName} (Exudyn's implicit solver) is replaced, "
-                  f"like GeneralizedAlpha, by the explicit Munthe-Kaas method {solver.tableau.name} on the Lie "
-                  f"groups {groups} (bodies per group); method= or an explicit solverType chooses the method, "
-                  f"liegroup= the groups")
-    if assemble:
-        warn_user("exudyn_lie.SolveDynamic: mbs is not assembled; calling mbs.Assemble()")
-        mbs.Assemble()
+    groups = ", ".join(f"{g} ({solver.groups.count(g)})" for g in dict.fromkeys(solver.groups)) or "none"
+    _before_solve(mbs, replaced and typeName, solver.tableau.name, f" on the Lie groups {groups} (bodies per group)",
+                  assemble)
     return solver.Solve(simulationSettings, updateInitialValues=updateInitialValues, storeSolver=storeSolver,
                         showProgress=showProgress, substeps=substeps, accelerations=accelerations, refresh=assemble,
                         constraintCheck=constraintCheck)

@@ -27,7 +27,7 @@ _LAZY = {
     "get_method": "integrators.tableau", "method_names": "integrators.tableau",
     **{n: "mbs" for n in ("GROUND", "ConstraintError", "Scene", "SceneError", "SimulationError", "Simulator",
                           "StepSizeError")},
-    **{n: "bridge" for n in ("SolveDynamic", "LieGroupSolver", "SceneFromExudyn", "ExudynScene", "BridgeError")},
+    **{n: "bridge" for n in ("SolveDynamic", "GetSolveTiming", "LieGroupSolver", "SceneFromExudyn", "ExudynScene", "BridgeError")},
 }
 
 __all__ = ["__version__", *_LAZY]

@@ -248,3 +248,20 @@ def test_classification_rules(exl_run, expected):
     native = _run("error", [dict(n=1, status="error", error=_err("ValueError", "user"))],
                   _err("NameError", "name 'VSum' is not defined"))
     assert corpus.exl_outcome(native, exl_run)[0] == expected
+
+
+def test_time_inside_solve_dynamic_is_split_and_summarised(corpus_run):
+    """Every script both runs finish has its seconds inside SolveDynamic: native, and
+    exudyn_lie's set-up, compilation and time loop, which add up to exudyn_lie's whole call."""
+    from exudyn_lie.apps.corpus_timing import script_times
+    records, _, _ = corpus_run
+    for n in STEPS:
+        t = script_times(records[f"pendulumRevolute{n}.py"])
+        assert t is not None and t["path"] == "compiled"
+        assert t["native"] > 0 and t["loop"] > 0 and t["setup"] > 0 and t["compile"] >= 0
+        assert t["setup"] + t["compile"] + t["loop"] == pytest.approx(t["exl"], rel=0.05, abs=0.02)
+    assert script_times(records["velocityLevelSlider.py"]) is None         # refused: no ratio
+    s = corpus.summarize(list(records.values()))["time"]
+    assert s["scripts"] == len(STEPS) + 1
+    text = corpus.render(list(records.values()), corpus.summarize(list(records.values())), "test", 0.0, 120)
+    assert "## Time inside `SolveDynamic`" in text and "| `pendulumRevolute100.py` | compiled |" in text

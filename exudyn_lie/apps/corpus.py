@@ -56,6 +56,7 @@ from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 from . import versions
+from .corpus_timing import render_timing, timing_summary
 
 CHILD = os.path.join(os.path.dirname(os.path.abspath(__file__)), "corpus_child.py")
 PACKAGE_PARENT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
@@ -207,6 +208,7 @@ def run_record(mode, events, timed_out, rc, wall, log):
             s = open_solves.pop(ev["n"], None)
             if s is not None:
                 s["seconds"] = ev.get("seconds")
+                s["timing"] = ev.get("timing")
                 s["state"] = ev.get("state")
                 s["status"] = "ok" if kind == "solve_end" else "error"
                 if kind == "solve_error":
@@ -447,6 +449,7 @@ def summarize(records):
         unsupportedItems=(dict(sorted(items.items(), key=lambda kv: (-kv[1][0], kv[0])))
                           if lists_available else None),
         nativeErrors=_count([error_line(r["native"]["error"]) for r in records if r["native"]["status"] == "error"]),
+        time=timing_summary(records),
     )
     return s
 
@@ -539,6 +542,7 @@ def render(records, summary, command, wall, timeout, fine=None):
         L += ["", f"## exudyn_lie runs that reached the time limit ({len(timeouts)})", ""]
         L += [f"* `{r['name']}`: {r['exlReason']} (native: {_native_cell(r)}, {r['native']['wall']:.1f} s)"
               for r in timeouts]
+    L += render_timing(records, s["time"])
     if s["nativeErrors"]:
         L += ["", "## Native failures (not counted against exudyn_lie)", "", "| native error | scripts |", "|---|---|"]
         L += [f"| {_cell(k, 200)} | {n} |" for k, n in s["nativeErrors"].items()]

@@ -274,6 +274,13 @@ def install_solve_wrappers(exu, mode, emit, factor=1):
         target = original
     state = dict(depth=0, count=0)
 
+    def timing():
+        """exudyn_lie's split of the call (set-up, compilation, time loop), in an exl run."""
+        if mode not in ("exl", "exlfine"):
+            return None
+        import exudyn_lie
+        return exudyn_lie.GetSolveTiming()
+
     def SolveDynamic(mbs, *args, **kwargs):
         if state["depth"]:                       # a solve inside a solve: Exudyn's own
             return original(mbs, *args, **kwargs)
@@ -291,13 +298,13 @@ def install_solve_wrappers(exu, mode, emit, factor=1):
         try:
             result = target(mbs, *args, **kwargs)
         except BaseException as e:
-            emit("solve_error", n=n, seconds=time.perf_counter() - tic,
+            emit("solve_error", n=n, seconds=time.perf_counter() - tic, timing=timing(),
                  exl=exl_kind(e) if mode in ("exl", "exlfine") else None,
                  **describe(e))
             raise
         finally:
             state["depth"] -= 1
-        emit("solve_end", n=n, seconds=time.perf_counter() - tic, returned=repr(result)[:40],
+        emit("solve_end", n=n, seconds=time.perf_counter() - tic, timing=timing(), returned=repr(result)[:40],
              state=final_state(mbs))
         return result
 

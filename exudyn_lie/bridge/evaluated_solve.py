@@ -113,6 +113,7 @@ class EvaluatedSolver:
     ``liegroup``, ``method`` (a ButcherTableau), ``verbose`` as for
     :class:`~.solver.LieGroupSolver`; ``reasons``: the items that force this path (for the
     one warning; None when the user chose the path)."""
+    pathName = "evaluated"         # as solve_timing reports it
 
     def __init__(self, mbs, tableau, liegroup="auto", verbose=False, reasons=None, projectInitial=True):
         self.mbs = mbs

@@ -9,6 +9,7 @@ from ..userwarn import warn_user
 from .constraint_check import check_tolerance
 from .solvertype import resolve_solver_type
 from .reader import BridgeError
+from .solve_timing import timed_call
 from .solver import LieGroupSolver, _check_method
 
 
@@ -43,6 +44,7 @@ def _before_solve(mbs, replacedType, methodName, where, assemble):
 
 
 @raised_at_boundary((SceneError, SimulationError))
+@timed_call
 def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialValues=False, storeSolver=True,
                  showHints=False, showCausingItems=True, autoAssemble=True, *, method=None, liegroup="auto",
                  stabilization="auto", projectInitial=True, verbose=False, showProgress=True, substeps=None,
@@ -93,7 +95,10 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
     model (items, initial state, and with ``projectInitial=False`` the initial constraint
     consistency) are checked first; with
     ``autoAssemble`` and an mbs that is not assembled, the model is checked from its item
-    dictionaries (what ``mbs.Assemble()`` will set) and only then assembled."""
+    dictionaries (what ``mbs.Assemble()`` will set) and only then assembled.
+
+    Where the call's time went (set-up, numba's compilation, the time loop):
+    ``exudyn_lie.GetSolveTiming()`` (:mod:`.solve_timing`)."""
     import exudyn as exu
     check_tolerance(constraintCheck)
     auto = stabilization == "auto"

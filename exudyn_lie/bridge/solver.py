@@ -121,6 +121,7 @@ class LieGroupSolver(StateIO):
     (returns a :class:`~exudyn_lie.mbs.Result`).  Both re-read the model from ``mbs``
     (cheap) so that changed parameters or initial values are used.
     """
+    pathName = "compiled"          # as solve_timing reports it
 
     def __init__(self, mbs, method="RK4", liegroup="auto", stabilization=None, projectInitial=True,
                  verbose=False, *, constraintTolerance=None, _configuration="initial", _scene=None):

@@ -32,6 +32,7 @@ import numpy as np
 
 from .reader import BridgeError
 from .settings import name_exudyn_setting
+from .solve_timing import compile_seconds, record_loop
 
 PROGRESS_FIRST = 2.0         # seconds before the first progress check (it measures the rate, prints nothing)
 PROGRESS_EVERY = 2.0         # seconds between progress lines
@@ -121,12 +122,15 @@ class TimeLoop:
             hook = (fast(self.hook, self) if fast is not None else None) or self.hook
             solver.SetUserFunctionNewton(mbs, hook)
             context = getattr(driver, "loop_context", None)
-            tic = time.perf_counter()
-            with (context() if context is not None else contextlib.nullcontext()):
-                ok = solver.SolveSteps(mbs, self.loopSettings)
-            if ok:
-                driver.loop_end()
-            self.loopSeconds = time.perf_counter() - tic
+            tic, compiled0 = time.perf_counter(), compile_seconds()
+            try:
+                with (context() if context is not None else contextlib.nullcontext()):
+                    ok = solver.SolveSteps(mbs, self.loopSettings)
+                if ok:
+                    driver.loop_end()
+            finally:
+                self.loopSeconds = time.perf_counter() - tic
+                record_loop(self.loopSeconds - (compile_seconds() - compiled0), driver.pathName)
             finalized = True
             finalize(mbs, solver, self.loopSettings)
         except BaseException:

@@ -130,7 +130,8 @@ class TimeLoop:
                     driver.loop_end()
             finally:
                 self.loopSeconds = time.perf_counter() - tic
-                record_loop(self.loopSeconds - (compile_seconds() - compiled0), driver.pathName)
+                record_loop(self.loopSeconds - (compile_seconds() - compiled0),
+                            getattr(driver, "pathName", type(driver).__name__))
             finalized = True
             finalize(mbs, solver, self.loopSettings)
         except BaseException:

@@ -165,7 +165,8 @@ def serve_outputs(sd, wk, am, ctol, fs, ist, R0, r0, V0, R, r, V, S, tout, k, Ro
                 if st != STATUS_OK:
                     return st, k
         if Po.shape[0] > k:
-            tracked_at(wk.track.trackCodes, wk.track.angleFrames, wk.path.bodyAngles, wk.path.bodyParameters, Ro[k], Po[k])
+            tracked_at(wk.track.trackCodes, wk.track.angleFrames, wk.path.bodyAngles, wk.path.bodyParameters, Ro[k],
+                       Po[k])
         k += 1
     return STATUS_OK, k
 

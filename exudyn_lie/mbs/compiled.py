@@ -10,7 +10,8 @@ from collections import namedtuple
 import numpy as np
 
 from .force_elements import compile_elements, lean_elements_only, scene_fields
-from .codes import EXTERNAL_FORCES, EXTERNAL_NONE, EXTERNAL_RATES, GROUP_NAMES, J_NROW, J_ROW0, ROW_COORD, ROW_COORD_VEL, ROW_DIST, ROW_KIND, ROW_ROLL, ROW_ROT, ROW_TRANS_LOCAL, ROW_TRANS_WORLD
+from .codes import (EXTERNAL_FORCES, EXTERNAL_NONE, EXTERNAL_RATES, GROUP_NAMES, J_NROW, J_ROW0, ROW_COORD,
+                    ROW_COORD_VEL, ROW_DIST, ROW_KIND, ROW_ROLL, ROW_ROT, ROW_TRANS_LOCAL, ROW_TRANS_WORLD)
 from .rotation_parameters import TRACK_ANGLE, TRACK_NONE
 from .external_probes import N_PROBE, probe_table
 from .linalg import REL_PIVOT_TOL, rcm_order
@@ -29,18 +30,22 @@ GROUP_NAMES = {v: k for k, v in GROUP_IDS.items()}
 SceneData = namedtuple("SceneData", [
     "nb", "gid", "mass", "com", "M", "Minv", "gravity", "hasGravity",
     "hasQext",                        # codes.EXTERNAL_*: none, Python forces, or the whole right-hand side
-    "loadIndex", "loadVectors",                   # loads: [body, 0 force / 1 torque, bodyFixed]; [vector, point]
-    # the compiled force elements' fields, from their registrations (mbs/force_elements.py), in this
-    # order: springs springBodies [A, B], springPoints [posA, posB], springLaw [k, d, L0, f0]; Cartesian springs cartesianBodies, cartesianPoints,
-    # cartesianLaw [k(3), d(3), offset(3)]; torsional springs torsionBodies, torsionFrames [rotA, rotB], torsionLaw [k, d, offset, torque];
-    # coordinate springs coordSpringEnds [A, B, rotation A, rotation B], coordSpringLaw [k, d, offset, direction A (3),
-    # direction B (3), angle A, angle B], coordSpringFrames [frame A, frame B], nCoordAngles (rotation coordinates of
-    # coordinate items, tracked: coordinate_angles); linear springs linearBodies, linearPoints, linearAxis (axis on A), linearLaw
-    # [k, d, offset, force]; rigid-body springs rigidSpringBodies [A, B, intrinsic], rigidSpringPoints, rigidSpringFrames, rigidSpringLaw (rows K (6),
-    # D (6), offset)
+    "loadIndex", "loadVectors",       # loads: [body, 0 force / 1 torque, bodyFixed]; [vector, point]
+    # the compiled force elements' fields, from their registrations (mbs/force_elements.py), in this order:
+    # * springs: springBodies [A, B], springPoints [posA, posB], springLaw [k, d, L0, f0];
+    # * Cartesian springs: cartesianBodies, cartesianPoints, cartesianLaw [k(3), d(3), offset(3)];
+    # * torsional springs: torsionBodies, torsionFrames [rotA, rotB], torsionLaw [k, d, offset, torque];
+    # * coordinate springs: coordSpringEnds [A, B, end code A, end code B], coordSpringLaw [k, d, offset,
+    #   direction A (3), direction B (3), force], coordSpringFrames [frame A, frame B], nCoordAngles (the
+    #   rotation coordinates of the coordinate items, tracked in PathState: coordinate_angles);
+    # * linear springs: linearBodies, linearPoints, linearAxis (axis on A), linearLaw [k, d, offset, force];
+    # * rigid-body springs: rigidSpringBodies [A, B, intrinsic], rigidSpringPoints, rigidSpringFrames,
+    #   rigidSpringLaw (rows K (6), D (6), offset)
     *scene_fields(),
-    "jointIndex", "jointPoints", "jointFrames", "jointParams",   # joints: [A, B, first row, rows]; [posA, posB]; [rotA, rotB]; [row parameters]
-    "rowIndex",                           # constraint rows: [kind, axis of A, axis of B, body A, body B]
+    "jointIndex",                     # joints: [A, B, first row, rows]
+    "jointPoints", "jointFrames",     # [posA, posB]; [rotA, rotB]
+    "jointParams",                    # the rows' parameters (N_JOINT_PARAMS per joint, joint_parameters)
+    "rowIndex",                       # constraint rows: [kind, axis of A, axis of B, body A, body B]
     "nrows", "bandwidth", "redundant", "pivotTol",
     "stabilization",                  # kernel.STAB_*: projection after every step; None: none (no projection
                                       #   compiled into the step loop, projection.project_state_if)
@@ -560,7 +565,8 @@ def make_work(sd, nstages, solve="auto", carried=None):
         perm=np.zeros(m, np.int64), ytmp=np.zeros(m), failInfo=np.zeros(4, np.int64),
         tmp6=np.zeros(6), tmp12=np.zeros(12), v3=np.zeros((N_SCRATCH3, 3)), m3=np.zeros((4, 3, 3)),
         ident=np.eye(3), zero3=np.zeros(3), zero6=np.zeros(6),
-        ext=np.zeros(2, np.int64), rdrive=constant_drives(sd), drive=None, Vw=np.zeros((nb, 6) if sd.hasQext else (0, 6)),
+        ext=np.zeros(2,
+                     np.int64), rdrive=constant_drives(sd), drive=None, Vw=np.zeros((nb, 6) if sd.hasQext else (0, 6)),
         tplan=plan, Tw=np.zeros(work_size(nb, m, plan)) if tree else None,
         track=carried.track, path=carried.path,
         # None without probes: external_forces then compiles without probe_kinematics (about 2 s of

@@ -19,7 +19,8 @@ from .rolling_disc_rows import rolling_disc_row
 
 # --------------------------------------------------------------------------- constraints
 @njit(cache=True, inline="always", _nrt=False)
-def extra_row(kind, q, j, a, b, gA, gB, RA, RB, rA, rB, VA, VB, rowIndex, rotA, rotB, jointParams, bodyParameters, jointAngles, v3, h, Jr, eta, rdrive):
+def extra_row(kind, q, j, a, b, gA, gB, RA, RB, rA, rB, VA, VB, rowIndex, rotA, rotB, jointParams, bodyParameters,
+              jointAngles, v3, h, Jr, eta, rdrive):
     """Row ``q`` of joint ``j`` of a coordinate or rolling-disc kind (:func:`joint_rows`; its
     points and scratch in ``v3``; fewer than 30 arguments: a longer call is a star-argument
     call in Python's bytecode, which numba's inliner refuses)."""
@@ -28,11 +29,11 @@ def extra_row(kind, q, j, a, b, gA, gB, RA, RB, rA, rB, VA, VB, rowIndex, rotA, 
     ax, axd, axb, bx, bxd, bxb = v3[11], v3[12], v3[13], v3[14], v3[15], v3[16]
     u, RtA = v3[17], v3[19]
     if kind == ROW_COORD or kind == ROW_COORD_VEL:
-        coordinate_row(q, a, b, gA, gB, RA, RB, rax, rowIndex[q, ROW_BX], rotA, rotB, jointParams[j], jointAngles[j], pA, pB, bA, bB, u, RtA,
-                       h, Jr, eta)
+        coordinate_row(q, a, b, gA, gB, RA, RB, rax, rowIndex[q, ROW_BX], rotA, rotB, jointParams[j], jointAngles[j],
+                       pA, pB, bA, bB, u, RtA, h, Jr, eta)
         if rax >= PARAM_BASE or rowIndex[q, ROW_BX] >= PARAM_BASE:     # rotation parameters of 3D bodies
-            node_parameter_terms(q, a, b, rax, rowIndex[q, ROW_BX], RA, RB, VA, VB, bodyParameters, jointParams[j, 0], h, Jr, eta,
-                                 ax, axd, axb)
+            node_parameter_terms(q, a, b, rax, rowIndex[q, ROW_BX], RA, RB, VA, VB, bodyParameters,
+                                 jointParams[j, 0], h, Jr, eta, ax, axd, axb)
         if kind == ROW_COORD_VEL:
             # velocity level: J V = w(t) constrains no position (as ROW_ROLL); the same J, and
             # eta = -Jdot V, since d/dt (J V - w) = J Vdot + Jdot V - wdot (wdot: row_drives)
@@ -41,15 +42,16 @@ def extra_row(kind, q, j, a, b, gA, gB, RA, RB, rA, rB, VA, VB, rowIndex, rotA, 
             h[q] -= rdrive[0, q]          # h(g) - c(t)
         eta[q] += rdrive[2, q]            # + cddot(t) (velocity level: + wdot(t))
     elif kind == ROW_ROLL:
-        rolling_disc_row(q, rax, a, b, gA, gB, RA, RB, rA, rB, VA, VB, rotA, rotB, jointParams[j], pB, vB, ax, axd, axb,
-                         bx, bxd, bxb, u, h, Jr, eta)
+        rolling_disc_row(q, rax, a, b, gA, gB, RA, RB, rA, rB, VA, VB, rotA, rotB, jointParams[j], pB, vB, ax, axd,
+                         axb, bx, bxd, bxb, u, h, Jr, eta)
 
 
 extra_row_if = guarded(extra_row)
 
 
 @njit(cache=True, inline="always", _nrt=False)
-def _rotation_row(q, rowIndex, rax, a, b, RA, VA, RB, VB, rotA, rotB, u, w, ax, axd, axb, bx, bxd, bxb, RtA, h, Jr, eta):
+def _rotation_row(q, rowIndex, rax, a, b, RA, VA, RB, VB, rotA, rotB, u, w, ax, axd, axb, bx, bxd, bxb, RtA, h, Jr,
+                  eta):
     """A rotation row: ``h = a . b`` of an axis of frame A and one of frame B (a locked
     relative rotation of the generic joint), its Jacobian on both sides' angular velocities
     and ``eta``."""
@@ -116,8 +118,8 @@ def _world_translation_row(q, rax, a, b, gA, gB, RA, RB, sA, sB, d, bd, h, Jr, e
 
 
 @njit(cache=True, inline="always", _nrt=False)
-def _axis_translation_row(q, kind, rax, a, b, j, gA, gB, RA, VA, RB, sA, sB, rotA, jointParams, u, ax, axd, axb, d, dd, bd, dAl,
-                          RtA, h, Jr, eta):
+def _axis_translation_row(q, kind, rax, a, b, j, gA, gB, RA, VA, RB, sA, sB, rotA, jointParams, u, ax, axd, axb, d,
+                          dd, bd, dAl, RtA, h, Jr, eta):
     """A translation row along an axis of frame A (local), a world axis through the general
     branch, or a distance row: ``h = a . d``, its Jacobian and ``eta``."""
     if kind == ROW_TRANS_LOCAL:
@@ -168,7 +170,8 @@ def _axis_translation_row(q, kind, rax, a, b, j, gA, gB, RA, VA, RB, sA, sB, rot
 
 
 @njit(cache=True, forceinline=True, _nrt=False)
-def joint_rows(j, gid, jointIndex, jointPoints, jointFrames, jointParams, rowIndex, rowsAll, bodyParameters, jointAngles, R, r, V, h, Jr, eta, rdrive, v3, ident, zero3, zero6):
+def joint_rows(j, gid, jointIndex, jointPoints, jointFrames, jointParams, rowIndex, rowsAll, bodyParameters,
+               jointAngles, R, r, V, h, Jr, eta, rdrive, v3, ident, zero3, zero6):
     """Residual ``h``, Jacobian rows ``Jr`` (row, 12: 6 for side A, 6 for side B) and
     ``eta = -Jdot V`` of all rows of joint ``j``, written at the joint's row slots
     (``rowsAll``: SceneData.rowsAll, None compiles no coordinate and rolling-disc rows, mbs/presence.py;
@@ -204,24 +207,27 @@ def joint_rows(j, gid, jointIndex, jointPoints, jointFrames, jointParams, rowInd
         rax = rowIndex[q, ROW_AX]
         if kind == ROW_COORD or kind == ROW_COORD_VEL or kind == ROW_ROLL:
             # not in a lean scene: compiled only for full ones (mbs/presence.py)
-            extra_row_if(rowsAll, kind, q, j, a, b, gA, gB, RA, RB, rA, rB, VA, VB, rowIndex, rotA, rotB, jointParams, bodyParameters, jointAngles, v3,
+            extra_row_if(rowsAll, kind, q, j, a, b, gA, gB, RA, RB, rA, rB, VA, VB, rowIndex, rotA, rotB,
+                         jointParams, bodyParameters, jointAngles, v3,
                          h, Jr, eta, rdrive)
         elif kind == ROW_ROT:
-            _rotation_row(q, rowIndex, rax, a, b, RA, VA, RB, VB, rotA, rotB, u, w, ax, axd, axb, bx, bxd, bxb, RtA, h, Jr,
-                          eta)
+            _rotation_row(q, rowIndex, rax, a, b, RA, VA, RB, VB, rotA, rotB, u, w, ax, axd, axb, bx, bxd, bxb, RtA,
+                          h, Jr, eta)
         elif kind == ROW_TRANS_WORLD:
             _world_translation_row(q, rax, a, b, gA, gB, RA, RB, sA, sB, d, bd, h, Jr, eta)
         else:
-            _axis_translation_row(q, kind, rax, a, b, j, gA, gB, RA, VA, RB, sA, sB, rotA, jointParams, u, ax, axd, axb, d, dd, bd,
-                                  dAl, RtA, h, Jr, eta)
+            _axis_translation_row(q, kind, rax, a, b, j, gA, gB, RA, VA, RB, sA, sB, rotA, jointParams, u, ax, axd,
+                                  axb, d, dd, bd, dAl, RtA, h, Jr, eta)
 
 
 @njit(cache=True, inline="always", _nrt=False)
-def joints_rows(gid, jointIndex, jointPoints, jointFrames, jointParams, rowIndex, rowsAll, bodyParameters, jointAngles, R, r, V, h, Jr, eta, rdrive, v3, ident, zero3, zero6):
+def joints_rows(gid, jointIndex, jointPoints, jointFrames, jointParams, rowIndex, rowsAll, bodyParameters,
+                jointAngles, R, r, V, h, Jr, eta, rdrive, v3, ident, zero3, zero6):
     """:func:`joint_rows` of every joint.  ``rdrive`` (3, m): the time-dependent part of the
     coordinate rows at the evaluation time (:mod:`.row_drives`): ``h - c(t)``, ``eta + cddot(t)``
     (the rate ``cdot(t)`` is the velocity target ``J V = cdot`` of the projections).  (Applied
     in the coordinate rows' branch: a loop over all rows here cost the heavy top 0.4 us of its
     2.9 us per step, measured.)"""
     for j in range(jointIndex.shape[0]):
-        joint_rows(j, gid, jointIndex, jointPoints, jointFrames, jointParams, rowIndex, rowsAll, bodyParameters, jointAngles, R, r, V, h, Jr, eta, rdrive, v3, ident, zero3, zero6)
+        joint_rows(j, gid, jointIndex, jointPoints, jointFrames, jointParams, rowIndex, rowsAll, bodyParameters,
+                   jointAngles, R, r, V, h, Jr, eta, rdrive, v3, ident, zero3, zero6)

@@ -61,7 +61,8 @@ def _parameter_side(code, body, R, V, bodyParameters, Cout, G, tmp):
 
 
 @njit(cache=True, _nrt=False)
-def coordinate_spring_value(gid, coordSpringEnds, coordSpringLaw, coordSpringFrames, bodyParameters, springAngles, s, R, r, V, v3, ident, zero3, zero6):
+def coordinate_spring_value(gid, coordSpringEnds, coordSpringLaw, coordSpringFrames, bodyParameters, springAngles, s,
+                            R, r, V, v3, ident, zero3, zero6):
     """(q_B - q_A - offset, qdot_B - qdot_A) of coordinate spring ``s``; the directions C of
     node-parameter ends in ``v3[7]`` (A) and ``v3[8]`` (B)."""
     pA, pB, vA, vB, bA, bB = v3[0], v3[1], v3[2], v3[3], v3[4], v3[5]
@@ -73,19 +74,23 @@ def coordinate_spring_value(gid, coordSpringEnds, coordSpringLaw, coordSpringFra
     qA, dqA = _coordinate(coordSpringEnds[s, 2], kp, 3, coordSpringFrames[s, 0], RA, pA, vA, springAngles[s, 0])
     qB, dqB = _coordinate(coordSpringEnds[s, 3], kp, 6, coordSpringFrames[s, 1], RB, pB, vB, springAngles[s, 1])
     # node-parameter ends: their direction d is 0, so _coordinate gave 0 for them
-    xA, dxA = _parameter_side(coordSpringEnds[s, 2], coordSpringEnds[s, 0], R, V, bodyParameters, v3[7], v3[9], v3[10])
-    xB, dxB = _parameter_side(coordSpringEnds[s, 3], coordSpringEnds[s, 1], R, V, bodyParameters, v3[8], v3[9], v3[10])
+    xA, dxA = _parameter_side(coordSpringEnds[s, 2], coordSpringEnds[s, 0], R, V, bodyParameters, v3[7], v3[9],
+                              v3[10])
+    xB, dxB = _parameter_side(coordSpringEnds[s, 3], coordSpringEnds[s, 1], R, V, bodyParameters, v3[8], v3[9],
+                              v3[10])
     return qB + xB - qA - xA - kp[2], dqB + dxB - dqA - dxA
 
 
 @njit(cache=True, _nrt=False)
-def coordinate_spring_forces(gid, coordSpringEnds, coordSpringLaw, coordSpringFrames, bodyParameters, springAngles, R, r, V, Q, v3, ident, zero3, zero6):
+def coordinate_spring_forces(gid, coordSpringEnds, coordSpringLaw, coordSpringFrames, bodyParameters, springAngles,
+                             R, r, V, Q, v3, ident, zero3, zero6):
     F = v3[6]
     for s in range(coordSpringEnds.shape[0]):
         a = coordSpringEnds[s, 0]
         b = coordSpringEnds[s, 1]
         kp = coordSpringLaw[s]
-        u, ud = coordinate_spring_value(gid, coordSpringEnds, coordSpringLaw, coordSpringFrames, bodyParameters, springAngles, s, R, r, V, v3, ident, zero3, zero6)
+        u, ud = coordinate_spring_value(gid, coordSpringEnds, coordSpringLaw, coordSpringFrames, bodyParameters,
+                                        springAngles, s, R, r, V, v3, ident, zero3, zero6)
         f = kp[0] * u + kp[1] * ud + kp[COORD_SPRING_FORCE]
         if a >= 0:
             if coordSpringEnds[s, 2] >= PARAM_BASE:          # e_k on the parametrisation's velocity coordinates
@@ -112,13 +117,15 @@ def coordinate_spring_forces(gid, coordSpringEnds, coordSpringLaw, coordSpringFr
 
 
 @njit(cache=True, _nrt=False)
-def coordinate_spring_energy(gid, coordSpringEnds, coordSpringLaw, coordSpringFrames, bodyParameters, springAngles, R, r, V, v3, ident, zero3, zero6):
+def coordinate_spring_energy(gid, coordSpringEnds, coordSpringLaw, coordSpringFrames, bodyParameters, springAngles,
+                             R, r, V, v3, ident, zero3, zero6):
     """Potential ``k/2 (q_B - q_A - offset)^2`` of every coordinate spring (a potential of
     the force only where it acts along the coordinate's gradient: not on a rotation-vector
     parameter ('rotationVector'), whose force acts along C = e_k, see node_coordinates)."""
     e = 0.0
     for s in range(coordSpringEnds.shape[0]):
-        u, _ = coordinate_spring_value(gid, coordSpringEnds, coordSpringLaw, coordSpringFrames, bodyParameters, springAngles, s, R, r, V, v3, ident, zero3, zero6)
+        u, _ = coordinate_spring_value(gid, coordSpringEnds, coordSpringLaw, coordSpringFrames, bodyParameters,
+                                       springAngles, s, R, r, V, v3, ident, zero3, zero6)
         e += 0.5 * coordSpringLaw[s, 0] * u * u
     return e
 
@@ -126,13 +133,15 @@ def coordinate_spring_energy(gid, coordSpringEnds, coordSpringLaw, coordSpringFr
 # the element's entries (registered in mbs/force_elements.py)
 @njit(cache=True, inline="always", _nrt=False)
 def coordinate_spring_element(sd, wk, R, r, V, Q):
-    coordinate_spring_forces(sd.gid, sd.coordSpringEnds, sd.coordSpringLaw, sd.coordSpringFrames, wk.path.bodyParameters, wk.path.springAngles, R, r, V, Q, wk.v3, wk.ident, wk.zero3, wk.zero6)
+    coordinate_spring_forces(sd.gid, sd.coordSpringEnds, sd.coordSpringLaw, sd.coordSpringFrames,
+                             wk.path.bodyParameters, wk.path.springAngles, R, r, V, Q, wk.v3, wk.ident, wk.zero3, wk.zero6)
 
 
 @njit(cache=True, inline="always", _nrt=False)
 def coordinate_spring_element_energy(sd, wk, R, r, V, e):
     """``e`` plus the coordinate springs' potential (summed on its own, then added)."""
     if sd.coordSpringEnds.shape[0] > 0:
-        return e + coordinate_spring_energy(sd.gid, sd.coordSpringEnds, sd.coordSpringLaw, sd.coordSpringFrames, wk.path.bodyParameters, wk.path.springAngles, R, r, V, wk.v3, wk.ident, wk.zero3,
+        return e + coordinate_spring_energy(sd.gid, sd.coordSpringEnds, sd.coordSpringLaw, sd.coordSpringFrames,
+                                            wk.path.bodyParameters, wk.path.springAngles, R, r, V, wk.v3, wk.ident, wk.zero3,
                                             wk.zero6)
     return e

@@ -26,7 +26,8 @@ from .coordinate_angles import angle_rate_row, frame_angle
 
 
 @njit(cache=True, inline="always", _nrt=False)
-def coordinate_row(q, a, b, gA, gB, RA, RB, rotEndA, rotEndB, FA, FB, par, angles, pA, pB, bA, bB, e, RTe, h, Jr, eta):
+def coordinate_row(q, a, b, gA, gB, RA, RB, rotEndA, rotEndB, FA, FB, par, angles, pA, pB, bA, bB, e, RTe, h, Jr,
+                   eta):
     """Row ``q`` of a coordinate constraint from the body origins ``pA, pB`` and their bias
     accelerations ``bA, bB`` (body_point at s = 0); ``par = jointParams[j]``, ``angles = jointAngles[j]``; ``rotEndX`` 1 for a
     rotation coordinate (frame ``FX``)."""

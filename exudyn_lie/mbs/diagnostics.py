@@ -29,7 +29,8 @@ def kinetic_and_gravity(gid, M, mass, com, gravity, R, r, V, Vb):
 def all_rows(sd, wk, R, r, V, h, Jr, eta, e):
     """Diagnostics at the state (R, r, V): residuals ``h``, Jacobian rows ``Jr`` and
     ``eta`` of every joint, and ``e`` = (kinetic, gravity potential, spring potential)."""
-    joints_rows(sd.gid, sd.jointIndex, sd.jointPoints, sd.jointFrames, sd.jointParams, sd.rowIndex, sd.rowsAll, wk.path.bodyParameters, wk.path.jointAngles, R, r, V, h, Jr, eta, wk.rdrive, wk.v3, wk.ident,
+    joints_rows(sd.gid, sd.jointIndex, sd.jointPoints, sd.jointFrames, sd.jointParams, sd.rowIndex, sd.rowsAll,
+                wk.path.bodyParameters, wk.path.jointAngles, R, r, V, h, Jr, eta, wk.rdrive, wk.v3, wk.ident,
                 wk.zero3, wk.zero6)
     ekin, egrav = kinetic_and_gravity(sd.gid, sd.M, sd.mass, sd.com, sd.gravity, R, r, V, wk.tmp6)
     e[0] = ekin
@@ -64,7 +65,8 @@ def joint_rows_at(sd, wk, R, r, V, h, Jr, eta):
     """Residuals ``h``, Jacobian rows ``Jr`` and ``eta`` of every joint at the state (R, r, V):
     ``all_rows`` without the energies, and without an entry taking the SceneData /
     Work tuples (a first run compiles none for the initial checks)."""
-    joints_rows(sd.gid, sd.jointIndex, sd.jointPoints, sd.jointFrames, sd.jointParams, sd.rowIndex, sd.rowsAll, wk.path.bodyParameters, wk.path.jointAngles, R, r, V, h, Jr, eta,
+    joints_rows(sd.gid, sd.jointIndex, sd.jointPoints, sd.jointFrames, sd.jointParams, sd.rowIndex, sd.rowsAll,
+                wk.path.bodyParameters, wk.path.jointAngles, R, r, V, h, Jr, eta,
                 wk.rdrive, wk.v3, wk.ident, wk.zero3, wk.zero6)
 
 

@@ -84,7 +84,8 @@ def cartesian_forces(gid, cartesianBodies, cartesianPoints, cartesianLaw, R, r, 
     for s in range(cartesianBodies.shape[0]):
         a = cartesianBodies[s, 0]
         b = cartesianBodies[s, 1]
-        gA, RA, gB, RB = connector_ends(gid, a, b, cartesianPoints[s, 0], cartesianPoints[s, 1], R, r, V, v3, ident, zero3, zero6)
+        gA, RA, gB, RB = connector_ends(gid, a, b, cartesianPoints[s, 0], cartesianPoints[s, 1], R, r, V, v3, ident,
+                                        zero3, zero6)
         for k in range(3):
             F[k] = cartesianLaw[s, 0, k] * (pB[k] - pA[k] - cartesianLaw[s, 2, k]) + cartesianLaw[s, 1, k] * (vB[k] - vA[k])
         add_pair_force(gA, RA, cartesianPoints[s, 0], a, gB, RB, cartesianPoints[s, 1], b, F, Q)
@@ -120,7 +121,8 @@ def torsion_angle(rotA, rotB, prev, RA, VA, RB, VB, FA, FB):
 
 
 @njit(cache=True, _nrt=False)
-def torsional_forces(gid, torsionBodies, torsionFrames, torsionLaw, torsionAngles, R, r, V, Q, F, m3, ident, zero3, zero6):
+def torsional_forces(gid, torsionBodies, torsionFrames, torsionLaw, torsionAngles, R, r, V, Q, F, m3, ident, zero3,
+                     zero6):
     """Torsional spring-dampers about the z axis of the frame on A (``torsionLaw`` = k, d,
     offset, torque): ``tau = k (phi - phi0) + d phidot + torque``;
     ``-tau z_A`` acts on B, ``+tau z_A`` on A."""
@@ -129,7 +131,8 @@ def torsional_forces(gid, torsionBodies, torsionFrames, torsionLaw, torsionAngle
         b = torsionBodies[s, 1]
         gA, RA, rA, VA = _side(gid, a, R, r, V, ident, zero3, zero6)
         gB, RB, rB, VB = _side(gid, b, R, r, V, ident, zero3, zero6)
-        phi, phid = torsion_angle(torsionFrames[s, 0], torsionFrames[s, 1], torsionAngles[s], RA, VA, RB, VB, m3[0], m3[1])
+        phi, phid = torsion_angle(torsionFrames[s, 0], torsionFrames[s, 1], torsionAngles[s], RA, VA, RB, VB, m3[0],
+                                  m3[1])
         tau = -(torsionLaw[s, 0] * (phi - torsionLaw[s, 2]) + torsionLaw[s, 1] * phid + torsionLaw[s, 3])
         for k in range(3):
             F[k] = tau * (RA[k, 0] * torsionFrames[s, 0, 0, 2] + RA[k, 1] * torsionFrames[s, 0, 1, 2] + RA[k, 2] * torsionFrames[s, 0, 2, 2])
@@ -169,7 +172,8 @@ def tait_bryan_xyz(Rr, out):
 
 
 @njit(cache=True, _nrt=False)
-def rigid_spring_forces(gid, rigidSpringBodies, rigidSpringPoints, rigidSpringFrames, rigidSpringLaw, R, r, V, Q, v3, m3, ident, zero3, zero6):
+def rigid_spring_forces(gid, rigidSpringBodies, rigidSpringPoints, rigidSpringFrames, rigidSpringLaw, R, r, V, Q, v3,
+                        m3, ident, zero3, zero6):
     """6-dof spring-dampers between the frames ``J0 = R_A rotA``
     at ``pA`` and ``J1 = R_B rotB`` at ``pB`` (``rigidSpringLaw`` rows: K (6x6), D (6x6), offset):
 
@@ -261,7 +265,8 @@ def torsion_angles(gid, torsionBodies, torsionFrames, torsionAngles, R, r, V, m3
     for s in range(torsionBodies.shape[0]):
         gA, RA, rA, VA = _side(gid, torsionBodies[s, 0], R, r, V, ident, zero3, zero6)
         gB, RB, rB, VB = _side(gid, torsionBodies[s, 1], R, r, V, ident, zero3, zero6)
-        phi, phid = torsion_angle(torsionFrames[s, 0], torsionFrames[s, 1], torsionAngles[s], RA, VA, RB, VB, m3[0], m3[1])
+        phi, phid = torsion_angle(torsionFrames[s, 0], torsionFrames[s, 1], torsionAngles[s], RA, VA, RB, VB, m3[0],
+                                  m3[1])
         torsionAngles[s] = phi
 
 
@@ -280,23 +285,26 @@ def inertial_forces(gid, M, mass, com, R, V, Q):
 # its forces ``(sd, wk, R, r, V, Q)`` and, if it has a potential, its energy added to ``e``.
 @njit(cache=True, inline="always", _nrt=False)
 def spring_element(sd, wk, R, r, V, Q):
-    spring_forces(sd.gid, sd.springBodies, sd.springPoints, sd.springLaw, R, r, V, Q, wk.v3, wk.ident, wk.zero3, wk.zero6)
+    spring_forces(sd.gid, sd.springBodies, sd.springPoints, sd.springLaw, R, r, V, Q, wk.v3, wk.ident, wk.zero3,
+                  wk.zero6)
 
 
 @njit(cache=True, inline="always", _nrt=False)
 def cartesian_element(sd, wk, R, r, V, Q):
-    cartesian_forces(sd.gid, sd.cartesianBodies, sd.cartesianPoints, sd.cartesianLaw, R, r, V, Q, wk.v3, wk.ident, wk.zero3, wk.zero6)
+    cartesian_forces(sd.gid, sd.cartesianBodies, sd.cartesianPoints, sd.cartesianLaw, R, r, V, Q, wk.v3, wk.ident,
+                     wk.zero3, wk.zero6)
 
 
 @njit(cache=True, inline="always", _nrt=False)
 def torsional_element(sd, wk, R, r, V, Q):
-    torsional_forces(sd.gid, sd.torsionBodies, sd.torsionFrames, sd.torsionLaw, wk.path.torsionAngles, R, r, V, Q, wk.v3[6], wk.m3, wk.ident, wk.zero3,
-                     wk.zero6)
+    torsional_forces(sd.gid, sd.torsionBodies, sd.torsionFrames, sd.torsionLaw, wk.path.torsionAngles, R, r, V, Q,
+                     wk.v3[6], wk.m3, wk.ident, wk.zero3, wk.zero6)
 
 
 @njit(cache=True, inline="always", _nrt=False)
 def rigid_spring_element(sd, wk, R, r, V, Q):
-    rigid_spring_forces(sd.gid, sd.rigidSpringBodies, sd.rigidSpringPoints, sd.rigidSpringFrames, sd.rigidSpringLaw, R, r, V, Q, wk.v3, wk.m3, wk.ident, wk.zero3,
+    rigid_spring_forces(sd.gid, sd.rigidSpringBodies, sd.rigidSpringPoints, sd.rigidSpringFrames, sd.rigidSpringLaw,
+                        R, r, V, Q, wk.v3, wk.m3, wk.ident, wk.zero3,
                         wk.zero6)
 
 
@@ -305,8 +313,8 @@ def spring_potential(gid, springBodies, springPoints, springLaw, R, r, V, v3, id
     """``e`` plus the potential ``k (L - L0)^2 / 2 + f0 L`` of the point-to-point springs."""
     pA, pB, vA, vB = v3[0], v3[1], v3[2], v3[3]
     for s in range(springBodies.shape[0]):
-        connector_ends(gid, springBodies[s, 0], springBodies[s, 1], springPoints[s, 0], springPoints[s, 1], R, r, V, v3,
-                       ident, zero3, zero6)
+        connector_ends(gid, springBodies[s, 0], springBodies[s, 1], springPoints[s, 0], springPoints[s, 1], R, r, V,
+                       v3, ident, zero3, zero6)
         L, _ = spring_length_rate(pA, pB, vA, vB)
         e += 0.5 * springLaw[s, 0] * (L - springLaw[s, 2]) ** 2 + springLaw[s, 3] * L
     return e
@@ -317,20 +325,22 @@ def cartesian_potential(gid, cartesianBodies, cartesianPoints, cartesianLaw, R, 
     """``e`` plus the potential of the Cartesian springs."""
     pA, pB = v3[0], v3[1]
     for s in range(cartesianBodies.shape[0]):
-        connector_ends(gid, cartesianBodies[s, 0], cartesianBodies[s, 1], cartesianPoints[s, 0], cartesianPoints[s, 1],
-                       R, r, V, v3, ident, zero3, zero6)
+        connector_ends(gid, cartesianBodies[s, 0], cartesianBodies[s, 1], cartesianPoints[s, 0],
+                       cartesianPoints[s, 1], R, r, V, v3, ident, zero3, zero6)
         for k in range(3):
             e += 0.5 * cartesianLaw[s, 0, k] * (pB[k] - pA[k] - cartesianLaw[s, 2, k]) ** 2
     return e
 
 
 @njit(cache=True, _nrt=False)
-def torsional_potential(gid, torsionBodies, torsionFrames, torsionLaw, torsionAngles, R, r, V, m3, ident, zero3, zero6, e):
+def torsional_potential(gid, torsionBodies, torsionFrames, torsionLaw, torsionAngles, R, r, V, m3, ident, zero3,
+                        zero6, e):
     """``e`` plus the potential ``k (phi - offset)^2 / 2 + torque phi`` of the torsional springs."""
     for s in range(torsionBodies.shape[0]):
         gA, RA, rA, VA = _side(gid, torsionBodies[s, 0], R, r, V, ident, zero3, zero6)
         gB, RB, rB, VB = _side(gid, torsionBodies[s, 1], R, r, V, ident, zero3, zero6)
-        phi, phid = torsion_angle(torsionFrames[s, 0], torsionFrames[s, 1], torsionAngles[s], RA, VA, RB, VB, m3[0], m3[1])
+        phi, phid = torsion_angle(torsionFrames[s, 0], torsionFrames[s, 1], torsionAngles[s], RA, VA, RB, VB, m3[0],
+                                  m3[1])
         e += 0.5 * torsionLaw[s, 0] * (phi - torsionLaw[s, 2]) ** 2 + torsionLaw[s, 3] * phi
     return e
 
@@ -339,15 +349,17 @@ def torsional_potential(gid, torsionBodies, torsionFrames, torsionLaw, torsionAn
 # tuples costs compile time steeply; the potentials above receive only their arrays)
 @njit(cache=True, inline="always", _nrt=False)
 def spring_element_energy(sd, wk, R, r, V, e):
-    return spring_potential(sd.gid, sd.springBodies, sd.springPoints, sd.springLaw, R, r, V, wk.v3, wk.ident, wk.zero3, wk.zero6, e)
+    return spring_potential(sd.gid, sd.springBodies, sd.springPoints, sd.springLaw, R, r, V, wk.v3, wk.ident,
+                            wk.zero3, wk.zero6, e)
 
 
 @njit(cache=True, inline="always", _nrt=False)
 def cartesian_element_energy(sd, wk, R, r, V, e):
-    return cartesian_potential(sd.gid, sd.cartesianBodies, sd.cartesianPoints, sd.cartesianLaw, R, r, V, wk.v3, wk.ident, wk.zero3, wk.zero6, e)
+    return cartesian_potential(sd.gid, sd.cartesianBodies, sd.cartesianPoints, sd.cartesianLaw, R, r, V, wk.v3,
+                               wk.ident, wk.zero3, wk.zero6, e)
 
 
 @njit(cache=True, inline="always", _nrt=False)
 def torsional_element_energy(sd, wk, R, r, V, e):
-    return torsional_potential(sd.gid, sd.torsionBodies, sd.torsionFrames, sd.torsionLaw, wk.path.torsionAngles, R, r, V, wk.m3, wk.ident, wk.zero3,
-                               wk.zero6, e)
+    return torsional_potential(sd.gid, sd.torsionBodies, sd.torsionFrames, sd.torsionLaw, wk.path.torsionAngles, R,
+                               r, V, wk.m3, wk.ident, wk.zero3, wk.zero6, e)

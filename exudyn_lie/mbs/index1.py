@@ -41,8 +41,8 @@ def _bodies_dot(aq, bq, al, bl, q, l, Jr, W):
 @njit(cache=True, inline="always", _nrt=False)
 def _row_dot(rowIndex, q, l, Jr, W):
     """(J M^-1 J^T)[q, l] (:func:`_bodies_dot` with the rows' bodies from ``rowIndex``)."""
-    return _bodies_dot(rowIndex[q, ROW_BODY_A], rowIndex[q, ROW_BODY_B], rowIndex[l, ROW_BODY_A], rowIndex[l, ROW_BODY_B], q, l,
-                       Jr, W)
+    return _bodies_dot(rowIndex[q, ROW_BODY_A], rowIndex[q, ROW_BODY_B], rowIndex[l, ROW_BODY_A],
+                       rowIndex[l, ROW_BODY_B], q, l, Jr, W)
 
 
 @njit(cache=True, inline="always", _nrt=False)
@@ -209,8 +209,8 @@ def oblique_schur_solve(gid, Minv, rowIndex, pivotTol, R, Jr, W, lam, plan, fail
     return STATUS_OK
 
 
-def solve_multipliers(gid, Minv, rowIndex, bw, redundant, pivotTol, R, Jr, W, lam, Sb, Sd, perm, ytmp, failInfo, tmp12,
-                      tree):
+def solve_multipliers(gid, Minv, rowIndex, bw, redundant, pivotTol, R, Jr, W, lam, Sb, Sd, perm, ytmp, failInfo,
+                      tmp12, tree):
     """``lam <- (J M^-1 J^T)^-1 lam`` by the solve the scene was compiled for: the tree solve
     (:mod:`.tree_solve`: leaves-to-root elimination, linear in the bodies; it needs no ``W``,
     its correction is ``y`` per body, ``apply_correction``) or :func:`schur_solve` (band or,
@@ -219,32 +219,35 @@ def solve_multipliers(gid, Minv, rowIndex, bw, redundant, pivotTol, R, Jr, W, la
 
 
 @overload(solve_multipliers, jit_options={"forceinline": True})
-def _solve_multipliers(gid, Minv, rowIndex, bw, redundant, pivotTol, R, Jr, W, lam, Sb, Sd, perm, ytmp, failInfo, tmp12,
-                       tree):
+def _solve_multipliers(gid, Minv, rowIndex, bw, redundant, pivotTol, R, Jr, W, lam, Sb, Sd, perm, ytmp, failInfo,
+                       tmp12, tree):
     if _is_tree(tree):
-        def by_tree(gid, Minv, rowIndex, bw, redundant, pivotTol, R, Jr, W, lam, Sb, Sd, perm, ytmp, failInfo, tmp12, tree):
+        def by_tree(gid, Minv, rowIndex, bw, redundant, pivotTol, R, Jr, W, lam, Sb, Sd, perm, ytmp, failInfo, tmp12,
+                    tree):
             return tree_solve(gid, Minv, rowIndex, R, Jr, lam, tree.plan, tree.Tw, pivotTol, failInfo)
         return by_tree
     if _is_oblique(tree):
-        def by_oblique(gid, Minv, rowIndex, bw, redundant, pivotTol, R, Jr, W, lam, Sb, Sd, perm, ytmp, failInfo, tmp12,
-                       tree):
+        def by_oblique(gid, Minv, rowIndex, bw, redundant, pivotTol, R, Jr, W, lam, Sb, Sd, perm, ytmp, failInfo,
+                       tmp12, tree):
             return oblique_schur_solve(gid, Minv, rowIndex, pivotTol, R, Jr, W, lam, tree.plan, failInfo, tmp12)
         return by_oblique
 
-    def by_schur(gid, Minv, rowIndex, bw, redundant, pivotTol, R, Jr, W, lam, Sb, Sd, perm, ytmp, failInfo, tmp12, tree):
-        return schur_solve(gid, Minv, rowIndex, bw, redundant, pivotTol, R, Jr, W, lam, Sb, Sd, perm, ytmp, failInfo, tmp12)
+    def by_schur(gid, Minv, rowIndex, bw, redundant, pivotTol, R, Jr, W, lam, Sb, Sd, perm, ytmp, failInfo, tmp12,
+                 tree):
+        return schur_solve(gid, Minv, rowIndex, bw, redundant, pivotTol, R, Jr, W, lam, Sb, Sd, perm, ytmp, failInfo,
+                           tmp12)
     return by_schur
 
 
 @njit(cache=True, inline="always", _nrt=False)
-def schur_correct(gid, Minv, rowIndex, bw, redundant, pivotTol, R, X, c, y, Jr, W, lam, Sb, Sd, perm, ytmp, failInfo, tmp12,
-                  tree):
+def schur_correct(gid, Minv, rowIndex, bw, redundant, pivotTol, R, X, c, y, Jr, W, lam, Sb, Sd, perm, ytmp, failInfo,
+                  tmp12, tree):
     """``X -= M^-1 J^T lambda`` with ``(J M^-1 J^T) lambda = c y + J X``: the correction that
     makes ``J X = -c y``.  The index-1 solve (eq. index1) is ``X = Vdot = M^-1 Q``,
     ``c y = -eta``; the velocity projection ``X = V``, ``c = 0``.  Returns a status code."""
     rows_times(rowIndex, Jr, X, c, y, lam)
-    st = solve_multipliers(gid, Minv, rowIndex, bw, redundant, pivotTol, R, Jr, W, lam, Sb, Sd, perm, ytmp, failInfo, tmp12,
-                           tree)
+    st = solve_multipliers(gid, Minv, rowIndex, bw, redundant, pivotTol, R, Jr, W, lam, Sb, Sd, perm, ytmp, failInfo,
+                           tmp12, tree)
     if st != STATUS_OK:
         return st
     apply_correction(rowIndex, W, lam, X, tree)
@@ -280,7 +283,8 @@ def rhs(sd, wk, t, R, r, V, Qext, Vdot):
     free_accelerations(sd.gid, sd.Minv, R, Q, Vdot, wk.tmp12)
     if sd.nrows == 0:
         return STATUS_OK
-    joints_rows(sd.gid, sd.jointIndex, sd.jointPoints, sd.jointFrames, sd.jointParams, sd.rowIndex, sd.rowsAll, wk.path.bodyParameters, wk.path.jointAngles, R, r, V, wk.h, wk.Jr, wk.eta, wk.rdrive,
+    joints_rows(sd.gid, sd.jointIndex, sd.jointPoints, sd.jointFrames, sd.jointParams, sd.rowIndex, sd.rowsAll,
+                wk.path.bodyParameters, wk.path.jointAngles, R, r, V, wk.h, wk.Jr, wk.eta, wk.rdrive,
                 wk.v3, wk.ident, wk.zero3, wk.zero6)
     return schur_correct(sd.gid, sd.Minv, sd.rowIndex, sd.bandwidth, sd.redundant, sd.pivotTol, R, Vdot, -1.0, wk.eta,
                          wk.Jr, wk.W, wk.lam, wk.Sb, wk.Sd, wk.perm, wk.ytmp, wk.failInfo, wk.tmp12, tree_of(sd, wk))

@@ -20,7 +20,8 @@ def linear_spring_forces(gid, linearBodies, linearPoints, linearAxis, linearLaw,
     for s in range(linearBodies.shape[0]):
         ia = linearBodies[s, 0]
         ib = linearBodies[s, 1]
-        gA, RA, gB, RB = connector_ends(gid, ia, ib, linearPoints[s, 0], linearPoints[s, 1], R, r, V, v3, ident, zero3, zero6)
+        gA, RA, gB, RB = connector_ends(gid, ia, ib, linearPoints[s, 0], linearPoints[s, 1], R, r, V, v3, ident,
+                                        zero3, zero6)
         u = 0.0
         v = 0.0
         for k in range(3):
@@ -37,5 +38,5 @@ def linear_spring_forces(gid, linearBodies, linearPoints, linearAxis, linearLaw,
 # the element's entry (registered in mbs/force_elements.py)
 @njit(cache=True, inline="always", _nrt=False)
 def linear_spring_element(sd, wk, R, r, V, Q):
-    linear_spring_forces(sd.gid, sd.linearBodies, sd.linearPoints, sd.linearAxis, sd.linearLaw, R, r, V, Q, wk.v3, wk.ident, wk.zero3,
-                         wk.zero6)
+    linear_spring_forces(sd.gid, sd.linearBodies, sd.linearPoints, sd.linearAxis, sd.linearLaw, R, r, V, Q, wk.v3,
+                         wk.ident, wk.zero3, wk.zero6)

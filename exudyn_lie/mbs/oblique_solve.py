@@ -41,7 +41,8 @@ def oblique_plan(sd):
         for q in range(sd.jointIndex[j, J_ROW0], sd.jointIndex[j, J_ROW0] + sd.jointIndex[j, J_NROW]):
             if sd.rowIndex[q, ROW_KIND] != ROW_COORD:
                 continue
-            for col, code, s in ((0, sd.rowIndex[q, ROW_AX], -1.0), (6, sd.rowIndex[q, ROW_BX], sd.jointParams[j, 0])):
+            for col, code, s in ((0, sd.rowIndex[q, ROW_AX], -1.0),
+                                 (6, sd.rowIndex[q, ROW_BX], sd.jointParams[j, 0])):
                 if code >= PARAM_BASE and is_oblique(code):
                     v = np.zeros(3)
                     v[code % PARAM_BASE] = s

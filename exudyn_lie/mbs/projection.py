@@ -12,7 +12,8 @@ from .presence import guarded
 
 
 # the arguments of project, by what they are (built by project_state from SceneData / Work)
-Joints = namedtuple("Joints", ["gid", "jointIndex", "jointPoints", "jointFrames", "jointParams", "rowIndex", "rowsAll", "bodyParameters", "jointAngles"])  # the joint tables
+Joints = namedtuple("Joints",
+                    ["gid", "jointIndex", "jointPoints", "jointFrames", "jointParams", "rowIndex", "rowsAll", "bodyParameters", "jointAngles"])  # the joint tables
 Schur = namedtuple("Schur", ["Minv", "bw", "redundant", "pivotTol",              # J M^-1 J^T: data...
                              "W", "lam", "Sb", "Sd", "perm", "ytmp", "failInfo", "tmp12",    # ... and work
                              "tree"])                                            # index1.TreeSolve
@@ -48,7 +49,8 @@ def project(level, joints, schur, rows, scratch, R, r, V):
         tol = PROJ_TOL * scale
         hmax = 0.0
         for it in range(PROJ_MAX_ITER + 1):
-            joints_rows(gid, jointIndex, jointPoints, jointFrames, jointParams, rowIndex, rowsAll, bodyParameters, jointAngles, R, r, V, h, Jr, eta, rdrive, v3, ident, zero3, zero6)
+            joints_rows(gid, jointIndex, jointPoints, jointFrames, jointParams, rowIndex, rowsAll, bodyParameters,
+                        jointAngles, R, r, V, h, Jr, eta, rdrive, v3, ident, zero3, zero6)
             hmax = 0.0
             for q in range(rowIndex.shape[0]):
                 if abs(h[q]) > hmax:
@@ -74,16 +76,19 @@ def project(level, joints, schur, rows, scratch, R, r, V):
         if hmax > PROJ_FAIL * tol:
             return STATUS_PROJECTION
     else:
-        joints_rows(gid, jointIndex, jointPoints, jointFrames, jointParams, rowIndex, rowsAll, bodyParameters, jointAngles, R, r, V, h, Jr, eta, rdrive, v3, ident, zero3, zero6)
-    return schur_correct(gid, Minv, rowIndex, bw, redundant, pivotTol, R, V, -1.0, rdrive[1], Jr, W, lam, Sb, Sd, perm,
-                         ytmp, failInfo, tmp12, tree)
+        joints_rows(gid, jointIndex, jointPoints, jointFrames, jointParams, rowIndex, rowsAll, bodyParameters,
+                    jointAngles, R, r, V, h, Jr, eta, rdrive, v3, ident, zero3, zero6)
+    return schur_correct(gid, Minv, rowIndex, bw, redundant, pivotTol, R, V, -1.0, rdrive[1], Jr, W, lam, Sb, Sd,
+                         perm, ytmp, failInfo, tmp12, tree)
 
 
 @njit(cache=True, inline="always", _nrt=False)
 def project_state(sd, wk, level, R, r, V):
     if sd.nrows == 0:
         return STATUS_OK
-    return project(level, Joints(sd.gid, sd.jointIndex, sd.jointPoints, sd.jointFrames, sd.jointParams, sd.rowIndex, sd.rowsAll, wk.path.bodyParameters, wk.path.jointAngles),
+    return project(level,
+                   Joints(sd.gid, sd.jointIndex, sd.jointPoints, sd.jointFrames, sd.jointParams, sd.rowIndex,
+                          sd.rowsAll, wk.path.bodyParameters, wk.path.jointAngles),
                    Schur(sd.Minv, sd.bandwidth, sd.redundant, sd.pivotTol, wk.W, wk.lam, wk.Sb, wk.Sd, wk.perm,
                          wk.ytmp, wk.failInfo, wk.tmp12, tree_of(sd, wk)),
                    Rows(wk.h, wk.Jr, wk.eta, wk.rdrive), Scratch(wk.Psi, wk.v3, wk.m3, wk.ident, wk.zero3, wk.zero6),
@@ -119,7 +124,8 @@ def constraint_rows_at(sd, wk, R, r, V):
     """Rows h(g), J and eta at (R, r, V) into ``wk.h``, ``wk.Jr``, ``wk.eta``; returns
     (max |h|, max |J V - w|), J V - w computed into ``wk.lam`` (scratch; ``w`` the velocity
     targets of the row drives, at the state's time)."""
-    joints_rows(sd.gid, sd.jointIndex, sd.jointPoints, sd.jointFrames, sd.jointParams, sd.rowIndex, sd.rowsAll, wk.path.bodyParameters, wk.path.jointAngles, R, r, V, wk.h, wk.Jr, wk.eta, wk.rdrive, wk.v3,
+    joints_rows(sd.gid, sd.jointIndex, sd.jointPoints, sd.jointFrames, sd.jointParams, sd.rowIndex, sd.rowsAll,
+                wk.path.bodyParameters, wk.path.jointAngles, R, r, V, wk.h, wk.Jr, wk.eta, wk.rdrive, wk.v3,
                 wk.ident, wk.zero3, wk.zero6)
     rows_times(sd.rowIndex, wk.Jr, V, -1.0, wk.rdrive[1], wk.lam)
     hmax = 0.0

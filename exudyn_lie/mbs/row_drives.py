@@ -123,7 +123,8 @@ class RowDrives:
             if getattr(jt, "offset", None) is None:
                 continue
             label = getattr(jt.offset, "label", None) or f"{jt.name}: offset function"
-            self.rows.append((int(sd.jointIndex[j, J_ROW0]), jt.offset, bool(jt.velocityLevel), float(sd.jointParams[j, 1]), label))
+            self.rows.append((int(sd.jointIndex[j, J_ROW0]), jt.offset, bool(jt.velocityLevel),
+                              float(sd.jointParams[j, 1]), label))
 
     def __bool__(self):
         return bool(self.rows)

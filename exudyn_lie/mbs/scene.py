@@ -473,7 +473,8 @@ class Scene:
         if np.linalg.norm(np.cross(aw, nw)) <= 1e-12 * max(1e-300, np.linalg.norm(aw) * np.linalg.norm(nw)):
             raise SceneError(f"{label}: the disc axis is parallel to the plane normal (or zero); the rolling "
                              f"direction (discAxis x planeNormal) is undefined")
-        e = RollingDiscPenalty(int(bodyA), _vec3(posA, f"{label}: posA"), n, int(bodyB), _vec3(posB, f"{label}: posB"),
+        e = RollingDiscPenalty(int(bodyA), _vec3(posA, f"{label}: posA"), n, int(bodyB),
+                               _vec3(posB, f"{label}: posB"),
                                a, discRadius, contactStiffness, contactDamping, dryFriction,
                                dryFrictionProportionalZone, viscousFriction, dryFrictionAngle, rollingViscousFriction,
                                bool(useLinearProportionalZone), bool(active), data0, label)
@@ -517,7 +518,8 @@ class Scene:
     def validate(self):
         """Re-check all data (the item records are mutable): raises SceneError."""
         if self.rightHandSide is not None:
-            other = [name for name in ("joints", "loads", "pythonForces") + self.CONNECTOR_LISTS if getattr(self, name)]
+            other = [name for name in ("joints", "loads",
+                                       "pythonForces") + self.CONNECTOR_LISTS if getattr(self, name)]
             if other or np.any(self.gravity != 0):
                 raise SceneError(f"a scene whose right-hand side is set (SetRightHandSide) has bodies only; this one "
                                  f"has {', '.join(other + (['gravity'] if np.any(self.gravity != 0) else []))}")

@@ -149,7 +149,8 @@ class Simulator(ExternalSeams):
         if present == ["trackedBodies"]:
             # its update alone: the step loop's own callee, so a first run compiles no
             # separate entry taking the SceneData / Work tuples for it
-            update_tracked_bodies(wk.track.trackCodes, wk.track.angleFrames, wk.path.bodyAngles, wk.path.bodyParameters, self.R)
+            update_tracked_bodies(wk.track.trackCodes, wk.track.angleFrames, wk.path.bodyAngles,
+                                  wk.path.bodyParameters, self.R)
         elif present:
             observe_initial_state(sd, wk, self.R, self.r, self.V)
 

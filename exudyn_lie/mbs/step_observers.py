@@ -50,8 +50,8 @@ _disc_data_if = guarded(update_rolling_disc_penalty_data, rows=True)
 @njit(cache=True, inline="always", _nrt=False)
 def observe_torsion_turns(sd, wk, R, r, V):
     """The torsional springs' angles, continued over turns (their force reads the branch)."""
-    _torsion_angles_if(sd.torsionBodies, sd.gid, sd.torsionBodies, sd.torsionFrames, wk.path.torsionAngles, R, r, V, wk.m3,
-                       wk.ident, wk.zero3, wk.zero6)
+    _torsion_angles_if(sd.torsionBodies, sd.gid, sd.torsionBodies, sd.torsionFrames, wk.path.torsionAngles, R, r, V,
+                       wk.m3, wk.ident, wk.zero3, wk.zero6)
 
 
 @njit(cache=True, inline="always", _nrt=False)
@@ -76,7 +76,8 @@ def observe_coordinate_angles(sd, wk, R, r, V):
 def observe_tracked_bodies(sd, wk, R, r, V):
     """The angle of each 2D body / rotor and the rotation parameters of each tracked body."""
     if wk.track.nTracked > 0:
-        update_tracked_bodies(wk.track.trackCodes, wk.track.angleFrames, wk.path.bodyAngles, wk.path.bodyParameters, R)
+        update_tracked_bodies(wk.track.trackCodes, wk.track.angleFrames, wk.path.bodyAngles, wk.path.bodyParameters,
+                              R)
 
 
 @njit(cache=True, inline="always", _nrt=False)

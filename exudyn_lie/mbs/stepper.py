@@ -47,8 +47,8 @@ from numba.extending import overload
 from . import external
 from .external_probes import probe_kinematics
 from .bodies import body_dexpinv_stage, body_world_velocity, exp_compose, add_point_force_origin, add_world_torque_row
-from .codes import (EXTERNAL_RATES, INFO_BODY, STAGE_ARG_MAX2, STATUS_BLOWUP, STATUS_EXTERNAL, STATUS_NONFINITE, STATUS_OK,
-                    STATUS_STAGE_ARG)
+from .codes import (EXTERNAL_RATES, INFO_BODY, STAGE_ARG_MAX2, STATUS_BLOWUP, STATUS_EXTERNAL, STATUS_NONFINITE,
+                    STATUS_OK, STATUS_STAGE_ARG)
 from .rotation_parameters import record_tracked
 from .index1 import rhs
 from .presence import guarded

@@ -17,7 +17,7 @@ import pytest
 import exudyn_lie as exl
 
 SCRIPTS = ["massPointSpring", "massPoint2DPendulum", "coordinateConstraintSlider", "linearSpringDamper", "rollingDisc",
-           "mass1DDriveTrain", "planarGear"]
+           "mass1DDriveTrain", "planarGear", "massPointOnGroundNode"]
 H_REF = 5e-6
 
 

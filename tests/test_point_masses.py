@@ -97,3 +97,24 @@ def test_R3_is_refused_for_a_rigid_body():
     with pytest.raises(SceneError, match="R3 is the group of point masses"):
         Simulator(sc, "RK4", ["R3", "R3", "R3"])
     assert Simulator(sc, "RK4", ["R3", "R3", "SO3xR3"]).groups == ["R3", "R3", "SO3xR3"]
+
+
+def test_a_mass_point_on_a_ground_node_is_ground_and_a_marker_on_it_is_refused():
+    """Exudyn accepts an ObjectMassPoint on a NodePointGround (fourBarMechanismTest): no
+    coordinates, it stays at the node; markers on the node are ground points.  A body marker on
+    that object makes Exudyn's own solver fail, so it is refused, before mbs is touched."""
+    import importlib
+    import exudyn_lie as exl
+    mod = importlib.import_module("item_corpus.massPointOnGroundNode")
+    mbs, ss = mod.Build()
+    sc = exl.SceneFromExudyn(mbs)
+    assert sc.nBodies == 2 and sc.bodyObject == [1, 2]
+    o0 = 0
+    mbs.AddMarker(exu.itemInterface.MarkerBodyPosition(bodyNumber=o0, localPosition=[0, 0, 0]))
+    m = mbs.systemData.NumberOfMarkers() - 1
+    n1m = [k for k in range(m) if mbs.GetMarker(k)["markerType"] == "NodePosition"][1]
+    mbs.AddObject(exu.itemInterface.ObjectConnectorSpringDamper(markerNumbers=[m, n1m], stiffness=1.0))
+    mbs.Assemble()
+    with pytest.raises(exl.BridgeError, match=r"marker \d+ \(MarkerBodyPosition\) is on object 0 \(ObjectMassPoint "
+                                              r"on a NodePointGround\)"):
+        exl.SceneFromExudyn(mbs)

@@ -167,7 +167,8 @@ class _Reader(JointReaders, ForceReaders):
         self.nObjects = self.sd.NumberOfObjects()
         self.objects = [mbs.GetObject(i) for i in range(self.nObjects)]
         self.markers = {}
-        self.ground = {}          # object index -> (pos, rot) of ObjectGround
+        self.ground = {}          # object index -> (pos, rot) of ObjectGround (and mass points on ground nodes)
+        self.groundMassPoints = set()     # ObjectMassPoint(2D) on a NodePointGround: no coordinates
         self.rigidNodeBody = {}   # node index -> scene body
         self.nodeAxisFrame = {}   # Node1D of a Mass1D -> (world axis, origin) of its one coordinate
         self.nodeRotor = {}       # Node1D of a RotationalMass1D -> (frame F, origin): R = F Rz(x)
@@ -249,6 +250,13 @@ class _Reader(JointReaders, ForceReaders):
             elif t in BODY_OBJECTS:
                 n = int(d["nodeNumber"])
                 nt = sc.nodeTypes.get(n)
+                if nt == "PointGround" and t in ("MassPoint", "MassPoint2D"):
+                    # Exudyn accepts a mass point on a ground node: it has no coordinates, so it
+                    # stays at the node's reference position; its markers are ground points
+                    gp = np.asarray(self.mbs.GetNode(n)["referenceCoordinates"], float).reshape(-1)[:3]
+                    self.ground[o] = (np.pad(gp, (0, 3 - len(gp))), np.eye(3))
+                    self.groundMassPoints.add(o)
+                    continue
                 if nt not in BODY_OBJECTS[t]:
                     raise BridgeError(f"object {o} ('{d.get('name', '')}') Object{t} uses node {n} of "
                                       f"type Node{nt}; supported nodes for it: "
@@ -295,7 +303,7 @@ class _Reader(JointReaders, ForceReaders):
             sc.nodeKinds.append(kind)
         # bodies in object order
         for o, d in enumerate(self.objects):
-            if d["objectType"] not in BODY_OBJECTS:
+            if d["objectType"] not in BODY_OBJECTS or o in self.ground:
                 continue
             n = int(d["nodeNumber"])
             b = self._add_body(sc, o, d, n, states[n], angles.get(n))
@@ -362,6 +370,11 @@ class _Reader(JointReaders, ForceReaders):
             pos, Rm = _ht(d)
             if t in ("BodyRigid", "BodyPosition", "BodyMass"):
                 o = int(d["bodyNumber"])
+                if o in self.groundMassPoints:
+                    raise BridgeError(f"{what}: marker {m} (Marker{t}) is on object {o} (Object"
+                                      f"{self.objects[o]['objectType']} on a NodePointGround), which has no "
+                                      f"coordinates; Exudyn's solver fails on it too; put the marker on the node "
+                                      f"(MarkerNodePosition)")
                 if o in self.ground:
                     gp, gR = self.ground[o]
                     body, pos, Rm = GROUND, gp + gR @ pos, (None if Rm is None else gR @ Rm)

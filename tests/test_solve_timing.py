@@ -9,6 +9,7 @@ from exudyn_lie.models import heavy_top
 
 def _solve(**kw):
     mbs, _ = heavy_top.build()
+    mbs.Assemble()
     ss = exu.SimulationSettings()
     ss.timeIntegration.numberOfSteps = 200
     ss.timeIntegration.endTime = 0.2
@@ -30,6 +31,7 @@ def test_the_parts_add_up_to_the_call(evaluation, path):
 def test_a_failed_call_is_timed_too():
     from exudyn_lie.errors import SimulationError
     mbs, _ = heavy_top.build()
+    mbs.Assemble()
     ss = exu.SimulationSettings()
     ss.timeIntegration.numberOfSteps = 2            # h = 0.5 s: far beyond RK4's stability on the heavy top
     ss.timeIntegration.endTime = 1.0

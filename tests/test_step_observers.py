@@ -21,6 +21,9 @@ def test_every_registered_observer_is_called_once_after_a_step_and_at_start_if_r
         assert (f"observer{k}" in start_calls) == o.atStart
     with pytest.raises(ValueError, match="registered twice"):
         so.register_observer(names[0], so.OBSERVERS[0].update, True, lambda sd, wk: False)
+    with pytest.raises(ValueError, match="before the stepper's code is generated"):
+        so.register_observer("late", so.OBSERVERS[0].update, True, lambda sd, wk: False)
+    assert len(so.OBSERVERS) == len(names)
 
 
 def _spinning_torsion_scene(k):

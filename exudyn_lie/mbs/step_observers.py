@@ -31,6 +31,7 @@ StepObserver = namedtuple("StepObserver", ["name", "update", "atStart", "present
 
 #: every step observer, in registration order
 OBSERVERS = []
+_SEALED = False         # True once after_accepted_step is generated: a later registration would not be in it
 
 
 def register_observer(name, update, atStart, present):
@@ -39,6 +40,10 @@ def register_observer(name, update, atStart, present):
     :func:`observe_initial_state` at all)."""
     if any(o.name == name for o in OBSERVERS):
         raise ValueError(f"step observer {name!r} is registered twice")
+    if _SEALED:
+        # the stepper's code is generated from the registrations when this module is imported
+        raise ValueError(f"step observer {name!r}: observers are registered in mbs/step_observers.py, before the "
+                         f"stepper's code is generated from them")
     OBSERVERS.append(StepObserver(name, update, bool(atStart), present))
 
 
@@ -129,6 +134,9 @@ observe_initial_state = njit(cache=True, _nrt=False)(generate(
     "observe_initial_state", "def observe_initial_state(sd, wk, R, r, V):",
     _calls([o for o in OBSERVERS if o.atStart]), [], dict(_ENV),
     "The observers registered with ``atStart`` at an initial state.", sys.modules[__name__]))
+
+
+_SEALED = True
 
 
 def observed_at_start(sd, wk):

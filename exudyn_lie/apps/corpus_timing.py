@@ -39,6 +39,11 @@ def script_times(rec):
     return out
 
 
+def timed_scripts(records):
+    """``[(name, script_times)]`` of the scripts both runs finished, in record order."""
+    return [(r["name"], t) for r in records if (t := script_times(r)) is not None]
+
+
 def _median(values):
     return statistics.median(values) if values else None
 
@@ -47,7 +52,7 @@ def timing_summary(records):
     """The corpus figures: per path the median warm ratio exl / native over substantial
     scripts, how many are faster than native, the fixed cost added to short runs, and the
     compilation paid over the whole corpus."""
-    rows = [(r["name"], t) for r in records if (t := script_times(r)) is not None]
+    rows = timed_scripts(records)
     big = [t for _, t in rows if t["native"] > SUBSTANTIAL]
     short = [t for _, t in rows if t["native"] < SHORT]
     paths = sorted({t["path"] for t in big})
@@ -94,10 +99,8 @@ def render_timing(records, s):
           f"script {_s(s['compileMax'][0])} s" + (f" (`{s['compileMax'][1]}`)" if s["compileMax"][1] else ""),
           "", "| script | path | native s | exudyn_lie s | set-up s | compile s | loop s | warm / native |",
           "|---|---|---|---|---|---|---|---|"]
-    for r in records:
-        t = script_times(r)
-        if t is not None:
-            L.append(f"| `{r['name']}` | {t['path']} | {t['native']:.4g} | {t['exl']:.4g} | {t['setup']:.3g} | "
-                     f"{t['compile']:.3g} | {t['loop']:.4g} | {t['warm'] / t['native']:.3g} |"
-                     if t["native"] > 0 else "")
+    for name, t in timed_scripts(records):
+        ratio = f"{t['warm'] / t['native']:.3g}" if t["native"] > 0 else "-"
+        L.append(f"| `{name}` | {t['path']} | {t['native']:.4g} | {t['exl']:.4g} | {t['setup']:.3g} | "
+                 f"{t['compile']:.3g} | {t['loop']:.4g} | {ratio} |")
     return L

@@ -111,7 +111,9 @@ class SpringDamperUF(_Connector):
     def add(self, t, st, F, T):
         # the spring's kinematics are its probe's (mbs/external_probes.spring_probe), also where
         # no Work holds the probe: one computation of length, rate, direction and arms
-        p = np.array(self.probe_row(), float)
+        p = self._kinematics
+        if p is None:                    # its input row (bodies, points) is fixed: a changed item is replaced
+            p = self._kinematics = np.array(self.probe_row(), float)
         spring_probe(st.R, st.r, np.ascontiguousarray(np.hstack((st.omega, st.vel))), p)
         f = self.force(t, float(p[SPRING_L]), float(p[SPRING_LD]))
         e0, e1, e2 = p[SPRING_E:SPRING_E + 3].tolist()
@@ -126,6 +128,7 @@ class SpringDamperUF(_Connector):
 
     # ---- the stepper's seam: length, rate, direction and arms computed by the compiled stage
     probeIndex = None        # the row of Work.probe (Combined.probe_rows)
+    _kinematics = None       # its probe row outside a stage (add)
 
     def probe_row(self):
         """The input row of its probe (mbs/external_probes.py): bodies and marker points."""

@@ -18,25 +18,6 @@ from dataclasses import asdict, dataclass
 from numba.core import event
 
 
-class CompileClock(event.Listener):
-    """The seconds numba spends compiling while it listens (nested compilations once)."""
-
-    def __init__(self):
-        self.depth = 0
-        self.seconds = 0.0
-        self.start = 0.0
-
-    def on_start(self, ev):
-        if self.depth == 0:
-            self.start = time.perf_counter()
-        self.depth += 1
-
-    def on_end(self, ev):
-        self.depth -= 1
-        if self.depth == 0:
-            self.seconds += time.perf_counter() - self.start
-
-
 @dataclass
 class SolveTiming:
     """Seconds of one ``SolveDynamic`` call: ``total`` = ``setup`` + ``compile`` + ``loop``."""
@@ -48,7 +29,7 @@ class SolveTiming:
 
 
 _last = None            # the SolveTiming of the last call
-_clock = None           # the CompileClock of the call under way
+_clock = None           # the numba TimingListener of the call under way
 _current = None         # its SolveTiming
 
 
@@ -65,7 +46,7 @@ def timed_solve():
     """Around a whole ``SolveDynamic`` call: yields its :class:`SolveTiming`, filled in on exit
     (also when the call raises)."""
     global _last, _clock, _current
-    timing, clock = SolveTiming(), CompileClock()
+    timing, clock = SolveTiming(), event.TimingListener()    # outermost compilations, summed
     outer = _clock, _current
     _clock, _current = clock, timing
     tic = time.perf_counter()
@@ -75,7 +56,7 @@ def timed_solve():
     finally:
         _clock, _current = outer
         timing.total = time.perf_counter() - tic
-        timing.compile = clock.seconds
+        timing.compile = _seconds(clock)
         timing.setup = max(0.0, timing.total - timing.compile - timing.loop)
         _last = timing
 
@@ -89,9 +70,13 @@ def timed_call(fn):
     return call
 
 
+def _seconds(clock):
+    return clock.duration if clock.done else 0.0
+
+
 def compile_seconds():
     """numba's compilation so far in the call under way (0 outside a call)."""
-    return 0.0 if _clock is None else _clock.seconds
+    return 0.0 if _clock is None else _seconds(_clock)
 
 
 def record_loop(seconds, path):

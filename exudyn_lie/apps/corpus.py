@@ -604,7 +604,7 @@ def run_corpus(scripts, outdir, timeout=120.0, jobs=1, log=print, fine=10):
     """Run every script natively and (when it reaches SolveDynamic) through exudyn_lie, and
     where exudyn_lie ran and both set testResult, natively with ``fine`` times the steps
     (0: not); returns the records in the order of ``scripts``."""
-    outdir = Path(outdir)
+    outdir = Path(outdir).resolve()        # the children run in the scripts' working copies
     logdir = outdir / "logs"
     logdir.mkdir(parents=True, exist_ok=True)
     cwds = {}

@@ -55,7 +55,7 @@ def _compiled_read(mbs, assemble):
 
 
 def evaluated_path(mbs, evaluation, assemble, *, method, liegroup, stabilization, projectInitial, verbose, settings,
-                   substeps):
+                   substeps, autoImplicit=False):
     """``(EvaluatedSolver of the run, None)``, or ``(None, the compiled reader's scene or None)``
     for the compiled path.  Raises before mbs is touched for input neither path takes."""
     from .evaluated_solve import EvaluatedSolver
@@ -75,6 +75,7 @@ def evaluated_path(mbs, evaluation, assemble, *, method, liegroup, stabilization
                           f"stabilization=None")
     tab = _check_method(method)
     lg = liegroup_argument(liegroup)
-    solver = EvaluatedSolver(mbs, tab, lg, verbose=verbose, reasons=reasons, projectInitial=projectInitial)
+    solver = EvaluatedSolver(mbs, tab, lg, verbose=verbose, reasons=reasons, projectInitial=projectInitial,
+                             autoImplicit=autoImplicit)
     solver.check_run(settings, substeps)
     return solver, None

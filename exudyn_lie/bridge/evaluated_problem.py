@@ -69,6 +69,13 @@ class EvaluatedProblem:
         self.stages = self.sim.method.stages
         self._stiffness = StageStiffnessWatch(self.tableau)
 
+    def set_method(self, tableau):
+        """Integrate with ``tableau`` from now on (bridge/method_choice.py)."""
+        self.sim.SetMethod(tableau)
+        self.tableau = self.sim.tableau
+        self.stages = self.sim.method.stages
+        self._stiffness = StageStiffnessWatch(self.tableau)
+
     # ------------------------------------------------------------------ the right-hand side
     def bind(self, Rs, rs, Vs, Vdot):
         """The stage function ``f(t)`` on the stepper's stage state ``Rs, rs, Vs``, writing

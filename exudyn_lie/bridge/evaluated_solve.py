@@ -34,6 +34,9 @@ from .moving_offsets import ParameterOffsets
 from .evaluated_problem import EvaluatedProblem
 from .evaluated_initial import project_initial
 from .evaluated_stiffness import check_step
+from .method_choice import auto_choice_text, stiff_choice, unstable_choice
+from ..errors import StepSizeError
+from ..mbs.codes import STATUS_BLOWUP
 from .constraint_check import ConsistencyAccount, ConstraintCheck, check_tolerance
 from .reader import BridgeError, UNHONOURED_MBS_FUNCTIONS, check_system_level
 from .run_plan import adaptive_settings, needs_accelerations, plan_substeps, time_settings
@@ -115,8 +118,11 @@ class EvaluatedSolver:
     one warning; None when the user chose the path)."""
     pathName = "evaluated"         # as solve_timing reports it
 
-    def __init__(self, mbs, tableau, liegroup="auto", verbose=False, reasons=None, projectInitial=True):
+    def __init__(self, mbs, tableau, liegroup="auto", verbose=False, reasons=None, projectInitial=True,
+                 autoImplicit=False):
         self.mbs = mbs
+        self.autoImplicit = bool(autoImplicit) and not tableau.implicit     # bridge/method_choice.py
+        self._explicit = tableau
         self.projectInitial = bool(projectInitial)
         self.tableau = tableau
         self.liegroup = liegroup
@@ -196,8 +202,9 @@ class EvaluatedSolver:
         # object outputs may read the multipliers
         needAcc = needs_accelerations(mbs, ss, userStep) if accelerations is None else bool(accelerations)
         groups, why = node_groups(mbs, self.liegroup)
-        tab = self.tableau
+        tab = self.tableau = self._explicit
         adaptive = self._adaptive = adaptive_settings(tab, ss, h)
+        name = auto_choice_text(tab) if (self.autoImplicit and adaptive is None) else tab.name
         if adaptive is not None:
             k = 1                          # the error control chooses the steps within each Exudyn step
             info = (f"exudyn_lie: explicit Munthe-Kaas {tab.name} (order {tab.order}) with adaptive steps (error "
@@ -205,7 +212,7 @@ class EvaluatedSolver:
                     f"{adaptive['rtol']:g}, step size <= {h:.6g} s) on the Exudyn-evaluated model, from t = {t0:g} to "
                     f"{tEnd:g} s in {nsteps} Exudyn steps")
         else:
-            info = (f"exudyn_lie: explicit Munthe-Kaas {tab.name} (order {tab.order}) on the Exudyn-evaluated model, "
+            info = (f"exudyn_lie: Munthe-Kaas {name} (order {tab.order}) on the Exudyn-evaluated model, "
                     f"step size h = {h:.6g} s, {nsteps} steps from t = {t0:g} to {tEnd:g} s")
         ss2 = loop_settings(ss, nsteps // k, info)
         self._loopPlan = dict(k=k, h=h, t0=t0, tEnd=tEnd, nsteps=nsteps, needAcc=needAcc, groups=groups, why=why,
@@ -255,7 +262,14 @@ class EvaluatedSolver:
         problem.write()
         # stability of the step at the initial state (stiff items at the script's step); adaptive
         # steps find a stable step themselves
-        rate, stable = check_step(model, tab, h, self._adaptive is None)
+        auto = self.autoImplicit and self._adaptive is None
+        rate, stable = check_step(model, tab, h, self._adaptive is None and not auto)
+        if auto:
+            chosen, line = stiff_choice(tab, h, stable, rate, "Exudyn's linearisation at the initial state")
+            if line:
+                problem.set_method(chosen)
+                self.tableau = tab = chosen
+                print(line)
         if self._adaptive is not None:
             problem.sim.SetAdaptive(**self._adaptive)
         # the initial accelerations (and a measured estimate of the cost per step)
@@ -337,7 +351,19 @@ class EvaluatedSolver:
         tic = time.perf_counter()
         if abs((t1 - t0) / k - h) > 1e-9 * h:
             raise off_plan(t1, t0 + k * h)
-        problem.advance(t0, t1, k, h, self._adaptive is not None)
+        try:
+            problem.advance(t0, t1, k, h, self._adaptive is not None)
+        except StepSizeError:
+            if not (self.autoImplicit and self._adaptive is None and not problem.tableau.implicit):
+                raise
+            # the explicit method the user did not name became unstable (bridge/method_choice.py): this
+            # Exudyn step again from its start, with the implicit method
+            tab, line = unstable_choice(problem.tableau, h, t0, STATUS_BLOWUP)
+            problem.restore(self._snap)
+            problem.set_method(tab)
+            self.tableau = tab
+            print(line)
+            problem.advance(t0, t1, k, h, False)
         problem.write()
         if P["needAcc"]:
             self._write_accelerations()

@@ -7,7 +7,7 @@ from ..errors import SimulationError, raised_at_boundary
 from ..mbs.scene import SceneError
 from ..userwarn import warn_user
 from .constraint_check import check_tolerance
-from .solvertype import resolve_solver_type
+from .solvertype import REPLACED, resolve_solver_type
 from .reader import BridgeError
 from .solve_timing import timed_call
 from .solver import LieGroupSolver, _check_method
@@ -104,8 +104,10 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
     auto = stabilization == "auto"
     settings = exu.SimulationSettings() if simulationSettings is None else simulationSettings
     # solverType (argument, else the setting, as Exudyn reads them) -> the tableau (bridge/solvertype.py)
+    named = method is not None
     method, typeName, replaced = resolve_solver_type(solverType, settings.timeIntegration.solverType, method,
                                                      _check_method)
+    autoImplicit = not named and typeName in REPLACED      # no method named: RK4, or ESDIRK3 where RK4 is unstable
     assemble = not mbs.systemIsConsistent and autoAssemble
     if evaluation not in ("auto", "compiled", "exudyn"):
         raise BridgeError(f"evaluation must be 'auto', 'compiled' or 'exudyn', got {evaluation!r}")
@@ -114,7 +116,7 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
         from .evaluated_dispatch import evaluated_path
         path, scene = evaluated_path(mbs, evaluation, assemble, method=method, liegroup=liegroup,
                                      stabilization=None if auto else stabilization, projectInitial=projectInitial,
-                                     verbose=verbose, settings=settings, substeps=substeps)
+                                     verbose=verbose, settings=settings, substeps=substeps, autoImplicit=autoImplicit)
         if path is not None:
             if constraintTolerance is not None:
                 raise BridgeError("exudyn_lie.SolveDynamic: constraintTolerance is available on the compiled path only "
@@ -127,7 +129,7 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
         stabilization = None if constraintTolerance is not None else "position"
     solver = LieGroupSolver(mbs, method=method, liegroup=liegroup, stabilization=stabilization,
                             projectInitial=projectInitial, verbose=verbose, constraintTolerance=constraintTolerance,
-                            _configuration="items" if assemble else "initial", _scene=scene)
+                            autoImplicit=autoImplicit, _configuration="items" if assemble else "initial", _scene=scene)
     solver._check_run(settings, substeps)
     _check_index2_rotvec_constraints(mbs, typeName, settings)
     groups = ", ".join(f"{g} ({solver.groups.count(g)})" for g in dict.fromkeys(solver.groups)) or "none"

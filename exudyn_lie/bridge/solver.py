@@ -39,11 +39,13 @@ from .. import __version__
 from ..compiling import compile_timer
 from ..integrators.tableau import resolve_pair
 from ..integrators.tableau import ButcherTableau, method_names
+from ..integrators.stability import stability_radius
 from ..mbs.compiled import auto_groups
 from ..mbs.simulator import Simulator
 from ..userwarn import warn_user
 from .constraint_check import ConstraintCheck, check_tolerance, kernel_explanation
 from .fast import CHUNK_ROWS, AdaptiveOutputChunks, OutputChunks
+from .method_choice import UNSTABLE_STATUS, stiff_choice, unstable_choice
 from .moving_offsets import ParameterOffsets
 from .params import ParameterWatch
 from .settings import liegroup_argument, positive_float
@@ -124,7 +126,7 @@ class LieGroupSolver(StateIO):
     pathName = "compiled"          # as solve_timing reports it
 
     def __init__(self, mbs, method="RK4", liegroup="auto", stabilization=None, projectInitial=True,
-                 verbose=False, *, constraintTolerance=None, _configuration="initial", _scene=None):
+                 verbose=False, *, constraintTolerance=None, autoImplicit=False, _configuration="initial", _scene=None):
         # _configuration='items' (internal, SolveDynamic): validate an mbs that is not assembled
         # yet from its item dictionaries; Solve() then re-reads it after mbs.Assemble().  _scene
         # (internal, SolveDynamic): the scene SceneFromExudyn just read of this mbs, used as it is
@@ -132,6 +134,10 @@ class LieGroupSolver(StateIO):
         self._configuration = _configuration
         self.tableau = _check_method(method)
         self.method = self.tableau.name
+        # autoImplicit: at the start of each fixed-step Solve, ESDIRK3 in place of the explicit method when
+        # that is not stable at the step (bridge/method_choice.py)
+        self.autoImplicit = bool(autoImplicit) and not self.tableau.implicit
+        self._explicit = self.tableau
         if stabilization not in (None, "none", "velocity", "position"):
             raise BridgeError(f"unknown stabilization {stabilization!r}; use None, 'velocity' or 'position'")
         self.stabilization = stabilization
@@ -214,21 +220,51 @@ class LieGroupSolver(StateIO):
         ct = self.constraintTolerance
         return "" if ct is None else f", projection on the group when the constraint drift exceeds {ct:g}"
 
+    def _kind(self):
+        return "implicit" if self.tableau.implicit else "explicit"
+
     def _solution_information(self, nsteps, h, t0, tEnd, k, adaptive=None):
         """What was integrated, for the solution file's header and the log."""
         groups = ", ".join(f"{g} ({self.groups.count(g)} {'body' if self.groups.count(g) == 1 else 'bodies'})"
                            for g in dict.fromkeys(self.groups))
         tab = self.tableau
         if adaptive is not None:
-            return (f"exudyn_lie {__version__}: explicit Munthe-Kaas {tab.name} (order {tab.order}, {tab.stages} "
+            return (f"exudyn_lie {__version__}: {self._kind()} Munthe-Kaas {tab.name} (order {tab.order}, {tab.stages} "
                     f"stages) with adaptive steps (error control on the group, absoluteTolerance = "
                     f"{adaptive['atol']:g}, relativeTolerance = {adaptive['rtol']:g}, step size <= {h:.6g} s, >= "
                     f"{adaptive['minStep']:g} s{self._constraint_tolerance_text()}), Lie group {groups or 'none'}, from t = {t0:g} to {tEnd:g} s; "
                     f"Exudyn's time loop made {nsteps // k} output steps (dense output at their exact times)")
-        return (f"exudyn_lie {__version__}: explicit Munthe-Kaas {tab.name} (order {tab.order}, {tab.stages} stages), "
+        return (f"exudyn_lie {__version__}: {self._kind()} Munthe-Kaas {tab.name} (order {tab.order}, {tab.stages} stages), "
                 f"Lie group {groups or 'none'}, step size h = {h:.6g} s, {nsteps} steps from t = {t0:g} to "
                 f"{tEnd:g} s; Exudyn's time loop made {nsteps // k} steps of {k} integration step(s) each (the "
                 f"header's 'number of time steps (planned)' counts those)")
+
+    def _choose_method(self, h):
+        """The explicit method, or ESDIRK3 where the explicit one is not stable at ``h`` by the spectral
+        radius of the linearised equations at the initial state (bridge/method_choice.py)."""
+        explicit, sim = self._explicit, self.sim
+        rho = sim.SpectralRadius()
+        hmax = stability_radius(explicit) / rho if rho > 0 else float("inf")
+        tab, line = stiff_choice(explicit, h, hmax, rho, "the spectral radius of the linearised equations at the "
+                                 "initial state")
+        if tab is not sim.tableau:
+            sim.SetMethod(tab)
+        self.tableau, self.method = tab, tab.name
+        if line:
+            print(line)
+
+    def _replace_after_failure(self, status, h, t):
+        """After a blow-up of the explicit method the user did not name: ESDIRK3 from now on (the
+        caller restarts from Exudyn's state at ``t``; bridge/method_choice.py)."""
+        if not (self.autoImplicit and not self.sim.tableau.implicit and status in UNSTABLE_STATUS):
+            return False
+        explicit = self.sim.tableau
+        tab, line = unstable_choice(explicit, h, t, status)
+        self.sim.SetMethod(tab)
+        self._chunks.out._ep.clear()
+        self.tableau, self.method = tab, tab.name
+        print(line)
+        return True
 
     def _announce(self, why):
         sc = self.scene
@@ -396,6 +432,9 @@ class LieGroupSolver(StateIO):
         needAcc = self._needs_accelerations(ss, userStep) if accelerations is None else bool(accelerations)
         self._watch = userStep          # a pre/post-step function may change the state
         adaptive = self._adaptive_settings(ss, h)
+        if self.autoImplicit and adaptive is None:
+            self._choose_method(h)
+            sim = self.sim
         info = self._solution_information(nsteps, h, t0, tEnd, k, adaptive)
         log = self.verbose or ss.timeIntegration.verboseMode >= 1
         if log:

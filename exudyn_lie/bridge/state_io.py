@@ -136,9 +136,10 @@ class StateIO:
         """The compiled path: the buffers at Exudyn's time ``t1`` from the next row of the
         output chunk, integrating a new chunk when the last one is used up."""
         ch = self._chunks
-        if ch.next == ch.rows:
+        while ch.next == ch.rows:
             if ch.failure is not None:
-                self.sim.RaiseStatus(ch.failure, ch.h)
+                self._failed(ch, t1)     # raises, or continues from Exudyn's state with another method
+                ch = self._chunks
             tic = time.perf_counter()
             rows, nflag = ch.refill(outputsLeft)
             sec = time.perf_counter() - tic
@@ -147,11 +148,24 @@ class StateIO:
             if nflag:
                 self._nodes.warn_flags()
             self._warn_watched_nodes()
-            if rows == 0:
-                self.sim.RaiseStatus(ch.failure, ch.h)
+            if rows == 0 and ch.failure is None:
+                raise AssertionError("an output chunk without outputs and without a failure")
         if not ch.on_plan(t1):
             raise off_plan(t1, ch.time_of_next())
         ch.pop()
+
+    def _failed(self, ch, t1):
+        """A kernel failure in the chunk: the method's replacement when the user named none and an
+        explicit method blew up (``_replace_after_failure``: the run continues from Exudyn's state at
+        the start of this step, the outputs integrated ahead are dropped), else its error."""
+        tStep = t1 - ch.nsub * ch.h
+        if self._replace_after_failure(ch.failure, ch.h, tStep):
+            self._restart_from_mbs(tStep)
+            return
+        self.sim.RaiseStatus(ch.failure, ch.h)
+
+    def _replace_after_failure(self, status, h, t):
+        return False
 
     def _restart_from_mbs(self, t):
         """Continue from the state in mbs at time ``t`` (Exudyn's start of the step): a user

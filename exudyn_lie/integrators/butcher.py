@@ -190,12 +190,20 @@ class ButcherTableau:
         exact = _is_exact(A_raw) and _is_exact(b_raw) and _is_exact(c_raw)
         scale = _coef_scale(A_raw, b_raw)
 
-        # explicit: strictly lower triangular A
+        # explicit (strictly lower triangular A) or singly diagonally implicit with an explicit
+        # first stage (ESDIRK: a_11 = 0, a_jj = gamma > 0 for j > 1): the stepper solves one stage
+        # at a time, each with the same Newton matrix I - h gamma F' (mbs/implicit.py)
         for j in range(s):
-            for l in range(j, s):
+            for l in range(j + 1, s):
                 if A_raw[j][l] != 0:
-                    fail(f"A is not strictly lower triangular (explicit method required): "
+                    fail(f"A is not lower triangular (explicit or diagonally implicit method required): "
                          f"a[{j + 1},{l + 1}] = {float(A_raw[j][l])!r} != 0")
+        diag = [A_raw[j][j] for j in range(s)]
+        if any(d != 0 for d in diag):
+            if diag[0] != 0 or any(d != diag[1] for d in diag[1:]) or not float(diag[1]) > 0:
+                fail("a diagonally implicit method needs an explicit first stage (a[1,1] = 0) and one "
+                     "positive diagonal a[j,j] = gamma for j > 1 (ESDIRK); got diagonal "
+                     + ", ".join(f"{float(d):.6g}" for d in diag))
         # row-sum condition c_j = sum_l a_jl
         for j in range(s):
             rs = sum(A_raw[j], 0 * A_raw[j][0]) if s else 0
@@ -281,8 +289,18 @@ class ButcherTableau:
         ``Psi_s = h sum_j b_j k_j = Phi`` and ``V_s = V_+``: its evaluation
         ``Vdot_s = F(t + h, g exp(Phi), V_+)`` is the next step's ``Vdot_1`` (the stage
         value ``k_s = dexp^-1_(-Phi) V_+`` itself differs from the next ``k_1 = V_+``)."""
-        s = self.stages
-        return s > 1 and bool(np.array_equal(self.A[s - 1], self.b))
+        s = self.stages        # (an implicit last stage is solved, not evaluated: not reused)
+        return s > 1 and not self.implicit and bool(np.array_equal(self.A[s - 1], self.b))
+
+    @property
+    def implicit(self):
+        """True for a diagonally implicit method (``a_jj = gamma > 0`` for the stages after the first)."""
+        return bool(self.A[-1, -1] != 0.0)
+
+    @property
+    def gamma(self):
+        """The diagonal ``gamma`` of a diagonally implicit method (0 for an explicit one)."""
+        return float(self.A[-1, -1])
 
     @property
     def embedded(self):

@@ -12,6 +12,10 @@ stability polynomial ``R(z) = 1 + sum_k (b^T A^(k-1) e) z^k`` per step, ``z = h 
   ``|R(z)| <= 1 + tol``: a step size ``h <= radius / rho`` keeps every mode of a
   linearisation with spectral radius ``rho`` (oscillatory or damped) from growing by
   more than ``1 + tol`` per step.  Used to suggest a step after a blow-up.
+
+A diagonally implicit method (``ButcherTableau.implicit``) has the rational stability function
+``R(z) = 1 + z b^T (I - z A)^-1 e`` (:func:`stability_function`); the catalogue's are A-stable
+(:func:`is_a_stable`), so no step limits them: :func:`stability_radius` is infinite.
 """
 from __future__ import annotations
 
@@ -34,9 +38,36 @@ def exact_tableau(tab):
             [Fraction(float(x)) for x in np.asarray(tab.b)])
 
 
+def stability_function(method, z, weights=None):
+    """``R(z) = 1 + z w^T (I - z A)^-1 e`` for an array of complex ``z``, with the weights ``w``
+    (default ``b``; ``b_hat`` for the embedded method): explicit and implicit tableaus alike."""
+    tab = get_method(method)
+    A = np.asarray(tab.A, float)
+    w = np.asarray(tab.b if weights is None else weights, float)
+    s = len(w)
+    zs = np.atleast_1d(np.asarray(z, complex))
+    out = np.array([1.0 + zz * (w @ np.linalg.solve(np.eye(s) - zz * A, np.ones(s))) for zz in zs.ravel()])
+    return out.reshape(zs.shape)
+
+
+def is_a_stable(method, weights=None):
+    """A-stability of a diagonally implicit tableau: its poles ``1 / gamma`` lie in the right
+    half-plane (gamma > 0), so by the maximum principle ``|R| <= 1`` on the left half-plane when it
+    holds on the imaginary axis, checked on a dense logarithmic grid and at infinity."""
+    tab = get_method(method)
+    if not tab.implicit:
+        return False
+    y = np.concatenate([np.geomspace(1e-4, 1e8, 4000), [1e12]])
+    return bool(np.max(np.abs(stability_function(tab, 1j * y, weights))) <= 1.0 + 1e-12)
+
+
 def stability_coefficients(method):
     """Coefficients ``[1, g1, ..., gs]`` (Fractions when the tableau is exact) of the
-    stability polynomial ``R(z) = sum g_k z^k``, ``g_k = b^T A^(k-1) e``."""
+    stability polynomial ``R(z) = sum g_k z^k``, ``g_k = b^T A^(k-1) e``, of an explicit method
+    (an implicit one has a rational function: :func:`stability_function`)."""
+    if get_method(method).implicit:
+        raise ValueError(f"{get_method(method).name} is implicit: its stability function is rational "
+                         "(stability_function), not a polynomial")
     A, b = exact_tableau(get_method(method))
     s = len(b)
     coeffs = [Fraction(1)]
@@ -161,7 +192,12 @@ def stability_radius(method, tol=1e-3, nangles=181):
     a practical, slowly growing limit instead of zero.
 
     ``method``: a catalogue name or any :class:`~exudyn_lie.integrators.ButcherTableau`
-    (a user's own too): the radius is computed from the tableau's coefficients."""
+    (a user's own too): the radius is computed from the tableau's coefficients.  An A-stable
+    implicit method: infinite."""
+    if get_method(method).implicit:
+        if is_a_stable(method):
+            return float("inf")
+        raise ValueError(f"{get_method(method).name}: implicit but not A-stable")
     coeffs = tuple(float(x) for x in stability_coefficients(method))
     return _stability_radius_of_polynomial(coeffs, float(tol), int(nangles))
 

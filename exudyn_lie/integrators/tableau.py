@@ -59,6 +59,9 @@ __all__ = [
     "continuous_order_residuals",
     "BS3",
     "Vern6",
+    # --- implicit methods ---
+    "IMPLICIT_METHODS",
+    "ESDIRK3",
 ]
 
 def _F(*xs):
@@ -355,6 +358,44 @@ Vern6 = ButcherTableau(
 )
 
 
+# gamma: the root in (1/3, 1/2) of 6 g^3 - 18 g^2 + 9 g - 1 = 0, for which the stability function of
+# a stiffly accurate order-3 ESDIRK vanishes at infinity (L-stability); the other coefficients follow
+# from stage order 2 (c2 = 2 gamma, c3 = 3/5) and the order-3 conditions on b (Kennedy & Carpenter).
+_G = 0.43586652150845899942
+_A32 = 0.6 * (0.3 - _G) / (2.0 * _G)
+_B = (0.18764102434672382516, -0.59529747357695494805, 0.97178992772177212347, _G)
+ESDIRK3 = ButcherTableau(
+    name="ESDIRK3", order=3,
+    A=[[0, 0, 0, 0],
+       [_G, _G, 0, 0],
+       [0.6 - _A32 - _G, _A32, _G, 0],
+       list(_B)],
+    b=list(_B), c=[0, 2 * _G, 0.6, 1],
+    # order 2, chosen here: b_hat_4 = 0.312 on the line of order-2 weights whose stability function
+    # stays bounded at infinity (b_hat^T lim (I - zA)^-1 e = 0): A-stable, |R_hat(-inf)| = 0.26,
+    # sum b_hat c^2 - 1/3 = 0.045 (not order 3)
+    b_hat=[0.28587736813740375901, -0.19605116303150865333, 0.59817379489410489432, 0.312],
+    order_hat=2,
+    # dense output of order 3: b_j(theta) = p_j theta + q_j theta^2 + r_j theta^3, the least-norm q and r
+    # of the continuous order conditions (stage order 2, A c = c^2 / 2, makes the tree [[o]] follow
+    # from [o, o]) and p = b - q - r
+    dense=ContinuousExtension(order=3, P=[
+        [0.94996120479985362892, -1.311004143547217352, 0.54868396309408754823],
+        [-0.86139203363418709111, 0.38438547775446642539, -0.11829091769723428232],
+        [0.40131732530968042752, 1.9042504700179094588, -1.3337778676058177628],
+        [0.51011350352465303467, -0.97763180422515853217, 0.90338482220896449691]],
+        source="derived here (least-norm solution of the continuous order conditions up to order 3)"),
+    aliases=("ESDIRK32", "ESDIRK3(2)4L[2]SA"),
+    description="L-stable, stiffly accurate, singly diagonally implicit Runge-Kutta method of order 3 "
+                "with an explicit first stage, 4 stages, stage order 2 (C. A. Kennedy, M. H. Carpenter, "
+                "'Diagonally implicit Runge-Kutta methods for ordinary differential equations. A review', "
+                "NASA/TM-2016-219173, ESDIRK3(2)4L[2]SA; coefficients recomputed here).",
+)
+
+#: The implicit methods, found by name (get_method) but not in METHODS (whose generic tests assume an
+#: explicit tableau).  The stepper solves their stages by a simplified Newton iteration (mbs/implicit.py).
+IMPLICIT_METHODS = (ESDIRK3,)
+
 #: The catalogue.  Adding a method = appending a tableau here.
 METHODS = (ExplicitEuler, ExplicitMidpoint, Heun, RK3, RK4, RK38, DOPRI5, RK6, RK67)
 
@@ -428,7 +469,7 @@ def _check_catalogue(methods):
 
 _check_catalogue(METHODS)
 _check_catalogue(METHODS + PAIRS[1:])     # embedded pairs: no name clashes
-_check_catalogue(METHODS + NAMED_EXTRA + PAIRS[1:])
+_check_catalogue(METHODS + NAMED_EXTRA + PAIRS[1:] + IMPLICIT_METHODS)
 
 
 def method_names():
@@ -453,7 +494,7 @@ def get_method(name):
     if not isinstance(name, str):
         raise TypeError(f"method name must be a string or ButcherTableau, got {type(name)}")
     key = _name_key(name)
-    for m in METHODS + NAMED_EXTRA:
+    for m in METHODS + NAMED_EXTRA + IMPLICIT_METHODS:
         if key in (_name_key(n) for n in (m.name,) + tuple(m.aliases)):
             return m
     raise ValueError(f"unknown integration method '{name}'; available: "

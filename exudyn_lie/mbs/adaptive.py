@@ -59,6 +59,8 @@ from .stepper import (ACT_ACCEPT, ACT_RETRY, ACT_STOP, controller_is, copy_state
 # extra stages, b (s), the stages of a step (b or bhat needs them), e = b - bhat, the dense
 # polynomial coefficients (s + m, degree), the number s of stages of a step, FSAL flag.
 AdaptiveMethod = namedtuple("AdaptiveMethod", ["A", "b", "c", "stages", "e", "P", "s", "fsal"])
+# ... of a diagonally implicit pair, with its Newton iteration's arrays (mbs/implicit.py)
+AdaptiveImplicitMethod = namedtuple("AdaptiveImplicitMethod", AdaptiveMethod._fields + ("gamma", "newton"))
 
 # The controller's state (one tuple: its type selects the adaptive code of stepper.mk_steps):
 # the controller's parameters and counters (integrators/control.py ``par``, ``S``), the
@@ -73,8 +75,10 @@ IS_HAVE0, IS_EXTRA, IS_VALID = range(3)
 HAVE0_NONE, HAVE0_STAGE1, HAVE0_FSAL = 0, 1, 2
 
 
-def adaptive_method(tab):
-    """The :class:`AdaptiveMethod` of an embedded pair (a tableau with ``b_hat``)."""
+def adaptive_method(tab, gid=None):
+    """The :class:`AdaptiveMethod` of an embedded pair (a tableau with ``b_hat``); an
+    :class:`AdaptiveImplicitMethod` for a diagonally implicit one, with the Newton arrays for the
+    bodies of group ids ``gid``."""
     if tab.b_hat is None:
         raise ValueError(f"method '{tab.name}' has no embedded weights (b_hat): adaptive steps need an "
                          f"embedded pair (DOPRI5, BS3 = ODE23, Vern6)")
@@ -92,8 +96,12 @@ def adaptive_method(tab):
         Aext[s:, :] = np.asarray(tab.dense.A_extra, dtype=np.float64)
         cext[s:] = np.asarray(tab.dense.c_extra, dtype=np.float64)
     P = np.zeros((s + m, 1)) if tab.dense is None else np.asarray(tab.dense.P, dtype=np.float64).copy()
-    return AdaptiveMethod(A=Aext, b=b, c=cext, stages=stages, e=b - bh, P=np.ascontiguousarray(P), s=s,
-                          fsal=bool(tab.fsal))
+    am = AdaptiveMethod(A=Aext, b=b, c=cext, stages=stages, e=b - bh, P=np.ascontiguousarray(P), s=s,
+                        fsal=bool(tab.fsal))
+    if tab.implicit:
+        from .implicit import newton_arrays
+        return AdaptiveImplicitMethod(*am, gamma=float(tab.gamma), newton=newton_arrays(gid))
+    return am
 
 
 @njit(cache=True, _nrt=False)

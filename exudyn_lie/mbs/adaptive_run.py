@@ -13,6 +13,7 @@ import numpy as np
 
 from ..integrators import control as _control
 from . import adaptive as _adaptive
+from . import implicit as _implicit
 from . import kernel
 from . import projection as _projection
 from .bodies import exp_compose
@@ -46,7 +47,9 @@ class AdaptiveRun:
             ctol[_projection.CT_VEL] = ct / float(timeScale)
         nb = sim.sd.nb
         self.sim = sim
-        self.method = _adaptive.adaptive_method(tab)
+        self.method = _adaptive.adaptive_method(tab, sim.sd.gid)
+        if tab.implicit:                     # Newton's corrections well below the error the control allows
+            self.method.newton.par[_implicit.NP_TOL] = _implicit.newton_tolerance(rtol)
         self.tol = _control.tolerances(atol, rtol, lengthScale, timeScale)
         self.par = _control.controller_params(tab.order_hat, safety=safety, fac_max=maxIncrease, h_min=minStep,
                                               h_max=maxStep)

@@ -53,6 +53,7 @@ STATUS_PROJECTION = 4      # the position projection did not converge
 STATUS_STAGE_ARG = 5       # a stage argument Psi_j left the domain of dexpinv (wk.failInfo[INFO_BODY] = body)
 STATUS_EXTERNAL = 6        # the right-hand side evaluated in Python raised (mbs.external)
 STATUS_STEP_MIN = 7        # adaptive steps: the error control asks for a step below the minimum (mbs.adaptive)
+STATUS_NEWTON = 8          # an implicit stage's Newton iteration did not converge (mbs.implicit)
 # what a failed status refers to (Work.failInfo): the failing constraint row, the numerical rank of
 # redundant rows, the body whose stage argument left the domain of dexpinv
 INFO_ROW, INFO_RANK, INFO_BODY = 0, 1, 2

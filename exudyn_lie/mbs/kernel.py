@@ -40,6 +40,7 @@ from .codes import *  # noqa: F401,F403
 from .constraints import joint_rows, joints_rows  # noqa: F401
 from .diagnostics import all_rows, kinetic_and_gravity  # noqa: F401
 from .force_elements import compute_forces, spring_energy  # noqa: F401
+from . import implicit  # noqa: F401  (registers the implicit methods' overloads of the stepper's seam)
 from .index1 import rhs, schur_correct, schur_solve  # noqa: F401
 from .projection import project, project_state  # noqa: F401
 from .step_observers import after_accepted_step, observe_initial_state, watch_rotation_entries  # noqa: F401

@@ -235,3 +235,57 @@ def rcm_order(n, edges):
                     seen[w] = True
                     queue.append(w)
     return order[::-1]
+
+
+@njit(cache=True, _nrt=False)
+def lu_factor_inplace(E, piv):
+    """LU with partial pivoting of the square ``E`` in place (``L`` unit lower, ``U`` upper), the
+    row exchanges in ``piv``.  Returns -1, or the first column without a nonzero pivot.  The
+    Newton matrix of the implicit stages (mbs/implicit.py) is not symmetric: no Cholesky."""
+    n = E.shape[0]
+    bad = -1
+    for k in range(n):
+        p = k
+        big = abs(E[k, k])
+        for i in range(k + 1, n):
+            if abs(E[i, k]) > big:
+                big = abs(E[i, k])
+                p = i
+        piv[k] = p
+        if big == 0.0:
+            if bad < 0:
+                bad = k
+            continue
+        if p != k:
+            for c in range(n):
+                E[k, c], E[p, c] = E[p, c], E[k, c]
+        inv = 1.0 / E[k, k]
+        for i in range(k + 1, n):
+            f = E[i, k] * inv
+            if f != 0.0:
+                E[i, k] = f
+                for c in range(k + 1, n):
+                    E[i, c] -= f * E[k, c]
+            else:
+                E[i, k] = 0.0
+    return bad
+
+
+@njit(cache=True, _nrt=False)
+def lu_solve_inplace(E, piv, x):
+    """Solve ``E_original x_new = x`` with the factors of :func:`lu_factor_inplace`."""
+    n = E.shape[0]
+    for k in range(n):
+        p = piv[k]
+        if p != k:
+            x[k], x[p] = x[p], x[k]
+    for i in range(n):
+        s = x[i]
+        for c in range(i):
+            s -= E[i, c] * x[c]
+        x[i] = s
+    for i in range(n - 1, -1, -1):
+        s = x[i]
+        for c in range(i + 1, n):
+            s -= E[i, c] * x[c]
+        x[i] = s / E[i, i]

@@ -19,6 +19,7 @@ from ..errors import SimulationError
 from ..userwarn import warn_user
 from . import kernel, stepper
 from .entry import call
+from .rotation_parameters import record_tracked
 from .state import twist_to_world_velocity
 
 CHUNK_SECONDS = 0.05        # aimed wall time of one chunk (progress, responsiveness)
@@ -90,15 +91,50 @@ class OutputRows:
         acc = n if self.doacc else 0
         # where a blow-up's step suggestion linearises (stiffness.suggest_step)
         sim._segmentStart = (t0, sim.R.copy(), sim.r.copy(), sim.V.copy())
-        args = (sim.sd, sim.wk, sim.method, sim.control, float(t0), h, n * nsub, sim.R, sim.r, sim.V, float(vmax),
-                nsub, self.Ro[:n], self.ro[:n], self.Vo[:n], self.Po[:n], self.Vdo[:acc], self.lamo[:acc])
-        st, done = call(self._ep, "mk", stepper.mk_steps, args)
+        total, done = n * nsub, 0
+        while True:
+            if done % nsub == 0:         # whole output periods, their outputs from row done // nsub on
+                o = done // nsub
+                args = (sim.sd, sim.wk, sim.method, sim.control, float(t0 + done * h), h, total - done, sim.R, sim.r,
+                        sim.V, float(vmax), nsub, self.Ro[o:n], self.ro[o:n], self.Vo[o:n], self.Po[o:n],
+                        self.Vdo[o:acc], self.lamo[o:acc])
+                st, d = call(self._ep, "mk", stepper.mk_steps, args)
+            else:                        # the rest of a period after a step in parts: one step at a time
+                st, d = sim._mk_steps(1, h, t0 + done * h)
+                if d and (done + 1) % nsub == 0:
+                    self._record((done + 1) // nsub - 1, t0 + (done + 1) * h)
+            done += d
+            if st == kernel.STATUS_OK and done < total:
+                continue
+            if st != kernel.STATUS_NEWTON or not sim.tableau.implicit:
+                break
+            st = sim._substeps(h, t0 + done * h)     # an implicit step whose Newton iteration failed, in parts
+            if st != kernel.STATUS_OK:
+                break
+            done += 1
+            if done % nsub == 0:
+                self._record(done // nsub - 1, t0 + done * h)
+            if done == total:
+                break
         rows = done // nsub
         if st != kernel.STATUS_OK and self.doacc and rows > 0 and np.isnan(self.Vdo[rows - 1, 0, 0]):
             rows -= 1                   # its accelerations failed: not an output
         sim.t = t0 + done * h           # on a failure: the last accepted step
         self.failure = None if st == kernel.STATUS_OK else st
         return rows, t0 + (np.arange(1, self.maxRows + 1) * nsub) * h
+
+    def _record(self, o, t):
+        """Output row ``o`` of the state at ``t`` (as ``stepper.record_output``; the accelerations
+        and multipliers from one evaluation at it, NaN if it fails)."""
+        sim = self.sim
+        self.Ro[o], self.ro[o], self.Vo[o] = sim.R, sim.r, sim.V
+        wk = sim.wk
+        record_tracked(wk.track.trackCodes, wk.path.bodyAngles, wk.path.bodyParameters, self.Po[o])
+        if self.doacc:
+            if sim._evaluate(t, sim.R, sim.r, sim.V) == kernel.STATUS_OK:
+                self.Vdo[o], self.lamo[o] = wk.Vd[0], wk.lam
+            else:
+                self.Vdo[o, 0, 0] = np.nan
 
     def adapt(self, seconds, rows):
         """The next chunk's size from the wall time of this one."""

@@ -28,6 +28,7 @@ from .row_drives import RowDrives
 from .scene import Scene, SceneError
 from .state import BodyStates, twist_to_world_velocity, world_velocity_to_twist
 from .stepper import fixed_step_control, method_arrays
+from .implicit import implicit_method, newton_counters
 from .entry import call
 from .adaptive_run import AdaptiveRun
 from .initial_state import RowLevels, check_initial_state
@@ -72,7 +73,7 @@ class Simulator(ExternalSeams):
         self._carried = compile_carried(scene)       # track plan, path state, probes: kept by every Work
         self.sd = self.sd._replace(stabilization={None: None, "velocity": kernel.STAB_VELOCITY,
                                                   "position": kernel.STAB_POSITION}[self.stabilization])
-        self.method = method_arrays(self.tableau)
+        self.method = self._method_arrays()
         self.control = fixed_step_control()
         self._extViews = None
         self._extToken = (0 if not self.sd.hasQext else
@@ -90,6 +91,36 @@ class Simulator(ExternalSeams):
         if verbose:
             for i, b in enumerate(scene.bodies):
                 print(f"exudyn_lie: body {i} ({b.name}): {self.groups[i]}")
+
+    def _method_arrays(self):
+        """The stepper's form of ``self.tableau``: an explicit ``Method``, or an ``ImplicitMethod`` with
+        its Newton arrays (mbs/implicit.py)."""
+        if self.tableau.implicit:
+            return implicit_method(self.tableau, self.sd.gid)
+        return method_arrays(self.tableau)
+
+    def SetMethod(self, method):
+        """Integrate with ``method`` (a name or a tableau) from now on; the state, the path state and
+        the solve stay.  Adaptive steps: call :meth:`SetAdaptive` again."""
+        tab = resolve_pair(method)
+        if getattr(self, "_ad", None) is not None and tab.b_hat is None:
+            raise SimulationError(f"{tab.name} has no embedded error estimate for the adaptive steps set")
+        self.tableau = tab
+        self.method = self._method_arrays()
+        self.wk = self._make_work()        # (a new Work keeps the path state: compile_carried)
+
+    @property
+    def newtonCounters(self):
+        """An implicit method's Newton work so far (``{'jacobians', 'factorizations', 'iterations',
+        'stages', 'retries'}``; None for an explicit method)."""
+        if not self.tableau.implicit:
+            return None
+        out = newton_counters(self.method.newton)
+        ad = getattr(self, "_ad", None)
+        if ad is not None and hasattr(ad.method, "newton"):
+            for key, v in newton_counters(ad.method.newton).items():
+                out[key] += v
+        return out
 
     def _make_work(self, solve="auto"):
         """New work arrays (``compiled.make_work``; ``solve``: see ``compiled.solve_plan``).
@@ -358,10 +389,45 @@ class Simulator(ExternalSeams):
         # the state this call starts from: restored on failure, and where a blow-up's
         # step suggestion linearises (the rejected state itself is far from the motion)
         self._segmentStart = (self.t, self.R.copy(), self.r.copy(), self.V.copy())
-        st, done = self._mk_steps(int(nsteps), h)
-        self.t += done * h               # on a failure: the last accepted step
+        n, done = int(nsteps), 0
+        while True:
+            st, d = self._mk_steps(n - done, h)
+            done += d
+            self.t += d * h              # on a failure: the last accepted step
+            if st != kernel.STATUS_NEWTON or not self.tableau.implicit:
+                break
+            st = self._substeps(h, self.t)      # an implicit step whose Newton iteration failed, in parts
+            if st != kernel.STATUS_OK:
+                break
+            done += 1
+            self.t += h
+            if done == n:
+                break
         if st != kernel.STATUS_OK:
             self._raise_status(st, h)
+
+    #: the parts an implicit step whose Newton iteration does not converge is tried in, in turn
+    SUBSTEPS = (2, 4, 8, 16, 32, 64)
+
+    def _substeps(self, h, t):
+        """One step of size ``h`` from the current state at ``t`` in ``SUBSTEPS`` equal parts, the first
+        division whose every part converges (its Newton iteration); a failed division leaves the state
+        and the path state as they were.  Returns the kernel status (``STATUS_NEWTON`` when every
+        division failed).  A force that switches on inside a step (a contact that closes) can stall
+        the iteration at the user's step."""
+        start = (self.R.copy(), self.r.copy(), self.V.copy())
+        path = [None if a is None else a.copy() for a in self.wk.path]
+        for m in self.SUBSTEPS:
+            st, _ = self._mk_steps(m, h / m, t)
+            if st == kernel.STATUS_OK:
+                return st
+            self.R[:], self.r[:], self.V[:] = start
+            for a, saved in zip(self.wk.path, path):
+                if a is not None:
+                    a[...] = saved
+            if st != kernel.STATUS_NEWTON:
+                return st
+        return kernel.STATUS_NEWTON
 
     def NoOutputs(self):
         """The output arguments of ``stepper.mk_steps`` for a call that records nothing:

@@ -57,6 +57,11 @@ def raise_status(sim, st, h):
             f"position projection did not converge in {kernel.PROJ_MAX_ITER} iterations at t = {sim.t:.6g} s "
             f"(max |h| = {np.max(np.abs(hres)):.3g}); the constraints of joints "
             f"{', '.join(sim._joints_of_rows(bad))} may not be satisfiable")
+    if st == kernel.STATUS_NEWTON:
+        raise step_size_error(
+            sim.tableau.name, h, sim.t, "the Newton iteration of an implicit stage did not converge (with a "
+            f"Jacobian of this step, then at each iterate, and with the step in up to {sim.SUBSTEPS[-1]} parts)",
+            "the step is too large for the nonlinearity of the model", h / sim.SUBSTEPS[-1])
     sugg = suggest_step(sim, h)
     what = "non-finite (NaN/inf)" if st == kernel.STATUS_NONFINITE else "unbounded (blow-up)"
     raise step_size_error(sim.tableau.name, h, sim.t, f"the state became {what}",

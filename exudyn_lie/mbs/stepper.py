@@ -60,6 +60,10 @@ from .step_observers import after_accepted_step
 # embedded weights (no rows without a pair).
 Method = namedtuple("Method", ["A", "b", "c", "stages", "bhat"])
 
+# A diagonally implicit tableau (ESDIRK) with its Newton iteration's arrays and state (mbs/implicit.py,
+# which registers the implicit overloads of is_implicit and implicit_stage)
+ImplicitMethod = namedtuple("ImplicitMethod", ["A", "b", "c", "stages", "bhat", "gamma", "newton"])
+
 # Step controller: kind, parameters, state (CONTROL_FIXED: none)
 Control = namedtuple("Control", ["kind", "par", "state"])
 CONTROL_FIXED = 0
@@ -285,6 +289,12 @@ def stage_rhs(sd, wk, t, Vdot):
 ACT_RETRY, ACT_ACCEPT, ACT_STOP = 0, 1, 2      # control_step's verdict on an attempted step
 
 
+def carries_newton(tab):
+    """At compile time: the method tuple ``tab`` (a numba type) holds Newton arrays (field ``newton``):
+    an implicit method, fixed or adaptive (mbs/implicit.py)."""
+    return isinstance(tab, types.BaseNamedTuple) and "newton" in tab.instance_class._fields
+
+
 def controller_is(ctl, cls):
     """At compile time: ``ctl`` (a numba type) is the namedtuple type ``cls``."""
     return isinstance(ctl, types.BaseNamedTuple) and ctl.instance_class is cls
@@ -292,6 +302,15 @@ def controller_is(ctl, cls):
 
 def is_adaptive(ctl):
     """True if the controller varies the step (a compile-time constant)."""
+
+
+def is_implicit(tab):
+    """True if the stages after the first are implicit (a compile-time constant: mbs/implicit.py)."""
+
+
+def implicit_stage(sd, wk, tab, j, h, t, R, r, V):
+    """Solve implicit stage ``j`` of the step ``(t, h)`` from ``(R, r, V)``: ``wk.K[j]``, ``wk.Vd[j]``;
+    a status (mbs/implicit.py)."""
 
 
 def controller_start(sd, wk, tab, ctl, R, r, V, Ro, ro, Vo, Po):
@@ -325,6 +344,18 @@ def step_accepted(sd, wk, tab, ctl, R, r, V, t, h, Ro, ro, Vo, Po, n):
 def _fixed_is_adaptive(ctl):
     if controller_is(ctl, Control):
         return lambda ctl: False
+
+
+@overload(is_implicit, inline="always")
+def _explicit_is_implicit(tab):
+    if not carries_newton(tab):
+        return lambda tab: False
+
+
+@overload(implicit_stage, inline="always")
+def _explicit_implicit_stage(sd, wk, tab, j, h, t, R, r, V):
+    if not carries_newton(tab):
+        return lambda sd, wk, tab, j, h, t, R, r, V: STATUS_OK
 
 
 @overload(controller_start, inline="always")
@@ -448,6 +479,7 @@ def mk_steps(sd, wk, tab, ctl, t0, h, nsteps, R, r, V, vmax, every, Ro, ro, Vo, 
     stages = tab.stages
     ns = stages.shape[0]
     adaptive = is_adaptive(ctl)
+    implicit = is_implicit(tab)
     acc = Vdo.shape[0] > 0
     pending = -1                         # output row whose accelerations are still due
     n = 0
@@ -471,6 +503,14 @@ def mk_steps(sd, wk, tab, ctl, t0, h, nsteps, R, r, V, vmax, every, Ro, ro, Vo, 
         ok = True
         for jj in range(ns):
             j = stages[jj]
+            if implicit and jj > 0:      # (mbs/implicit.py; the first stage is explicit)
+                st = implicit_stage(sd, wk, tab, j, hs, t, R, r, V)
+                if st != STATUS_OK:
+                    if adaptive:
+                        ok = False
+                        break
+                    return st, n
+                continue
             st = mk_stage_state(sd, wk, A, j, hs, R, r, V)
             if st != STATUS_OK:          # only for j >= 1: any pending output is written
                 if adaptive:             # a rejection with the largest decrease

@@ -18,7 +18,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import SimulationError
-from ..integrators.stability import stability_coefficients, stability_radius
+from ..integrators.stability import is_a_stable, stability_coefficients, stability_radius
 from . import kernel
 from .bodies import body_dexpinv_stage, exp_compose
 from .diagnostics import stage_stiffness
@@ -42,7 +42,7 @@ def largest_stable_step(tableau, ev):
     ev = np.asarray(ev, complex)
     ev = np.minimum(ev.real, 0.0) + 1j * ev.imag
     ev = ev[np.abs(ev) > 0]
-    if ev.size == 0:
+    if ev.size == 0 or (tableau.implicit and is_a_stable(tableau)):
         return float("inf")
     c = np.array([float(x) for x in stability_coefficients(tableau)])
     rho = float(np.max(np.abs(ev)))

@@ -1,0 +1,42 @@
+"""The drop-in's method when the user names none (no ``method=``, an implicit Exudyn solver type):
+the explicit default where it is stable at the script's own step, else the L-stable implicit
+ESDIRK3 (mbs/implicit.py).  Both paths decide once at the start of a fixed-step run, from the
+largest stable step of the explicit method at the initial state: the compiled path from the
+spectral radius of its linearised equations (``Simulator.SpectralRadius``), the evaluated path
+from the eigenvalues of Exudyn's own linearisation (``evaluated_stiffness.check_step``)."""
+from ..integrators.tableau import get_method
+from ..mbs.codes import STATUS_BLOWUP, STATUS_NONFINITE, STATUS_STAGE_ARG
+
+#: the kernel statuses of an explicit method that a stiff mode makes unstable
+UNSTABLE_STATUS = (STATUS_BLOWUP, STATUS_NONFINITE, STATUS_STAGE_ARG)
+
+IMPLICIT_DEFAULT = "ESDIRK3"
+
+
+def stiff_choice(explicit, h, hmax, rate, source):
+    """``(tableau, line)``: ``explicit`` and None when ``h <= hmax`` (its largest stable step),
+    else the implicit default and the one line that says why."""
+    if not h > hmax:
+        return explicit, None
+    imp = get_method(IMPLICIT_DEFAULT)
+    line = (f"exudyn_lie: {explicit.name} is not stable at the step h = {h:.4g} s for this model (fastest mode "
+            f"|lambda| ~ {rate:.4g} 1/s, {source}; stable up to h = {hmax:.3g} s): integrating with the L-stable "
+            f"implicit {imp.name} (order {imp.order}); method='{explicit.name}' keeps the explicit method")
+    return imp, line
+
+
+def unstable_choice(explicit, h, t, status):
+    """``(implicit default, line)`` when ``explicit`` became unstable during a run (a contact that
+    closed, a friction zone entered: a mode the check at the start could not see)."""
+    imp = get_method(IMPLICIT_DEFAULT)
+    what = {STATUS_BLOWUP: "the state blew up", STATUS_NONFINITE: "the state became non-finite",
+            STATUS_STAGE_ARG: "a stage rotation exceeded 2 pi"}[status]
+    line = (f"exudyn_lie: {explicit.name} became unstable after t = {t:.6g} s at the step h = {h:.4g} s ({what}): "
+            f"continuing from Exudyn's state at t = {t:.6g} s with the L-stable implicit {imp.name} (order "
+            f"{imp.order}); method='{explicit.name}' keeps the explicit method")
+    return imp, line
+
+
+def auto_choice_text(tab):
+    """The solution file's name of the method of a run whose choice is made at its start."""
+    return f"{tab.name}, or {IMPLICIT_DEFAULT} if the model is too stiff for it at this step,"

@@ -1,0 +1,374 @@
+"""Diagonally implicit Munthe-Kaas stages, compiled: the implicit methods' side of the stepper.
+
+An ESDIRK tableau (``integrators.tableau.IMPLICIT_METHODS``: ``a_11 = 0``, ``a_jj = gamma`` for
+``j > 1``) run by :func:`~.stepper.mk_steps` as an :class:`~.stepper.ImplicitMethod`: stage 1 is
+the explicit stage at the step's start, every later stage ``j`` solves, per body in its own group
+(eq. MK1 with the stage's own term)::
+
+    Theta_j = P_j + h gamma dexp^-1_{-Theta_j} V_j,      P_j = h sum_{l<j} a_jl k_l
+    V_j     = W_j + h gamma F(t + c_j h, g exp(Theta_j), V_j),   W_j = V + h sum_{l<j} a_jl Vdot_l
+
+for the stage's algebra element ``Theta_j`` and velocity ``V_j``; then ``k_j = (Theta_j - P_j) / (h
+gamma)`` and ``Vdot_j = (V_j - W_j) / (h gamma)``, so that the step ``g exp(h sum b_j k_j)`` of a
+stiffly accurate method ends at the last stage.  The update is still ``exp`` of an element of the
+body's algebra: a lower pair to the ground stays exact on SE3 (the paper's corollary 1).
+
+**Simplified Newton.**  With ``dexp^-1 ~ I`` in the Newton matrix (its derivative is O(Theta), and
+the iteration converges to the exact stage solution whatever the matrix) and ``D_V = dF/dV``,
+``D_Theta = dF/dTheta`` at the step's start, the iteration solves::
+
+    (I - h gamma D_V - (h gamma)^2 D_Theta) dV = -F2 - h gamma D_Theta F1,   dTheta = -F1 + h gamma dV
+
+with the residuals ``F1 = Theta - P - h gamma dexp^-1 V`` and ``F2 = V - W - h gamma F``.  ``D_V`` and
+``D_Theta`` are forward differences of the stepper's own stage right-hand side (``stage_rhs``, so
+the compiled and the evaluated path alike, with every item the right-hand side holds), along each
+axis of each body's algebra (``axes``); the matrix is factored once (LU) and reused over the
+stages and steps while the iteration converges fast, refactored when ``h`` changes, and the
+Jacobian recomputed at the next step's start when the contraction rate exceeded ``REFRESH_RATE``
+or when a stage did not converge with an older one (that stage is then solved again).  A stage
+that does not converge with a Jacobian of its own step ends the call with ``STATUS_NEWTON``.
+
+Convergence (the norm: ``|dV|_inf / (tol v) + ...`` with ``v`` the velocity scale of the step,
+``h v`` the configuration's; round-off floors) when ``eta |d| <= 1`` with Hairer's ``eta = theta /
+(1 - theta)`` from the contraction rate ``theta``, or ``|d| <= 1`` (Hairer & Wanner II, sec. IV.8).
+"""
+from collections import namedtuple
+
+import numpy as np
+from numba import njit
+from numba.extending import overload
+
+from ..groups import GROUPS
+from ..groups.interface import algebra_axes
+from . import stepper
+from .bodies import body_dexpinv_stage, exp_compose
+from .codes import INFO_BODY, STAGE_ARG_MAX2, STATUS_NEWTON, STATUS_OK
+from .linalg import lu_factor_inplace, lu_solve_inplace
+from .stepper import ImplicitMethod, needed_stages, stage_rhs  # noqa: F401 (ImplicitMethod: its home is stepper)
+
+# The Newton iteration's arrays and state (one per simulator: tab.newton)
+Newton = namedtuple("Newton", [
+    "E", "piv",            # (n, n) the factored Newton matrix, n = 6 nb; its row exchanges
+    "Dv", "Dth",           # (n, n) dF/dV and dF/dTheta at the start of the step they were computed at
+    "axes",                # (nb, 6) 1.0 on the axes of each body's algebra (the unknowns), 0.0 elsewhere
+    "P", "W", "Th",        # (nb, 6) the stage's explicit parts and its algebra element Theta_j
+    "F1", "Ap", "A1",      # (nb, 6) the residual F1, F at the iterate (A1: kept over a Jacobian there)
+    "x",                   # (n,) the right-hand side of the Newton system, then the correction dV
+    "k6", "m6",            # (6,) scratch
+    "st",                  # float state: NS_* below
+    "par",                 # [tolerance, maximum iterations]
+])
+NS_STALE, NS_FRESH, NS_H, NS_JACOBIANS, NS_FACTORS, NS_ITERATIONS, NS_STAGES, NS_RETRIES, NS_RATE, NS_FULL = range(10)
+NP_TOL, NP_MAXIT = range(2)
+
+NEWTON_TOL = 1e-9          # the correction relative to the step's velocity scale (and h times it)
+NEWTON_MAXIT = 10
+REFRESH_RATE = 0.25        # a contraction rate above this: new Jacobian at the next step's start
+FD_STEP = 1.4901161193847656e-08     # sqrt(eps): forward differences of F
+
+
+def implicit_method(tableau, gid, tol=NEWTON_TOL, maxIterations=NEWTON_MAXIT):
+    """The :class:`~.stepper.ImplicitMethod` of a diagonally implicit tableau for the bodies of group
+    ids ``gid``, with its Newton arrays."""
+    if not tableau.implicit:
+        raise ValueError(f"{tableau.name} is explicit")
+    A, b, c = tableau.arrays()
+    bh = np.zeros(0) if tableau.b_hat is None else np.array(tableau.b_hat, dtype=np.float64)
+    return ImplicitMethod(A=A, b=b, c=c, stages=needed_stages(A, b), bhat=bh, gamma=float(tableau.gamma),
+                          newton=newton_arrays(gid, tol, maxIterations))
+
+
+def newton_tolerance(rtol):
+    """The Newton tolerance of adaptive steps with the relative tolerance ``rtol``: a hundredth of it,
+    within [NEWTON_TOL / 10, 1e-5]."""
+    return float(min(1e-5, max(0.1 * NEWTON_TOL, 1e-2 * float(rtol))))
+
+
+def newton_arrays(gid, tol=NEWTON_TOL, maxIterations=NEWTON_MAXIT):
+    """The :class:`Newton` arrays for the bodies of group ids ``gid``."""
+    nb = len(gid)
+    n = 6 * nb
+    names = list(GROUPS)
+    axes = np.zeros((nb, 6))
+    for i, g in enumerate(gid):
+        axes[i, list(algebra_axes(GROUPS[names[int(g)]]))] = 1.0
+    z = lambda: np.zeros((nb, 6))      # noqa: E731
+    st = np.zeros(10)
+    st[NS_STALE] = 1.0
+    return Newton(E=np.zeros((n, n)), piv=np.zeros(n, np.int64), Dv=np.zeros((n, n)), Dth=np.zeros((n, n)),
+                axes=axes, P=z(), W=z(), Th=z(), F1=z(), Ap=z(), A1=z(), x=np.zeros(n), k6=np.zeros(6), m6=np.zeros(6),
+                  st=st, par=np.array([float(tol), float(maxIterations)]))
+
+
+def newton_counters(nw):
+    """``{'jacobians', 'factorizations', 'iterations', 'stages', 'retries'}`` so far."""
+    s = nw.st
+    return {"jacobians": int(s[NS_JACOBIANS]), "factorizations": int(s[NS_FACTORS]),
+            "iterations": int(s[NS_ITERATIONS]), "stages": int(s[NS_STAGES]), "retries": int(s[NS_RETRIES]),
+            "fullNewton": int(s[NS_FULL])}
+
+
+@njit(cache=True, _nrt=False)
+def stage_rhs_at(sd, wk, t, out):
+    """``stepper.stage_rhs`` compiled once for the Newton iteration's many call sites (it is inlined
+    wherever it is called: each inlined copy costs seconds of compile time)."""
+    return stage_rhs(sd, wk, t, out)
+
+
+# --------------------------------------------------------------------------- the Newton matrix
+@njit(cache=True, _nrt=False)
+def _set_start(gid, R, r, V, Rs, rs, Vs):
+    for i in range(gid.shape[0]):
+        for a in range(3):
+            rs[i, a] = r[i, a]
+            for c in range(3):
+                Rs[i, a, c] = R[i, a, c]
+        for k in range(6):
+            Vs[i, k] = V[i, k]
+
+
+@njit(cache=True, _nrt=False)
+def _difference_column(Ap, A0, e, D, col):
+    nb = Ap.shape[0]
+    for i in range(nb):
+        for k in range(6):
+            D[6 * i + k, col] = (Ap[i, k] - A0[i, k]) / e
+
+
+@njit(cache=True, _nrt=False)
+def newton_jacobian(sd, wk, nw, t, R, r, V, A0):
+    """``Dv = dF/dV`` and ``Dth = dF/dTheta`` at ``(t, g, V)`` where ``F = A0``, by forward differences
+    of the stage right-hand side along each algebra axis; returns a status."""
+    gid = sd.gid
+    nb = gid.shape[0]
+    _set_start(gid, R, r, V, wk.Rs, wk.rs, wk.Vs)
+    X = nw.m6
+    for i in range(nb):
+        for k in range(6):
+            col = 6 * i + k
+            if nw.axes[i, k] == 0.0:
+                for row in range(6 * nb):
+                    nw.Dv[row, col] = 0.0
+                    nw.Dth[row, col] = 0.0
+                continue
+            e = FD_STEP * max(1.0, abs(V[i, k]))
+            wk.Vs[i, k] = V[i, k] + e
+            st = stage_rhs_at(sd, wk, t, nw.Ap)
+            wk.Vs[i, k] = V[i, k]
+            if st != STATUS_OK:
+                return st
+            _difference_column(nw.Ap, A0, e, nw.Dv, col)
+            for m in range(6):
+                X[m] = 0.0
+            X[k] = FD_STEP
+            exp_compose(gid[i], R[i], r[i], X, wk.Rs[i], wk.rs[i], wk.m3[0], wk.v3[0])
+            st = stage_rhs_at(sd, wk, t, nw.Ap)
+            for a in range(3):
+                wk.rs[i, a] = r[i, a]
+                for c in range(3):
+                    wk.Rs[i, a, c] = R[i, a, c]
+            if st != STATUS_OK:
+                return st
+            _difference_column(nw.Ap, A0, FD_STEP, nw.Dth, col)
+    nw.st[NS_JACOBIANS] += 1.0
+    return STATUS_OK
+
+
+@njit(cache=True, _nrt=False)
+def newton_factor(nw, hg):
+    """``E = I - hg Dv - hg^2 Dth``, factored; returns a status."""
+    n = nw.E.shape[0]
+    hg2 = hg * hg
+    for a in range(n):
+        for c in range(n):
+            nw.E[a, c] = -hg * nw.Dv[a, c] - hg2 * nw.Dth[a, c]
+        nw.E[a, a] += 1.0
+    nw.st[NS_FACTORS] += 1.0
+    if lu_factor_inplace(nw.E, nw.piv) >= 0:
+        return STATUS_NEWTON
+    return STATUS_OK
+
+
+# --------------------------------------------------------------------------- one stage
+@njit(cache=True, _nrt=False)
+def explicit_parts(A, j, h, V, K, Vd, P, W):
+    """``P_j = h sum_{l<j} a_jl k_l`` and ``W_j = V + h sum_{l<j} a_jl Vdot_l``."""
+    for i in range(V.shape[0]):
+        for k in range(6):
+            p = 0.0
+            w = V[i, k]
+            for l in range(j):
+                p += A[j, l] * K[l, i, k]
+                w += h * A[j, l] * Vd[l, i, k]
+            P[i, k] = h * p
+            W[i, k] = w
+
+
+@njit(cache=True, _nrt=False)
+def newton_iterate(sd, wk, nw, j, jprev, hg, tj, R, r, V, vscale, full):
+    """The simplified Newton iteration of stage ``j`` (module docstring), from the predictor
+    ``V_j = W_j + hg Vdot_jprev``, ``Theta_j = P_j + hg k_jprev``; the stage's ``V_j`` in ``wk.Vs``,
+    ``Theta_j`` in ``nw.Th``.  With ``full``, Newton's own iteration: the Jacobian at every iterate
+    (a force that switches on inside the stage, such as a contact that closes, is not in the
+    Jacobian of the step's start).  Returns a status (STATUS_NEWTON: no convergence, also when an
+    iterate's rotation leaves the domain of dexpinv)."""
+    gid = sd.gid
+    nb = gid.shape[0]
+    Th, P, W, F1, x, Ap, axes = nw.Th, nw.P, nw.W, nw.F1, nw.x, nw.Ap, nw.axes
+    tol = nw.par[NP_TOL]
+    maxit = int(nw.par[NP_MAXIT]) * (3 if full else 1)      # (Newton's own: quadratic only near the solution)
+    tscale = hg * vscale
+    eps8 = 8.0 * 2.220446049250313e-16
+    for i in range(nb):
+        for k in range(6):
+            wk.Vs[i, k] = W[i, k] + hg * wk.Vd[jprev, i, k] * axes[i, k]
+            Th[i, k] = (P[i, k] + hg * wk.K[jprev, i, k]) * axes[i, k]
+    dprev = 0.0
+    rate = 0.0
+    for it in range(maxit):
+        for i in range(nb):
+            Ti = Th[i]
+            if not Ti[0] * Ti[0] + Ti[1] * Ti[1] + Ti[2] * Ti[2] <= STAGE_ARG_MAX2:
+                wk.failInfo[INFO_BODY] = i
+                return STATUS_NEWTON
+            exp_compose(gid[i], R[i], r[i], Ti, wk.Rs[i], wk.rs[i], wk.m3[0], wk.v3[0])
+        st = stage_rhs_at(sd, wk, tj, Ap)
+        nw.st[NS_ITERATIONS] += 1.0
+        if st != STATUS_OK:
+            return st
+        if full:                         # the Jacobian at this iterate (wk.Rb, rb, Vb: free during the stages)
+            _set_start(gid, wk.Rs, wk.rs, wk.Vs, wk.Rb, wk.rb, wk.Vb)
+            for i in range(nb):
+                for k in range(6):
+                    nw.A1[i, k] = Ap[i, k]
+            st = newton_jacobian(sd, wk, nw, tj, wk.Rb, wk.rb, wk.Vb, nw.A1)
+            if st == STATUS_OK:
+                st = newton_factor(nw, hg)
+            if st != STATUS_OK:
+                return st
+            _set_start(gid, wk.Rb, wk.rb, wk.Vb, wk.Rs, wk.rs, wk.Vs)
+            for i in range(nb):
+                for k in range(6):
+                    Ap[i, k] = nw.A1[i, k]
+        for i in range(nb):
+            for k in range(6):
+                nw.m6[k] = -Th[i, k]
+            body_dexpinv_stage(gid[i], nw.m6, wk.Vs[i], nw.k6)
+            for k in range(6):
+                F1[i, k] = (Th[i, k] - P[i, k] - hg * nw.k6[k]) * axes[i, k]
+        # x = -F2 - hg Dth F1
+        n = 6 * nb
+        for row in range(n):
+            i, k = row // 6, row % 6
+            s = 0.0
+            for col in range(n):
+                s += nw.Dth[row, col] * F1[col // 6, col % 6]
+            x[row] = (-(wk.Vs[i, k] - W[i, k] - hg * Ap[i, k]) - hg * s) * axes[i, k]
+        lu_solve_inplace(nw.E, nw.piv, x)
+        d = 0.0
+        for i in range(nb):
+            for k in range(6):
+                if axes[i, k] == 0.0:
+                    continue
+                dv = x[6 * i + k]
+                dt = -F1[i, k] + hg * dv
+                wk.Vs[i, k] += dv
+                Th[i, k] += dt
+                d = max(d, abs(dv) / (tol * vscale + eps8 * abs(wk.Vs[i, k])),
+                        abs(dt) / (tol * tscale + eps8 * abs(Th[i, k])))
+        if not np.isfinite(d):
+            return STATUS_NEWTON
+        if it > 0:
+            rate = d / dprev if dprev > 0.0 else 0.0
+            nw.st[NS_RATE] = max(nw.st[NS_RATE], rate)
+            if rate >= 1.0 and d > 1.0 and not (full and rate < 4.0):
+                return STATUS_NEWTON
+            if rate < 1.0 and rate / (1.0 - rate) * d <= 1.0:
+                return STATUS_OK
+            # what the remaining iterations can reach at this rate (Hairer & Wanner II, (8.24)); Newton's
+            # own iteration converges faster near the solution than its rate far from it predicts
+            if not full and rate < 1.0 and rate ** (maxit - 1 - it) / (1.0 - rate) * d > 1.0:
+                return STATUS_NEWTON
+        if d <= 1.0:
+            return STATUS_OK
+        dprev = d
+    return STATUS_NEWTON
+
+
+@njit(cache=True, _nrt=False)
+def solve_stage(sd, wk, A, c, gamma, nw, stages, j, h, t, R, r, V):
+    """Stage ``j`` of an ESDIRK step of size ``h`` from ``(t, g, V)``: ``k_j`` into ``wk.K[j]``,
+    ``Vdot_j`` into ``wk.Vd[j]``.  At the first implicit stage the Newton matrix is brought up to
+    date (Jacobian if stale, factorisation if ``h`` changed); a stage that does not converge with an
+    older Jacobian is solved again with one of this step."""
+    hg = h * gamma
+    jprev = stages[0]
+    for jj in range(stages.shape[0]):
+        if stages[jj] == j:
+            break
+        jprev = stages[jj]
+    if jprev == stages[0]:                 # the first implicit stage: a new step
+        nw.st[NS_FRESH] = 0.0
+        nw.st[NS_RATE] = 0.0
+        if nw.st[NS_STALE] != 0.0:
+            st = newton_jacobian(sd, wk, nw, t, R, r, V, wk.Vd[stages[0]])
+            if st != STATUS_OK:
+                return st
+            nw.st[NS_STALE] = 0.0
+            nw.st[NS_FRESH] = 1.0
+            nw.st[NS_H] = 0.0
+        if nw.st[NS_H] != hg:
+            st = newton_factor(nw, hg)
+            if st != STATUS_OK:
+                return st
+            nw.st[NS_H] = hg
+    explicit_parts(A, j, h, V, wk.K, wk.Vd, nw.P, nw.W)
+    vscale = 1e-300
+    for i in range(V.shape[0]):
+        for k in range(6):
+            vscale = max(vscale, abs(V[i, k]), hg * abs(wk.Vd[stages[0], i, k]))
+    st = newton_iterate(sd, wk, nw, j, jprev, hg, t + c[j] * h, R, r, V, vscale, False)
+    if st == STATUS_NEWTON and nw.st[NS_FRESH] == 0.0:
+        nw.st[NS_RETRIES] += 1.0
+        st = newton_jacobian(sd, wk, nw, t, R, r, V, wk.Vd[stages[0]])
+        if st != STATUS_OK:
+            return st
+        nw.st[NS_FRESH] = 1.0
+        st = newton_factor(nw, hg)
+        if st != STATUS_OK:
+            return st
+        nw.st[NS_H] = hg
+        st = newton_iterate(sd, wk, nw, j, jprev, hg, t + c[j] * h, R, r, V, vscale, False)
+    if st == STATUS_NEWTON:
+        nw.st[NS_FULL] += 1.0
+        st = newton_iterate(sd, wk, nw, j, jprev, hg, t + c[j] * h, R, r, V, vscale, True)
+        nw.st[NS_H] = 0.0                # (the matrix of the last iterate serves this step's later stages;
+        nw.st[NS_STALE] = 1.0            #  the next step starts with a Jacobian at its start)
+    if st != STATUS_OK:
+        nw.st[NS_STALE] = 1.0
+        return st
+    nw.st[NS_STAGES] += 1.0
+    if nw.st[NS_RATE] > REFRESH_RATE:
+        nw.st[NS_STALE] = 1.0
+    Kj = wk.K[j]
+    Vdj = wk.Vd[j]
+    for i in range(V.shape[0]):
+        for k in range(6):
+            Kj[i, k] = (nw.Th[i, k] - nw.P[i, k]) / hg
+            Vdj[i, k] = (wk.Vs[i, k] - nw.W[i, k]) / hg
+    return STATUS_OK
+
+
+# --------------------------------------------------------------------------- the stepper's seam
+@overload(stepper.is_implicit, inline="always")
+def _implicit_is_implicit(tab):
+    if stepper.carries_newton(tab):
+        return lambda tab: True
+
+
+@overload(stepper.implicit_stage, inline="always")
+def _implicit_stage(sd, wk, tab, j, h, t, R, r, V):
+    if stepper.carries_newton(tab):
+        def impl(sd, wk, tab, j, h, t, R, r, V):
+            return solve_stage(sd, wk, tab.A, tab.c, tab.gamma, tab.newton, tab.stages, j, h, t, R, r, V)
+        return impl

@@ -128,7 +128,7 @@ def test_stiff_generic_ode2_beyond_stability_limit_raises_step_size_error():
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         with pytest.raises(StepSizeError, match="stability limit") as e:
-            exl.SolveDynamic(mbs, quiet_settings(0.1, 100), showProgress=False)
+            exl.SolveDynamic(mbs, quiet_settings(0.1, 100), showProgress=False, method="RK4")
     # omega = 1e4 rad/s; RK4's imaginary-axis limit 2 sqrt(2): stable up to 2.83e-4 s; the
     # suggested step (0.9 of it) runs, bounded
     assert "stable up to h = 0.000283 s" in str(e.value)
@@ -139,6 +139,21 @@ def test_stiff_generic_ode2_beyond_stability_limit_raises_step_size_error():
         warnings.simplefilter("ignore")
         exl.SolveDynamic(mbs, quiet_settings(0.01, int(np.ceil(0.01 / sugg))), showProgress=False)
     assert abs(_final_state(mbs)[0][0]) <= 0.0101
+
+
+def test_stiff_generic_ode2_without_a_method_runs_implicitly(capsys):
+    """No method named: the check at the start finds RK4 unstable at the script's step and the run
+    takes ESDIRK3 (one line says so); L-stable, it stays bounded."""
+    mbs = new_mbs()
+    n = mbs.AddNode(NodeGenericODE2(referenceCoordinates=[0.0], initialCoordinates=[0.01],
+                                    initialCoordinates_t=[0.0], numberOfODE2Coordinates=1))
+    mbs.AddObject(ObjectGenericODE2(nodeNumbers=[n], massMatrix=np.eye(1), stiffnessMatrix=np.array([[1e8]])))
+    mbs.Assemble()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        exl.SolveDynamic(mbs, quiet_settings(0.1, 100), showProgress=False)
+    assert "RK4 is not stable at the step h = 0.001 s" in capsys.readouterr().out
+    assert abs(_final_state(mbs)[0][0]) <= 0.01
 
 
 # ---------------------------------------------------------------------------- cross-validation

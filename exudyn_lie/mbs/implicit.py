@@ -26,11 +26,17 @@ axis of each body's algebra (``axes``); the matrix is factored once (LU) and reu
 stages and steps while the iteration converges fast, refactored when ``h`` changes, and the
 Jacobian recomputed at the next step's start when the contraction rate exceeded ``REFRESH_RATE``
 or when a stage did not converge with an older one (that stage is then solved again).  A stage
-that does not converge with a Jacobian of its own step ends the call with ``STATUS_NEWTON``.
+that does not converge with a Jacobian of its own step is solved by Newton's own iteration (the
+Jacobian at every iterate: a force that switches on inside the stage, a contact that closes, is not
+in the Jacobian of the step's start); if that fails too, ``STATUS_NEWTON``: the simulator divides
+the step (``Simulator._substeps``), adaptive steps reject it.
 
-Convergence (the norm: ``|dV|_inf / (tol v) + ...`` with ``v`` the velocity scale of the step,
-``h v`` the configuration's; round-off floors) when ``eta |d| <= 1`` with Hairer's ``eta = theta /
-(1 - theta)`` from the contraction rate ``theta``, or ``|d| <= 1`` (Hairer & Wanner II, sec. IV.8).
+Convergence: ``d = max(|dV|_inf / (tol v), |dTheta|_inf / (tol h gamma v))`` (round-off floors
+added, also absolute ones: a spring whose motion L-stability damped to 1e-150 leaves the round-off
+of R and the denormals) with ``v`` the velocity scale of the step, the largest ``|V|`` and ``|W_j|`` (not the
+accelerations: a stiff transient's ``h F`` would loosen the tolerance; the position error a run
+accumulates is about ``T tol v``); converged when ``eta d <= 1`` with Hairer's ``eta = theta /
+(1 - theta)`` from the contraction rate ``theta``, or ``d <= 1`` (Hairer & Wanner II, sec. IV.8).
 """
 from collections import namedtuple
 
@@ -61,7 +67,11 @@ Newton = namedtuple("Newton", [
 NS_STALE, NS_FRESH, NS_H, NS_JACOBIANS, NS_FACTORS, NS_ITERATIONS, NS_STAGES, NS_RETRIES, NS_RATE, NS_FULL = range(10)
 NP_TOL, NP_MAXIT = range(2)
 
-NEWTON_TOL = 1e-9          # the correction relative to the step's velocity scale (and h times it)
+# the correction relative to the step's velocity scale (and h gamma times it).  The last stage's
+# velocity is the step's (stiffly accurate), so its Newton error adds up over the steps: about
+# N tol v after N steps, which 1e-9 made the error floor of the stiff chain in tests/test_implicit.py
+# (7.5e-7 at h = 2.5e-4 against 5e-9 at 1e-11; 5.3 -> 6.5 iterations per stage at h = 4e-3)
+NEWTON_TOL = 1e-11
 NEWTON_MAXIT = 10
 REFRESH_RATE = 0.25        # a contraction rate above this: new Jacobian at the next step's start
 FD_STEP = 1.4901161193847656e-08     # sqrt(eps): forward differences of F
@@ -274,8 +284,11 @@ def newton_iterate(sd, wk, nw, j, jprev, hg, tj, R, r, V, vscale, full):
                 dt = -F1[i, k] + hg * dv
                 wk.Vs[i, k] += dv
                 Th[i, k] += dt
-                d = max(d, abs(dv) / (tol * vscale + eps8 * abs(wk.Vs[i, k])),
-                        abs(dt) / (tol * tscale + eps8 * abs(Th[i, k])))
+                # round-off floors, relative to the values and absolute (1 rad, 1 length unit per
+                # second or per step): increments carry the round-off of R and r themselves, and a
+                # motion damped to 1e-150 by L-stability reaches the denormals
+                d = max(d, abs(dv) / (tol * vscale + eps8 * max(abs(wk.Vs[i, k]), vscale, 1.0)),
+                        abs(dt) / (tol * tscale + eps8 * max(abs(Th[i, k]), 1.0)))
         if not np.isfinite(d):
             return STATUS_NEWTON
         if it > 0:
@@ -326,7 +339,7 @@ def solve_stage(sd, wk, A, c, gamma, nw, stages, j, h, t, R, r, V):
     vscale = 1e-300
     for i in range(V.shape[0]):
         for k in range(6):
-            vscale = max(vscale, abs(V[i, k]), hg * abs(wk.Vd[stages[0], i, k]))
+            vscale = max(vscale, abs(V[i, k]), abs(nw.W[i, k]))
     st = newton_iterate(sd, wk, nw, j, jprev, hg, t + c[j] * h, R, r, V, vscale, False)
     if st == STATUS_NEWTON and nw.st[NS_FRESH] == 0.0:
         nw.st[NS_RETRIES] += 1.0

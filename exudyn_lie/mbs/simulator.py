@@ -408,6 +408,8 @@ class Simulator(ExternalSeams):
 
     #: the parts an implicit step whose Newton iteration does not converge is tried in, in turn
     SUBSTEPS = (2, 4, 8, 16, 32, 64)
+    #: steps done in parts so far (implicit methods, fixed steps)
+    dividedSteps = 0
 
     def _substeps(self, h, t):
         """One step of size ``h`` from the current state at ``t`` in ``SUBSTEPS`` equal parts, the first
@@ -420,6 +422,7 @@ class Simulator(ExternalSeams):
         for m in self.SUBSTEPS:
             st, _ = self._mk_steps(m, h / m, t)
             if st == kernel.STATUS_OK:
+                self.dividedSteps += 1
                 return st
             self.R[:], self.r[:], self.V[:] = start
             for a, saved in zip(self.wk.path, path):

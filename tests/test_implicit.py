@@ -1,0 +1,267 @@
+"""Implicit Munthe-Kaas methods (ESDIRK3, mbs/implicit.py): the tableau's properties, the order of
+convergence on stiff and constrained models against fine references, the paper's corollary 1 for an
+implicit method, the Newton matrix against central differences, stiffness from 1e2 to 1e10, and the
+drop-in's own choice of method in SolveDynamic."""
+import numpy as np
+import pytest
+
+import exudyn as exu
+from exudyn.utilities import (MarkerNodePosition, NodePoint, ObjectConnectorSpringDamper, ObjectGround,
+                              ObjectMassPoint, MarkerBodyPosition, LoadForceVector)
+
+import exudyn_lie as exl
+from exudyn_lie.errors import StepSizeError
+from exudyn_lie.integrators import stability as S
+from exudyn_lie.integrators.tableau import ESDIRK3, METHODS, get_method
+from exudyn_lie.mbs import GROUND, Scene, Simulator
+from exudyn_lie.mbs.implicit import newton_jacobian
+
+from test_bridge_common import quiet_settings
+
+
+# --------------------------------------------------------------------------- the tableau
+def test_esdirk3_is_found_by_name_and_is_not_an_explicit_method():
+    assert get_method("esdirk3") is ESDIRK3 and get_method("ESDIRK3(2)4L[2]SA") is ESDIRK3
+    assert ESDIRK3 not in METHODS
+    assert ESDIRK3.implicit and not get_method("RK4").implicit
+    assert ESDIRK3.achieved_order() == 3 and ESDIRK3.order_hat == 2 and ESDIRK3.dense.order == 3
+    assert not ESDIRK3.fsal                      # its last stage is solved, not evaluated at the result
+
+
+def test_esdirk3_is_l_stable_and_its_embedded_method_a_stable():
+    assert S.is_a_stable(ESDIRK3)
+    # L-stable: R(z) ~ C / z for z -> -inf (0.0287 at -1e2, 2.9e-6 at -1e6)
+    R = np.abs(S.stability_function(ESDIRK3, [-1e2, -1e4, -1e6]))
+    assert np.all(R * [1e2, 1e4, 1e6] < 3.0)
+    assert S.is_a_stable(ESDIRK3, ESDIRK3.b_hat)                            # bounded at infinity
+    assert S.stability_radius(ESDIRK3) == np.inf
+    with pytest.raises(ValueError, match="rational"):
+        S.stability_coefficients(ESDIRK3)
+    # the explicit methods' polynomial and the general rational form agree
+    z = np.array([-0.3 + 0.8j, -2.0, 1.5j])
+    c = [float(x) for x in S.stability_coefficients("RK4")]
+    assert np.allclose(S.stability_function("RK4", z), np.polyval(c[::-1], z), rtol=1e-14)
+
+
+def test_a_diagonally_implicit_tableau_needs_one_gamma_and_an_explicit_first_stage():
+    from exudyn_lie.integrators.butcher import ButcherTableau
+    with pytest.raises(ValueError, match="ESDIRK"):
+        ButcherTableau(name="bad", order=1, A=[[0, 0, 0], [0.25, 0.25, 0], [0.2, 0.3, 0.5]], b=[0.3, 0.3, 0.4],
+                       c=[0, 0.5, 1.0])
+    with pytest.raises(ValueError, match="ESDIRK"):
+        ButcherTableau(name="bad2", order=1, A=[[0.5, 0], [0, 0.5]], b=[0.5, 0.5], c=[0.5, 0.5])
+
+
+# --------------------------------------------------------------------------- models
+def chain(k, damping, n=5):
+    """A revolute pendulum to the ground followed by bodies on stiff Cartesian and torsional springs."""
+    sc = Scene(gravity=[0, 0, -9.81])
+    prev = GROUND
+    for i in range(n):
+        b = sc.AddBody(1.0, np.diag([0.01, 0.02, 0.03]), r0=[0.5 * (i + 1), 0, 0], omega0=[0.1 * i, 0.3, 0.2])
+        if prev == GROUND:
+            sc.AddRevoluteJoint(GROUND, b, [0, 0, 0], axis=[0, 1, 0])
+            sc.AddSpringDamper(GROUND, [0, 0, 0], b, [-0.5, 0, 0], stiffness=10.0)
+        else:
+            sc.AddCartesianSpringDamper(prev, [0.25, 0, 0], b, [-0.25, 0, 0], stiffness=[k] * 3,
+                                        damping=[damping] * 3)
+            sc.AddTorsionalSpringDamper(prev, b, stiffness=0.01 * k, damping=0.01 * damping)
+        prev = b
+    return sc
+
+
+def run(sc, method, group, T, h):
+    sim = Simulator(sc, method, group, projectInitial=True)
+    sim.Run(T, h, outputEvery=int(round(T / h)))
+    return sim
+
+
+def slope(hs, errs):
+    return np.polyfit(np.log(hs), np.log(errs), 1)[0]
+
+
+# --------------------------------------------------------------------------- order and corollary 1
+@pytest.mark.parametrize("group", ["SE3", "SO3xR3"])
+def test_order_three_on_a_constrained_chain(group):
+    """Springs of 1e4 (|lambda| ~ 1e2, resolved by the steps): the classical order 3."""
+    T = 0.2
+    ref = run(chain(1e4, 0.0), "RK4", group, T, 1e-5)
+    hs = np.array([1e-3, 5e-4, 2.5e-4, 1.25e-4])
+    errs = [np.abs(run(chain(1e4, 0.0), "ESDIRK3", group, T, h).r - ref.r).max() for h in hs]
+    assert 2.6 <= slope(hs, errs) <= 3.4, errs
+
+
+def test_stiff_damped_chain_converges_at_the_stage_order_at_least():
+    """Springs of 1e6 critically damped (|lambda| up to ~4e3, h |lambda| up to 16 here): RK4 is
+    unstable at the larger steps; ESDIRK3 converges, at least at its stage order 2 (the order a
+    stiff problem may reduce it to)."""
+    T = 0.2
+    ref = run(chain(1e6, 2000.0), "RK4", "SE3", T, 1e-5)
+    hs = np.array([4e-3, 2e-3, 1e-3, 5e-4])
+    errs = [np.abs(run(chain(1e6, 2000.0), "ESDIRK3", "SE3", T, h).r - ref.r).max() for h in hs]
+    assert slope(hs, errs) >= 1.9, errs
+    assert errs[0] < 1e-4
+    with pytest.raises(StepSizeError):
+        run(chain(1e6, 2000.0), "RK4", "SE3", T, 4e-3)
+
+
+def pendulum(offset=(0.3, 0.1, -0.2)):
+    """A body on a revolute joint to the ground whose frame is off the axis (corollary 1 needs the
+    screw, not a pure rotation about the frame's origin), with a stiff torsional spring."""
+    sc = Scene(gravity=[0, 0, -9.81])
+    b = sc.AddBody(2.0, np.diag([0.02, 0.03, 0.04]), r0=[0.5, 0.2, 0.1], omega0=[0, 3.0, 0], name="arm")
+    sc.AddRevoluteJoint(GROUND, b, [0.2, 0.2, 0.0], axis=[0, 1, 0], name="hinge")
+    sc.AddTorsionalSpringDamper(GROUND, b, stiffness=1e5, damping=0.0)
+    return sc
+
+
+def test_corollary_1_holds_for_the_implicit_method_on_se3_not_on_so3xr3():
+    """A lower pair to the ground stays exact on SE3 (the stage solution is in the joint's
+    subalgebra) and drifts on SO3xR3, without any projection; h |lambda| ~ 11 (RK4: unstable).
+    Exact means round-off accumulated over the run: measured 1.2e-10 after 200 steps, as RK4 at
+    h = 1e-4 after 10,000 (5e-11); SO3xR3: 4.2e-7."""
+    T, h = 1.0, 5e-3
+    viol = {}
+    for group in ("SE3", "SO3xR3"):
+        sim = Simulator(pendulum(), "ESDIRK3", group, projectInitial=True)
+        sim.Run(T, h, outputEvery=int(round(T / h)))
+        _, _, pv, rv = sim.Diagnostics()
+        viol[group] = max(pv.max(), rv.max())
+    assert viol["SE3"] < 1e-9
+    assert viol["SO3xR3"] > 1e3 * viol["SE3"]
+
+
+# --------------------------------------------------------------------------- the Newton matrix
+@pytest.mark.parametrize("group", ["SE3", "SO3xR3"])
+def test_newton_jacobian_matches_central_differences(group):
+    """The compiled forward-difference Jacobians dF/dV and dF/dTheta (columns per body and algebra
+    axis) against central differences of the simulator's own evaluation, at a moving state."""
+    from exudyn_lie.mbs.bodies import exp_compose
+    sim = Simulator(chain(1e4, 10.0, n=3), "ESDIRK3", group, projectInitial=True)
+    sim.Run(0.05, 1e-3, outputEvery=50)
+    nw, nb = sim.method.newton, sim.sd.nb
+    R, r, V, t = sim.R.copy(), sim.r.copy(), sim.V.copy(), sim.t
+    assert sim._evaluate(t, R, r, V) == 0
+    A0 = sim.wk.Vd[0].copy()
+    assert newton_jacobian(sim.sd, sim.wk, nw, t, R, r, V, A0) == 0
+    Dv, Dth = nw.Dv.copy(), nw.Dth.copy()
+
+    def F(X, dV):
+        Rp, rp = np.empty_like(R), np.empty_like(r)
+        for i in range(nb):
+            exp_compose(int(sim.gid[i]), R[i], r[i], np.ascontiguousarray(X[i]), Rp[i], rp[i], np.empty((3, 3)),
+                        np.empty(3))
+        assert sim._evaluate(t, Rp, rp, np.ascontiguousarray(V + dV)) == 0
+        return sim.wk.Vd[0].ravel().copy()
+
+    e = 1e-6
+    for col in range(6 * nb):
+        d = np.zeros((nb, 6))
+        d.flat[col] = e
+        cv = (F(np.zeros((nb, 6)), d) - F(np.zeros((nb, 6)), -d)) / (2 * e)
+        ct = (F(d, np.zeros((nb, 6))) - F(-d, np.zeros((nb, 6)))) / (2 * e)
+        scale = 1.0 + np.abs(cv).max() + np.abs(ct).max()
+        assert np.abs(Dv[:, col] - cv).max() <= 2e-5 * scale, col
+        assert np.abs(Dth[:, col] - ct).max() <= 2e-5 * scale, col
+
+
+# --------------------------------------------------------------------------- stiffness 1e2 .. 1e10
+@pytest.mark.parametrize("k", [1e2, 1e4, 1e6, 1e8, 1e10])
+def test_stiffness_range_no_nan_no_growth(k):
+    """A body on an undamped spring released from rest, h = 1e-2 whatever k (h omega up to 1e3):
+    finite, energy never above the initial one (L-stability damps what the step does not resolve)."""
+    from exudyn_lie.apps import stress_models as M
+    sim = Simulator(M.spring_mass(k), "ESDIRK3", "SE3")
+    e0 = sim.Diagnostics()[0].sum()
+    res = sim.Run(1.0, 1e-2, outputEvery=1)
+    assert np.all(np.isfinite(res.r)) and np.all(np.isfinite(res.V))
+    assert np.all(res.energy.sum(axis=1) <= e0 * (1 + 1e-9))
+
+
+def falling_on_a_wall():
+    """A body that falls 5 cm onto a stiff, damped one-sided wall (a Python force, switched on inside
+    a step: not in the Jacobian of the step's start)."""
+    sc = Scene(gravity=[0, 0, -9.81])
+    sc.AddBody(1.0, np.eye(3) * 1e-3, r0=[0, 0, 0.05])
+
+    def wall(t, state):
+        F = np.zeros((1, 3))
+        z, vz = state.r[0, 2], state.vel[0, 2]
+        if z < 0:
+            F[0, 2] = max(0.0, -1e7 * z - 1e4 * vz)
+        return F, np.zeros((1, 3))
+    sc.AddPythonForce(wall)
+    return sc
+
+
+def test_newton_failure_in_a_step_is_retried_in_parts():
+    """The fixed step is kept where Newton converges and divided where it does not; the run ends and
+    agrees with RK4 at a step 30 times smaller (h |lambda| = 3 at the wall: RK4 is unstable at this
+    step).  (At h = 1e-3 the contact lasts less than a step: the body bounces back to 0.044 m where
+    the reference rests; the step, not the method, cannot resolve it.)"""
+    sim = Simulator(falling_on_a_wall(), "ESDIRK3", "SO3xR3")
+    sim.Run(0.3, 3e-4, outputEvery=1000)
+    ref = Simulator(falling_on_a_wall(), "RK4", "SO3xR3")
+    ref.Run(0.3, 1e-5, outputEvery=30000)
+    assert sim.dividedSteps >= 1
+    assert abs(sim.r[0, 2] - ref.r[0, 2]) < 1e-9 and abs(sim.V[0, 5]) < 1e-9
+
+
+# --------------------------------------------------------------------------- the drop-in's choice
+def stiff_mass_chain(mbs, k=1e8, n=4, damping=2e3):
+    """Point masses on stiff springs in a line from the ground, a load on the last (h |lambda| >> 3
+    at the script's step)."""
+    ground = mbs.AddObject(ObjectGround())
+    mg = mbs.AddMarker(MarkerBodyPosition(bodyNumber=ground, localPosition=[0, 0, 0]))
+    prev = mg
+    for i in range(n):
+        nd = mbs.AddNode(NodePoint(referenceCoordinates=[0.1 * (i + 1), 0, 0], initialVelocities=[0, 0.1 * i, 0]))
+        o = mbs.AddObject(ObjectMassPoint(physicsMass=1.0, nodeNumber=nd))
+        m = mbs.AddMarker(MarkerBodyPosition(bodyNumber=o, localPosition=[0, 0, 0]))
+        mbs.AddObject(ObjectConnectorSpringDamper(markerNumbers=[prev, m], stiffness=k, damping=damping,
+                                                  referenceLength=0.1))
+        prev = m
+    mbs.AddLoad(LoadForceVector(markerNumber=prev, loadVector=[0, 0, -10.0]))
+    mbs.AddMarker(MarkerNodePosition(nodeNumber=nd))
+    mbs.Assemble()
+    return nd
+
+
+def _solve(method=None, T=0.05, h=1e-3, native=False, factor=1):
+    SC = exu.SystemContainer()
+    mbs = SC.AddSystem()
+    nd = stiff_mass_chain(mbs)
+    ss = quiet_settings(T, int(round(T / h)) * factor)
+    ss.timeIntegration.generalizedAlpha.spectralRadius = 0.9
+    if native:
+        ss.timeIntegration.newton.relativeTolerance = 1e-12
+        ss.timeIntegration.newton.absoluteTolerance = 1e-12
+        ss.timeIntegration.newton.useModifiedNewton = False
+        exu.SolveDynamic(mbs, ss)
+    elif method is None:
+        exl.SolveDynamic(mbs, ss)
+    else:
+        exl.SolveDynamic(mbs, ss, method=method)
+    return np.array(mbs.GetNodeOutput(nd, exu.OutputVariableType.Position))
+
+
+def test_solve_dynamic_chooses_the_implicit_method_for_a_stiff_model(capsys):
+    with pytest.raises(StepSizeError):
+        _solve("RK4")                            # named: today's behaviour, the explicit method's error
+    capsys.readouterr()
+    p = _solve()                                 # no method named: one line says which and why
+    out = capsys.readouterr().out
+    assert "integrating with the L-stable implicit ESDIRK3" in out and "RK4 is not stable" in out
+    fine = _solve(native=True, factor=100)        # generalized-alpha at a 100 times finer step
+    native = _solve(native=True)                 # ... and at the script's step
+    # measured: 4.9e-6 against generalized-alpha's 2.9e-5 at the same step
+    assert np.abs(p - fine).max() < 0.5 * np.abs(native - fine).max()
+
+
+def test_solve_dynamic_keeps_rk4_where_it_is_stable(capsys):
+    SC = exu.SystemContainer()
+    mbs = SC.AddSystem()
+    stiff_mass_chain(mbs, k=1e2, damping=1.0)
+    exl.SolveDynamic(mbs, quiet_settings(0.05, 50))
+    assert "ESDIRK3" not in capsys.readouterr().out
+    assert mbs.sys["lieGroupSolver"].tableau.name == "RK4"

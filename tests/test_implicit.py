@@ -265,3 +265,41 @@ def test_solve_dynamic_keeps_rk4_where_it_is_stable(capsys):
     exl.SolveDynamic(mbs, quiet_settings(0.05, 50))
     assert "ESDIRK3" not in capsys.readouterr().out
     assert mbs.sys["lieGroupSolver"].tableau.name == "RK4"
+
+
+def slack_rope(mbs):
+    """A point mass falling 0.2 m on a slack rope to the ground that turns stiff (1e8 N/m, overdamped: it does not bounce) when taut:
+    stable for RK4 at the start (no stiffness yet), not once the rope is taut."""
+    ground = mbs.AddObject(ObjectGround())
+    mg = mbs.AddMarker(MarkerBodyPosition(bodyNumber=ground, localPosition=[0, 0, 0]))
+    nd = mbs.AddNode(NodePoint(referenceCoordinates=[0, 0, -0.8]))
+    o = mbs.AddObject(ObjectMassPoint(physicsMass=1.0, nodeNumber=nd))
+    m = mbs.AddMarker(MarkerBodyPosition(bodyNumber=o, localPosition=[0, 0, 0]))
+
+    def rope(mbs, t, itemNumber, deltaL, deltaL_t, stiffness, damping, force):
+        return stiffness * deltaL + damping * deltaL_t if deltaL > 0 else 0.0
+    mbs.AddObject(ObjectConnectorSpringDamper(markerNumbers=[mg, m], stiffness=1e8, damping=1e5,
+                                              referenceLength=1.0, springForceUserFunction=rope))
+    mbs.AddLoad(LoadForceVector(markerNumber=m, loadVector=[0, 0, -9.81]))
+    mbs.Assemble()
+    return nd
+
+
+def test_a_blow_up_of_the_default_method_continues_implicitly(capsys):
+    """Without a method the run goes on, from Exudyn's state at the start of the failing step, with
+    ESDIRK3 and says so once; the outputs are all there and the mass hangs on the rope at the end
+    (static stretch m g / k = 1e-7 m), as generalized-alpha at a finer step has it."""
+    SC = exu.SystemContainer()
+    mbs = SC.AddSystem()
+    nd = slack_rope(mbs)
+    ss = quiet_settings(1.0, 1000)
+    assert exl.SolveDynamic(mbs, ss)
+    out = capsys.readouterr().out
+    assert out.count("became unstable") == 1 and "continuing from Exudyn's state" in out
+    assert mbs.sys["lieGroupSolver"].tableau.name == "ESDIRK3"
+    z = mbs.GetNodeOutput(nd, exu.OutputVariableType.Position)[2]
+    SC2 = exu.SystemContainer()
+    mbs2 = SC2.AddSystem()
+    nd2 = slack_rope(mbs2)
+    exu.SolveDynamic(mbs2, quiet_settings(1.0, 100000))
+    assert abs(z - mbs2.GetNodeOutput(nd2, exu.OutputVariableType.Position)[2]) < 1e-6

@@ -103,9 +103,14 @@ def test_corrupted_c_raises():
 
 
 def test_non_explicit_raises():
+    """Explicit or ESDIRK (explicit first stage, one diagonal gamma) only: neither an entry above the
+    diagonal nor a diagonal of several values."""
     d = _rk4_exact()
     d["A"] = [[0, 0, 0, 0], ["1/4", "1/4", 0, 0], [0, "1/2", 0, 0], [0, 0, 1, 0]]
-    with pytest.raises(ValueError, match=r"'broken'.*strictly lower triangular.*a\[2,2\]"):
+    with pytest.raises(ValueError, match=r"'broken'.*diagonally implicit.*a\[j,j\] = gamma.*0, 0.25, 0, 0"):
+        ButcherTableau(name="broken", order=4, **d)
+    d["A"] = [[0, 0, 0, 0], ["1/2", 0, "1/4", 0], [0, "1/2", 0, 0], [0, 0, 1, 0]]
+    with pytest.raises(ValueError, match=r"'broken'.*not lower triangular.*a\[2,3\]"):
         ButcherTableau(name="broken", order=4, **d)
 
 

@@ -33,6 +33,9 @@ Sections (``--sections``, default all):
 * ``evaluated``  the path on which Exudyn evaluates the model (items the kernel does not read):
   chains of 1, 10, 50 bodies with one foreign item, per step and per stage, against the
   compiled path and generalized-alpha (:mod:`.bench_evaluated`).
+* ``stiff``  stiff models (a chain on stiff spring-dampers, an ANCF cable with a rigid body, a
+  penalty contact): the implicit ESDIRK3 against Exudyn's generalized-alpha, work against
+  precision (:mod:`.bench_stiff`).
 
 Every sweep runs through Exudyn's ``exudyn.processing.ParameterVariation`` with
 multiprocessing (:func:`exudyn_lie.apps.bench_runs.sweep`); every time is the
@@ -63,7 +66,7 @@ NATIVE_FREE = ("RK44", "RK67", "DOPRI5")
 EPS_LEVELS = (1e-4, 1e-5, 1e-6, 1e-7, 1e-8)
 SECTIONS = ("wp", "perstep", "scaling", "startup", "overhead", "groups", "mujoco", "params", "items",
             "userfunctions", "topology", "adaptive", "planar", "evaluated", "check",
-            "stabilization")
+            "stabilization", "stiff")
 TARGET_RATIO = 10.0
 # absolute per-step targets (MK-RK4, SE3, median step, this 2-core machine)
 KERNEL_STEP_TARGETS_US = {"heavytop": 3.0, "doublependulum": 6.0}
@@ -841,6 +844,9 @@ def write_report(cfg, out, cmdline):
         L += _adaptive_lines(out["adaptive"], out["adaptive"].get("figures", ()))
     from .bench_planar import report_lines as _planar_lines
     L += _planar_lines(out.get("planar"))
+    if out.get("stiff"):
+        from .bench_stiff import report_lines as _stiff_lines
+        L += _stiff_lines(out["stiff"]["models"], out["stiff"].get("figures", ()))
     # ---- profile notes
     A("## 7. Profile and optimisation record")
     A("")
@@ -1000,6 +1006,9 @@ def main(argv=None):
     if "adaptive" in cfg.sections:
         from . import bench_adaptive
         out["adaptive"] = bench_adaptive.run_section(cfg, log)
+    if "stiff" in cfg.sections:
+        from . import bench_stiff
+        out["stiff"] = dict(models=bench_stiff.run_section(cfg, log))
     if "planar" in cfg.sections:
         from .bench_planar import planar_section
         log("planar four-bar of 2D bodies vs the 3D planar four-bar; SE2 vs SE3 maps")
@@ -1017,6 +1026,11 @@ def main(argv=None):
         figs = adaptive_plot(out["adaptive"], cfg.figdir)
         out["figures"] += figs
         out["adaptive"]["figures"] = [os.path.join("bench_figures", os.path.basename(f)) for f in figs]
+    if out.get("stiff"):
+        from .bench_stiff import plot as stiff_plot
+        figs = stiff_plot(out["stiff"]["models"], cfg.figdir)
+        out["figures"] += figs
+        out["stiff"]["figures"] = [os.path.join("bench_figures", os.path.basename(f)) for f in figs]
     write_report(cfg, out, cmdline)
     if args.readme:
         from .generated import update_file_block

@@ -40,3 +40,39 @@ def unstable_choice(explicit, h, t, status):
 def auto_choice_text(tab):
     """The solution file's name of the method of a run whose choice is made at its start."""
     return f"{tab.name}, or {IMPLICIT_DEFAULT} if the model is too stiff for it at this step,"
+
+
+# --------------------------------------------------------------------------- the compiled path's solver
+def choose_at_start(solver, h):
+    """A :class:`~.solver.LieGroupSolver`'s method for a fixed-step run of ``h``: its explicit one, or
+    ESDIRK3 where that is not stable at ``h`` by the spectral radius of the linearised equations at the
+    initial state."""
+    from ..errors import SimulationError
+    from ..integrators.stability import stability_radius
+    explicit, sim = solver._explicit, solver.sim
+    try:
+        rho = sim.SpectralRadius()
+    except SimulationError:           # the right-hand side fails at the start: the run says how
+        rho = 0.0
+    hmax = stability_radius(explicit) / rho if rho > 0 else float("inf")
+    tab, line = stiff_choice(explicit, h, hmax, rho, "the spectral radius of the linearised equations at the "
+                             "initial state")
+    if tab is not sim.tableau:
+        sim.SetMethod(tab)
+    solver.tableau, solver.method = tab, tab.name
+    if line:
+        print(line)
+
+
+def replace_after_failure(solver, status, h, t):
+    """After a blow-up of the explicit method the user did not name: ESDIRK3 from now on (the caller
+    restarts from Exudyn's state at ``t``); False when the failure stays an error."""
+    sim = solver.sim
+    if not (solver.autoImplicit and not sim.tableau.implicit and status in UNSTABLE_STATUS):
+        return False
+    tab, line = unstable_choice(sim.tableau, h, t, status)
+    sim.SetMethod(tab)
+    solver._chunks.out._ep.clear()
+    solver.tableau, solver.method = tab, tab.name
+    print(line)
+    return True

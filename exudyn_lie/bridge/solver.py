@@ -39,13 +39,12 @@ from .. import __version__
 from ..compiling import compile_timer
 from ..integrators.tableau import resolve_pair
 from ..integrators.tableau import ButcherTableau, method_names
-from ..integrators.stability import stability_radius
 from ..mbs.compiled import auto_groups
 from ..mbs.simulator import Simulator
 from ..userwarn import warn_user
 from .constraint_check import ConstraintCheck, check_tolerance, kernel_explanation
 from .fast import CHUNK_ROWS, AdaptiveOutputChunks, OutputChunks
-from .method_choice import UNSTABLE_STATUS, stiff_choice, unstable_choice
+from .method_choice import choose_at_start, replace_after_failure
 from .moving_offsets import ParameterOffsets
 from .params import ParameterWatch
 from .settings import liegroup_argument, positive_float
@@ -240,31 +239,10 @@ class LieGroupSolver(StateIO):
                 f"header's 'number of time steps (planned)' counts those)")
 
     def _choose_method(self, h):
-        """The explicit method, or ESDIRK3 where the explicit one is not stable at ``h`` by the spectral
-        radius of the linearised equations at the initial state (bridge/method_choice.py)."""
-        explicit, sim = self._explicit, self.sim
-        rho = sim.SpectralRadius()
-        hmax = stability_radius(explicit) / rho if rho > 0 else float("inf")
-        tab, line = stiff_choice(explicit, h, hmax, rho, "the spectral radius of the linearised equations at the "
-                                 "initial state")
-        if tab is not sim.tableau:
-            sim.SetMethod(tab)
-        self.tableau, self.method = tab, tab.name
-        if line:
-            print(line)
+        choose_at_start(self, h)
 
     def _replace_after_failure(self, status, h, t):
-        """After a blow-up of the explicit method the user did not name: ESDIRK3 from now on (the
-        caller restarts from Exudyn's state at ``t``; bridge/method_choice.py)."""
-        if not (self.autoImplicit and not self.sim.tableau.implicit and status in UNSTABLE_STATUS):
-            return False
-        explicit = self.sim.tableau
-        tab, line = unstable_choice(explicit, h, t, status)
-        self.sim.SetMethod(tab)
-        self._chunks.out._ep.clear()
-        self.tableau, self.method = tab, tab.name
-        print(line)
-        return True
+        return replace_after_failure(self, status, h, t)
 
     def _announce(self, why):
         sc = self.scene

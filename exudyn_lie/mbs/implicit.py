@@ -379,6 +379,12 @@ def _implicit_is_implicit(tab):
         return lambda tab: True
 
 
+@overload(stepper.evaluate_stage, inline="always")
+def _implicit_evaluate_stage(sd, wk, tab, t, Vdot):
+    if stepper.carries_newton(tab):
+        return lambda sd, wk, tab, t, Vdot: stage_rhs_at(sd, wk, t, Vdot)
+
+
 @overload(stepper.implicit_stage, inline="always")
 def _implicit_stage(sd, wk, tab, j, h, t, R, r, V):
     if stepper.carries_newton(tab):

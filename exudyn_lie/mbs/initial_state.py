@@ -14,6 +14,10 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import ConstraintError
+from ..userwarn import warn_user
+from . import kernel
+from .compiled import with_redundant
+from .linalg import REL_PIVOT_TOL
 
 # relative size of the constraint residual / velocity error accepted at the start
 INITIAL_TOL = 1e-8
@@ -78,3 +82,37 @@ class RowLevels:
 
     def describe_rows(self, rows):
         return "joints " + ", ".join(self.sim._joints_of_rows(rows))
+
+
+def check_redundancy(sim):
+    """Redundant rows at ``sim``'s initial state switch the kernel to its rank-revealing solve.
+
+    One rule decides, the kernel's (:mod:`exudyn_lie.mbs.linalg`): the time loop's own
+    band Cholesky of ``S = J M^-1 J^T`` at the initial state (O(m b^2)).  If a pivot
+    falls to ``<= REL_PIVOT_TOL * S_ii`` (its row's diagonal) the time loop would stop at its first
+    stage, so the simulator switches to the rank-revealing (complete-pivoted
+    Cholesky) solve, which applies the same tolerance, and warns: "redundant" with
+    the rank when the pivoted factorisation drops rows, "ill-conditioned" when only
+    the band factorisation's ordering met the threshold.  The joints are named from
+    the null space of the dense S (O(m^3), only on this path)."""
+    if sim.sd.nrows == 0:
+        return
+    if sim._evaluate(sim.t, sim.R, sim.r, sim.V) != kernel.STATUS_SINGULAR:
+        return
+    m = sim.sd.nrows
+    rank, dep = sim._dependent_rows(sim.R, sim.r, sim.V, forced=True)
+    sim.redundantJoints = sim._joints_of_rows(dep)
+    sim.sd = with_redundant(sim.sd, True)
+    sim.wk = sim._make_work()
+    sim._update_tracking()
+    names = ", ".join(sim.redundantJoints)
+    rule = (f"Cholesky pivots of J M^-1 J^T at or below {REL_PIVOT_TOL:g} x their row's diagonal at the "
+            f"initial state")
+    if rank < m:
+        msg = (f"exudyn_lie: redundant constraints among joints {names} (numerical rank {rank} of {m} "
+               f"rows: {rule}); using the rank-revealing (pivoted Cholesky) solve")
+    else:
+        msg = (f"exudyn_lie: ill-conditioned constraints among joints {names} (a band Cholesky pivot of "
+               f"J M^-1 J^T at or below {REL_PIVOT_TOL:g} x its row's diagonal at the initial state, "
+               f"full rank with pivoting); using the pivoted Cholesky solve")
+    warn_user(msg)

@@ -19,6 +19,7 @@ from ..errors import SimulationError
 from ..userwarn import warn_user
 from . import kernel, stepper
 from .entry import call
+from . import implicit_run
 from .rotation_parameters import record_tracked
 from .state import twist_to_world_velocity
 
@@ -108,7 +109,7 @@ class OutputRows:
                 continue
             if st != kernel.STATUS_NEWTON or not sim.tableau.implicit:
                 break
-            st = sim._substeps(h, t0 + done * h)     # an implicit step whose Newton iteration failed, in parts
+            st = implicit_run.substeps(sim, h, t0 + done * h)      # an implicit step that failed, in parts
             if st != kernel.STATUS_OK:
                 break
             done += 1

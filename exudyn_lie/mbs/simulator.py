@@ -15,23 +15,22 @@ from ..compiling import announce_cold_compile
 from ..errors import ConstraintError, SimulationError, StepSizeError  # noqa: F401 (re-exported)
 from ..groups import so3
 from ..integrators.tableau import resolve_pair
-from ..userwarn import warn_user
 from . import external, kernel
 from .rolling_disc_penalty_forces import D_DATA
 from .force_elements import write_row
 from .rotation_parameters import record_tracked, update_tracked_bodies
 from .step_observers import observe_initial_state, observed_at_start
 from .coordinate_forces import COORD_SPRING_FORCE
-from .compiled import compile_carried, compile_scene, make_work, resolve_groups, with_redundant
+from .compiled import compile_carried, compile_scene, make_work, resolve_groups
 from .linalg import REL_PIVOT_TOL, rows_in_null_space, schur_rank_and_null
 from .row_drives import RowDrives
 from .scene import Scene, SceneError
 from .state import BodyStates, twist_to_world_velocity, world_velocity_to_twist
-from .stepper import fixed_step_control, method_arrays
-from .implicit import implicit_method, newton_counters
+from .stepper import fixed_step_control
+from . import implicit_run
 from .entry import call
 from .adaptive_run import AdaptiveRun
-from .initial_state import RowLevels, check_initial_state
+from .initial_state import RowLevels, check_initial_state, check_redundancy
 from .outputs import Result, run  # noqa: F401 (Result re-exported)
 from . import step_errors, stiffness
 from .diagnostics import constraint_jacobian, joint_rows_at, schur_complement
@@ -73,7 +72,7 @@ class Simulator(ExternalSeams):
         self._carried = compile_carried(scene)       # track plan, path state, probes: kept by every Work
         self.sd = self.sd._replace(stabilization={None: None, "velocity": kernel.STAB_VELOCITY,
                                                   "position": kernel.STAB_POSITION}[self.stabilization])
-        self.method = self._method_arrays()
+        self.method = implicit_run.method_arrays_of(self.tableau, self.sd.gid)
         self.control = fixed_step_control()
         self._extViews = None
         self._extToken = (0 if not self.sd.hasQext else
@@ -92,35 +91,19 @@ class Simulator(ExternalSeams):
             for i, b in enumerate(scene.bodies):
                 print(f"exudyn_lie: body {i} ({b.name}): {self.groups[i]}")
 
-    def _method_arrays(self):
-        """The stepper's form of ``self.tableau``: an explicit ``Method``, or an ``ImplicitMethod`` with
-        its Newton arrays (mbs/implicit.py)."""
-        if self.tableau.implicit:
-            return implicit_method(self.tableau, self.sd.gid)
-        return method_arrays(self.tableau)
-
     def SetMethod(self, method):
         """Integrate with ``method`` (a name or a tableau) from now on; the state, the path state and
         the solve stay.  Adaptive steps: call :meth:`SetAdaptive` again."""
-        tab = resolve_pair(method)
-        if getattr(self, "_ad", None) is not None and tab.b_hat is None:
-            raise SimulationError(f"{tab.name} has no embedded error estimate for the adaptive steps set")
-        self.tableau = tab
-        self.method = self._method_arrays()
+        self.tableau = resolve_pair(method)
+        self.method = implicit_run.method_arrays_of(self.tableau, self.sd.gid)
         self.wk = self._make_work()        # (a new Work keeps the path state: compile_carried)
+        self._ad = None
 
     @property
     def newtonCounters(self):
         """An implicit method's Newton work so far (``{'jacobians', 'factorizations', 'iterations',
-        'stages', 'retries'}``; None for an explicit method)."""
-        if not self.tableau.implicit:
-            return None
-        out = newton_counters(self.method.newton)
-        ad = getattr(self, "_ad", None)
-        if ad is not None and hasattr(ad.method, "newton"):
-            for key, v in newton_counters(ad.method.newton).items():
-                out[key] += v
-        return out
+        'stages', 'retries', 'fullNewton'}``; None for an explicit method)."""
+        return implicit_run.newton_counters_of(self)
 
     def _make_work(self, solve="auto"):
         """New work arrays (``compiled.make_work``; ``solve``: see ``compiled.solve_plan``).
@@ -245,37 +228,8 @@ class Simulator(ExternalSeams):
         return rank, rows_in_null_space(null)
 
     def _check_redundancy(self):
-        """Redundant rows switch the kernel to its rank-revealing solve.
-
-        One rule decides, the kernel's (:mod:`exudyn_lie.mbs.linalg`): the time loop's own
-        band Cholesky of ``S = J M^-1 J^T`` at the initial state (O(m b^2)).  If a pivot
-        falls to ``<= REL_PIVOT_TOL * S_ii`` (its row's diagonal) the time loop would stop at its first
-        stage, so the simulator switches to the rank-revealing (complete-pivoted
-        Cholesky) solve, which applies the same tolerance, and warns: "redundant" with
-        the rank when the pivoted factorisation drops rows, "ill-conditioned" when only
-        the band factorisation's ordering met the threshold.  The joints are named from
-        the null space of the dense S (O(m^3), only on this path)."""
-        if self.sd.nrows == 0:
-            return
-        if self._evaluate(self.t, self.R, self.r, self.V) != kernel.STATUS_SINGULAR:
-            return
-        m = self.sd.nrows
-        rank, dep = self._dependent_rows(self.R, self.r, self.V, forced=True)
-        self.redundantJoints = self._joints_of_rows(dep)
-        self.sd = with_redundant(self.sd, True)
-        self.wk = self._make_work()
-        self._update_tracking()
-        names = ", ".join(self.redundantJoints)
-        rule = (f"Cholesky pivots of J M^-1 J^T at or below {REL_PIVOT_TOL:g} x their row's diagonal at the "
-                f"initial state")
-        if rank < m:
-            msg = (f"exudyn_lie: redundant constraints among joints {names} (numerical rank {rank} of {m} "
-                   f"rows: {rule}); using the rank-revealing (pivoted Cholesky) solve")
-        else:
-            msg = (f"exudyn_lie: ill-conditioned constraints among joints {names} (a band Cholesky pivot of "
-                   f"J M^-1 J^T at or below {REL_PIVOT_TOL:g} x its row's diagonal at the initial state, "
-                   f"full rank with pivoting); using the pivoted Cholesky solve")
-        warn_user(msg)
+        """Redundant rows switch the kernel to its rank-revealing solve (:func:`.initial_state.check_redundancy`)."""
+        check_redundancy(self)
 
     def _residuals_and_JV(self):
         """h(g, t) and J V - w(t) at the current state and time, row by row (no dense Jacobian;
@@ -389,48 +343,12 @@ class Simulator(ExternalSeams):
         # the state this call starts from: restored on failure, and where a blow-up's
         # step suggestion linearises (the rejected state itself is far from the motion)
         self._segmentStart = (self.t, self.R.copy(), self.r.copy(), self.V.copy())
-        n, done = int(nsteps), 0
-        while True:
-            st, d = self._mk_steps(n - done, h)
-            done += d
-            self.t += d * h              # on a failure: the last accepted step
-            if st != kernel.STATUS_NEWTON or not self.tableau.implicit:
-                break
-            st = self._substeps(h, self.t)      # an implicit step whose Newton iteration failed, in parts
-            if st != kernel.STATUS_OK:
-                break
-            done += 1
-            self.t += h
-            if done == n:
-                break
+        st = implicit_run.advance(self, int(nsteps), h)     # (an implicit step that fails, in parts)
         if st != kernel.STATUS_OK:
             self._raise_status(st, h)
 
-    #: the parts an implicit step whose Newton iteration does not converge is tried in, in turn
-    SUBSTEPS = (2, 4, 8, 16, 32, 64)
-    #: steps done in parts so far (implicit methods, fixed steps)
+    #: steps done in parts so far (implicit methods, fixed steps: implicit_run.substeps)
     dividedSteps = 0
-
-    def _substeps(self, h, t):
-        """One step of size ``h`` from the current state at ``t`` in ``SUBSTEPS`` equal parts, the first
-        division whose every part converges (its Newton iteration); a failed division leaves the state
-        and the path state as they were.  Returns the kernel status (``STATUS_NEWTON`` when every
-        division failed).  A force that switches on inside a step (a contact that closes) can stall
-        the iteration at the user's step."""
-        start = (self.R.copy(), self.r.copy(), self.V.copy())
-        path = [None if a is None else a.copy() for a in self.wk.path]
-        for m in self.SUBSTEPS:
-            st, _ = self._mk_steps(m, h / m, t)
-            if st == kernel.STATUS_OK:
-                self.dividedSteps += 1
-                return st
-            self.R[:], self.r[:], self.V[:] = start
-            for a, saved in zip(self.wk.path, path):
-                if a is not None:
-                    a[...] = saved
-            if st != kernel.STATUS_NEWTON:
-                return st
-        return kernel.STATUS_NEWTON
 
     def NoOutputs(self):
         """The output arguments of ``stepper.mk_steps`` for a call that records nothing:

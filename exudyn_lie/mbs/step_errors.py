@@ -10,6 +10,7 @@ from . import external, kernel
 from .codes import INFO_BODY, INFO_ROW
 from .linalg import REL_PIVOT_TOL
 from .stiffness import suggest_step
+from .implicit_run import SUBSTEPS
 
 
 def raise_status(sim, st, h):
@@ -60,8 +61,8 @@ def raise_status(sim, st, h):
     if st == kernel.STATUS_NEWTON:
         raise step_size_error(
             sim.tableau.name, h, sim.t, "the Newton iteration of an implicit stage did not converge (with a "
-            f"Jacobian of this step, then at each iterate, and with the step in up to {sim.SUBSTEPS[-1]} parts)",
-            "the step is too large for the nonlinearity of the model", h / sim.SUBSTEPS[-1])
+            f"Jacobian of this step, then at each iterate, and with the step in up to {SUBSTEPS[-1]} parts)",
+            "the step is too large for the nonlinearity of the model", h / SUBSTEPS[-1])
     sugg = suggest_step(sim, h)
     what = "non-finite (NaN/inf)" if st == kernel.STATUS_NONFINITE else "unbounded (blow-up)"
     raise step_size_error(sim.tableau.name, h, sim.t, f"the state became {what}",

@@ -37,6 +37,30 @@ Three seams (the third, the step observers after each accepted step, is :mod:`.s
   fixed-step specialisation holds none of the adaptive controller's code (same speed and
   compile time as a loop of its own), and a controller is its tuple type plus its overloads
   of these functions (the adaptive one registers them in :mod:`.adaptive`).
+
+**The loop** (:func:`mk_steps`).
+
+**Fixed steps** (``ctl`` a :class:`Control`): ``nsteps`` steps of size ``h`` from ``t0``.
+``nsteps = 0`` evaluates the equations of motion once at the current state (the
+first stage of a step): accelerations in ``wk.Vd[0]``, multipliers in ``wk.lam``.
+(One call site of the inlined right-hand side serves both uses: a second one would
+double the compile time.)
+Outputs: with ``every > 0`` the state after every ``every``-th step goes to row
+``o = (n + 1) / every - 1`` (:func:`record_output`); if ``Vdo`` has rows, the accelerations
+and multipliers at that state go to ``Vdo[o], lamo[o]``.  They are the first stage of
+the following step (explicit RK: stage 1 is evaluated at the step's initial state),
+so recording them costs one extra evaluation per call, after the last step.  A failure
+in that evaluation leaves ``Vdo[o, 0, 0]`` NaN.
+
+**Adaptive steps** (``ctl`` an ``adaptive.AdaptiveControl``, ``tab`` an
+``adaptive.AdaptiveMethod``): from ``ctl.fs[FS_T]`` with the next step ``ctl.fs[FS_H]``
+until ``ctl.fs[FS_TEND]``, or until every output time ``ctl.tout`` is written to
+``Ro, ro, Vo, Po`` (dense output); ``t0, h, nsteps, every`` are not used and ``Vdo,
+lamo`` have no rows.  Returns the number of outputs written (:mod:`.adaptive`).
+
+**Implicit methods** (``tab`` an ``ImplicitMethod`` or ``adaptive.AdaptiveImplicitMethod``, carrying
+Newton arrays): stage 1 as above, each later stage solved by :func:`implicit_stage`
+(:mod:`.implicit`), the rest of the loop unchanged.
 """
 from collections import namedtuple
 
@@ -308,6 +332,12 @@ def is_implicit(tab):
     """True if the stages after the first are implicit (a compile-time constant: mbs/implicit.py)."""
 
 
+def evaluate_stage(sd, wk, tab, t, Vdot):
+    """``stage_rhs`` as the method's specialisation of ``mk_steps`` calls it: inlined for an explicit
+    method, through the one compiled copy the Newton iteration calls for an implicit one (each
+    inlined copy of the right-hand side costs seconds of compile time)."""
+
+
 def implicit_stage(sd, wk, tab, j, h, t, R, r, V):
     """Solve implicit stage ``j`` of the step ``(t, h)`` from ``(R, r, V)``: ``wk.K[j]``, ``wk.Vd[j]``;
     a status (mbs/implicit.py)."""
@@ -350,6 +380,12 @@ def _fixed_is_adaptive(ctl):
 def _explicit_is_implicit(tab):
     if not carries_newton(tab):
         return lambda tab: False
+
+
+@overload(evaluate_stage, inline="always")
+def _explicit_evaluate_stage(sd, wk, tab, t, Vdot):
+    if not carries_newton(tab):
+        return lambda sd, wk, tab, t, Vdot: stage_rhs(sd, wk, t, Vdot)
 
 
 @overload(implicit_stage, inline="always")
@@ -455,25 +491,8 @@ def project_step_end(sd, wk, t, R, r, V):
 @njit(cache=True, _nrt=False)
 def mk_steps(sd, wk, tab, ctl, t0, h, nsteps, R, r, V, vmax, every, Ro, ro, Vo, Po, Vdo, lamo):
     """Advance MK steps in place.  Returns (status, steps done / outputs written); on a
-    failure (R, r, V) hold the last accepted step (the rejected one is undone).
-
-    **Fixed steps** (``ctl`` a :class:`Control`): ``nsteps`` steps of size ``h`` from ``t0``.
-    ``nsteps = 0`` evaluates the equations of motion once at the current state (the
-    first stage of a step): accelerations in ``wk.Vd[0]``, multipliers in ``wk.lam``.
-    (One call site of the inlined right-hand side serves both uses: a second one would
-    double the compile time.)
-    Outputs: with ``every > 0`` the state after every ``every``-th step goes to row
-    ``o = (n + 1) / every - 1`` (:func:`record_output`); if ``Vdo`` has rows, the accelerations
-    and multipliers at that state go to ``Vdo[o], lamo[o]``.  They are the first stage of
-    the following step (explicit RK: stage 1 is evaluated at the step's initial state),
-    so recording them costs one extra evaluation per call, after the last step.  A failure
-    in that evaluation leaves ``Vdo[o, 0, 0]`` NaN.
-
-    **Adaptive steps** (``ctl`` an ``adaptive.AdaptiveControl``, ``tab`` an
-    ``adaptive.AdaptiveMethod``): from ``ctl.fs[FS_T]`` with the next step ``ctl.fs[FS_H]``
-    until ``ctl.fs[FS_TEND]``, or until every output time ``ctl.tout`` is written to
-    ``Ro, ro, Vo, Po`` (dense output); ``t0, h, nsteps, every`` are not used and ``Vdo,
-    lamo`` have no rows.  Returns the number of outputs written (:mod:`.adaptive`)."""
+    failure (R, r, V) hold the last accepted step (the rejected one is undone).  Its arguments and
+    outputs, fixed and adaptive steps: the module docstring's "The loop"."""
     A = tab.A
     c = tab.c
     stages = tab.stages
@@ -503,22 +522,20 @@ def mk_steps(sd, wk, tab, ctl, t0, h, nsteps, R, r, V, vmax, every, Ro, ro, Vo, 
         ok = True
         for jj in range(ns):
             j = stages[jj]
-            if implicit and jj > 0:      # (mbs/implicit.py; the first stage is explicit)
+            solved = implicit and jj > 0     # an implicit stage (mbs/implicit.py; the first is explicit)
+            if solved:
                 st = implicit_stage(sd, wk, tab, j, hs, t, R, r, V)
-                if st != STATUS_OK:
-                    if adaptive:
-                        ok = False
-                        break
-                    return st, n
-                continue
-            st = mk_stage_state(sd, wk, A, j, hs, R, r, V)
+            else:
+                st = mk_stage_state(sd, wk, A, j, hs, R, r, V)
             if st != STATUS_OK:          # only for j >= 1: any pending output is written
                 if adaptive:             # a rejection with the largest decrease
                     ok = False
                     break
                 return st, n
+            if solved:
+                continue
             if stage_needed(ctl, j):
-                st = stage_rhs(sd, wk, t + c[j] * hs, wk.Vd[j])
+                st = evaluate_stage(sd, wk, tab, t + c[j] * hs, wk.Vd[j])
                 stage_evaluated(ctl, j, st)
                 if st != STATUS_OK:
                     if pending >= 0:

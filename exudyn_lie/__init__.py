@@ -1,4 +1,4 @@
-"""exudyn_lie: explicit Munthe-Kaas Lie group integrators for Exudyn multibody models.
+"""exudyn_lie: Munthe-Kaas Lie group integrators, explicit and implicit, for Exudyn multibody models.
 
 Each rigid body is integrated on its own configuration-space Lie group, SE(3) (screw
 update) or SO(3)xR3 (decoupled update), as analysed by Müller & Terze, *The

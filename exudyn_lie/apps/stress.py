@@ -16,7 +16,9 @@ number from this run) plus PNG figures to ``--out`` (default ``./stress_results`
                   projectInitial=True;
 * ``fuzz``        random mechanisms: Jacobians / eta vs finite differences, energy order,
                   agreement with Exudyn's generalized-alpha;
-* ``badinput``    bad input gives a clear error and leaves the scene / mbs unchanged.
+* ``badinput``    bad input gives a clear error and leaves the scene / mbs unchanged;
+* ``stiff``       stiffness 1e2 ... 1e10 at one step with the implicit ESDIRK3: finite, energy as
+                  the linear theory has it, joints held (:mod:`.stress_stiff`).
 
 Options: ``--quick`` (the subset the tests run), ``--out DIR``, ``--cases a,b`` (subset),
 ``--readme docs/STRESS.md`` (also rewrite that file's generated summary block).
@@ -34,7 +36,7 @@ from pathlib import Path
 
 from . import versions
 
-CASE_ORDER = ("spin", "groupmaps", "longrun", "stability", "rxyz", "constraints", "fuzz", "badinput")
+CASE_ORDER = ("spin", "groupmaps", "longrun", "stability", "rxyz", "constraints", "fuzz", "badinput", "stiff")
 
 
 

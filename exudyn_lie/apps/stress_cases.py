@@ -1619,6 +1619,8 @@ def case_badinput(quick, outdir):
     return cr
 
 
+from .stress_stiff import case_stiff  # noqa: E402 (a case module of its own)
+
 CASES = {
     "spin": case_spin,
     "groupmaps": case_groupmaps,
@@ -1628,4 +1630,5 @@ CASES = {
     "constraints": case_constraints,
     "fuzz": case_fuzz,
     "badinput": case_badinput,
+    "stiff": case_stiff,
 }

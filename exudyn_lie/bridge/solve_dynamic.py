@@ -36,7 +36,7 @@ def _before_solve(mbs, replacedType, methodName, where, assemble):
     method replaces (``replacedType``, or False), and the assembly of an unassembled ``mbs``."""
     if replacedType:
         warn_user(f"exudyn_lie.SolveDynamic: DynamicSolverType.{replacedType} (Exudyn's implicit solver) is replaced, "
-                  f"like GeneralizedAlpha, by the explicit Munthe-Kaas method {methodName}{where}; method= or an "
+                  f"like GeneralizedAlpha, by the Munthe-Kaas method {methodName}{where}; method= or an "
                   f"explicit solverType chooses the method, liegroup= the groups")
     if assemble:
         warn_user("exudyn_lie.SolveDynamic: mbs is not assembled; calling mbs.Assemble()")
@@ -49,16 +49,18 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
                  showHints=False, showCausingItems=True, autoAssemble=True, *, method=None, liegroup="auto",
                  stabilization="auto", projectInitial=True, verbose=False, showProgress=True, substeps=None,
                  accelerations=None, constraintTolerance=None, evaluation="auto", constraintCheck=True):
-    """Drop-in for ``exudyn.SolveDynamic``: integrate ``mbs`` with an explicit Munthe-Kaas
-    Lie group method inside Exudyn's time loop; returns True.
+    """Drop-in for ``exudyn.SolveDynamic``: integrate ``mbs`` with a Munthe-Kaas Lie group method
+    inside Exudyn's time loop; returns True.
 
     The positional arguments are Exudyn's.  ``solverType`` (else
     ``timeIntegration.solverType``, as Exudyn reads them): an explicit type selects its
     tableau (RK44 -> RK4, ODE23 -> BS3, ...), GeneralizedAlpha is replaced by ``method``,
     TrapezoidalIndex2 too but with a warning, VelocityVerlet and DVERK6 are refused
     (:mod:`exudyn_lie.bridge.solvertype`); ``showHints`` / ``showCausingItems`` are accepted for
-    compatibility.  Keyword-only extras: ``method`` (default RK4 or the explicit solverType's
-    tableau; :func:`exudyn_lie.method_names` or a
+    compatibility.  Keyword-only extras: ``method`` (default: the explicit solverType's tableau,
+    else RK4, or the L-stable implicit ESDIRK3 where RK4 is not stable at the step, at the start or
+    after a blow-up during the run, said in one line: :mod:`.method_choice`;
+    :func:`exudyn_lie.method_names`, ``'ESDIRK3'`` or a
     :class:`~exudyn_lie.integrators.ButcherTableau` of the user's own; it must agree with an
     explicit solverType),
     ``liegroup`` ('SE3', 'SO3xR3', 'auto' or {rigid-body object index: group}),

@@ -48,7 +48,7 @@ from ..groups import GROUPS
 from ..groups.interface import algebra_axes
 from . import stepper
 from .bodies import body_dexpinv_stage, exp_compose
-from .codes import INFO_BODY, STAGE_ARG_MAX2, STATUS_NEWTON, STATUS_OK
+from .codes import INFO_BODY, STAGE_ARG_MAX2, STATUS_EXTERNAL, STATUS_NEWTON, STATUS_OK
 from .linalg import lu_factor_inplace, lu_solve_inplace
 from .stepper import ImplicitMethod, needed_stages, stage_rhs  # noqa: F401 (ImplicitMethod: its home is stepper)
 
@@ -244,6 +244,9 @@ def newton_iterate(sd, wk, nw, j, jprev, hg, tj, R, r, V, vscale, full):
             exp_compose(gid[i], R[i], r[i], Ti, wk.Rs[i], wk.rs[i], wk.m3[0], wk.v3[0])
         st = stage_rhs_at(sd, wk, tj, Ap)
         nw.st[NS_ITERATIONS] += 1.0
+        if st == STATUS_EXTERNAL and wk.ext[1] != 0:     # non-finite rates outside: the iterate diverged
+            wk.ext[1] = 0
+            return STATUS_NEWTON
         if st != STATUS_OK:
             return st
         if full:                         # the Jacobian at this iterate (wk.Rb, rb, Vb: free during the stages)

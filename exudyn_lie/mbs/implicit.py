@@ -106,12 +106,13 @@ def newton_arrays(gid, tol=NEWTON_TOL, maxIterations=NEWTON_MAXIT):
     st = np.zeros(10)
     st[NS_STALE] = 1.0
     return Newton(E=np.zeros((n, n)), piv=np.zeros(n, np.int64), Dv=np.zeros((n, n)), Dth=np.zeros((n, n)),
-                axes=axes, P=z(), W=z(), Th=z(), F1=z(), Ap=z(), A1=z(), x=np.zeros(n), k6=np.zeros(6), m6=np.zeros(6),
-                  st=st, par=np.array([float(tol), float(maxIterations)]))
+                  axes=axes, P=z(), W=z(), Th=z(), F1=z(), Ap=z(), A1=z(), x=np.zeros(n), k6=np.zeros(6),
+                  m6=np.zeros(6), st=st, par=np.array([float(tol), float(maxIterations)]))
 
 
 def newton_counters(nw):
-    """``{'jacobians', 'factorizations', 'iterations', 'stages', 'retries'}`` so far."""
+    """``{'jacobians', 'factorizations', 'iterations', 'stages', 'retries', 'fullNewton'}`` so far: stages
+    solved again with a Jacobian of their step (retries) and by Newton's own iteration (fullNewton)."""
     s = nw.st
     return {"jacobians": int(s[NS_JACOBIANS]), "factorizations": int(s[NS_FACTORS]),
             "iterations": int(s[NS_ITERATIONS]), "stages": int(s[NS_STAGES]), "retries": int(s[NS_RETRIES]),

@@ -1,7 +1,8 @@
 """The one Munthe-Kaas stepper (eq. MK1), compiled: every path of the package runs it.
 
 ``mk_steps`` advances the state ``(R, r, V)`` of all bodies, each in its own group
-(:mod:`.bodies`), with the explicit tableau ``tab`` (:class:`Method`).  Its users: the
+(:mod:`.bodies`), with the tableau ``tab`` (:class:`Method`; an implicit one: :class:`ImplicitMethod`,
+the last section below).  Its users: the
 fixed-step loop of :class:`~exudyn_lie.mbs.Simulator` (``Advance`` / ``Run``), the
 accelerations at a state (``nsteps = 0``), and the bridge's output chunks
 (:class:`~exudyn_lie.bridge.fast.OutputChunks`), with or without forces evaluated in

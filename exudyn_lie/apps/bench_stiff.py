@@ -8,7 +8,7 @@ Models (Exudyn scripts built here, each run as a user runs it: the same ``mbs``,
 * ``cable``: a 2D ANCF cable of eight elements clamped at one end with a rigid 2D body pinned to
   its tip, under gravity; the Exudyn-evaluated path;
 * ``coin``: a coin rolling on a penalty contact with dry friction (ObjectConnectorRollingDiscPenalty,
-  contact stiffness 1e5, damping 1e3), started in contact; the compiled path.
+  contact stiffness 1e6, damping 1e4), started in contact; the compiled path.
 
 For each model and step ``h`` (halved from the largest): the end state (all ODE2 coordinates)
 against generalized-alpha at a step 64 times below the smallest (Exudyn's default Newton: full Newton
@@ -92,7 +92,7 @@ def build_coin(mbs):
     nData = mbs.AddNode(NodeGenericData(initialCoordinates=[0, 0, -1e-4], numberOfDataCoordinates=3))
     mbs.AddObject(ObjectConnectorRollingDiscPenalty(markerNumbers=[mG, mB], nodeNumber=nData, discRadius=r,
                                                     dryFriction=[0.5, 0.5], dryFrictionProportionalZone=0.05,
-                                                    contactStiffness=1e5, contactDamping=1e3))
+                                                    contactStiffness=1e6, contactDamping=1e4))
     mbs.Assemble()
 
 

@@ -203,7 +203,7 @@ def _coin(h, T, native=False, evaluation="auto"):
         import warnings
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            exl.SolveDynamic(mbs, ss, showProgress=False, evaluation=evaluation)
+            exl.SolveDynamic(mbs, ss, showProgress=False, evaluation=evaluation, method="RK4")
     return FM.final_state(mbs)
 
 

@@ -198,7 +198,7 @@ def report_lines(res, figures=()):
             L.append(f"* error {e:g}: {ratio}")
         L.append("")
     for f in figures:
-        L.append(f"![stiff work-precision]({f})")
+        L += [f"![stiff work-precision]({f})", ""]
     return L
 
 
@@ -209,14 +209,20 @@ def plot(res, figdir):
     import matplotlib.pyplot as plt
     fig, axes = plt.subplots(1, len(res), figsize=(5 * len(res), 4.2))
     for ax, (model, rows) in zip(np.atleast_1d(axes), res.items()):
-        for solver, label, style in (("native", "Exudyn generalized-alpha", "s-"), ("exl", "exudyn_lie (ESDIRK3)", "o-")):
-            pts = [(r["error"], r["seconds"]) for r in rows if r["solver"] == solver and np.isfinite(r["error"])]
-            ax.loglog([p[0] for p in pts], [p[1] for p in pts], style, label=label)
-        ax.set_title(f"{model}, T = {T_END[model]:g} s")
+        nat = [(r["error"], r["seconds"]) for r in rows if r["solver"] == "native" and np.isfinite(r["error"])]
+        ax.loglog([p[0] for p in nat], [p[1] for p in nat], "s-", color="C0", label="Exudyn generalized-alpha")
+        exl = [r for r in rows if r["solver"] == "exl" and np.isfinite(r["error"])]
+        ax.loglog([r["error"] for r in exl], [r["seconds"] for r in exl], "-", color="C1")
+        for method, marker in (("ESDIRK3", "o"), ("RK4", "^")):
+            pts = [r for r in exl if r["method"] == method]
+            if pts:
+                ax.loglog([r["error"] for r in pts], [r["seconds"] for r in pts], marker, color="C1",
+                          label=f"exudyn_lie, no method named: {method}")
+        ax.set_title(f"{model}, T = {T_END[model]:g} s, steps {min(STEPS[model]):g} ... {max(STEPS[model]):g} s")
         ax.set_xlabel("error of the end state")
         ax.set_ylabel("time inside the solve [s]")
         ax.grid(True, which="both", alpha=0.3)
-        ax.legend(fontsize=8)
+        ax.legend(fontsize=7, framealpha=0.6)
     fig.tight_layout()
     os.makedirs(figdir, exist_ok=True)
     path = os.path.join(figdir, "wp_stiff.png")

@@ -119,12 +119,18 @@ def test_bad_evaluation_keyword():
         exl.SolveDynamic(mbs, quiet_settings(0.01, 10), evaluation="python")
 
 
-def test_stiff_generic_ode2_beyond_stability_limit_raises_step_size_error():
+def _stiff_generic_ode2():
+    """One GenericODE2 coordinate on a spring of 1e8 (omega = 1e4 rad/s), released from 0.01."""
     mbs = new_mbs()
     n = mbs.AddNode(NodeGenericODE2(referenceCoordinates=[0.0], initialCoordinates=[0.01],
                                     initialCoordinates_t=[0.0], numberOfODE2Coordinates=1))
     mbs.AddObject(ObjectGenericODE2(nodeNumbers=[n], massMatrix=np.eye(1), stiffnessMatrix=np.array([[1e8]])))
     mbs.Assemble()
+    return mbs
+
+
+def test_stiff_generic_ode2_beyond_stability_limit_raises_step_size_error():
+    mbs = _stiff_generic_ode2()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         with pytest.raises(StepSizeError, match="stability limit") as e:
@@ -144,11 +150,7 @@ def test_stiff_generic_ode2_beyond_stability_limit_raises_step_size_error():
 def test_stiff_generic_ode2_without_a_method_runs_implicitly(capsys):
     """No method named: the check at the start finds RK4 unstable at the script's step and the run
     takes ESDIRK3 (one line says so); L-stable, it stays bounded."""
-    mbs = new_mbs()
-    n = mbs.AddNode(NodeGenericODE2(referenceCoordinates=[0.0], initialCoordinates=[0.01],
-                                    initialCoordinates_t=[0.0], numberOfODE2Coordinates=1))
-    mbs.AddObject(ObjectGenericODE2(nodeNumbers=[n], massMatrix=np.eye(1), stiffnessMatrix=np.array([[1e8]])))
-    mbs.Assemble()
+    mbs = _stiff_generic_ode2()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         exl.SolveDynamic(mbs, quiet_settings(0.1, 100), showProgress=False)

@@ -50,7 +50,7 @@ from . import stepper
 from .bodies import body_dexpinv_stage, exp_compose
 from .codes import INFO_BODY, STAGE_ARG_MAX2, STATUS_EXTERNAL, STATUS_NEWTON, STATUS_OK
 from .linalg import lu_factor_inplace, lu_solve_inplace
-from .stepper import ImplicitMethod, needed_stages, stage_rhs  # noqa: F401 (ImplicitMethod: its home is stepper)
+from .stepper import ImplicitMethod, copy_state, needed_stages, stage_rhs  # noqa: F401 (ImplicitMethod: its home is stepper)
 
 # The Newton iteration's arrays and state (one per simulator: tab.newton)
 Newton = namedtuple("Newton", [
@@ -128,17 +128,6 @@ def stage_rhs_at(sd, wk, t, out):
 
 # --------------------------------------------------------------------------- the Newton matrix
 @njit(cache=True, _nrt=False)
-def _set_start(gid, R, r, V, Rs, rs, Vs):
-    for i in range(gid.shape[0]):
-        for a in range(3):
-            rs[i, a] = r[i, a]
-            for c in range(3):
-                Rs[i, a, c] = R[i, a, c]
-        for k in range(6):
-            Vs[i, k] = V[i, k]
-
-
-@njit(cache=True, _nrt=False)
 def _difference_column(Ap, A0, e, D, col):
     nb = Ap.shape[0]
     for i in range(nb):
@@ -152,7 +141,7 @@ def newton_jacobian(sd, wk, nw, t, R, r, V, A0):
     of the stage right-hand side along each algebra axis; returns a status."""
     gid = sd.gid
     nb = gid.shape[0]
-    _set_start(gid, R, r, V, wk.Rs, wk.rs, wk.Vs)
+    copy_state(R, r, V, wk.Rs, wk.rs, wk.Vs)
     X = nw.m6
     for i in range(nb):
         for k in range(6):
@@ -195,7 +184,7 @@ def newton_factor(nw, hg):
             nw.E[a, c] = -hg * nw.Dv[a, c] - hg2 * nw.Dth[a, c]
         nw.E[a, a] += 1.0
     nw.st[NS_FACTORS] += 1.0
-    if lu_factor_inplace(nw.E, nw.piv) >= 0:
+    if lu_factor_inplace(nw.E, n, nw.piv, 0.0) >= 0:
         return STATUS_NEWTON
     return STATUS_OK
 
@@ -251,7 +240,7 @@ def newton_iterate(sd, wk, nw, j, jprev, hg, tj, R, r, V, vscale, full):
         if st != STATUS_OK:
             return st
         if full:                         # the Jacobian at this iterate (wk.Rb, rb, Vb: free during the stages)
-            _set_start(gid, wk.Rs, wk.rs, wk.Vs, wk.Rb, wk.rb, wk.Vb)
+            copy_state(wk.Rs, wk.rs, wk.Vs, wk.Rb, wk.rb, wk.Vb)
             for i in range(nb):
                 for k in range(6):
                     nw.A1[i, k] = Ap[i, k]
@@ -260,7 +249,7 @@ def newton_iterate(sd, wk, nw, j, jprev, hg, tj, R, r, V, vscale, full):
                 st = newton_factor(nw, hg)
             if st != STATUS_OK:
                 return st
-            _set_start(gid, wk.Rb, wk.rb, wk.Vb, wk.Rs, wk.rs, wk.Vs)
+            copy_state(wk.Rb, wk.rb, wk.Vb, wk.Rs, wk.rs, wk.Vs)
             for i in range(nb):
                 for k in range(6):
                     Ap[i, k] = nw.A1[i, k]
@@ -278,7 +267,7 @@ def newton_iterate(sd, wk, nw, j, jprev, hg, tj, R, r, V, vscale, full):
             for col in range(n):
                 s += nw.Dth[row, col] * F1[col // 6, col % 6]
             x[row] = (-(wk.Vs[i, k] - W[i, k] - hg * Ap[i, k]) - hg * s) * axes[i, k]
-        lu_solve_inplace(nw.E, nw.piv, x)
+        lu_solve_inplace(nw.E, n, nw.piv, x)
         d = 0.0
         for i in range(nb):
             for k in range(6):

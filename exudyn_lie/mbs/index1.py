@@ -12,8 +12,8 @@ from .bodies import apply_minv
 from .codes import INFO_RANK, INFO_ROW, ROW_BODY_A, ROW_BODY_B, STATUS_OK, STATUS_SINGULAR
 from .constraints import joints_rows
 from .force_elements import compute_forces
-from .linalg import band_ldl_inplace, band_ldl_solve_inplace, pivoted_cholesky_solve
-from .oblique_solve import force_direction_rows, lu_solve_inplace
+from .linalg import band_ldl_inplace, band_ldl_solve_inplace, lu_factor_inplace, lu_solve_inplace, pivoted_cholesky_solve
+from .oblique_solve import force_direction_rows
 from .tree_solve import tree_correction, tree_solve
 
 
@@ -202,10 +202,11 @@ def oblique_schur_solve(gid, Minv, rowIndex, pivotTol, R, Jr, W, lam, plan, fail
             S[q, l] = _row_dot(rowIndex, q, l, Jr, W)
         if abs(S[q, q]) > dmax:
             dmax = abs(S[q, q])
-    fail = lu_solve_inplace(S, m, plan.piv, lam, pivotTol * dmax)
+    fail = lu_factor_inplace(S, m, plan.piv, pivotTol * dmax)
     if fail >= 0:
         failInfo[INFO_ROW] = fail
         return STATUS_SINGULAR
+    lu_solve_inplace(S, m, plan.piv, lam)
     return STATUS_OK
 
 

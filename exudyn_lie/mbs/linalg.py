@@ -238,54 +238,52 @@ def rcm_order(n, edges):
 
 
 @njit(cache=True, _nrt=False)
-def lu_factor_inplace(E, piv):
-    """LU with partial pivoting of the square ``E`` in place (``L`` unit lower, ``U`` upper), the
-    row exchanges in ``piv``.  Returns -1, or the first column without a nonzero pivot.  The
-    Newton matrix of the implicit stages (mbs/implicit.py) is not symmetric: no Cholesky."""
-    n = E.shape[0]
-    bad = -1
-    for k in range(n):
+def lu_factor_inplace(E, m, piv, tol):
+    """LU with partial pivoting of the leading ``m x m`` block of ``E`` in place (``L`` unit lower,
+    ``U`` upper; whole rows exchanged, recorded in ``piv``).  Returns -1, or the first column whose
+    pivot is at or below ``tol`` (the factorisation stops there).  For the non-symmetric systems:
+    the oblique rows' index-1 solve (mbs/index1.py) and the implicit stages' Newton matrix
+    (mbs/implicit.py)."""
+    for k in range(m):
         p = k
         big = abs(E[k, k])
-        for i in range(k + 1, n):
+        for i in range(k + 1, m):
             if abs(E[i, k]) > big:
                 big = abs(E[i, k])
                 p = i
+        if big <= tol:
+            return k
         piv[k] = p
-        if big == 0.0:
-            if bad < 0:
-                bad = k
-            continue
         if p != k:
-            for c in range(n):
+            for c in range(m):
                 E[k, c], E[p, c] = E[p, c], E[k, c]
         inv = 1.0 / E[k, k]
-        for i in range(k + 1, n):
+        for i in range(k + 1, m):
             f = E[i, k] * inv
             if f != 0.0:
                 E[i, k] = f
-                for c in range(k + 1, n):
+                for c in range(k + 1, m):
                     E[i, c] -= f * E[k, c]
-            else:
-                E[i, k] = 0.0
-    return bad
+    return -1
 
 
 @njit(cache=True, _nrt=False)
-def lu_solve_inplace(E, piv, x):
-    """Solve ``E_original x_new = x`` with the factors of :func:`lu_factor_inplace`."""
-    n = E.shape[0]
-    for k in range(n):
+def lu_solve_inplace(E, m, piv, x):
+    """``x <- E_original^-1 x`` with the factors of :func:`lu_factor_inplace`: the row exchanges,
+    then forward elimination column by column (the order of a factorisation that carries ``x``
+    along) and back substitution."""
+    for k in range(m):
         p = piv[k]
         if p != k:
             x[k], x[p] = x[p], x[k]
-    for i in range(n):
-        s = x[i]
-        for c in range(i):
-            s -= E[i, c] * x[c]
-        x[i] = s
-    for i in range(n - 1, -1, -1):
-        s = x[i]
-        for c in range(i + 1, n):
-            s -= E[i, c] * x[c]
-        x[i] = s / E[i, i]
+    for k in range(m):
+        xk = x[k]
+        for i in range(k + 1, m):
+            f = E[i, k]
+            if f != 0.0:
+                x[i] -= f * xk
+    for k in range(m - 1, -1, -1):
+        s = x[k]
+        for c in range(k + 1, m):
+            s -= E[k, c] * x[c]
+        x[k] = s / E[k, k]

@@ -68,37 +68,3 @@ def force_direction_rows(plan, Jr):
         c = plan.pcol[p]
         for i in range(3):
             Cr[q, c + i] = plan.pval[p, i]
-
-
-@njit(cache=True, _nrt=False)
-def lu_solve_inplace(S, m, piv, b, tol):
-    """Solve ``S x = b`` in place (``b <- x``) by LU with partial pivoting (``S`` overwritten).
-    Returns -1, or the first column whose pivot is at or below ``tol``."""
-    for k in range(m):
-        p = k
-        big = abs(S[k, k])
-        for i in range(k + 1, m):
-            if abs(S[i, k]) > big:
-                big = abs(S[i, k])
-                p = i
-        if big <= tol:
-            return k
-        piv[k] = p
-        if p != k:
-            for c in range(m):
-                S[k, c], S[p, c] = S[p, c], S[k, c]
-            b[k], b[p] = b[p], b[k]
-        inv = 1.0 / S[k, k]
-        for i in range(k + 1, m):
-            f = S[i, k] * inv
-            if f != 0.0:
-                S[i, k] = f
-                for c in range(k + 1, m):
-                    S[i, c] -= f * S[k, c]
-                b[i] -= f * b[k]
-    for k in range(m - 1, -1, -1):
-        s = b[k]
-        for c in range(k + 1, m):
-            s -= S[k, c] * b[c]
-        b[k] = s / S[k, k]
-    return -1

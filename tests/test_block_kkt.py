@@ -61,6 +61,32 @@ def test_chain_matches_the_whole_kkt_matrix(seed):
     assert kkt._bw <= 2                      # the chain's rows in band order: a narrow band
 
 
+def test_a_block_of_m_that_changes_is_inverted_again_and_one_that_does_not_keeps_its_inverse():
+    """The inverses of M's blocks are kept while a block is equal bit for bit (a constant mass
+    matrix: ANCF elements, points); a block that changes (a rigid body's rotation) is inverted
+    again, also one that changes in one pair of entries only."""
+    rng = np.random.default_rng(7)
+    sizes = np.array([3, 6, 2, 5])
+    M, Cq, f = _chain(rng, sizes, rowsPerJoint=1)
+    eta = rng.normal(size=Cq.shape[0])
+    kkt = BlockKKT(M.shape[0], Cq.shape[0], _blocks_of(sizes), _no_empty)
+    kkt.solve(M, f, Cq, eta)
+    inverses = kkt._MinvB.copy()
+    kkt.solve(M.copy(), f, Cq, eta)
+    assert np.array_equal(kkt._MinvB, inverses)
+    M2 = M.copy()
+    M2[3:9, 3:9] += np.eye(6)                # block 1 changes
+    M2[9, 10] += 1e-3                        # block 2 changes in one pair of entries
+    M2[10, 9] += 1e-3
+    kkt.solve(M2, f, Cq, eta)
+    a, lam = _kkt(M2, Cq, f, eta)
+    assert np.allclose(kkt.a, a, rtol=1e-10, atol=1e-10 * np.abs(a).max())
+    assert np.allclose(kkt.lam, lam, rtol=1e-10, atol=1e-10 * np.abs(lam).max())
+    kkt.solve(M, f, Cq, eta)                 # back to M: its own solution again
+    a, lam = _kkt(M, Cq, f, eta)
+    assert np.allclose(kkt.a, a, rtol=1e-10, atol=1e-10 * np.abs(a).max())
+
+
 def test_rows_that_change_blocks_are_ordered_again():
     rng = np.random.default_rng(7)
     sizes = [3] * 10

@@ -68,18 +68,35 @@ def invert_block(M, blk, p0, s, W):
 
 
 @njit(cache=True)
-def invert_blocks(M, blk, blkPtr, blkOff, MinvB, W):
+def invert_blocks(M, blk, blkPtr, blkOff, MinvB, W, MB, MBok):
     """The inverse of every diagonal block of M into the flat storage ``MinvB[blkOff[b]:]``
-    (row-major s x s); ``W`` (smax, 2 smax) scratch.  Returns False if a block is singular."""
+    (row-major s x s); ``W`` (smax, 2 smax) scratch.  Returns False if a block is singular.
+
+    ``MB`` (``MinvB``'s layout) holds the blocks last inverted and ``MBok[b]`` whether
+    ``MinvB`` is their inverse: a block equal to it bit for bit keeps its inverse.  The mass
+    matrix of most items is constant (ANCF elements, points, 2D bodies), and the s^3 inversion
+    of a large block (a cable's nodes share one) cost more than Exudyn's evaluations of the
+    stage together; the s^2 comparison does not change any result."""
     for bI in range(blkPtr.shape[0] - 1):
         p0 = blkPtr[bI]
         s = blkPtr[bI + 1] - p0
+        o = blkOff[bI]
+        same = MBok[bI] != 0
+        for i in range(s):
+            for k in range(s):
+                v = M[blk[p0 + i], blk[p0 + k]]
+                if MB[o + i * s + k] != v:
+                    same = False
+                    MB[o + i * s + k] = v
+        if same:
+            continue
+        MBok[bI] = 0
         if not invert_block(M, blk, p0, s, W):
             return False
-        o = blkOff[bI]
         for i in range(s):
             for k in range(s):
                 MinvB[o + i * s + k] = W[i, s + k]
+        MBok[bI] = 1
     return True
 
 
@@ -192,7 +209,7 @@ def _subtract_reactions(Cq, lam, blk, blkPtr, blkOff, MinvB, bRowPtr, bRows, T, 
 
 
 @njit(cache=True)
-def schur_band_solve(M, f, Cq, eta, blk, blkPtr, blkOff, blockOf, pos, bw, pivoted, MinvB, W, a, lam,
+def schur_band_solve(M, f, Cq, eta, blk, blkPtr, blkOff, blockOf, pos, bw, pivoted, MinvB, W, MB, MBok, a, lam,
                      nzIdx, nzCnt, rowBlk, rowBlkCnt, bRowPtr, bRows, cnt, Y, Band, x, T, Sd, perm, yw):
     """``a``, ``lam`` of ``[M C_q^T; C_q 0][a; lam] = [f; eta]`` (module docstring).
 
@@ -205,7 +222,7 @@ def schur_band_solve(M, f, Cq, eta, blk, blkPtr, blkOff, blockOf, pos, bw, pivot
     the band (the pattern changed: order the rows again)."""
     m = eta.shape[0]
     nb = blkPtr.shape[0] - 1
-    if not invert_blocks(M, blk, blkPtr, blkOff, MinvB, W):
+    if not invert_blocks(M, blk, blkPtr, blkOff, MinvB, W, MB, MBok):
         return KKT_SINGULAR_BLOCK
     for bI in range(nb):                 # a0 = M^-1 f
         p0 = blkPtr[bI]
@@ -279,6 +296,8 @@ class BlockKKT:
         self.blkOff = np.concatenate([[0], np.cumsum(sizes * sizes)]).astype(np.int64)
         smax = int(sizes.max()) if nb else 1
         self._MinvB = np.zeros(int(self.blkOff[-1]))
+        self._MB = np.zeros(int(self.blkOff[-1]))
+        self._MBok = np.zeros(nb, np.int64)
         self._W = np.zeros((smax, 2 * smax))
         self._T = np.zeros(smax)
         self._rowBlk = np.zeros((m, max(nb, 1)), np.int64)
@@ -316,9 +335,9 @@ class BlockKKT:
         if self.pivoted and self._Sd.shape[0] != self.m:
             self._Sd = np.zeros((self.m, self.m))
         return schur_band_solve(M, f, Cq, eta, self.blk, self.blkPtr, self.blkOff, self.blockOf, self._pos,
-                                self._bw, self.pivoted, self._MinvB, self._W, self.a, self.lam, self._nzIdx,
-                                self._nzCnt, self._rowBlk, self._rowBlkCnt, self._bRowPtr, self._bRows,
-                                self._cnt, self._Y, self._band, self._x, self._T, self._Sd, self._perm, self._yw)
+                                self._bw, self.pivoted, self._MinvB, self._W, self._MB, self._MBok, self.a,
+                                self.lam, self._nzIdx, self._nzCnt, self._rowBlk, self._rowBlkCnt, self._bRowPtr,
+                                self._bRows, self._cnt, self._Y, self._band, self._x, self._T, self._Sd, self._perm, self._yw)
 
     def solve(self, M, f, Cq, eta):
         """``a``, ``lam`` of ``[M C_q^T; C_q 0][a; lam] = [f; eta]`` (M n x n, C_q m x n)."""

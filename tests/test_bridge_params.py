@@ -441,18 +441,13 @@ def _state(mbs):
 
 
 @pytest.mark.parametrize("assemble", [True, False])
-@pytest.mark.parametrize("what", ["GeneralContact", "PostNewtonUserFunction", "PreNewtonResidualUserFunction",
+@pytest.mark.parametrize("what", ["PostNewtonUserFunction", "PreNewtonResidualUserFunction",
                                   "SystemJacobianUserFunction"])
 def test_unhonoured_system_features_are_refused_with_mbs_unchanged(what, assemble):
+    """(GeneralContact is honoured on the Exudyn-evaluated path: tests/test_general_contact.py; the
+    compiled path's refusal: tests/test_foreign_items.py.)"""
     mbs, out = torsional_offset()
-    if what == "GeneralContact":
-        gc = mbs.AddGeneralContact()             # a sphere on the pendulum (object 1), as generalContactImplicit1
-        gc.SetFrictionPairings(np.zeros((1, 1)))
-        gc.SetSearchTreeCellSize(numberOfCells=[2, 2, 2])
-        gc.SetSearchTreeBox(pMin=[-1, -1, -1], pMax=[1, 1, 1])
-        gc.AddSphereWithMarker(mbs.AddMarker(MarkerBodyRigid(bodyNumber=1)), radius=0.05, contactStiffness=1e4,
-                               contactDamping=10, frictionMaterialIndex=0)
-    elif what == "PostNewtonUserFunction":
+    if what == "PostNewtonUserFunction":
         mbs.SetPostNewtonUserFunction(lambda mbs, t: [0, -1])
     elif what == "PreNewtonResidualUserFunction":
         mbs.SetPreNewtonResidualUserFunction(lambda mbs, t, newtonIt, discIt: None)

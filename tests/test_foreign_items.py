@@ -193,7 +193,8 @@ def _sliding_joint(m):
 
 
 BAD = {
-    "GeneralContact": ("generic_ode2", _general_contact, {}, r"GeneralContact"),
+    "GeneralContact on the compiled path": ("generic_ode2", _general_contact, dict(evaluation="compiled"),
+                                            r"GeneralContact.*evaluation='auto'"),
     "non-finite initial coordinate of the foreign item's node": ("generic_ode2", _nan_node, {},
                                                                  r"node \d+ .*NodeGenericODE2.*not finite"),
     "sliding joint, classical formulation": ("cable2d_pendulum", _sliding_joint, {},

@@ -38,6 +38,7 @@ from .method_choice import auto_choice_text, stiff_choice, unstable_choice
 from ..errors import StepSizeError
 from ..mbs.codes import STATUS_BLOWUP
 from .constraint_check import ConsistencyAccount, ConstraintCheck, check_tolerance
+from .general_contact import general_contacts, use_full_search
 from .reader import BridgeError, UNHONOURED_MBS_FUNCTIONS, check_system_level
 from .run_plan import adaptive_settings, needs_accelerations, plan_substeps, time_settings
 from .solver import loop_settings
@@ -105,8 +106,8 @@ def node_groups(mbs, liegroup):
 
 def check_system(mbs):
     """:func:`.reader.check_system_level` with what this path honours itself (a
-    PostNewtonUserFunction: Exudyn calls it after every step)."""
-    check_system_level(mbs, UNHONOURED_HERE, " (not verified against Exudyn's own solver yet)")
+    PostNewtonUserFunction: Exudyn calls it after every step; GeneralContact: bridge/general_contact.py)."""
+    check_system_level(mbs, UNHONOURED_HERE, generalContact=True)
 
 
 class EvaluatedSolver:
@@ -244,6 +245,8 @@ class EvaluatedSolver:
         P, mbs, tab = self._loopPlan, self.mbs, self.tableau
         t0, h, k, nsteps = P["t0"], P["h"], P["k"], P["nsteps"]
         sd = mbs.systemData
+        if general_contacts(mbs):
+            self._explicitSolver = use_full_search(mbs, t0, P["tEnd"])     # the law of Exudyn's explicit solvers
         cur = exu.ConfigurationType.Current
         q = sd.GetODE2Coordinates(configuration=cur, copy=False)
         qt = sd.GetODE2Coordinates_t(configuration=cur, copy=False)

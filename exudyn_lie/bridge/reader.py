@@ -124,15 +124,16 @@ UNHONOURED_MBS_FUNCTIONS = {
 }
 
 
-def check_system_level(mbs, unhonoured=None, contactReason=""):
-    """Refuse what is not an item but changes the model: GeneralContact and mbs-level user
-    functions that exudyn_lie does not honour (``unhonoured``: name -> why; default
-    ``UNHONOURED_MBS_FUNCTIONS``) (reads only; raises BridgeError)."""
+def check_system_level(mbs, unhonoured=None, generalContact=False):
+    """Refuse what is not an item but changes the model: GeneralContact (unless ``generalContact``:
+    the Exudyn-evaluated path, bridge/general_contact.py) and mbs-level user functions that
+    exudyn_lie does not honour (``unhonoured``: name -> why; default ``UNHONOURED_MBS_FUNCTIONS``)
+    (reads only; raises BridgeError)."""
     n = int(mbs.NumberOfGeneralContacts())
-    if n > 0:
-        raise BridgeError(f"mbs has {n} GeneralContact(s) (mbs.AddGeneralContact): exudyn_lie does not "
-                          f"integrate GeneralContact{contactReason}; solve this model with exudyn.SolveDynamic, "
-                          f"or remove the contact (mbs.DeleteGeneralContact)")
+    if n > 0 and not generalContact:
+        raise BridgeError(f"mbs has {n} GeneralContact(s) (mbs.AddGeneralContact): the compiled kernel does not "
+                          f"have GeneralContact; evaluation='auto' (the default) or 'exudyn' lets Exudyn evaluate "
+                          f"the model")
     for name, why in (UNHONOURED_MBS_FUNCTIONS if unhonoured is None else unhonoured).items():
         fn = getattr(mbs, "Get" + name, None)
         if fn is None:

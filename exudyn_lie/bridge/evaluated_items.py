@@ -100,8 +100,8 @@ def coordinate_constraint_rows(mbs):
             vel += rows
             continue
         what = _describe_object(mbs, o, d)
-        uf = _userfunction(d, "offsetUserFunction", what)
-        if uf is not None and _userfunction(d, "offsetUserFunction_t", what) is None:
+        uf = _userfunction(d, "offsetUserFunction", what, evaluated=True)
+        if uf is not None and _userfunction(d, "offsetUserFunction_t", what, evaluated=True) is None:
             fn = OffsetUserFunction(mbs, o, d, uf, "offsetUserFunction")
             moving += [(r, fn, fn.label) for r in rows]
     return np.array(vel, np.int64), moving
@@ -137,9 +137,9 @@ def position_derived_rows(mbs):
         if d["objectType"] != "JointGeneric" or not d.get("activeConnector", True):
             continue
         what = _describe_object(mbs, o, d)
-        if _userfunction(d, "offsetUserFunction_t", what) is not None:
+        if _userfunction(d, "offsetUserFunction_t", what, evaluated=True) is not None:
             every = True
-        if _userfunction(d, "offsetUserFunction", what) is not None:
+        if _userfunction(d, "offsetUserFunction", what, evaluated=True) is not None:
             rows += [int(r) for r in sd.GetObjectLTGAE(o)]
     if every:
         vel = [o for o in range(sd.NumberOfObjects()) if mbs.GetObject(o).get("velocityLevel", False) is True

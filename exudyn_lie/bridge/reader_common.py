@@ -113,8 +113,11 @@ class TorsionData:
     item: object = None
 
 
-def _userfunction(d, key, what):
-    """The Python callable of an Exudyn user-function parameter, None if unset."""
+def _userfunction(d, key, what, evaluated=False):
+    """The Python callable of an Exudyn user-function parameter, None if unset.  Any other kind
+    (Exudyn's symbolic user functions, ``exudyn.symbolic``) is evaluated by Exudyn itself: the
+    compiled reader raises NotCompiled (the Exudyn-evaluated path takes the model), the evaluated
+    path's own readers (``evaluated``: they call the function themselves) a BridgeError."""
     uf = d.get(key, 0)
     if isinstance(uf, (int, float)) and uf == 0:
         return None
@@ -122,8 +125,12 @@ def _userfunction(d, key, what):
         return None
     fn = uf.get("function") if isinstance(uf, dict) else uf
     if not callable(fn):
-        raise BridgeError(f"{what}: {key} of type {uf.get('type') if isinstance(uf, dict) else type(uf)} "
-                          f"is not a Python callable; exudyn_lie supports Python user functions only")
+        kind = uf.get("type") if isinstance(uf, dict) else type(uf).__name__
+        if evaluated:
+            raise BridgeError(f"{what}: {key} of type {kind} is not a Python callable; exudyn_lie calls this "
+                              f"function itself (its rate by differences) and supports Python functions only")
+        raise NotCompiled(f"{what}: {key} of type {kind} (Exudyn evaluates it; the compiled kernel calls Python "
+                          f"functions only)")
     return fn
 
 

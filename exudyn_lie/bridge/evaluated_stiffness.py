@@ -91,7 +91,16 @@ def _ode1_jacobian(model):
 def check_step(model, tableau, h, refuse=True):
     """The stability check before a run (:func:`~exudyn_lie.mbs.stiffness.check_linear_stability`)
     with the eigenvalues of Exudyn's linearisation at the state in mbs; returns (fastest rate,
-    largest stable step)."""
+    largest stable step).
+
+    Not with a GeneralContact: its Jacobian (``JacobianODE2LHS``) is that of the active-set law
+    for the implicit solvers' Newton iteration, not the derivative of the law this path evaluates
+    (bridge/general_contact.py); in Exudyn's ``particleClusters.py`` it has a damping of 6e7 on a
+    rotation of inertia 7.8e-5 (|lambda| = 7.7e11 1/s) where Exudyn's explicit Euler runs at the
+    script's step.  The stepper's blow-up check and the stage-stiffness watch during the run
+    remain."""
+    if int(model.mbs.NumberOfGeneralContacts()):
+        return 0.0, float("inf")
     return check_linear_stability(tableau, h, model.sd.GetTime(), linear_eigenvalues(model),
                                   "Exudyn's stiffness, damping and mass matrices on the constraint manifold at "
                                   "this state", refuse)

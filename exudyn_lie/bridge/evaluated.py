@@ -161,6 +161,8 @@ class EvaluatedModel:
         # C_qdot of velocity-level rows: the ODE2_t factor (position-level rows have no ODE2_t part)
         self._factorODE2_t = 1.0 if len(self.velocityRows) else 0.0
         self.evaluations = 0
+        self.constantMass = False        # set by the solver (mass_force_jacobian)
+        self._Mconst = None
         # bound methods, looked up once (the stage loop is Python)
         s = solver
         self._massMatrix, self._getM = s.ComputeMassMatrix, s.GetSystemMassMatrix
@@ -211,11 +213,19 @@ class EvaluatedModel:
 
     # ------------------------------------------------------------------ evaluations
     def mass_force_jacobian(self, t):
-        """(M, f, C_q) at the state in mbs (C_q rows of the AE equations; None without)."""
+        """(M, f, C_q) at the state in mbs (C_q rows of the AE equations; None without).  M is
+        evaluated once when ``constantMass`` (Exudyn's ``reuseConstantMassMatrix`` on a system whose
+        bodies all declare a constant one, evaluated_items.constant_mass_matrix): the dense copy of
+        an n x n matrix per stage cost more than the rest of a stage for many bodies (particles);
+        the returned M must not be changed."""
         self._setTime(t)
         mbs = self.mbs
-        self._massMatrix(mbs)
-        M = self._getM()
+        M = self._Mconst
+        if M is None:
+            self._massMatrix(mbs)
+            M = self._getM()
+            if self.constantMass:
+                self._Mconst = M
         self._ode2rhs(mbs)
         f = self._residual()[:self.n]
         if self.n1:

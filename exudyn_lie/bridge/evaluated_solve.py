@@ -29,7 +29,7 @@ import numpy as np
 
 from ..userwarn import warn_user
 from .evaluated import EvaluatedModel, Layout
-from .evaluated_items import check_model, parameter_offset_rows
+from .evaluated_items import check_model, constant_mass_matrix, parameter_offset_rows
 from .moving_offsets import ParameterOffsets
 from .evaluated_problem import EvaluatedProblem
 from .evaluated_initial import project_initial
@@ -217,7 +217,8 @@ class EvaluatedSolver:
                     f"step size h = {h:.6g} s, {nsteps} steps from t = {t0:g} to {tEnd:g} s")
         ss2 = loop_settings(ss, nsteps // k, info)
         self._loopPlan = dict(k=k, h=h, t0=t0, tEnd=tEnd, nsteps=nsteps, needAcc=needAcc, groups=groups, why=why,
-                              tolCheck=tolCheck, ticTotal=ticTotal, log=self.verbose or ss.timeIntegration.verboseMode >= 1)
+                              tolCheck=tolCheck, ticTotal=ticTotal, log=self.verbose or ss.timeIntegration.verboseMode >= 1,
+                              reuseMass=bool(ss.timeIntegration.reuseConstantMassMatrix))
         self._integration = 0.0
         loop = TimeLoop(mbs, self, ss, ss2, t0, tEnd, nsteps // k, storeSolver=storeSolver, showProgress=showProgress,
                         watch=True)
@@ -255,6 +256,7 @@ class EvaluatedSolver:
         self._ae = sd.GetAECoordinates(configuration=cur, copy=False) if layout.nAE else np.zeros(0)
         y = (np.array(sd.GetODE1Coordinates(configuration=cur), float) if layout.nODE1 else np.zeros(0))
         model = self.model = EvaluatedModel(mbs, solver, layout, q, qt, verbose=self.verbose)
+        model.constantMass = P["reuseMass"] and constant_mass_matrix(mbs)
         problem = self.problem = EvaluatedProblem(model, tab)
         problem.read_state(q, qt, y, t0)
         fixed = project_initial(model, problem, t0, self.projectInitial)

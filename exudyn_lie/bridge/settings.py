@@ -52,6 +52,9 @@ SETTINGS = (
                                                "disc) are updated after every step from its end state, as Exudyn's "
                                                "PostNewton does, and no step is repeated (Exudyn's discontinuous "
                                                "iteration would repeat it with the updated data)"),
+    ("timeIntegration.reuseConstantMassMatrix", HONOURED, "Exudyn-evaluated path: True, a mass matrix that all "
+                                                          "bodies declare constant is evaluated once, as Exudyn's "
+                                                          "own solvers do; False: at every stage"),
     ("timeIntegration", IGNORED, _STEP),       # newton, generalizedAlpha, explicit, adaptive steps, tolerances
     ("solution.restart.continueIfAvailable", REFUSED, "True: exudyn_lie does not continue from a restart file"),
     ("solution", HONOURED, _LOOP + ": solution and restart files, sensors, their periods, image recording"),

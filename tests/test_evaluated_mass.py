@@ -58,3 +58,11 @@ def test_the_run_is_the_same_with_m_once_and_m_at_every_stage(node):
         assert m.constantMass == (reuse and node == exu.NodeType.RotationRotationVector)
         out.append(np.array(mbs.systemData.GetODE2Coordinates()))
     assert np.array_equal(out[0], out[1])
+
+
+def test_a_model_too_large_for_exudyns_dense_interface_is_refused_clearly():
+    """150,000 coordinates (Exudyn's particlesTest3D2.py): the dense copies of M would take 168 GiB."""
+    from exudyn_lie.bridge.evaluated import check_dense_size
+    with pytest.raises(exl.BridgeError, match=r"150000 ODE2 coordinates.*densely, 168 GiB"):
+        check_dense_size(150000, 0)
+    check_dense_size(1200, 0)

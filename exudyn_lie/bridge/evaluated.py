@@ -125,6 +125,25 @@ class Layout:
         return order.astype(np.int64), ptr
 
 
+def check_dense_size(n, nJacobian):
+    """Exudyn's interface gives M (n x n) and the system Jacobian (nJacobian x nJacobian; 0: not
+    needed, no constraints) as dense copies; refuse a model whose copies exceed half of the memory
+    (a particle system of 150,000 coordinates: 168 GiB each) with a clear error instead of a
+    MemoryError."""
+    import os
+    need = 8.0 * (n * n + 2 * nJacobian * nJacobian)
+    try:
+        have = float(os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES"))
+    except (ValueError, OSError, AttributeError):
+        return
+    if need > 0.5 * have:
+        what = "the mass matrix and the system Jacobian" if nJacobian else "the mass matrix"
+        raise BridgeError(f"this model has {n} ODE2 coordinates: Exudyn evaluates it (items the compiled kernel does "
+                          f"not have), and its interface copies {what} densely, {need / 2 ** 30:.3g} GiB, more than "
+                          f"half of this machine's memory ({have / 2 ** 30:.3g} GiB); solve this model with "
+                          f"exudyn.SolveDynamic")
+
+
 class EvaluatedModel:
     """Exudyn's M, f, C_q and eta at a state of the Lie group / vector-space layout.
 
@@ -139,7 +158,8 @@ class EvaluatedModel:
         n, m, n1 = layout.nODE2, layout.nAE, layout.nODE1
         self.n, self.m, self.n1 = n, m, n1
         self.nsys = n + n1 + m
-        self._Z = np.zeros((self.nsys, self.nsys))
+        check_dense_size(n, self.nsys if m else 0)
+        self._Z = np.zeros((self.nsys, self.nsys) if m else (0, 0))
         self.kkt = BlockKKT(n, m, layout.blocks, self._check_rows, verbose)
         self.a, self.lam = self.kkt.a, self.kkt.lam
         self.ydot = np.zeros(n1)

@@ -28,6 +28,7 @@ from ..mbs.codes import BODY_TWIST, GROUP_NAMES
 from ..mbs.scene import Scene
 from ..mbs.simulator import Simulator
 from ..mbs.stiffness import StageStiffnessWatch
+from .evaluated_jacobian import ExudynNewtonJacobian, applies as jacobian_applies
 from .evaluated_kernels import pack_rates, pack_state, unpack_state
 
 
@@ -68,6 +69,7 @@ class EvaluatedProblem:
         self.tableau = self.sim.tableau
         self.stages = self.sim.method.stages
         self._stiffness = StageStiffnessWatch(self.tableau)
+        self._jacobian_for_method()
 
     def set_method(self, tableau):
         """Integrate with ``tableau`` from now on (bridge/method_choice.py)."""
@@ -75,6 +77,13 @@ class EvaluatedProblem:
         self.tableau = self.sim.tableau
         self.stages = self.sim.method.stages
         self._stiffness = StageStiffnessWatch(self.tableau)
+        self._jacobian_for_method()
+
+    def _jacobian_for_method(self):
+        """An implicit method's Newton Jacobian from Exudyn's Jacobians where that applies
+        (bridge/evaluated_jacobian.py), else the kernel's differences."""
+        self.jacobian = (ExudynNewtonJacobian(self.model, self)
+                         if self.tableau.implicit and jacobian_applies(self.model) else None)
 
     # ------------------------------------------------------------------ the right-hand side
     def bind(self, Rs, rs, Vs, Vdot):
@@ -181,6 +190,8 @@ class EvaluatedProblem:
         last steps show a mode beyond the method's stability radius (:class:`~exudyn_lie.mbs.stiffness.StageStiffnessWatch`)."""
         sim = self.sim
         sim.t = t0
+        if self.jacobian is not None:
+            self.jacobian.before_steps(sim, t0)
         if adaptive:
             sim.AdvanceTo(t1)
         else:

@@ -85,6 +85,12 @@ def test_a_block_of_m_that_changes_is_inverted_again_and_one_that_does_not_keeps
     kkt.solve(M, f, Cq, eta)                 # back to M: its own solution again
     a, lam = _kkt(M, Cq, f, eta)
     assert np.allclose(kkt.a, a, rtol=1e-10, atol=1e-10 * np.abs(a).max())
+    kkt.constantM = M                        # the caller's constant M: not compared while it is passed
+    kkt.solve(M, f, Cq, eta)
+    assert np.allclose(kkt.a, a, rtol=1e-10, atol=1e-10 * np.abs(a).max())
+    kkt.solve(M2, f, Cq, eta)                # another array: compared, and inverted again
+    a2, _ = _kkt(M2, Cq, f, eta)
+    assert np.allclose(kkt.a, a2, rtol=1e-10, atol=1e-10 * np.abs(a2).max())
 
 
 def test_rows_that_change_blocks_are_ordered_again():

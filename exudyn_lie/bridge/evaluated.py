@@ -245,7 +245,7 @@ class EvaluatedModel:
             self._massMatrix(mbs)
             M = self._getM()
             if self.constantMass:
-                self._Mconst = M
+                self._Mconst = self.kkt.constantM = M
         self._ode2rhs(mbs)
         f = self._residual()[:self.n]
         if self.n1:

@@ -68,7 +68,7 @@ def invert_block(M, blk, p0, s, W):
 
 
 @njit(cache=True)
-def invert_blocks(M, blk, blkPtr, blkOff, MinvB, W, MB, MBok):
+def invert_blocks(M, blk, blkPtr, blkOff, MinvB, W, MB, MBok, unchanged):
     """The inverse of every diagonal block of M into the flat storage ``MinvB[blkOff[b]:]``
     (row-major s x s); ``W`` (smax, 2 smax) scratch.  Returns False if a block is singular.
 
@@ -76,8 +76,12 @@ def invert_blocks(M, blk, blkPtr, blkOff, MinvB, W, MB, MBok):
     ``MinvB`` is their inverse: a block equal to it bit for bit keeps its inverse.  The mass
     matrix of most items is constant (ANCF elements, points, 2D bodies), and the s^3 inversion
     of a large block (a cable's nodes share one) cost more than Exudyn's evaluations of the
-    stage together; the s^2 comparison does not change any result."""
+    stage together; the s^2 comparison does not change any result.  ``unchanged``: the caller
+    passes the same, unchanged M as last time (a constant mass matrix evaluated once): no
+    comparison either."""
     for bI in range(blkPtr.shape[0] - 1):
+        if unchanged and MBok[bI] != 0:
+            continue
         p0 = blkPtr[bI]
         s = blkPtr[bI + 1] - p0
         o = blkOff[bI]
@@ -209,7 +213,8 @@ def _subtract_reactions(Cq, lam, blk, blkPtr, blkOff, MinvB, bRowPtr, bRows, T, 
 
 
 @njit(cache=True)
-def schur_band_solve(M, f, Cq, eta, blk, blkPtr, blkOff, blockOf, pos, bw, pivoted, MinvB, W, MB, MBok, a, lam,
+def schur_band_solve(M, f, Cq, eta, blk, blkPtr, blkOff, blockOf, pos, bw, pivoted, MinvB, W, MB, MBok, unchanged, a,
+                     lam,
                      nzIdx, nzCnt, rowBlk, rowBlkCnt, bRowPtr, bRows, cnt, Y, Band, x, T, Sd, perm, yw):
     """``a``, ``lam`` of ``[M C_q^T; C_q 0][a; lam] = [f; eta]`` (module docstring).
 
@@ -222,7 +227,7 @@ def schur_band_solve(M, f, Cq, eta, blk, blkPtr, blkOff, blockOf, pos, bw, pivot
     the band (the pattern changed: order the rows again)."""
     m = eta.shape[0]
     nb = blkPtr.shape[0] - 1
-    if not invert_blocks(M, blk, blkPtr, blkOff, MinvB, W, MB, MBok):
+    if not invert_blocks(M, blk, blkPtr, blkOff, MinvB, W, MB, MBok, unchanged):
         return KKT_SINGULAR_BLOCK
     for bI in range(nb):                 # a0 = M^-1 f
         p0 = blkPtr[bI]
@@ -280,6 +285,7 @@ class BlockKKT:
         self.dense = False            # a singular block of M: the whole KKT matrix
         self.settled = False          # set-up done: redundant rows from now on are an error
         self.blk = None
+        self.constantM = None         # the caller's M that never changes (its blocks are not compared)
         self._nzIdx = np.zeros((m, n), np.int64)
         self._nzCnt = np.zeros(m, np.int64)
         self._perm = np.zeros(m, np.int64)
@@ -334,8 +340,9 @@ class BlockKKT:
     def _band_solve(self, M, f, Cq, eta):
         if self.pivoted and self._Sd.shape[0] != self.m:
             self._Sd = np.zeros((self.m, self.m))
+        unchanged = self.constantM is not None and M is self.constantM
         return schur_band_solve(M, f, Cq, eta, self.blk, self.blkPtr, self.blkOff, self.blockOf, self._pos,
-                                self._bw, self.pivoted, self._MinvB, self._W, self._MB, self._MBok, self.a,
+                                self._bw, self.pivoted, self._MinvB, self._W, self._MB, self._MBok, unchanged, self.a,
                                 self.lam, self._nzIdx, self._nzCnt, self._rowBlk, self._rowBlkCnt, self._bRowPtr,
                                 self._bRows, self._cnt, self._Y, self._band, self._x, self._T, self._Sd, self._perm, self._yw)
 

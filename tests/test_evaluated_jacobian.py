@@ -82,3 +82,24 @@ def test_the_run_is_the_run_with_difference_jacobians_at_fewer_evaluations(monke
     assert np.abs(qa - qb).max() < 1e-8, np.abs(qa - qb).max()
     print(f"evaluations: {na} with Exudyn's Jacobian, {pbb.model.evaluations} with differences")
     assert na < 0.8 * pbb.model.evaluations
+
+
+def test_the_constrained_inverse_with_a_regular_and_a_singular_mass_matrix():
+    """P = M^-1 - M^-1 C^T (C M^-1 C^T)^-1 C M^-1 for a regular M; a coordinate without mass that a
+    row fixes (Exudyn's ballBearingTest.py, objectFFRFTest.py) gives P from the KKT matrix, and P
+    maps any force to accelerations the rows allow (C P = 0)."""
+    from exudyn_lie.bridge.evaluated_jacobian import ExudynNewtonJacobian
+    rng = np.random.default_rng(1)
+    n, m = 8, 3
+    A = rng.standard_normal((n, n))
+    M = A @ A.T + n * np.eye(n)
+    C = rng.standard_normal((m, n))
+    Mi = np.linalg.inv(M)
+    P = ExudynNewtonJacobian._projector(M, C)
+    assert np.allclose(P, Mi - Mi @ C.T @ np.linalg.solve(C @ Mi @ C.T, C @ Mi), rtol=0, atol=1e-14)
+    M[0, :] = M[:, 0] = 0.0
+    C2 = np.vstack([C, np.eye(n)[0]])
+    P2 = ExudynNewtonJacobian._projector(M, C2)
+    assert P2 is not None and np.abs(C2 @ P2).max() < 1e-12
+    C[:, 0] = 0.0
+    assert ExudynNewtonJacobian._projector(M, C) is None       # the massless coordinate held by nothing

@@ -57,21 +57,25 @@ class ExudynNewtonJacobian:
         self.evaluations = 0
         self.everyStep = len(vec) <= EVERY_STEP_MAX_COORDINATES
 
-    def _projector(self, M, Cq):
-        Minv = np.linalg.inv(np.asarray(M, float))
-        if Cq is None or Cq.shape[0] == 0:
-            return Minv
-        C = np.asarray(Cq, float)
+    @staticmethod
+    def _projector(M, Cq):
+        """P, the upper left block of the inverse of [M C_q^T; C_q 0] (M may be singular where the
+        rows fix its coordinates, as the index-1 solve allows); None if that matrix is singular."""
+        M = np.asarray(M, float)
+        n = M.shape[0]
+        C = np.zeros((0, n)) if Cq is None else np.asarray(Cq, float)
         C = C[np.any(C != 0.0, axis=1)]
-        if C.shape[0] == 0:
-            return Minv
-        MC = Minv @ C.T
-        S = C @ MC
+        m = C.shape[0]
+        K = np.zeros((n + m, n + m))
+        K[:n, :n] = M
+        K[:n, n:] = C.T
+        K[n:, :n] = C
+        rhs = np.zeros((n + m, n))
+        rhs[:n] = np.eye(n)
         try:
-            X = np.linalg.solve(S, MC.T)
-        except np.linalg.LinAlgError:            # redundant rows: their least-squares multipliers
-            X = np.linalg.lstsq(S, MC.T, rcond=1e-12)[0]
-        return Minv - MC @ X
+            return np.linalg.solve(K, rhs)[:n]
+        except np.linalg.LinAlgError:            # redundant rows, or a coordinate that nothing holds
+            return None
 
     def fill(self, newton, t):
         """``newton.Dth``, ``newton.Dv`` at the simulator's state and time ``t``; marks the Jacobian as
@@ -82,6 +86,8 @@ class ExudynNewtonJacobian:
         m._setTime(t)
         M, _, Cq = m.mass_force_jacobian(t)
         P = self._projector(M, Cq)
+        if P is None:
+            return                                 # (still stale: the kernel's differences)
         s.ComputeJacobianODE2RHS(mbs, scalarFactor_ODE2=1.0, scalarFactor_ODE2_t=0.0, scalarFactor_ODE1=0.0,
                                  computeLoadsJacobian=1)
         K = np.asarray(s.GetSystemJacobian())[:n, :n]

@@ -124,8 +124,9 @@ def _run(variant, N, n):
     parts = None
     if Timed is not None:
         # per method: the median duration of one call times its calls per stage (a stage is one
-        # ComputeMassMatrix call): robust against the rare call that the machine interrupts
-        stages = len(Timed.acc.get("ComputeMassMatrix", ()))
+        # ComputeODE2RHS call; the mass matrix of this chain is constant, evaluated once): robust
+        # against the rare call that the machine interrupts
+        stages = len(Timed.acc.get("ComputeODE2RHS", ()))
         parts = {k: float(np.median(v)) * len(v) / stages for k, v in Timed.acc.items()} if stages else {}
     return per, parts
 

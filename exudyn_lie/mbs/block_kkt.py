@@ -75,8 +75,8 @@ def invert_blocks(M, blk, blkPtr, blkOff, MinvB, W, MB, MBok, unchanged):
     ``MB`` (``MinvB``'s layout) holds the blocks last inverted and ``MBok[b]`` whether
     ``MinvB`` is their inverse: a block equal to it bit for bit keeps its inverse.  The mass
     matrix of most items is constant (ANCF elements, points, 2D bodies), and the s^3 inversion
-    of a large block (a cable's nodes share one) cost more than Exudyn's evaluations of the
-    stage together; the s^2 comparison does not change any result.  ``unchanged``: the caller
+    of a large block (a cable's nodes share one) cost more than the rest of a stage's evaluation
+    of the model; the s^2 comparison does not change any result.  ``unchanged``: the caller
     passes the same, unchanged M as last time (a constant mass matrix evaluated once): no
     comparison either."""
     for bI in range(blkPtr.shape[0] - 1):

@@ -87,7 +87,8 @@ class ExudynNewtonJacobian:
         M, _, Cq = m.mass_force_jacobian(t)
         P = self._projector(M, Cq)
         if P is None:
-            return                                 # (still stale: the kernel's differences)
+            self.everyStep = False                 # (still stale: the kernel's differences; not
+            return                                 #  tried again at every step)
         s.ComputeJacobianODE2RHS(mbs, scalarFactor_ODE2=1.0, scalarFactor_ODE2_t=0.0, scalarFactor_ODE1=0.0,
                                  computeLoadsJacobian=1)
         K = np.asarray(s.GetSystemJacobian())[:n, :n]

@@ -34,7 +34,8 @@ def ball_on_sphere(mu=0.3, sensor=False):
     gc.AddSphereWithMarker(mB, radius=0.1, contactStiffness=1e5, contactDamping=10.0, frictionMaterialIndex=0)
     s = None
     if sensor:      # a ray from above the ball downwards: it hits the ball, which moves along x
-        s = mbs.CreateDistanceSensor(mbs.NumberOfGeneralContacts() - 1, positionOrMarker=[0.1, 0.0, 1.0], dirSensor=[0, 0, -1], minDistance=0,
+        s = mbs.CreateDistanceSensor(mbs.NumberOfGeneralContacts() - 1, positionOrMarker=[0.1, 0.0, 1.0],
+                                     dirSensor=[0, 0, -1], minDistance=0,
                                      maxDistance=2.0, measureVelocity=True, storeInternal=True)
     mbs.Assemble()
     return mbs, s

@@ -182,7 +182,6 @@ class EvaluatedModel:
         self._factorODE2_t = 1.0 if len(self.velocityRows) else 0.0
         self.evaluations = 0
         self.constantMass = False        # set by the solver (mass_force_jacobian)
-        self._Mconst = None
         # bound methods, looked up once (the stage loop is Python)
         s = solver
         self._massMatrix, self._getM = s.ComputeMassMatrix, s.GetSystemMassMatrix
@@ -240,12 +239,12 @@ class EvaluatedModel:
         the returned M must not be changed."""
         self._setTime(t)
         mbs = self.mbs
-        M = self._Mconst
+        M = self.kkt.constantM           # (the solve keeps the constant M and its blocks' inverses)
         if M is None:
             self._massMatrix(mbs)
             M = self._getM()
             if self.constantMass:
-                self._Mconst = self.kkt.constantM = M
+                self.kkt.constantM = M
         self._ode2rhs(mbs)
         f = self._residual()[:self.n]
         if self.n1:

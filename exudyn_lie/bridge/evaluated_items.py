@@ -36,7 +36,7 @@ CONSTANT_MASS = {
     "GenericODE2": lambda d, mbs: not d.get("massMatrixUserFunction", 0),
 }
 #: object types that are not bodies (their mass matrix: none)
-_NOT_BODIES = ("Connector", "Joint", "Contact", "Sensor")
+_NOT_BODIES = ("Connector", "Joint", "Contact")
 
 
 def constant_mass_matrix(mbs):

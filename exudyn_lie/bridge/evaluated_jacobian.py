@@ -3,8 +3,7 @@
 The simplified Newton iteration of an implicit stage (``mbs/implicit.py``) needs ``D_Theta =
 dVdot/dTheta`` and ``D_V = dVdot/dV`` at the step's start.  The kernel forms them by forward
 differences of the stage right-hand side, two evaluations per coordinate: on this path each is an
-evaluation by Exudyn (M, f, C_q, eta), 2n per Jacobian (256 for the 128 coordinates of Exudyn's
-``ANCFgeneralContactCircle.py``).  For a model of vector-space coordinates only (no
+evaluation by Exudyn (M, f, C_q, eta), 2n per Jacobian.  For a model of vector-space coordinates only (no
 ``NodeRigidBodyRotVecLG``, whose group coordinates would need the tangent maps, and no ODE1
 coordinates), they follow from Exudyn's own Jacobians in one pass: with ``qdot = v`` and
 ``[M C_q^T; C_q 0][a; lam] = [f; eta]`` (eq. index1),
@@ -25,12 +24,12 @@ from __future__ import annotations
 import numpy as np
 
 from ..mbs.implicit import NS_FRESH, NS_H, NS_JACOBIANS, NS_STALE
+from .general_contact import general_contacts
 
 
 def applies(model):
     """Whether :class:`ExudynNewtonJacobian` serves this model (module docstring)."""
-    return (len(model.L.lgNodes) == 0 and model.n1 == 0 and model.n > 0
-            and int(model.mbs.NumberOfGeneralContacts()) == 0)
+    return len(model.L.lgNodes) == 0 and model.n1 == 0 and model.n > 0 and not general_contacts(model.mbs)
 
 
 #: a Jacobian at every step up to this many coordinates (else when the kernel asks for one): the
@@ -83,7 +82,6 @@ class ExudynNewtonJacobian:
         m, p = self.model, self.problem
         s, mbs, n = m.solver, m.mbs, m.n
         p.write()
-        m._setTime(t)
         M, _, Cq = m.mass_force_jacobian(t)
         P = self._projector(M, Cq)
         if P is None:

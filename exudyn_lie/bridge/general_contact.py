@@ -18,10 +18,10 @@ law applied the contacts of the step's start to all of them: a ball leaving a sp
 back for the rest of the step, and the result differed from generalized-alpha at a fine step by
 an amount that did not shrink with h (5.2e-4 for a ball on a sphere at h = 1e-4 and 2.5e-5, the
 trial that kept GeneralContact refused until now); with the full search the bouncing ball of
-``tests/test_general_contact.py`` is Exudyn's RK44 run at the same step.  Exudyn 1.13.6 has no setter for the flag; an explicit
-solver's initialisation on the same system is the one way to clear it, so :func:`use_full_search`
-runs one after the implicit solver's (which set it), with settings that write, store and warn
-nothing.  It sets the current accelerations, ODE1 rates and multipliers to zero, which the
+``tests/test_general_contact.py`` is Exudyn's RK44 run at the same step.  Exudyn 1.13.6 has no
+setter for the flag; an explicit solver's initialisation on the same system is the one way to
+clear it, so :func:`use_full_search` runs one after the implicit solver's (which set it), with
+settings that write, store and warn nothing.  It sets the current accelerations, ODE1 rates and multipliers to zero, which the
 evaluated path computes and writes afterwards anyway.  The next solver that Exudyn initialises
 on this system sets the flag again.
 """

@@ -213,9 +213,8 @@ def _subtract_reactions(Cq, lam, blk, blkPtr, blkOff, MinvB, bRowPtr, bRows, T, 
 
 
 @njit(cache=True)
-def schur_band_solve(M, f, Cq, eta, blk, blkPtr, blkOff, blockOf, pos, bw, pivoted, MinvB, W, MB, MBok, unchanged, a,
-                     lam,
-                     nzIdx, nzCnt, rowBlk, rowBlkCnt, bRowPtr, bRows, cnt, Y, Band, x, T, Sd, perm, yw):
+def schur_band_solve(M, f, Cq, eta, blk, blkPtr, blkOff, blockOf, pos, bw, pivoted, MinvB, W, MB, MBok, unchanged,
+                     a, lam, nzIdx, nzCnt, rowBlk, rowBlkCnt, bRowPtr, bRows, cnt, Y, Band, x, T, Sd, perm, yw):
     """``a``, ``lam`` of ``[M C_q^T; C_q 0][a; lam] = [f; eta]`` (module docstring).
 
     M is block diagonal (``blk``, ``blkPtr``; ``blockOf`` coordinate -> block); ``pos`` is
@@ -344,7 +343,8 @@ class BlockKKT:
         return schur_band_solve(M, f, Cq, eta, self.blk, self.blkPtr, self.blkOff, self.blockOf, self._pos,
                                 self._bw, self.pivoted, self._MinvB, self._W, self._MB, self._MBok, unchanged, self.a,
                                 self.lam, self._nzIdx, self._nzCnt, self._rowBlk, self._rowBlkCnt, self._bRowPtr,
-                                self._bRows, self._cnt, self._Y, self._band, self._x, self._T, self._Sd, self._perm, self._yw)
+                                self._bRows, self._cnt, self._Y, self._band, self._x, self._T, self._Sd, self._perm,
+                                self._yw)
 
     def solve(self, M, f, Cq, eta):
         """``a``, ``lam`` of ``[M C_q^T; C_q 0][a; lam] = [f; eta]`` (M n x n, C_q m x n)."""

@@ -135,9 +135,11 @@ class ConstraintCheck:
     as ``(kind, index, AE rows)`` for every active position-level constraint with coordinates
     (an item's rows that constrain no coordinate, Exudyn's equations ``lambda = 0`` of free
     axes, are left out).  ``dependent``: the items of a redundant set (rank-revealing solve),
-    None without one."""
+    None without one.  ``aeCoordinates``: AE unknowns that are coordinates (a sliding joint's
+    sliding coordinate, bridge/evaluated_sliding.py), which the test for multipliers leaves
+    alone: its rows are equations of them."""
 
-    def __init__(self, mbs, solver, tolerance, dependent=None):
+    def __init__(self, mbs, solver, tolerance, dependent=None, aeCoordinates=()):
         self.mbs, self.solver = mbs, solver
         sd = mbs.systemData
         self.n, self.n1, self.m = int(sd.ODE2Size()), int(sd.ODE1Size()), int(sd.AEsize())
@@ -146,7 +148,7 @@ class ConstraintCheck:
         # no residual below the smallest tolerance (the model's size at least 1 mm) is judged,
         # so the size is read only when a residual first exceeds it
         self._floor = DEFAULT_RELATIVE * 1e-3 if tolerance is True else self._tol
-        active = self._rows_with_coordinates()
+        active = self._rows_with_coordinates(np.asarray(aeCoordinates, np.int64))
         items, nodeRows = [], set()
         for n in range(sd.NumberOfNodes()):
             rows = [int(r) for r in sd.GetNodeLTGAE(n) if active[int(r)]]
@@ -197,7 +199,7 @@ class ConstraintCheck:
             self._tol = DEFAULT_RELATIVE * self.size
         return self._tol
 
-    def _rows_with_coordinates(self):
+    def _rows_with_coordinates(self, aeCoordinates):
         """Which AE rows are equations of the coordinates: those whose residual does not move
         when every multiplier moves by 1 (Exudyn writes the equation ``lambda = 0`` of a free
         axis or an inactive connector as the multiplier itself).  Two residual evaluations,
@@ -210,7 +212,9 @@ class ConstraintCheck:
         lam = np.array(sd.GetAECoordinates(configuration=cur), float)
         s.ComputeAlgebraicEquations(mbs, False)
         g0 = np.array(s.GetSystemResidual()[o:], float)
-        sd.SetAECoordinates(lam + 1.0, configuration=cur)
+        bump = np.ones(self.m)
+        bump[aeCoordinates] = 0.0
+        sd.SetAECoordinates(lam + bump, configuration=cur)
         try:
             s.ComputeAlgebraicEquations(mbs, False)
             g1 = np.array(s.GetSystemResidual()[o:], float)

@@ -53,6 +53,7 @@ from ..mbs.block_kkt import BlockKKT
 from ..mbs.row_drives import offset_and_derivatives
 from .evaluated_items import LIE_GROUP_NODES, coordinate_constraint_rows, node_rows, position_derived_rows
 from .evaluated_kernels import write_exudyn_state, write_moved_positions
+from .evaluated_sliding import SlidingCoordinates, sliding_joints
 from .reader import BridgeError
 
 EPS_CBRT = float(np.finfo(float).eps) ** (1.0 / 3.0)
@@ -193,6 +194,10 @@ class EvaluatedModel:
         self._setTime = self.sd.SetTime
         import exudyn as exu
         self._cur = exu.ConfigurationType.Current
+        # AE unknowns that are coordinates (ObjectJointSliding2D's s: bridge/evaluated_sliding.py)
+        joints = sliding_joints(mbs)
+        self.sliding = SlidingCoordinates(self, joints) if joints else None
+        self.aeCur = self.sd.GetAECoordinates(configuration=self._cur, copy=False) if m else np.zeros(0)
 
     # ------------------------------------------------------------------ state
     def write_state(self, R, r, V, prev, qv, vv):
@@ -239,6 +244,8 @@ class EvaluatedModel:
         the returned M must not be changed."""
         self._setTime(t)
         mbs = self.mbs
+        if self.sliding is not None:
+            self.sliding.project(t, self.aeCur)
         M = self.kkt.constantM           # (the solve keeps the constant M and its blocks' inverses)
         if M is None:
             self._massMatrix(mbs)
@@ -260,7 +267,34 @@ class EvaluatedModel:
                 raise BridgeError("a constraint acts on ODE1 coordinates; exudyn_lie's index-1 solve handles "
                                   "constraints on ODE2 coordinates only; solve with exudyn.SolveDynamic")
             self._lamlam = J[self.n + self.n1:, self.n + self.n1:]
+            if self.sliding is not None:
+                self._lamlam = self._lamlam.copy()
+                self.sliding.velocities(J, self.qt)
+                f = self.sliding.transform(Cq, f, self._lamlam)
         return M, f, Cq
+
+    def position_residual(self, t):
+        """Exudyn's position-level residual at the state in mbs; a velocity-level row has none
+        (Exudyn returns its velocity equation there): 0; the rows of sliding joints in the basis
+        of bridge/evaluated_sliding.py."""
+        self._setTime(t)
+        if self.sliding is not None:
+            self.sliding.project(t, self.aeCur)
+        self._ae(self.mbs, False)
+        g = self._residual()[self.n + self.n1:].copy()
+        g[self.velocityRows] = 0.0
+        return g if self.sliding is None else self.sliding.transform_rows(g)
+
+    def ae_solution(self):
+        """Exudyn's AE coordinates of the last solve: the multipliers (and the sliding joints'
+        forces and coordinates)."""
+        return self.lam if self.sliding is None else self.sliding.forces(self.lam, self.aeCur)
+
+    def start_step(self):
+        """A step starts after Exudyn's PostNewton, which added the sliding coordinates' increments
+        to the joints' data nodes: the increments start again from 0."""
+        if self.sliding is not None:
+            self.aeCur[self.sliding.slots] = 0.0
 
     def raw_residuals(self):
         """Exudyn's own position- and velocity-level AE residuals at the state and time in
@@ -285,6 +319,8 @@ class EvaluatedModel:
         (``R, r, prev, qv``: the state's Lie group and vector parts, needed for them), the
         central difference of the position level along the motion."""
         m = self.m
+        if self.sliding is not None:
+            self.sliding.refresh(t, self.aeCur, self.qt)
         if self._velocityLevel:
             self._setTime(t)
             self._ae(self.mbs, True)
@@ -300,7 +336,7 @@ class EvaluatedModel:
             gp, _, gm = self._position_along_motion(t, R, r, prev, qv, eps, False, False)
             P = self.positionRows
             gv[P] = (gp[P] - gm[P]) * (0.5 / eps)
-        return gv
+        return gv if self.sliding is None else self.sliding.transform_rows(gv)
 
     def _onto_unit_sphere(self, q):
         """Normalise the Euler parameters of EP nodes in ``q`` (Current = total - reference).
@@ -324,6 +360,9 @@ class EvaluatedModel:
         L, q, mbs, ae, res, setTime = self.L, self.q, self.mbs, self._ae, self._residual, self._setTime
         o = self.n + self.n1
         self._qsave[:] = q
+        sl = self.sliding
+        if sl is not None:
+            s0 = self.aeCur[sl.slots].copy()
         g0 = None
         if centre:
             setTime(t)
@@ -332,16 +371,22 @@ class EvaluatedModel:
         write_moved_positions(R, r, L.lgIdx, L.lgRef, prev, q, self.qt, L.vecIdx, qv, eps, self._ER, self._rv)
         if sphere:
             self._onto_unit_sphere(q)
+        if sl is not None:
+            sl.move(self.aeCur, s0, eps)
         setTime(t + eps)
         ae(mbs, False)
         gp = res()[o:].copy()
         write_moved_positions(R, r, L.lgIdx, L.lgRef, prev, q, self.qt, L.vecIdx, qv, -eps, self._ER, self._rv)
         if sphere:
             self._onto_unit_sphere(q)
+        if sl is not None:
+            sl.move(self.aeCur, s0, -eps)
         setTime(t - eps)
         ae(mbs, False)
         gm = res()[o:].copy()
         q[:] = self._qsave
+        if sl is not None:
+            self.aeCur[sl.slots] = s0
         setTime(t)
         return gp, g0, gm
 
@@ -398,6 +443,8 @@ class EvaluatedModel:
             out[P] = etaP
         for row, fn, label in self._movingRows:        # + cddot(t): coordinate_constraint_rows
             out[row] += offset_and_derivatives(fn, t, label)[2]
+        if self.sliding is not None:
+            self.sliding.transform_rows(out)
         if restore:
             q[:] = self._qsave
             setTime(t)

@@ -43,13 +43,8 @@ def _names(mbs, rows):
 
 
 def _position_residual(model, t):
-    """The position-level residual; a velocity-level row has none (Exudyn returns its velocity
-    equation there): 0."""
-    model._setTime(t)
-    model._ae(model.mbs, False)
-    g = model._residual()[model.n + model.n1:].copy()
-    g[model.velocityRows] = 0.0
-    return g
+    """The position-level residual (:meth:`~.evaluated.EvaluatedModel.position_residual`)."""
+    return model.position_residual(t)
 
 
 def _correction(model, t, rhs):

@@ -97,12 +97,19 @@ def check_model(mbs):
                               f"NodeRigidBodyRotVecLG is not supported when Exudyn evaluates the model (the model has "
                               f"items the compiled kernel does not have, or evaluation='exudyn'); solve with "
                               f"exudyn.SolveDynamic, or use a NodeRigidBodyEP / Rxyz node")
-        if t == "JointSliding2D" and d.get("activeConnector", True) and d.get("useClassicalFormulation", True):
-            # Exudyn's ComputeAlgebraicEquations raises 'velocityLevel not possible for
-            # useClassicalFormulation': this path takes eta from the velocity level
-            raise BridgeError(f"{_describe_object(mbs, o, d)}: useClassicalFormulation=True (Exudyn's default) has no "
-                              f"velocity-level equation in Exudyn, which exudyn_lie's index-1 solve needs for the "
-                              f"acceleration term; solve this model with exudyn.SolveDynamic")
+        if t == "JointSliding2D" and d.get("activeConnector", True):
+            # bridge/evaluated_sliding.py: the classical formulation's rows (a point on the curve,
+            # s from the positions); the other mixes s into rows with multipliers
+            if not d.get("useClassicalFormulation", True) or d.get("constrainRotation", False):
+                what = ("useClassicalFormulation=False" if not d.get("useClassicalFormulation", True)
+                        else "constrainRotation=True")
+                raise BridgeError(f"{_describe_object(mbs, o, d)}: {what} is not supported by exudyn_lie (only "
+                                  f"Exudyn's default, useClassicalFormulation=True without constrainRotation, whose "
+                                  f"sliding coordinate it takes from the positions); solve with exudyn.SolveDynamic")
+        if t == "JointSliding" and d.get("activeConnector", True):
+            raise BridgeError(f"{_describe_object(mbs, o, d)}: ObjectJointSliding is not supported by exudyn_lie "
+                              f"(Exudyn has no velocity-level equation for it; the 2D ObjectJointSliding2D is "
+                              f"supported); solve with exudyn.SolveDynamic")
         if d.get("velocityLevel", False) is True and d.get("activeConnector", True) and t != "ConnectorCoordinate":
             raise BridgeError(f"{_describe_object(mbs, o, d)}: velocityLevel=True is not supported by exudyn_lie (its "
                               f"index-1 solve needs position-level constraints); use velocityLevel=False or solve "
@@ -162,29 +169,33 @@ def position_derived_rows(mbs):
       Exudyn's index-3 solve holds the moving offset;
     * ``every``: the model has a GenericJoint with ``offsetUserFunction_t``, for which
       Exudyn's velocity-level call raises ``offsetUserFunction_t not implemented for
-      velocity level constraints`` for the whole system: every row's ``g_v`` and ``eta``
-      then come from the position level (velocity-level rows are refused: they have none).
+      velocity level constraints`` for the whole system, or an ObjectJointSliding2D (its
+      classical formulation raises ``velocityLevel not possible``): every row's ``g_v`` and
+      ``eta`` then come from the position level (velocity-level rows are refused: they have
+      none).
     """
     sd = mbs.systemData
-    rows, every = [], False
+    rows, every, why = [], False, ""
     for o in range(sd.NumberOfObjects()):
         d = mbs.GetObject(o)
+        if d["objectType"] == "JointSliding2D" and d.get("activeConnector", True):
+            every, why = True, "an ObjectJointSliding2D"
         if d["objectType"] != "JointGeneric" or not d.get("activeConnector", True):
             continue
         what = _describe_object(mbs, o, d)
         if _userfunction(d, "offsetUserFunction_t", what, evaluated=True) is not None:
-            every = True
+            every, why = True, "an ObjectJointGeneric with offsetUserFunction_t"
         if _userfunction(d, "offsetUserFunction", what, evaluated=True) is not None:
             rows += [int(r) for r in sd.GetObjectLTGAE(o)]
     if every:
-        vel = [o for o in range(sd.NumberOfObjects()) if mbs.GetObject(o).get("velocityLevel", False) is True
-               and mbs.GetObject(o).get("activeConnector", True)]
+        vel = [o for o in range(sd.NumberOfObjects()) if mbs.GetObject(o).get("activeConnector", True)
+               and (mbs.GetObject(o).get("velocityLevel", False) is True
+                    or mbs.GetObject(o)["objectType"] in VELOCITY_LEVEL_OBJECTS)]
         if vel:
-            raise BridgeError(f"{_describe_object(mbs, vel[0])} is a velocity-level constraint, and the model has an "
-                              f"ObjectJointGeneric with offsetUserFunction_t, for which Exudyn cannot evaluate the "
-                              f"velocity-level equations; exudyn_lie cannot integrate the two together: remove "
-                              f"offsetUserFunction_t (the position-level offsetUserFunction is enough) or solve with "
-                              f"exudyn.SolveDynamic")
+            raise BridgeError(f"{_describe_object(mbs, vel[0])} is a velocity-level constraint, and the model has "
+                              f"{why}, for which Exudyn cannot evaluate the velocity-level equations; exudyn_lie "
+                              f"cannot integrate the two together (with offsetUserFunction_t: remove it, the "
+                              f"position-level offsetUserFunction is enough) or solve with exudyn.SolveDynamic")
         rows = list(range(int(sd.AEsize())))
     return np.array(sorted(set(rows)), np.int64), every
 

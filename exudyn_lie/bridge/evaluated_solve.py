@@ -307,7 +307,8 @@ class EvaluatedSolver:
         if P["tolCheck"] is not None and layout.nAE:
             ticCheck = time.perf_counter()
             dependent = range(sd.NumberOfObjects()) if model.pivoted else None
-            check = self.constraintCheck = ConstraintCheck(mbs, solver, P["tolCheck"], dependent)
+            check = self.constraintCheck = ConstraintCheck(mbs, solver, P["tolCheck"], dependent,
+                                                           () if model.sliding is None else model.sliding.slots)
             account = ConsistencyAccount(check)
             account.step(t0, model.velocity_constraints(t0, problem.R, problem.r, problem.prev, problem.qv),
                          np.max(np.abs(qt)) if qt.size else 0.0)
@@ -328,7 +329,7 @@ class EvaluatedSolver:
         model.accelerations(problem.t, problem.R, problem.r, problem.prev, problem.qv, True)
         self._qtt[:] = model.a
         if self._ae.size:
-            self._ae[:] = model.lam
+            self._ae[:] = model.ae_solution()
 
     def _actual_coordinates(self):
         # Exudyn's residual g = x - offset holds the new offset already: x = g + offset
@@ -350,6 +351,7 @@ class EvaluatedSolver:
         P, problem, model = self._loopPlan, self.problem, self.model
         k, h = P["k"], P["h"]
         self._snap = problem.snapshot()          # the step's start (a repeat of the step restores it)
+        model.start_step()
         if self._offsets:
             problem.write()                      # the step's start state into mbs
             model.set_parameter_offsets(self._offsets.record(t0, t1, self._actual_coordinates))
@@ -372,6 +374,8 @@ class EvaluatedSolver:
         problem.write()
         if P["needAcc"]:
             self._write_accelerations()
+        elif model.sliding is not None:
+            model.sliding.project(t1, model.aeCur)     # for Exudyn's PostNewton (its data nodes)
         self.mbs.systemData.SetTime(t1)
         self._integration += time.perf_counter() - tic
 

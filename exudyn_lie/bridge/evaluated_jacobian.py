@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..mbs.implicit import NP_REF, NP_SCALE, NS_FRESH, NS_H, NS_JACOBIANS, NS_STALE
+from ..mbs.implicit import NS_FRESH, NS_H, NS_JACOBIANS, NS_STALE
 from .general_contact import general_contacts
 
 
@@ -97,7 +97,6 @@ class ExudynNewtonJacobian:
         Av = P @ D
         v, cols = self.vec, self.cols
         ix = np.ix_(cols, cols)
-        newton.par[NP_SCALE] = newton.par[NP_REF] + float(np.max(np.abs(m.q))) if n else 1.0
         newton.Dth[:] = 0.0
         newton.Dv[:] = 0.0
         newton.Dth[ix] = Aq[np.ix_(v, v)]

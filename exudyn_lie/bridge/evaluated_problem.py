@@ -30,14 +30,6 @@ from ..mbs.simulator import Simulator
 from ..mbs.stiffness import StageStiffnessWatch
 from .evaluated_jacobian import ExudynNewtonJacobian, applies as jacobian_applies
 from .evaluated_kernels import pack_rates, pack_state, unpack_state
-from ..mbs.implicit import NP_REF
-
-
-def reference_length(model):
-    """The largest reference value of Exudyn's ODE2 coordinates (at least 1)."""
-    import exudyn as exu
-    ref = np.asarray(model.sd.GetODE2Coordinates(configuration=exu.ConfigurationType.Reference), float)
-    return max(1.0, float(np.max(np.abs(ref))) if ref.size else 1.0)
 
 
 
@@ -92,14 +84,6 @@ class EvaluatedProblem:
         (bridge/evaluated_jacobian.py), else the kernel's differences."""
         self.jacobian = (ExudynNewtonJacobian(self.model, self)
                          if self.tableau.implicit and jacobian_applies(self.model) else None)
-        if self.tableau.implicit:
-            # the round-off of Exudyn's forces scales with the total positions, reference + q
-            # (mbs/implicit.newton_factor); r holds q only
-            ref = reference_length(self.model)
-            for method in (self.sim.method, getattr(getattr(self.sim, "_ad", None), "method", None)):
-                nw = getattr(method, "newton", None)
-                if nw is not None:
-                    nw.par[NP_REF] = ref
 
     # ------------------------------------------------------------------ the right-hand side
     def bind(self, Rs, rs, Vs, Vdot):

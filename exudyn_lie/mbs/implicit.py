@@ -60,13 +60,12 @@ Newton = namedtuple("Newton", [
     "P", "W", "Th",        # (nb, 6) the stage's explicit parts and its algebra element Theta_j
     "F1", "Ap", "A1",      # (nb, 6) the residual F1, F at the iterate (A1: kept over a Jacobian there)
     "x",                   # (n,) the right-hand side of the Newton system, then the correction dV
-    "noise",               # (n,) the round-off of F per row: eps X sum_c |Dth[row, c]| (newton_factor)
     "k6", "m6",            # (6,) scratch
     "st",                  # float state: NS_* below
-    "par",                 # [tolerance, maximum iterations, reference length, length scale X]
+    "par",                 # [tolerance, maximum iterations]
 ])
 NS_STALE, NS_FRESH, NS_H, NS_JACOBIANS, NS_FACTORS, NS_ITERATIONS, NS_STAGES, NS_RETRIES, NS_RATE, NS_FULL = range(10)
-NP_TOL, NP_MAXIT, NP_REF, NP_SCALE = range(4)
+NP_TOL, NP_MAXIT = range(2)
 
 # the correction relative to the step's velocity scale (and h gamma times it).  The last stage's
 # velocity is the step's (stiffly accurate), so its Newton error adds up over the steps: about
@@ -107,8 +106,8 @@ def newton_arrays(gid, tol=NEWTON_TOL, maxIterations=NEWTON_MAXIT):
     st = np.zeros(10)
     st[NS_STALE] = 1.0
     return Newton(E=np.zeros((n, n)), piv=np.zeros(n, np.int64), Dv=np.zeros((n, n)), Dth=np.zeros((n, n)),
-                  axes=axes, P=z(), W=z(), Th=z(), F1=z(), Ap=z(), A1=z(), x=np.zeros(n), noise=np.zeros(n),
-                  k6=np.zeros(6), m6=np.zeros(6), st=st, par=np.array([float(tol), float(maxIterations), 1.0, 1.0]))
+                  axes=axes, P=z(), W=z(), Th=z(), F1=z(), Ap=z(), A1=z(), x=np.zeros(n), k6=np.zeros(6),
+                  m6=np.zeros(6), st=st, par=np.array([float(tol), float(maxIterations)]))
 
 
 def newton_counters(nw):
@@ -171,35 +170,19 @@ def newton_jacobian(sd, wk, nw, t, R, r, V, A0):
             if st != STATUS_OK:
                 return st
             _difference_column(nw.Ap, A0, FD_STEP, nw.Dth, col)
-    # the length scale of the round-off of F (newton_factor): positions, and the reference values
-    # a problem keeps outside r (par[NP_REF], 1 by default)
-    X = nw.par[NP_REF]
-    for i in range(nb):
-        for a in range(3):
-            X = max(X, abs(r[i, a]))
-    nw.par[NP_SCALE] = X
     nw.st[NS_JACOBIANS] += 1.0
     return STATUS_OK
 
 
 @njit(cache=True, _nrt=False)
 def newton_factor(nw, hg):
-    """``E = I - hg Dv - hg^2 Dth``, factored; returns a status.  Also the round-off of F per row,
-    ``noise = eps X sum_c |Dth[row, c]|``: a stiff force is a sum of terms of size ``|Dth| X`` (X: the
-    positions' length scale, par[NP_SCALE]) whose rounding stays in F; the Newton correction of V
-    cannot fall below ``hg`` times it (for the ANCF cable of Exudyn's ``ANCFslidingJoint2D.py``,
-    F's second differences along q stayed below it, and the iteration stalled above the tolerance
-    without this floor)."""
+    """``E = I - hg Dv - hg^2 Dth``, factored; returns a status."""
     n = nw.E.shape[0]
     hg2 = hg * hg
-    X = nw.par[NP_SCALE] * 2.220446049250313e-16
     for a in range(n):
-        s = 0.0
         for c in range(n):
             nw.E[a, c] = -hg * nw.Dv[a, c] - hg2 * nw.Dth[a, c]
-            s += abs(nw.Dth[a, c])
         nw.E[a, a] += 1.0
-        nw.noise[a] = X * s
     nw.st[NS_FACTORS] += 1.0
     if lu_factor_inplace(nw.E, n, nw.piv, 0.0) >= 0:
         return STATUS_NEWTON
@@ -296,10 +279,8 @@ def newton_iterate(sd, wk, nw, j, jprev, hg, tj, R, r, V, vscale, full):
                 Th[i, k] += dt
                 # round-off floors, relative to the values and absolute (1 rad, 1 length unit per
                 # second or per step): increments carry the round-off of R and r themselves, and a
-                # motion damped to 1e-150 by L-stability reaches the denormals; and that of F
-                # (newton_factor)
-                d = max(d, abs(dv) / (tol * vscale + eps8 * max(abs(wk.Vs[i, k]), vscale, 1.0)
-                                      + hg * nw.noise[6 * i + k]),
+                # motion damped to 1e-150 by L-stability reaches the denormals
+                d = max(d, abs(dv) / (tol * vscale + eps8 * max(abs(wk.Vs[i, k]), vscale, 1.0)),
                         abs(dt) / (tol * tscale + eps8 * max(abs(Th[i, k]), 1.0)))
         if not np.isfinite(d):
             return STATUS_NEWTON

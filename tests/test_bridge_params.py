@@ -346,7 +346,8 @@ def test_without_the_change_the_result_differs():
 # ----------------------------------------------------------------------------- a changed structure stops the run
 def _stop_at(change, t_change=0.05):
     """The torsional model with ``change(mbs, items)`` made by a pre-step function from
-    t_change on; returns the BridgeError's message and the time Exudyn reached."""
+    t_change on, on the compiled path (evaluation='auto' continues on the Exudyn-evaluated path,
+    tests/test_hand_over.py); returns the BridgeError's message and the time Exudyn reached."""
     mbs = exu.SystemContainer().AddSystem()
     g, b, j = pendulum(mbs)
     tsd = mbs.CreateTorsionalSpringDamper(itemNumbers=[g, b], position=[0, 0, 0], axis=[0, 0, 1], stiffness=200)
@@ -359,7 +360,7 @@ def _stop_at(change, t_change=0.05):
     mbs.SetPreStepUserFunction(pre_step)
     mbs.Assemble()
     with pytest.raises(BridgeError) as e:
-        exl.SolveDynamic(mbs, settings(0.1, 1e-3), showProgress=False)
+        exl.SolveDynamic(mbs, settings(0.1, 1e-3), showProgress=False, evaluation="compiled")
     return str(e.value), mbs.systemData.GetTime()
 
 

@@ -234,7 +234,7 @@ def test_changing_the_offset_function_during_the_solve_stops_it():
         return True
     mbs.SetPreStepUserFunction(pre)
     with pytest.raises(BridgeError, match="offsetUserFunction' changed during the solve"):
-        exl.SolveDynamic(mbs, ss)
+        exl.SolveDynamic(mbs, ss, evaluation="compiled")       # ('auto': the evaluated path continues)
 
 
 def test_scene_offset_must_be_callable():

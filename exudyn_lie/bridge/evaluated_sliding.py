@@ -90,10 +90,9 @@ class SlidingCoordinates:
         """``s`` of every joint for the positions and time in mbs, written into ``ae`` (mbs'
         Current AE coordinates; the joints' forces there are 0 during the iteration, so that
         the row of s gives ``-|c| F_ax``, and then as before: sensors read them)."""
-        m = self.model
         if not self._haveC:
             self._fresh_jacobian()
-        P, slots = self.P, self.slots
+        P = self.P
         forces = ae[P].copy()
         ae[P] = 0.0
         try:
@@ -102,8 +101,7 @@ class SlidingCoordinates:
             ae[P] = forces
 
     def _iterate(self, t, ae):
-        m = self.model
-        P, slots = self.P, self.slots
+        m, P, slots = self.model, self.P, self.slots
         o = m.n + m.n1
         m._setTime(t)
         last = np.inf

@@ -187,8 +187,23 @@ class EvaluatedSolver:
         ticTotal = time.perf_counter()
         ss = exu.SimulationSettings() if simulationSettings is None else simulationSettings
         self.check_run(ss, substeps)
+        ss2, k, nsteps, t0, tEnd = self._plan(ss, substeps, accelerations, tolCheck, ticTotal)
+        loop = TimeLoop(mbs, self, ss, ss2, t0, tEnd, nsteps // k, storeSolver=storeSolver, showProgress=showProgress,
+                        watch=True)
+        loop.run()
+        if updateInitialValues:
+            update_initial_values(mbs)
+        self._timing(loop.loopSeconds, ticTotal, nsteps)
+        return True
+
+    def _plan(self, ss, substeps, accelerations, tolCheck, ticTotal, start=None, needAcc=None):
+        """The run's plan (``_loopPlan``) and the settings of Exudyn's loop; ``start``: from this time
+        (a run this path takes over, :meth:`take_over`), else the settings' startTime."""
+        mbs = self.mbs
         nsteps, t0, tEnd, h = time_settings(ss)
         k, userStep = plan_substeps(mbs, ss, nsteps, h, substeps)
+        if start is not None:
+            t0, nsteps = start, max(int(round((tEnd - start) / h)), 1)
         # one MK step per Exudyn step by default: Exudyn's per-step work (InitializeStep,
         # PostNewton with the data coordinates of contacts, search trees) then runs after
         # every step as in its own solvers; it costs a few us against the stages' tens.
@@ -201,7 +216,8 @@ class EvaluatedSolver:
             raise BridgeError(f"substeps={substeps}: {postNewton} need Exudyn's PostNewton after every step "
                               f"(their data coordinates change between steps); use substeps=None or 1")
         # object outputs may read the multipliers
-        needAcc = needs_accelerations(mbs, ss, userStep) if accelerations is None else bool(accelerations)
+        if needAcc is None:
+            needAcc = needs_accelerations(mbs, ss, userStep) if accelerations is None else bool(accelerations)
         groups, why = node_groups(mbs, self.liegroup)
         tab = self.tableau = self._explicit
         adaptive = self._adaptive = adaptive_settings(tab, ss, h)
@@ -220,13 +236,31 @@ class EvaluatedSolver:
                               tolCheck=tolCheck, ticTotal=ticTotal, log=self.verbose or ss.timeIntegration.verboseMode >= 1,
                               reuseMass=bool(ss.timeIntegration.reuseConstantMassMatrix))
         self._integration = 0.0
-        loop = TimeLoop(mbs, self, ss, ss2, t0, tEnd, nsteps // k, storeSolver=storeSolver, showProgress=showProgress,
-                        watch=True)
-        loop.run()
-        if updateInitialValues:
-            update_initial_values(mbs)
+        return ss2, k, nsteps, t0, tEnd
+
+    def take_over(self, loop, ss, k, needAcc, tolCheck, t):
+        """Continue a run of the compiled path inside its time loop (bridge/time_loop.py) from
+        the state in mbs at ``t``, with its ``k`` integration steps per Exudyn step; returns False
+        where this path cannot (post-Newton items with k > 1, adaptive steps with k > 1)."""
+        if k > 1 and (self._post_newton_items() or adaptive_settings(self.tableau, ss, time_settings(ss)[3])):
+            return False
+        ticTotal = time.perf_counter()
+        self._plan(ss, k, None, tolCheck, ticTotal, start=t, needAcc=needAcc)
+        # a connector switched off: its equations are lam = 0 (Exudyn's Newton makes them so at the
+        # next step; their residual is the multiplier the compiled path wrote)
+        import exudyn as exu
+        sd = self.mbs.systemData
+        if sd.AEsize():
+            ae = sd.GetAECoordinates(configuration=exu.ConfigurationType.Current, copy=False)
+            for o in range(sd.NumberOfObjects()):
+                if not self.mbs.GetObject(o).get("activeConnector", True):
+                    ae[np.asarray(sd.GetObjectLTGAE(o), np.int64)] = 0.0
+        self.loop_begin(loop.solver)
+        return True
+
+    def _timing(self, loopSeconds, ticTotal, nsteps):
         nev, integ = self.model.evaluations, self._integration
-        self.timing = dict(total=time.perf_counter() - ticTotal, loop=loop.loopSeconds, integration=integ,
+        self.timing = dict(total=time.perf_counter() - ticTotal, loop=loopSeconds, integration=integ,
                            steps=nsteps, evaluations=nev, perStage=integ / max(nev, 1), perStep=integ / max(nsteps, 1))
         if self._adaptive is not None:
             acc, rej, nrhs = self.problem.sim.adaptiveCounters
@@ -235,7 +269,6 @@ class EvaluatedSolver:
             print(f"exudyn_lie: {nsteps} steps in {self.timing['total']:.3g} s (integration {integ:.3g} s = "
                   f"{1e6 * self.timing['perStep']:.3g} us/step, {nev} evaluations of {1e6 * self.timing['perStage']:.3g}"
                   f" us)")
-        return True
 
     # ------------------------------------------------------------------ the driver of the time loop
     def loop_begin(self, solver):
@@ -382,3 +415,26 @@ class EvaluatedSolver:
     def loop_end(self):
         if not self._loopPlan["needAcc"]:
             self._write_accelerations()          # the final ones, as a native solve leaves them
+
+
+def hand_over_from(compiled, error, loop):
+    """A user function changed a parameter the compiled kernel holds fixed (``error``, a
+    params.FixedParameterChanged) in a run of ``compiled`` (a LieGroupSolver of SolveDynamic's
+    evaluation='auto'): the Exudyn-evaluated driver that continues it from the step's start (the
+    state in mbs; it reads every item as Exudyn has it now), or None where this path cannot take
+    the model."""
+    plan = compiled._loopPlan
+    try:
+        ev = EvaluatedSolver(compiled.mbs, compiled._explicit, liegroup=compiled._liegroup_arg,
+                             verbose=compiled.verbose, autoImplicit=compiled.autoImplicit)
+        if not ev.take_over(loop, loop.settings, plan["k"], plan["needAcc"],
+                            getattr(compiled, "_constraintCheck", True), error.t):
+            return None
+    except BridgeError:
+        return None
+    warn_user(f"exudyn_lie: {error.what} was changed by a user function at t = {error.t:.6g} s, which the compiled "
+              f"kernel cannot follow; the run continues from there on the Exudyn-evaluated path (Exudyn evaluates "
+              f"the whole model at every stage)")
+    if compiled._chunks is not None:
+        compiled._chunks.rows = 0            # the compiled driver's fast hook defers to the loop's hook
+    return ev

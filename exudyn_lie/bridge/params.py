@@ -108,6 +108,16 @@ def _finite(x, what, key):
     return x
 
 
+class FixedParameterChanged(BridgeError):
+    """A user function changed a parameter the compiled kernel holds fixed (items.FIXED, such as a
+    joint's ``activeConnector``) before the step that starts at ``t``: with evaluation='auto' the run
+    continues on the Exudyn-evaluated path (:meth:`~.solver.LieGroupSolver.hand_over`)."""
+
+    def __init__(self, message, t, what):
+        super().__init__(message)
+        self.t, self.what = t, what
+
+
 class ParameterWatch:
     """Records the items a user function changes during ``Solve`` and applies the changes
     to the compiled scene before the next step.
@@ -229,7 +239,12 @@ class ParameterWatch:
                     raise BridgeError(f"{self.what(kind, i, new)}: field '{key}' changed at t = {t:.6g} s is not "
                                       f"known to exudyn_lie; solve with exudyn.SolveDynamic")
                 status, why = st
-                if status in (FIXED, REFUSED) and not _same(new.get(key), old.get(key)):
+                if status == FIXED and not _same(new.get(key), old.get(key)):
+                    raise FixedParameterChanged(
+                        f"{self.what(kind, i, new)}: parameter '{key}' changed during the solve at t = {t:.6g} s; "
+                        f"exudyn_lie cannot change it during a run ({why}); set it before the solve, or solve "
+                        f"with exudyn.SolveDynamic", t, f"{self.what(kind, i, new)}: parameter '{key}'")
+                if status == REFUSED and not _same(new.get(key), old.get(key)):
                     raise BridgeError(
                         f"{self.what(kind, i, new)}: parameter '{key}' changed during the solve at t = {t:.6g} s; "
                         f"exudyn_lie cannot change it during a run ({why}); set it before the solve, or solve "

@@ -329,6 +329,11 @@ class _Reader(JointReaders, ForceReaders):
         ``(R, r, omega, vel)`` read from the node (``angle``: a 2D body's or rotor's total angle)."""
         R, r, om, vel = state
         label = d.get("name", "") or f"object{o}"
+        if d["objectType"] == "RigidBody2D" and float(d["inertia"]) == 0.0:
+            # a massless rotation (finite segments joined by rotational springs): the kernel
+            # inverts each body's mass; Exudyn's whole KKT matrix can be regular
+            raise NotCompiled(f"object {o} ('{d.get('name', '')}') ObjectRigidBody2D: inertia = 0 is not supported "
+                              f"by the compiled kernel (it inverts each body's mass matrix)")
         try:
             if d["objectType"] == "RigidBody2D":
                 # inertia about the node (Exudyn's reference point); Exudyn's 2D bodies take no

@@ -131,7 +131,8 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
         stabilization = None if constraintTolerance is not None else "position"
     solver = LieGroupSolver(mbs, method=method, liegroup=liegroup, stabilization=stabilization,
                             projectInitial=projectInitial, verbose=verbose, constraintTolerance=constraintTolerance,
-                            autoImplicit=autoImplicit, _configuration="items" if assemble else "initial", _scene=scene)
+                            autoImplicit=autoImplicit, handOver=evaluation == "auto" and auto,
+                            _configuration="items" if assemble else "initial", _scene=scene)
     solver._check_run(settings, substeps)
     _check_index2_rotvec_constraints(mbs, typeName, settings)
     groups = ", ".join(f"{g} ({solver.groups.count(g)})" for g in dict.fromkeys(solver.groups)) or "none"

@@ -125,7 +125,8 @@ class LieGroupSolver(StateIO):
     pathName = "compiled"          # as solve_timing reports it
 
     def __init__(self, mbs, method="RK4", liegroup="auto", stabilization=None, projectInitial=True,
-                 verbose=False, *, constraintTolerance=None, autoImplicit=False, _configuration="initial", _scene=None):
+                 verbose=False, *, constraintTolerance=None, autoImplicit=False, handOver=False,
+                 _configuration="initial", _scene=None):
         # _configuration='items' (internal, SolveDynamic): validate an mbs that is not assembled
         # yet from its item dictionaries; Solve() then re-reads it after mbs.Assemble().  _scene
         # (internal, SolveDynamic): the scene SceneFromExudyn just read of this mbs, used as it is
@@ -137,6 +138,9 @@ class LieGroupSolver(StateIO):
         # that is not stable at the step (bridge/method_choice.py)
         self.autoImplicit = bool(autoImplicit) and not self.tableau.implicit
         self._explicit = self.tableau
+        # handOver (SolveDynamic's evaluation='auto' with its default stabilization): a change the
+        # kernel cannot follow continues the run on the Exudyn-evaluated path (hand_over)
+        self.handOver = bool(handOver)
         if stabilization not in (None, "none", "velocity", "position"):
             raise BridgeError(f"unknown stabilization {stabilization!r}; use None, 'velocity' or 'position'")
         self.stabilization = stabilization
@@ -431,8 +435,12 @@ class LieGroupSolver(StateIO):
 
         self._loopPlan = dict(k=k, h=h, tEnd=tEnd, adaptive=adaptive, needAcc=needAcc, since=ticTotal - pendingPrepare)
         self.timing = dict(integration=0.0, steps=nsteps, exudynSteps=nsteps // k, substeps=k)
-        TimeLoop(self.mbs, self, ss, ss2, t0, tEnd, nsteps // k, storeSolver=storeSolver, showProgress=showProgress,
-                 watch=self._watch).run()
+        loop = TimeLoop(self.mbs, self, ss, ss2, t0, tEnd, nsteps // k, storeSolver=storeSolver,
+                        showProgress=showProgress, watch=self._watch)
+        loop.run()
+        self.handedOverTo = loop.driver if loop.driver is not self else None
+        if self.handedOverTo is not None:
+            self.timing["integration"] += self.handedOverTo._integration
         if updateInitialValues:
             update_initial_values(self.mbs)
         now = time.perf_counter()
@@ -545,6 +553,11 @@ class LieGroupSolver(StateIO):
                 progress(t1)
             return True
         return fast_hook
+
+    def hand_over(self, error, loop):
+        """The driver that continues the run after ``error`` (evaluated_solve.hand_over_from), or None."""
+        from .evaluated_solve import hand_over_from
+        return hand_over_from(self, error, loop) if self.handOver else None
 
     def loop_end(self):
         if not self._loopPlan["needAcc"]:

@@ -21,7 +21,10 @@ compiled :class:`~.solver.LieGroupSolver`, the Exudyn-evaluated
   discontinuous iteration repeats the step; else a user function changed the state);
 * ``loop_end()``: after a successful ``SolveSteps`` (the final writes);
 * optional ``loop_context()`` (a context manager around ``SolveSteps``) and
-  ``loop_fast_hook(hook, loop)`` (a hook for the common case that falls back to ``hook``).
+  ``loop_fast_hook(hook, loop)`` (a hook for the common case that falls back to ``hook``);
+* optional ``hand_over(error, loop)``: a user function changed what the driver cannot follow
+  (``params.FixedParameterChanged``); the driver that continues the run from the step's start
+  (its ``loop_begin`` done), or None (the error stands).
 """
 from __future__ import annotations
 
@@ -30,6 +33,7 @@ import time
 
 import numpy as np
 
+from .params import FixedParameterChanged
 from .reader import BridgeError
 from .settings import name_exudyn_setting
 from .solve_timing import compile_seconds, record_loop
@@ -109,7 +113,7 @@ class TimeLoop:
         import exudyn as exu
         mbs, driver = self.mbs, self.driver
         solver = exu.MainSolverImplicitSecondOrder()
-        driver.solver = solver
+        driver.solver = self.solver = solver
         self._initialize(solver)
         finalized = False
         try:
@@ -127,11 +131,11 @@ class TimeLoop:
                 with (context() if context is not None else contextlib.nullcontext()):
                     ok = solver.SolveSteps(mbs, self.loopSettings)
                 if ok:
-                    driver.loop_end()
+                    self.driver.loop_end()        # (a driver that took over the run ends it)
             finally:
                 self.loopSeconds = time.perf_counter() - tic
                 record_loop(self.loopSeconds - (compile_seconds() - compiled0),
-                            getattr(driver, "pathName", type(driver).__name__))
+                            getattr(self.driver, "pathName", type(self.driver).__name__))
             finalized = True
             finalize(mbs, solver, self.loopSettings)
         except BaseException:
@@ -197,7 +201,11 @@ class TimeLoop:
                 self.count += 1
                 if self.watch and self._changed():
                     driver.loop_restart(steps[0], False)     # a user function changed the state
-            driver.loop_advance(steps[0], t1, self.nExudyn - self.count + 1)
+            try:
+                driver.loop_advance(steps[0], t1, self.nExudyn - self.count + 1)
+            except FixedParameterChanged as e:
+                driver = self._hand_over(e)
+                driver.loop_advance(steps[0], t1, self.nExudyn - self.count + 1)
             self.output(t1)
             if self.watch:
                 self._remember()
@@ -205,6 +213,20 @@ class TimeLoop:
         except BaseException as e:      # noqa: BLE001 - re-raised after Exudyn unwinds
             self.hookError = name_exudyn_setting(e)
             raise
+
+    def _hand_over(self, error):
+        """The driver that continues the run after ``error`` (see the module docstring), or the
+        error again."""
+        hand = getattr(self.driver, "hand_over", None)
+        new = hand(error, self) if hand is not None else None
+        if new is None:
+            raise error
+        self.driver = new
+        if self.storeSolver:
+            self.mbs.sys["lieGroupSolver"] = new
+        self.check = getattr(new, "loop_check", None)
+        self.watch = True                # (the new driver reads mbs' state when it changes)
+        return new
 
     def output(self, t1):
         """After the state at ``t1`` is in mbs: the constraint check and the progress line."""

@@ -36,6 +36,8 @@ Sections (``--sections``, default all):
 * ``stiff``  stiff models (a chain on stiff spring-dampers, an ANCF cable with a rigid body, a
   penalty contact): the implicit ESDIRK3 against Exudyn's generalized-alpha, work against
   precision (:mod:`.bench_stiff`).
+* ``particles``  a particle system of GeneralContact spheres (the evaluated path): time per step and
+  time at equal error against Exudyn's explicit RK44 and explicit Euler (:mod:`.bench_particles`).
 
 Every sweep runs through Exudyn's ``exudyn.processing.ParameterVariation`` with
 multiprocessing (:func:`exudyn_lie.apps.bench_runs.sweep`); every time is the
@@ -66,7 +68,7 @@ NATIVE_FREE = ("RK44", "RK67", "DOPRI5")
 EPS_LEVELS = (1e-4, 1e-5, 1e-6, 1e-7, 1e-8)
 SECTIONS = ("wp", "perstep", "scaling", "startup", "overhead", "groups", "mujoco", "params", "items",
             "userfunctions", "topology", "adaptive", "planar", "evaluated", "check",
-            "stabilization", "stiff")
+            "stabilization", "stiff", "particles")
 TARGET_RATIO = 10.0
 # absolute per-step targets (MK-RK4, SE3, median step, this 2-core machine)
 KERNEL_STEP_TARGETS_US = {"heavytop": 3.0, "doublependulum": 6.0}
@@ -844,6 +846,9 @@ def write_report(cfg, out, cmdline):
         L += _adaptive_lines(out["adaptive"], out["adaptive"].get("figures", ()))
     from .bench_planar import report_lines as _planar_lines
     L += _planar_lines(out.get("planar"))
+    if out.get("particles"):
+        from .bench_particles import report_lines as _particle_lines
+        L += _particle_lines(out["particles"])
     if out.get("stiff"):
         from .bench_stiff import report_lines as _stiff_lines
         L += _stiff_lines(out["stiff"]["models"], out["stiff"].get("figures", ()))
@@ -1009,6 +1014,9 @@ def main(argv=None):
     if "stiff" in cfg.sections:
         from . import bench_stiff
         out["stiff"] = dict(models=bench_stiff.run_section(cfg, log))
+    if "particles" in cfg.sections:
+        from . import bench_particles
+        out["particles"] = bench_particles.run_section(cfg, log)
     if "planar" in cfg.sections:
         from .bench_planar import planar_section
         log("planar four-bar of 2D bodies vs the 3D planar four-bar; SE2 vs SE3 maps")

@@ -72,7 +72,13 @@ NP_TOL, NP_MAXIT = range(2)
 # N tol v after N steps: a looser tolerance became the error floor of the stiff chain of
 # tests/test_implicit.py at its smaller steps (about one more iteration per stage is its price)
 NEWTON_TOL = 1e-11
-NEWTON_MAXIT = 10
+# simplified Newton contracts linearly: an ANCF cable swinging at a step 37 times its fastest
+# mode's period over 2 pi (Exudyn's ANCFslidingJoint2D.py) contracted at rates 0.1-0.2 with the
+# Jacobian of the step's start, and needed about 10 iterations to reach the tolerance; with 10 the
+# stages fell back to a new Jacobian (2n evaluations) and Newton's own iteration (2n per iterate).
+# An iteration predicted not to converge within the limit at its rate still stops early.
+NEWTON_MAXIT = 20
+NEWTON_MAXIT_FULL = 30     # Newton's own iteration (a Jacobian per iterate): quadratic only near the solution
 REFRESH_RATE = 0.25        # a contraction rate above this: new Jacobian at the next step's start
 FD_STEP = 1.4901161193847656e-08     # sqrt(eps): forward differences of F
 
@@ -216,7 +222,7 @@ def newton_iterate(sd, wk, nw, j, jprev, hg, tj, R, r, V, vscale, full):
     nb = gid.shape[0]
     Th, P, W, F1, x, Ap, axes = nw.Th, nw.P, nw.W, nw.F1, nw.x, nw.Ap, nw.axes
     tol = nw.par[NP_TOL]
-    maxit = int(nw.par[NP_MAXIT]) * (3 if full else 1)      # (Newton's own: quadratic only near the solution)
+    maxit = NEWTON_MAXIT_FULL if full else int(nw.par[NP_MAXIT])
     tscale = hg * vscale
     eps8 = 8.0 * 2.220446049250313e-16
     for i in range(nb):

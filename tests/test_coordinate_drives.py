@@ -237,6 +237,33 @@ def test_changing_the_offset_function_during_the_solve_stops_it():
         exl.SolveDynamic(mbs, ss, evaluation="compiled")       # ('auto': the evaluated path continues)
 
 
+@pytest.mark.parametrize("evaluation", ["auto", "exudyn"])
+def test_offset_function_changed_during_the_solve_is_followed(evaluation):
+    """A pre-step function replaces the offset function at t > 0.1 s by one that leaves the old one
+    at t = 0.2 s (a cubic added: no jump).  'auto' hands the run to the Exudyn-evaluated path, which
+    reads the new function; on that path from the start ('exudyn') the change is recorded and the
+    rows read again.  x(T) follows the new function to 1e-5 m (the old one would end 0.135 m away;
+    the new one's third derivative jumps at 0.2 s, where RK4 at h = 0.01 s without projection on
+    the evaluated path loses 3e-6 m)."""
+    def uf0(mbs, t, i, off):
+        return 0.2 * np.sin(2 * t)
+
+    def uf1(mbs, t, i, off):
+        return 0.2 * np.sin(2 * t) + 5.0 * max(0.0, t - 0.2) ** 3
+    mbs, ss, o, n = slider_mbs(uf0, 0.0, 0.0, 0.4)
+
+    def pre(mbs, t):
+        if t > 0.1:
+            mbs.SetObjectParameter(o, "offsetUserFunction", uf1)
+        return True
+    mbs.SetPreStepUserFunction(pre)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        exl.SolveDynamic(mbs, ss, evaluation=evaluation)
+    x = float(np.atleast_1d(mbs.GetNodeOutput(n, exu.OutputVariableType.Coordinates))[0])
+    assert abs(x - uf1(None, 0.5, 0, 0)) < 1e-5, (x, uf1(None, 0.5, 0, 0), uf0(None, 0.5, 0, 0))
+
+
 def test_scene_offset_must_be_callable():
     sc = Scene()
     sc.AddBody(1.0, np.eye(3))

@@ -170,17 +170,7 @@ class EvaluatedModel:
         self._eta0 = np.zeros(0)
         self._etaBuf = np.zeros(m)
         self._vmax = 0.0
-        self.velocityRows, self._functionRows = coordinate_constraint_rows(mbs)
-        self._movingRows = list(self._functionRows)
-        # rows whose g_v and eta come from the position level (position_derived_rows)
-        self.positionRows, self._allPosition = position_derived_rows(mbs)
-        self._velocityLevel = not self._allPosition
-        # of those, the nodes' own rows: differentiated along the straight line in their
-        # coordinates (_onto_unit_sphere says why the others are not)
-        nr = np.isin(self.positionRows, node_rows(mbs))
-        self._posObjectRows, self._posNodeRows = self.positionRows[~nr], self.positionRows[nr]
-        # C_qdot of velocity-level rows: the ODE2_t factor (position-level rows have no ODE2_t part)
-        self._factorODE2_t = 1.0 if len(self.velocityRows) else 0.0
+        self.read_rows()
         self.evaluations = 0
         self.constantMass = False        # set by the solver (mass_force_jacobian)
         # bound methods, looked up once (the stage loop is Python)
@@ -198,6 +188,23 @@ class EvaluatedModel:
         joints = sliding_joints(mbs)
         self.sliding = SlidingCoordinates(self, joints) if joints else None
         self.aeCur = self.sd.GetAECoordinates(configuration=self._cur, copy=False) if m else np.zeros(0)
+
+    def read_rows(self):
+        """What the rows need beyond Exudyn's evaluation, from the items as they are now (again
+        when a user function changed an object: an offset function, a connector switched on or
+        to velocity level)."""
+        mbs = self.mbs
+        self.velocityRows, self._functionRows = coordinate_constraint_rows(mbs)
+        self._movingRows = list(self._functionRows)
+        # rows whose g_v and eta come from the position level (position_derived_rows)
+        self.positionRows, self._allPosition = position_derived_rows(mbs)
+        self._velocityLevel = not self._allPosition
+        # of those, the nodes' own rows: differentiated along the straight line in their
+        # coordinates (_onto_unit_sphere says why the others are not)
+        nr = np.isin(self.positionRows, node_rows(mbs))
+        self._posObjectRows, self._posNodeRows = self.positionRows[~nr], self.positionRows[nr]
+        # C_qdot of velocity-level rows: the ODE2_t factor (position-level rows have no ODE2_t part)
+        self._factorODE2_t = 1.0 if len(self.velocityRows) else 0.0
 
     # ------------------------------------------------------------------ state
     def write_state(self, R, r, V, prev, qv, vv):

@@ -132,6 +132,7 @@ class EvaluatedSolver:
         check_system(mbs)
         check_model(mbs)
         self.timing = {}
+        self._marks = []                         # objects changed during the loop (loop_context)
 
     def check_run(self, ss, substeps):
         """Raise for settings this path refuses (changes nothing)."""
@@ -369,6 +370,11 @@ class EvaluatedSolver:
         g, gv = self.model.raw_residuals()
         return lambda r, v: (g[r] + v, gv[r])
 
+    def loop_context(self):
+        """Objects changed by user functions during the loop are recorded (``_marks``): the rows'
+        offset functions and levels are read again before the next step."""
+        return ObjectChanges(self.mbs, self._marks)
+
     def loop_restart(self, t, repeat):
         """Exudyn's discontinuous iteration repeats the step: from the step's start again (the
         data coordinates PostNewton updated are Exudyn's); a user function set the state: from it."""
@@ -385,6 +391,9 @@ class EvaluatedSolver:
         k, h = P["k"], P["h"]
         self._snap = problem.snapshot()          # the step's start (a repeat of the step restores it)
         model.start_step()
+        if self._marks:
+            del self._marks[:]
+            model.read_rows()
         if self._offsets:
             problem.write()                      # the step's start state into mbs
             model.set_parameter_offsets(self._offsets.record(t0, t1, self._actual_coordinates))
@@ -437,4 +446,34 @@ def hand_over_from(compiled, error, loop):
               f"the whole model at every stage)")
     if compiled._chunks is not None:
         compiled._chunks.rows = 0            # the compiled driver's fast hook defers to the loop's hook
+    ev._marks = compiled._params.marks       # (its watch stays on for the rest of the loop)
     return ev
+
+
+class ObjectChanges:
+    """While Exudyn's loop runs, ``SetObjectParameter`` / ``ModifyObject`` on ``mbs`` append the
+    object's index to ``marks``."""
+
+    def __init__(self, mbs, marks):
+        self.mbs, self.marks, self._saved = mbs, marks, {}
+
+    def __enter__(self):
+        import exudyn as exu
+        target, marks = self.mbs, self.marks
+        for name in ("SetObjectParameter", "ModifyObject"):
+            orig = self._saved[name] = getattr(exu.MainSystem, name)
+
+            def wrapped(mbs, *args, _orig=orig, **kw):
+                out = _orig(mbs, *args, **kw)
+                if mbs is target:
+                    marks.append(args[0] if args else kw.get("objectNumber"))
+                return out
+            setattr(exu.MainSystem, name, wrapped)
+        return self
+
+    def __exit__(self, *exc):
+        import exudyn as exu
+        for name, orig in self._saved.items():
+            setattr(exu.MainSystem, name, orig)
+        self._saved = {}
+        return False

@@ -72,8 +72,8 @@ NP_TOL, NP_MAXIT = range(2)
 # N tol v after N steps: a looser tolerance became the error floor of the stiff chain of
 # tests/test_implicit.py at its smaller steps (about one more iteration per stage is its price)
 NEWTON_TOL = 1e-11
-# simplified Newton contracts linearly: an ANCF cable swinging at a step 37 times its fastest
-# mode's period over 2 pi (the cable of ANCFslidingJoint2D.py) contracted at rates 0.1-0.2 with the
+# simplified Newton contracts linearly: an ANCF cable swinging at a step with h |lambda| = 37 for
+# its fastest mode (the cable of ANCFslidingJoint2D.py) contracted at rates 0.1-0.2 with the
 # Jacobian of the step's start, and needed about 10 iterations to reach the tolerance; with 10 the
 # stages fell back to a new Jacobian (2n evaluations) and Newton's own iteration (2n per iterate).
 # An iteration predicted not to converge within the limit at its rate still stops early.

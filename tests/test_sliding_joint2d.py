@@ -9,8 +9,8 @@ import pytest
 import exudyn as exu
 from exudyn.itemInterface import (Cable2D, CoordinateConstraint, Force, Gravity, MarkerBodyCable2DCoordinates,
                                   MarkerBodyMass, MarkerBodyRigid, MarkerNodeCoordinate, MarkerNodePosition,
-                                  NodeGenericData, NodePointGround, ObjectJointSliding2D, Point2DS1, Rigid2D,
-                                  RigidBody2D, SensorNode, SensorObject)
+                                  NodeGenericData, NodePointGround, ObjectConnectorCoordinate, ObjectJointSliding2D,
+                                  Point2DS1, Rigid2D, RigidBody2D, SensorNode, SensorObject)
 
 import exudyn_lie as exl
 from exudyn_lie.bridge.reader import BridgeError
@@ -20,7 +20,7 @@ T = 0.25
 FINE = 20
 
 
-def build(h=H, tEnd=T, axialForce=0.0, **joint):
+def build(h=H, tEnd=T, axialForce=0.0, drive=False, **joint):
     SC = exu.SystemContainer()
     mbs = SC.AddSystem()
     L, rho, b, E, g, nElements = 2.0, 1000.0, 0.01, 2e8, 9.81, 4
@@ -49,8 +49,11 @@ def build(h=H, tEnd=T, axialForce=0.0, **joint):
         bodyNumber=oRigid)), markers[1]], slidingMarkerNumbers=markers, slidingMarkerOffsets=[i * lElem for i in
                                                                                               range(nElements)],
         nodeNumber=nData, axialForce=axialForce, **joint))
+    if drive:       # the slider's angle driven by an offset function (a row Exudyn differentiates in time)
+        mbs.AddObject(ObjectConnectorCoordinate(markerNumbers=[mGround, mbs.AddMarker(MarkerNodeCoordinate(
+            nodeNumber=nRigid, coordinate=2))], offsetUserFunction=lambda mbs, t, i, off: 0.3 * np.sin(5 * t)))
     S = dict(position=mbs.AddSensor(SensorNode(nodeNumber=nRigid, storeInternal=True,
-                                               outputVariableType=exu.OutputVariableType.Position)),
+                                               outputVariableType=exu.OutputVariableType.Coordinates)),
              sliding=mbs.AddSensor(SensorObject(objectNumber=oJoint, storeInternal=True,
                                                 outputVariableType=exu.OutputVariableType.SlidingCoordinate)),
              force=mbs.AddSensor(SensorObject(objectNumber=oJoint, storeInternal=True,
@@ -78,25 +81,45 @@ def solve(native, h=H, **kw):
     return out, np.asarray(mbs.systemData.GetDataCoordinates())
 
 
-@pytest.mark.parametrize("axialForce", [0.0, 0.2])
-def test_sliding_joint_follows_the_fine_native_run_across_elements(axialForce):
+@pytest.mark.parametrize("axialForce, drive", [(0.0, False), (0.2, False), (0.0, True)])
+def test_sliding_joint_follows_the_fine_native_run_across_elements(axialForce, drive):
     """The slider's position, its sliding coordinate (Exudyn's SlidingCoordinate output: data node
     plus the AE unknown) and the joint's force (Exudyn's Force output: the AE unknowns) against
     generalized-alpha at h/20.  exudyn_lie at h: within 1e-5 m; the force (up to 2.8 N) within
     2e-3 N, after t = 0: at t = 0 Exudyn's output of the force along the curve is 0 (its initial
     accelerations leave axialForce out), exudyn_lie's is axialForce from the start.  Both runs end
-    on the third element (data node: marker index 2)."""
-    ref, refData = solve(True, H / FINE, axialForce=axialForce)
-    ours, data = solve(False, axialForce=axialForce)
+    on the third element (data node: marker index 2).  With ``drive`` the slider's angle follows the
+    offset function of a ConnectorCoordinate (position: x, y and the angle): the joint makes every
+    row's eta come from the position level, which holds the function's time dependence already
+    (it was added a second time before)."""
+    ref, refData = solve(True, H / FINE, axialForce=axialForce, drive=drive)
+    ours, data = solve(False, axialForce=axialForce, drive=drive)
     assert refData[0] == 2.0 and data[0] == 2.0            # the switch to the next element happened
     dPos = np.abs(ours["position"] - ref["position"]).max()
     dS = np.abs(ours["sliding"] - ref["sliding"]).max()
     dF = np.abs(ours["force"][1:] - ref["force"][1:]).max()
-    print(f"axialForce {axialForce}: position {dPos:.3g} m, sliding coordinate {dS:.3g} m, force {dF:.3g} N "
+    if drive:
+        assert np.ptp(ref["position"][:, 2]) > 0.2         # the angle moved (0.3 sin(5 t) to 0.28 rad)
+    print(f"axialForce {axialForce}, drive {drive}: position {dPos:.3g} m, sliding coordinate {dS:.3g} m, force {dF:.3g} N "
           f"(max |force| {np.abs(ref['force']).max():.3g} N) from generalized-alpha at h/{FINE}")
     assert np.ptp(ref["sliding"]) > 0.3                     # it slid
     assert dPos < 1e-5 and dS < 1e-5
     assert dF < 2e-3
+
+
+def test_sliding_joint_switched_off_during_the_run_stops_it():
+    """Only the joints active at the start have their sliding coordinate taken from the positions:
+    one switched off by a user function stops the run with an error that says so."""
+    SC, mbs, ss, S, nData = build()
+    o = next(i for i in range(mbs.systemData.NumberOfObjects()) if mbs.GetObject(i)["objectType"] == "JointSliding2D")
+
+    def pre(mbs, t):
+        if t > 0.01:
+            mbs.SetObjectParameter(o, "activeConnector", False)
+        return True
+    mbs.SetPreStepUserFunction(pre)
+    with pytest.warns(RuntimeWarning), pytest.raises(BridgeError, match="switched on or off during the run"):
+        exl.SolveDynamic(mbs, ss, showProgress=False)
 
 
 @pytest.mark.parametrize("joint, match", [(dict(useClassicalFormulation=False), "useClassicalFormulation=False"),

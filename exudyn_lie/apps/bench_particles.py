@@ -5,7 +5,7 @@ users integrate with explicit methods (Exudyn's ``particleClusters.py`` runs exp
 mass points) in a 3 x 3 x 3 block with random initial velocities (seed 1, up to 0.5 m/s) fall
 under gravity onto a large fixed sphere (r = 10 m: nearly a plane), contact stiffness 1e4 N/m,
 damping 2 Ns/m, no friction; T = 0.2 s (they land and collide).  At each step h, inside the solve
-call, best of three warm runs:
+call, best of three runs (exudyn_lie: after one more, whose numba compilation, if any, is not counted):
 
 * ``exl``: ``exl.SolveDynamic`` with RK4 (the Exudyn-evaluated path; GeneralContact with the law of
   Exudyn's explicit solvers, bridge/general_contact.py);
@@ -132,7 +132,7 @@ def report_lines(res):
          f"`python -m exudyn_lie bench --sections particles` (module `exudyn_lie/apps/bench_particles.py`: the "
          f"model, {res['coordinates']} coordinates, the reference and the timing).  Error: max over the end "
          f"state's coordinates against Exudyn's RK44 at h = {REF_H:g} s; time: inside the solve call, best of "
-         "warm runs.", "",
+         "runs (exudyn_lie after one more).", "",
          "| h [s] | solver | error | time [s] | per step [us] |", "|---|---|---|---|---|"]
     L += [f"| {r['h']:g} | {r['solver']} | {r['error']:.3g} | {r['seconds']:.4g} | {1e6 * r['perStep']:.1f} |"
           for r in rows]

@@ -184,9 +184,6 @@ class EvaluatedModel:
         self._setTime = self.sd.SetTime
         import exudyn as exu
         self._cur = exu.ConfigurationType.Current
-        # AE unknowns that are coordinates (ObjectJointSliding2D's s: bridge/evaluated_sliding.py)
-        joints = sliding_joints(mbs)
-        self.sliding = SlidingCoordinates(self, joints) if joints else None
         self.aeCur = self.sd.GetAECoordinates(configuration=self._cur, copy=False) if m else np.zeros(0)
 
     def read_rows(self):
@@ -194,10 +191,15 @@ class EvaluatedModel:
         when a user function changed an object: an offset function, a connector switched on or
         to velocity level)."""
         mbs = self.mbs
-        self.velocityRows, self._functionRows = coordinate_constraint_rows(mbs)
-        self._movingRows = list(self._functionRows)
+        self.velocityRows, functionRows = coordinate_constraint_rows(mbs)
         # rows whose g_v and eta come from the position level (position_derived_rows)
         self.positionRows, self._allPosition = position_derived_rows(mbs)
+        # an offset function's rate and acceleration are added to Exudyn's velocity level; the
+        # position level's differences along the motion (t moves with it) hold them already
+        P = set(self.positionRows.tolist())
+        self._functionRows = [x for x in functionRows if x[0] not in P]
+        self._paramRows = getattr(self, "_paramRows", [])
+        self._movingRows = self._functionRows + self._paramRows
         self._velocityLevel = not self._allPosition
         # of those, the nodes' own rows: differentiated along the straight line in their
         # coordinates (_onto_unit_sphere says why the others are not)
@@ -205,6 +207,14 @@ class EvaluatedModel:
         self._posObjectRows, self._posNodeRows = self.positionRows[~nr], self.positionRows[nr]
         # C_qdot of velocity-level rows: the ODE2_t factor (position-level rows have no ODE2_t part)
         self._factorODE2_t = 1.0 if len(self.velocityRows) else 0.0
+        # AE unknowns that are coordinates (ObjectJointSliding2D's s: bridge/evaluated_sliding.py)
+        joints = sliding_joints(mbs)
+        if not hasattr(self, "sliding"):
+            self.sliding = SlidingCoordinates(self, joints) if joints else None
+        elif [j[0] for j in joints] != ([] if self.sliding is None else self.sliding.objects):
+            raise BridgeError("an ObjectJointSliding2D was switched on or off during the run (activeConnector); "
+                              "exudyn_lie takes its sliding coordinate from the positions only for the joints "
+                              "active at the start; solve with exudyn.SolveDynamic")
 
     # ------------------------------------------------------------------ state
     def write_state(self, R, r, V, prev, qv, vv):
@@ -298,8 +308,8 @@ class EvaluatedModel:
         return self.lam if self.sliding is None else self.sliding.forces(self.lam, self.aeCur)
 
     def start_step(self):
-        """A step starts after Exudyn's PostNewton, which added the sliding coordinates' increments
-        to the joints' data nodes: the increments start again from 0."""
+        """A step starts: Exudyn's PostNewton after the last one (none before the first) added the
+        sliding coordinates' increments to the joints' data nodes, so they start again from 0."""
         if self.sliding is not None:
             self.aeCur[self.sliding.slots] = 0.0
 
@@ -318,6 +328,7 @@ class EvaluatedModel:
 
     def set_parameter_offsets(self, moving):
         """The moving rows of offsets changed by user functions (bridge/moving_offsets.py)."""
+        self._paramRows = moving
         self._movingRows = self._functionRows + moving
 
     def velocity_constraints(self, t, R=None, r=None, prev=None, qv=None):
@@ -334,8 +345,6 @@ class EvaluatedModel:
             gv = self._residual()[self.n + self.n1:].copy()
         else:
             gv = np.zeros(m)
-        for row, fn, label in self._movingRows:          # - cdot(t): coordinate_constraint_rows
-            gv[row] -= offset_and_derivatives(fn, t, label)[1]
         if len(self.positionRows):
             if R is None:
                 raise SimulationError("internal: velocity_constraints needs the state for position-derived rows")
@@ -343,6 +352,8 @@ class EvaluatedModel:
             gp, _, gm = self._position_along_motion(t, R, r, prev, qv, eps, False, False)
             P = self.positionRows
             gv[P] = (gp[P] - gm[P]) * (0.5 / eps)
+        for row, fn, label in self._movingRows:          # - cdot(t): coordinate_constraint_rows
+            gv[row] -= offset_and_derivatives(fn, t, label)[1]
         return gv if self.sliding is None else self.sliding.transform_rows(gv)
 
     def _onto_unit_sphere(self, q):

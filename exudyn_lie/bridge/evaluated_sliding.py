@@ -70,6 +70,10 @@ class SlidingCoordinates:
         self._haveC = False
         self._s0 = np.zeros(k)
         self.iterations = 0
+        # the length scale of the positions (the round-off of r(s) - p0): the reference values
+        import exudyn as exu
+        ref = np.asarray(model.sd.GetODE2Coordinates(configuration=exu.ConfigurationType.Reference), float)
+        self.scale = max(1.0, float(np.max(np.abs(ref))) if ref.size else 1.0)
 
     # ------------------------------------------------------------------ s from the positions
     def _jacobian_columns(self, J):
@@ -112,14 +116,14 @@ class SlidingCoordinates:
             self.fs[:] = -g[slots]
             step = float(np.max(np.abs(ds)))
             # converged, or at the rounding floor (the step no longer halves)
-            if step <= 1e-15 or (it >= 3 and step > 0.5 * last and step <= 1e-9):
+            if step <= 1e-15 * self.scale or (it >= 3 and step > 0.5 * last and step <= 1e-9 * self.scale):
                 self.iterations += it
                 return
             ae[slots] += ds
             last = step
             if it == 2:
                 self._fresh_jacobian()        # slow contraction: c of the new s
-        k = int(np.argmax(np.abs(ds)))
+        k = int(np.argmax(np.abs(ds)))       # (not converged: the positions left the cable)
         raise ConstraintError(f"object {self.objects[k]} (ObjectJointSliding2D): its marker's position is not on the "
                               f"cable (the closest point was not found in {MAX_ITER} Gauss-Newton steps; last "
                               f"change of the sliding coordinate {ds[k]:.3g} m); the joint's constraint is lost")

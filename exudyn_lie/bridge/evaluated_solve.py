@@ -133,6 +133,7 @@ class EvaluatedSolver:
         check_model(mbs)
         self.timing = {}
         self._marks = []                         # objects changed during the loop (loop_context)
+        self._takeOver = None                    # the time this driver took over a run (hand_over_from)
 
     def check_run(self, ss, substeps):
         """Raise for settings this path refuses (changes nothing)."""
@@ -294,7 +295,11 @@ class EvaluatedSolver:
         problem = self.problem = EvaluatedProblem(model, tab)
         problem.read_state(q, qt, y, t0)
         fixed = project_initial(model, problem, t0, self.projectInitial)
-        if fixed:
+        if fixed and self._takeOver is not None:
+            warn_user(f"exudyn_lie: at the hand-over to the Exudyn-evaluated path (t = {self._takeOver:.6g} s) the "
+                      f"state does not satisfy the constraints as changed; projected onto them: {fixed} (Exudyn's "
+                      f"own solvers pull it onto them in their Newton iteration)")
+        elif fixed:
             warn_user(f"exudyn_lie: the initial state does not satisfy the constraints; projected onto them: "
                       f"{fixed} (Exudyn's own solvers start from it unchanged; pass projectInitial=False to "
                       f"raise instead)")
@@ -433,13 +438,22 @@ def hand_over_from(compiled, error, loop):
     state in mbs; it reads every item as Exudyn has it now), or None where this path cannot take
     the model."""
     plan = compiled._loopPlan
+    if compiled.scene.rollingDiscPenalties:
+        # the compiled path runs Exudyn's loop with one PostNewton pass for their data (solver.py);
+        # the evaluated path needs Exudyn's discontinuous iteration as the user set it
+        error.args = (f"{error.args[0]} (the Exudyn-evaluated path cannot take over the run: the model has "
+                      f"ObjectConnectorRollingDiscPenalty items)",)
+        return None
     try:
         ev = EvaluatedSolver(compiled.mbs, compiled._explicit, liegroup=compiled._liegroup_arg,
-                             verbose=compiled.verbose, autoImplicit=compiled.autoImplicit)
+                             verbose=compiled.verbose, autoImplicit=compiled.autoImplicit,
+                             projectInitial=compiled.projectInitial)
+        ev._takeOver = error.t
         if not ev.take_over(loop, loop.settings, plan["k"], plan["needAcc"],
                             getattr(compiled, "_constraintCheck", True), error.t):
             return None
-    except BridgeError:
+    except BridgeError as e:
+        error.args = (f"{error.args[0]} (the Exudyn-evaluated path cannot take over the run: {e})",)
         return None
     warn_user(f"exudyn_lie: {error.what} was changed by a user function at t = {error.t:.6g} s, which the compiled "
               f"kernel cannot follow; the run continues from there on the Exudyn-evaluated path (Exudyn evaluates "

@@ -131,7 +131,7 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
         stabilization = None if constraintTolerance is not None else "position"
     solver = LieGroupSolver(mbs, method=method, liegroup=liegroup, stabilization=stabilization,
                             projectInitial=projectInitial, verbose=verbose, constraintTolerance=constraintTolerance,
-                            autoImplicit=autoImplicit, handOver=evaluation == "auto" and auto,
+                            autoImplicit=autoImplicit, handOver=evaluation == "auto" and auto and constraintTolerance is None,
                             _configuration="items" if assemble else "initial", _scene=scene)
     solver._check_run(settings, substeps)
     _check_index2_rotvec_constraints(mbs, typeName, settings)

@@ -25,6 +25,8 @@ import warnings
 
 import numpy as np
 
+from .bench_stiff import curve, time_at
+
 T_END = 0.2
 STEPS = (4e-4, 2e-4, 1e-4, 5e-5)
 #: explicit Euler is first order and its error constant is larger: smaller steps reach the others' errors
@@ -113,19 +115,6 @@ def run_section(cfg, log):
     return dict(rows=rows, coordinates=int(qref.size))
 
 
-def _curve(rows, solver):
-    pts = sorted(((r["error"], r["seconds"]) for r in rows if r["solver"] == solver and r["error"] > 0),
-                 key=lambda p: p[0])
-    return np.array(pts)
-
-
-def time_at(pts, err):
-    """The time at the error ``err`` interpolated log-log along the curve (None outside it)."""
-    if len(pts) < 2 or not (pts[0, 0] <= err <= pts[-1, 0]):
-        return None
-    return float(np.exp(np.interp(np.log(err), np.log(pts[:, 0]), np.log(pts[:, 1]))))
-
-
 def report_lines(res):
     rows = res["rows"]
     L = ["## A particle system (GeneralContact) against Exudyn's explicit solvers", "",
@@ -136,9 +125,9 @@ def report_lines(res):
          "| h [s] | solver | error | time [s] | per step [us] |", "|---|---|---|---|---|"]
     L += [f"| {r['h']:g} | {r['solver']} | {r['error']:.3g} | {r['seconds']:.4g} | {1e6 * r['perStep']:.1f} |"
           for r in rows]
-    ours = _curve(rows, "exl")
+    ours = curve(rows, "exl")
     for other in SOLVERS[1:]:
-        theirs = _curve(rows, other)
+        theirs = curve(rows, other)
         L += ["", f"Time of exudyn_lie / {other} at equal error (interpolated; '-': the curves do not overlap):", ""]
         for e in TARGETS:
             ta, tb = time_at(ours, e), time_at(theirs, e)

@@ -168,9 +168,10 @@ def run_section(cfg, log):
     return res
 
 
-def _curve(rows, solver):
-    pts = sorted(((r["error"], r["seconds"]) for r in rows if r["solver"] == solver and np.isfinite(r["error"])),
-                 key=lambda p: p[0])
+def curve(rows, solver):
+    """``(error, seconds)`` of ``solver``'s rows, sorted by error (finite, positive errors: a log-log curve)."""
+    pts = sorted(((r["error"], r["seconds"]) for r in rows if r["solver"] == solver and np.isfinite(r["error"])
+                  and r["error"] > 0), key=lambda p: p[0])
     return np.array(pts)
 
 
@@ -190,7 +191,7 @@ def report_lines(res, figures=()):
         L += [f"### {model}", "", "| h [s] | solver | method | error | time [s] |", "|---|---|---|---|---|"]
         L += [f"| {r['h']:g} | {r['solver']} | {r['method']} | {r['error']:.3g} | {r['seconds']:.4g} |" for r in rows]
         L += ["", "(nan: the solver stopped at this step.)"] if any(not np.isfinite(r["error"]) for r in rows) else []
-        a, b = _curve(rows, "exl"), _curve(rows, "native")
+        a, b = curve(rows, "exl"), curve(rows, "native")
         L += ["", "Time of exudyn_lie / generalized-alpha at equal error (interpolated; '-': outside a curve):", ""]
         for e in TARGETS:
             ta, tb = time_at(a, e), time_at(b, e)

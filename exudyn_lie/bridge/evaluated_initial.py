@@ -42,11 +42,6 @@ def _names(mbs, rows):
     return ", ".join(dict.fromkeys(m.get(int(r), f"AE row {r}") for r in rows))
 
 
-def _position_residual(model, t):
-    """The position-level residual (:meth:`~.evaluated.EvaluatedModel.position_residual`)."""
-    return model.position_residual(t)
-
-
 def _correction(model, t, rhs):
     """``Delta`` with ``C_q Delta = rhs`` of least M-norm (the KKT solve with f = 0)."""
     M, f, Cq = model.mass_force_jacobian(t)
@@ -67,7 +62,7 @@ class _ExudynLevels:
         scale = max(1.0, float(np.max(np.abs(p.r))) if p.r.size else 1.0,
                     float(np.max(np.abs(p.qv))) if p.qv.size else 1.0)
         self.scale = scale
-        return _position_residual(self.model, self.t), scale
+        return self.model.position_residual(self.t), scale
 
     def velocity_residual(self):
         m, p = self.model, self.problem
@@ -78,7 +73,7 @@ class _ExudynLevels:
         """Gauss-Newton steps on the group for Lie group nodes, added to vector coordinates."""
         model, problem, t = self.model, self.problem, self.t
         L = model.L
-        g = _position_residual(model, t)
+        g = model.position_residual(t)
         for _ in range(MAX_ITER):
             d = _correction(model, t, -g)
             for i in range(len(L.lgNodes)):
@@ -87,7 +82,7 @@ class _ExudynLevels:
                 problem.r[i] += d[idx[:3]]
             problem.qv += d[L.vecIdx]
             problem.write()
-            g = _position_residual(model, t)
+            g = model.position_residual(t)
             if np.max(np.abs(g)) <= TOL * self.scale:
                 return
         bad = np.nonzero(np.abs(g) > TOL * self.scale)[0]

@@ -68,8 +68,6 @@ class SlidingCoordinates:
         self.sdot = np.zeros(k)
         self.fs = np.zeros(k)              # c . lam, the force along the curve (|c| F_ax)
         self._haveC = False
-        self._s0 = np.zeros(k)
-        self.iterations = 0
         # the length scale of the positions (the round-off of r(s) - p0): the reference values
         import exudyn as exu
         ref = np.asarray(model.sd.GetODE2Coordinates(configuration=exu.ConfigurationType.Reference), float)
@@ -117,7 +115,6 @@ class SlidingCoordinates:
             step = float(np.max(np.abs(ds)))
             # converged, or at the rounding floor (the step no longer halves)
             if step <= 1e-15 * self.scale or (it >= 3 and step > 0.5 * last and step <= 1e-9 * self.scale):
-                self.iterations += it
                 return
             ae[slots] += ds
             last = step

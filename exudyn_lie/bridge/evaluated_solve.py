@@ -31,6 +31,7 @@ from ..userwarn import warn_user
 from .evaluated import EvaluatedModel, Layout
 from .evaluated_items import check_model, constant_mass_matrix, parameter_offset_rows
 from .moving_offsets import ParameterOffsets
+from .params import MainSystemPatch
 from .evaluated_problem import EvaluatedProblem
 from .evaluated_initial import project_initial
 from .evaluated_stiffness import check_step
@@ -464,30 +465,20 @@ def hand_over_from(compiled, error, loop):
     return ev
 
 
-class ObjectChanges:
+class ObjectChanges(MainSystemPatch):
     """While Exudyn's loop runs, ``SetObjectParameter`` / ``ModifyObject`` on ``mbs`` append the
     object's index to ``marks``."""
+    patched = ("SetObjectParameter", "ModifyObject")
 
     def __init__(self, mbs, marks):
-        self.mbs, self.marks, self._saved = mbs, marks, {}
+        self.mbs, self.marks = mbs, marks
 
-    def __enter__(self):
-        import exudyn as exu
+    def wrap(self, orig, name):
         target, marks = self.mbs, self.marks
-        for name in ("SetObjectParameter", "ModifyObject"):
-            orig = self._saved[name] = getattr(exu.MainSystem, name)
 
-            def wrapped(mbs, *args, _orig=orig, **kw):
-                out = _orig(mbs, *args, **kw)
-                if mbs is target:
-                    marks.append(args[0] if args else kw.get("objectNumber"))
-                return out
-            setattr(exu.MainSystem, name, wrapped)
-        return self
-
-    def __exit__(self, *exc):
-        import exudyn as exu
-        for name, orig in self._saved.items():
-            setattr(exu.MainSystem, name, orig)
-        self._saved = {}
-        return False
+        def wrapped(mbs, *args, **kw):
+            out = orig(mbs, *args, **kw)
+            if mbs is target:
+                marks.append(args[0] if args else kw.get("objectNumber"))
+            return out
+        return wrapped

@@ -108,6 +108,30 @@ def _finite(x, what, key):
     return x
 
 
+class MainSystemPatch:
+    """While entered (Exudyn's loop runs), the ``exudyn.MainSystem`` methods ``patched`` are replaced
+    by ``self.wrap(original, name)``; the originals are put back on exit."""
+    patched = ()
+
+    def wrap(self, orig, name):
+        raise NotImplementedError
+
+    def __enter__(self):
+        import exudyn as exu
+        self._saved = {}
+        for name in self.patched:
+            orig = self._saved[name] = getattr(exu.MainSystem, name)
+            setattr(exu.MainSystem, name, self.wrap(orig, name))
+        return self
+
+    def __exit__(self, *exc):
+        import exudyn as exu
+        for name, orig in self._saved.items():
+            setattr(exu.MainSystem, name, orig)
+        self._saved = {}
+        return False
+
+
 class FixedParameterChanged(BridgeError):
     """A user function changed a parameter the compiled kernel holds fixed (items.FIXED, such as a
     joint's ``activeConnector``) before the step that starts at ``t``: with evaluation='auto' the run
@@ -118,7 +142,7 @@ class FixedParameterChanged(BridgeError):
         self.t, self.what = t, what
 
 
-class ParameterWatch:
+class ParameterWatch(MainSystemPatch):
     """Records the items a user function changes during ``Solve`` and applies the changes
     to the compiled scene before the next step.
 
@@ -165,22 +189,10 @@ class ParameterWatch:
         for n in range(self.nItems["node"]):
             self.snap[("node", n)] = mbs.GetNode(n)
 
-    def __enter__(self):
-        import exudyn as exu
-        cls = exu.MainSystem
-        target = self.mbs
-        for name, kind in _WRAPPED.items():
-            orig = getattr(cls, name)
-            self._saved[name] = orig
-            setattr(cls, name, self._wrapper(orig, kind, name.startswith("Set"), target))
-        return self
+    patched = tuple(_WRAPPED)
 
-    def __exit__(self, *exc):
-        import exudyn as exu
-        for name, orig in self._saved.items():
-            setattr(exu.MainSystem, name, orig)
-        self._saved = {}
-        return False
+    def wrap(self, orig, name):
+        return self._wrapper(orig, _WRAPPED[name], name.startswith("Set"), self.mbs)
 
     def _wrapper(self, orig, kind, named, target):
         marks, late = self.marks, self.late

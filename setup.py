@@ -15,7 +15,7 @@ setup(
     + ["exudyn_lie.models"],
     package_dir={"exudyn_lie.models": "models"},
     python_requires=">=3.9",
-    install_requires=["exudyn>=1.13", "numpy", "numba", "matplotlib"],
+    install_requires=["exudyn>=1.13", "numpy", "numba", "matplotlib", "threadpoolctl"],
     extras_require={"test": ["pytest", "pytest-xdist", "scipy"], "bench": ["mujoco>=4.0.0"]},
     entry_points={"console_scripts": ["exudyn_lie=exudyn_lie.__main__:main"]},
 )

@@ -9,6 +9,7 @@ from ..userwarn import warn_user
 from .constraint_check import check_tolerance
 from .solvertype import REPLACED, resolve_solver_type
 from .reader import BridgeError
+from .blas_threads import one_blas_thread
 from .solve_timing import timed_call
 from .solver import LieGroupSolver, _check_method
 
@@ -45,6 +46,7 @@ def _before_solve(mbs, replacedType, methodName, where, assemble):
 
 @raised_at_boundary((SceneError, SimulationError))
 @timed_call
+@one_blas_thread
 def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialValues=False, storeSolver=True,
                  showHints=False, showCausingItems=True, autoAssemble=True, *, method=None, liegroup="auto",
                  stabilization="auto", projectInitial=True, verbose=False, showProgress=True, substeps=None,

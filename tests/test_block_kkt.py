@@ -3,8 +3,8 @@ the Exudyn-evaluated path uses, against the whole KKT matrix solved by numpy."""
 import numpy as np
 import pytest
 
-from exudyn_lie.errors import ConstraintError
-from exudyn_lie.mbs.block_kkt import BlockKKT
+from exudyn_lie.errors import ConstraintError, SimulationError
+from exudyn_lie.mbs.block_kkt import DENSE_IN_KERNEL_MAX, BlockKKT
 
 
 def _blocks_of(sizes):
@@ -189,6 +189,36 @@ def test_a_singular_block_of_m_falls_back_to_the_whole_kkt_matrix():
     assert kkt.dense
     a, lam = _kkt(M, Cq, f, eta)
     assert np.allclose(kkt.a, a, atol=1e-9) and np.allclose(kkt.lam, lam, atol=1e-9)
+
+
+@pytest.mark.parametrize("nBlocks", [3, 20])
+def test_the_whole_kkt_matrix_in_the_kernel_and_by_lapack_agree_with_a_direct_solve(nBlocks):
+    """The dense fallback below DENSE_IN_KERNEL_MAX unknowns (the kernel's LU) and above it (numpy's
+    LAPACK), with an inactive row (no coordinates: lam = 0, its equation checked) and a
+    massless coordinate that a constraint fixes."""
+    rng = np.random.default_rng(9)
+    sizes = [3] * nBlocks
+    M, Cq, f = _chain(rng, sizes, rowsPerJoint=1)
+    M[3:6, 3:6] = np.diag([2.0, 0.0, 1.0])
+    fix = np.zeros(M.shape[0])
+    fix[4] = 1.0
+    Cq = np.vstack([Cq, fix, np.zeros(M.shape[0])])
+    eta = rng.normal(size=Cq.shape[0])
+    seen = []
+    kkt = BlockKKT(M.shape[0], Cq.shape[0], _blocks_of(sizes), lambda C, empty: seen.append(np.nonzero(empty)[0]))
+    assert (M.shape[0] + Cq.shape[0] <= DENSE_IN_KERNEL_MAX) == (nBlocks == 3)
+    for _ in range(2):
+        kkt.solve(M, f, Cq, eta)
+    assert kkt.dense
+    keep = np.arange(Cq.shape[0]) != Cq.shape[0] - 1
+    a, lam = _kkt(M, Cq[keep], f, eta[keep])
+    assert kkt.lam[-1] == 0.0
+    assert np.allclose(kkt.a, a, rtol=1e-10, atol=1e-10) and np.allclose(kkt.lam[keep], lam, rtol=1e-10, atol=1e-10)
+    assert len(seen) >= 2 and all(list(s) == [Cq.shape[0] - 1] for s in seen)
+    Cq[:, 4] = 0.0                                     # the massless coordinate free: singular
+    Cq[-2, 0] = 1.0
+    with pytest.raises(SimulationError, match="KKT matrix .* is singular"):
+        kkt.solve(M, f, Cq, eta)
 
 
 def test_no_rows():

@@ -24,11 +24,17 @@ import numpy as np
 from numba import njit
 
 from ..errors import ConstraintError, SimulationError
-from .linalg import (REL_PIVOT_TOL, band_ldl_inplace, band_ldl_solve_inplace, pivoted_cholesky_solve,
-                     rcm_order)
+from .linalg import (REL_PIVOT_TOL, band_ldl_inplace, band_ldl_solve_inplace, lu_factor_inplace, lu_solve_inplace,
+                     pivoted_cholesky_solve, rcm_order)
 
-# statuses of schur_band_solve
-KKT_OK, KKT_SINGULAR_BLOCK, KKT_SINGULAR_SCHUR, KKT_BEYOND_BAND, KKT_EMPTY_ROWS = 0, 1, 2, 3, 4
+# statuses of schur_band_solve and dense_kkt_solve
+KKT_OK, KKT_SINGULAR_BLOCK, KKT_SINGULAR_SCHUR, KKT_BEYOND_BAND, KKT_EMPTY_ROWS, KKT_SINGULAR = 0, 1, 2, 3, 4, 5
+
+#: the whole KKT matrix up to this order is factored in the kernel (unblocked LU): below it,
+#: numpy's LAPACK call costs more in its Python set-up (copies, the active rows) than in
+#: flops; measured on one core, LU and solve: 8 unknowns 1.1 us (numpy 3.8), 32: 8.1 (9.5),
+#: 64: 52 (27 plus about 30 of set-up), 128: 409 (121)
+DENSE_IN_KERNEL_MAX = 64
 
 
 @njit(cache=True, inline="always")
@@ -265,6 +271,50 @@ def schur_band_solve(M, f, Cq, eta, blk, blkPtr, blkOff, blockOf, pos, bw, pivot
     return KKT_EMPTY_ROWS if empty else KKT_OK
 
 
+@njit(cache=True)
+def dense_kkt_solve(M, f, Cq, eta, K, piv, x, active, a, lam):
+    """``a``, ``lam`` of the whole KKT matrix by LU with partial pivoting (small systems,
+    :data:`DENSE_IN_KERNEL_MAX`); rows without coordinates are left out (``lam = 0``).
+    Returns KKT_OK, KKT_EMPTY_ROWS when such rows exist (the caller checks their equations), or
+    KKT_SINGULAR on an exactly zero pivot (numpy's LAPACK rule)."""
+    n = M.shape[0]
+    m = Cq.shape[0]
+    k = 0
+    for r in range(m):
+        for c in range(n):
+            if Cq[r, c] != 0.0:
+                active[k] = r
+                k += 1
+                break
+    N = n + k
+    for i in range(n):
+        for j in range(n):
+            K[i, j] = M[i, j]
+        x[i] = f[i]
+    for p in range(k):
+        r = active[p]
+        for j in range(n):
+            K[n + p, j] = Cq[r, j]
+            K[j, n + p] = Cq[r, j]
+        for q in range(k):
+            K[n + p, n + q] = 0.0
+        x[n + p] = eta[r]
+    if lu_factor_inplace(K, N, piv, 0.0) >= 0:
+        return KKT_SINGULAR
+    lu_solve_inplace(K, N, piv, x)
+    for i in range(n):
+        a[i] = x[i]
+    for r in range(m):
+        lam[r] = 0.0
+    for p in range(k):
+        lam[active[p]] = x[n + p]
+    return KKT_EMPTY_ROWS if k < m else KKT_OK
+
+
+_SINGULAR_KKT = ("the KKT matrix [M Cq^T; Cq 0] is singular (a coordinate without mass that no constraint "
+                 "fixes?); exudyn_lie cannot compute accelerations")
+
+
 class BlockKKT:
     """The solve of the module docstring for ``n`` coordinates and ``m`` rows, with its
     workspace.  ``blocks(M)`` gives the block structure ``(blk, blkPtr)`` at the first
@@ -289,6 +339,7 @@ class BlockKKT:
         self._nzCnt = np.zeros(m, np.int64)
         self._perm = np.zeros(m, np.int64)
         self._yw = np.zeros(m)
+        self._K = None                # dense_kkt_solve's workspace
 
     def _set_up(self, M):
         n, m = self.n, self.m
@@ -393,6 +444,18 @@ class BlockKKT:
 
     def _dense_solve(self, M, f, Cq, eta):
         n = self.n
+        if n + self.m <= DENSE_IN_KERNEL_MAX and not self.pivoted:
+            if self._K is None:
+                N = n + self.m
+                self._K, self._piv, self._xK = np.zeros((N, N)), np.zeros(N, np.int64), np.zeros(N)
+                self._active = np.zeros(max(self.m, 1), np.int64)
+            st = dense_kkt_solve(M, f, Cq, eta, self._K, self._piv, self._xK, self._active, self.a, self.lam)
+            if st == KKT_OK:
+                return
+            if st == KKT_SINGULAR:
+                raise SimulationError(_SINGULAR_KKT)
+            self._check_rows(Cq, ~np.any(Cq != 0.0, axis=1))
+            return
         empty = ~np.any(Cq != 0.0, axis=1)
         if self.m:
             self._check_rows(Cq, empty)
@@ -407,8 +470,7 @@ class BlockKKT:
         try:
             x = np.linalg.lstsq(K, rhs, rcond=1e-12)[0] if self.pivoted else np.linalg.solve(K, rhs)
         except np.linalg.LinAlgError:
-            raise SimulationError("the KKT matrix [M Cq^T; Cq 0] is singular (a coordinate without mass "
-                                  "that no constraint fixes?); exudyn_lie cannot compute accelerations") from None
+            raise SimulationError(_SINGULAR_KKT) from None
         self.a[:] = x[:n]
         self.lam[:] = 0.0
         self.lam[active] = x[n:]

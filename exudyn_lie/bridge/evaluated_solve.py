@@ -234,7 +234,11 @@ class EvaluatedSolver:
         else:
             info = (f"exudyn_lie: Munthe-Kaas {name} (order {tab.order}) on the Exudyn-evaluated model, "
                     f"step size h = {h:.6g} s, {nsteps} steps from t = {t0:g} to {tEnd:g} s")
-        ss2 = loop_settings(ss, nsteps // k, info)
+        # Exudyn reduces its steps only after a failed discontinuous iteration, which needs items
+        # with a PostNewton (GeneralContact's active sets too); without them the steps stay fixed,
+        # t = t0 + i h as on the compiled path
+        follow = k == 1 and bool(postNewton or mbs.NumberOfGeneralContacts())
+        ss2 = loop_settings(ss, nsteps // k, info, followSteps=follow)
         self._loopPlan = dict(k=k, h=h, t0=t0, tEnd=tEnd, nsteps=nsteps, needAcc=needAcc, groups=groups, why=why,
                               tolCheck=tolCheck, ticTotal=ticTotal, log=self.verbose or ss.timeIntegration.verboseMode >= 1,
                               reuseMass=bool(ss.timeIntegration.reuseConstantMassMatrix))
@@ -405,7 +409,12 @@ class EvaluatedSolver:
             model.set_parameter_offsets(self._offsets.record(t0, t1, self._actual_coordinates))
         tic = time.perf_counter()
         if abs((t1 - t0) / k - h) > 1e-9 * h:
-            raise off_plan(t1, t0 + k * h)
+            if k > 1:
+                raise off_plan(t1, t0 + k * h)
+            # Exudyn reduced its step (a failed discontinuous iteration, loop_settings' followSteps)
+            # or shortened the last one, or grows it back: MK steps of at most h to its end
+            k = max(1, int(np.ceil((t1 - t0) / h * (1.0 - 1e-9))))
+            h = (t1 - t0) / k
         try:
             problem.advance(t0, t1, k, h, self._adaptive is not None)
         except StepSizeError:

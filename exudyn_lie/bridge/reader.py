@@ -140,9 +140,11 @@ def check_system_level(mbs, unhonoured=None, generalContact=False):
             continue
         uf = fn()
         if not (isinstance(uf, (int, float)) and uf == 0) and uf is not None:
-            # Exudyn's PostNewton calls it on the Exudyn-evaluated path
-            error = NotCompiled if name == "PostNewtonUserFunction" else BridgeError
-            raise error(f"mbs has a {name} (mbs.Set{name}): exudyn_lie does not call it ({why}); "
+            if name == "PostNewtonUserFunction":
+                # Exudyn's PostNewton calls it on the Exudyn-evaluated path (the reason it is taken)
+                raise NotCompiled(f"mbs has a {name} (mbs.Set{name}), which Exudyn's PostNewton calls after each "
+                                  f"step of its discontinuous iteration")
+            raise BridgeError(f"mbs has a {name} (mbs.Set{name}): exudyn_lie does not call it ({why}); "
                               f"solve with exudyn.SolveDynamic, or remove it with mbs.Set{name}(0)")
 
 

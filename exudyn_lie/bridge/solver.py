@@ -69,10 +69,13 @@ def _check_method(method):
                       f"exudyn_lie.integrators.ButcherTableau")
 
 
-def loop_settings(ss, exudynSteps, info):
+def loop_settings(ss, exudynSteps, info, followSteps=False):
     """The settings of Exudyn's own time loop around the hook: a deep copy of ``ss`` (the
-    user's object stays as it is) with ``exudynSteps`` fixed steps of its implicit solver,
-    whose Newton iteration is the hook, and ``info`` appended to the solution file's header."""
+    user's object stays as it is) with ``exudynSteps`` steps of its implicit solver, whose
+    Newton iteration is the hook, and ``info`` appended to the solution file's header.  The
+    steps are fixed unless ``followSteps`` (a driver that takes any step Exudyn asks for): then
+    Exudyn reduces them after a failed discontinuous iteration as the user set it (adaptiveStep,
+    discontinuous.useRecommendedStepSize), as in its own solve."""
     import copy
 
     import exudyn as exu
@@ -84,11 +87,12 @@ def loop_settings(ss, exudynSteps, info):
     ga.computeInitialAccelerations = False
     ga.useNewmark = False
     ga.useIndex2Constraints = False
-    ti2.adaptiveStep = False
     ti2.automaticStepSize = False
-    # contact items recommend a smaller step after an impact (PostNewton); the fixed steps
-    # do not follow it (Exudyn would reduce its step below the planned outputs)
-    ti2.discontinuous.useRecommendedStepSize = False
+    if not followSteps:
+        ti2.adaptiveStep = False
+        # contact items recommend a smaller step after an impact (PostNewton); fixed steps
+        # do not follow it (Exudyn would reduce its step below the planned outputs)
+        ti2.discontinuous.useRecommendedStepSize = False
     # Exudyn's log would count its own (output) steps and Newton iterations (none): the
     # bridge logs the integration instead; the solution file's header says what ran
     ti2.verboseMode = 0

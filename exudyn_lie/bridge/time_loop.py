@@ -147,6 +147,8 @@ class TimeLoop:
             if self.hookError is not None:
                 raise self.hookError from None
             raise
+        if not ok and self.hookError is not None:
+            raise self.hookError            # (Exudyn took the hook's error for a failed step)
         if not ok:
             raise exu.SolverError(f"exudyn_lie: Exudyn's time loop terminated: {solver.GetErrorString()}")
         return True
@@ -192,10 +194,13 @@ class TimeLoop:
         try:
             t1 = self.it.currentTime
             steps, driver = self.steps, self.driver
-            if t1 == steps[1] and self.count > 0:
+            if self.count > 0 and t1 <= steps[1]:
                 # Exudyn's discontinuous iteration calls the hook again for the same step, with
-                # the ODE2 coordinates reset to the start of the step
+                # the ODE2 coordinates reset to the start of the step; after a failed one it
+                # reduces the step (when its settings allow, bridge/solver.loop_settings): the
+                # step from the same start ends earlier
                 driver.loop_restart(steps[0], True)
+                steps[1] = t1
             else:
                 steps[0], steps[1] = steps[1], t1
                 self.count += 1

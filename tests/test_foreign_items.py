@@ -176,9 +176,10 @@ def _nan_node(m):
 
 
 def _sliding_joint(m):
-    """An ObjectJointSliding2D along the cable (Exudyn's ANCFslidingJoint2D example) in its other
-    formulation (useClassicalFormulation=False), whose rows mix the sliding coordinate with the
-    multipliers: refused (the default one is integrated, tests/test_sliding_joint2d.py)."""
+    """An ObjectJointSliding2D along the cable (Exudyn's ANCFslidingJoint2D example) with
+    constrainRotation=True, whose rotation row Exudyn's Jacobian gives without its dependence on
+    the sliding coordinate: refused (both formulations without it are integrated,
+    tests/test_sliding_joint2d.py)."""
     from exudyn.utilities import MarkerBodyCable2DCoordinates, NodeGenericData, ObjectJointSliding2D
     mbs = m.mbs
     els = [i for i in range(mbs.systemData.NumberOfObjects()) if mbs.GetObject(i)["objectType"] == "ANCFCable2D"]
@@ -189,7 +190,7 @@ def _sliding_joint(m):
     mbs.AddObject(ObjectJointSliding2D(name="slider", markerNumbers=[mbs.AddMarker(MarkerBodyRigid(bodyNumber=body)),
                                                                      cm[0]],
                                        slidingMarkerNumbers=cm, slidingMarkerOffsets=[i * L for i in range(len(els))],
-                                       nodeNumber=nd, useClassicalFormulation=False))
+                                       nodeNumber=nd, constrainRotation=True))
 
 
 BAD = {
@@ -197,8 +198,8 @@ BAD = {
                                             r"GeneralContact.*evaluation='auto'"),
     "non-finite initial coordinate of the foreign item's node": ("generic_ode2", _nan_node, {},
                                                                  r"node \d+ .*NodeGenericODE2.*not finite"),
-    "sliding joint, other formulation": ("cable2d_pendulum", _sliding_joint, {},
-                                         r"object \d+ \('slider'\) ObjectJointSliding2D: useClassicalFormulation=False"),
+    "sliding joint, constrained rotation": ("cable2d_pendulum", _sliding_joint, {},
+                                            r"object \d+ \('slider'\) ObjectJointSliding2D: constrainRotation=True"),
     "evaluation='compiled' with a foreign item": ("generic_ode2", lambda m: None, dict(evaluation="compiled"),
                                                   r"ObjectGenericODE2 is not supported"),
     "unknown evaluation": ("generic_ode2", lambda m: None, dict(evaluation="python"), r"evaluation must be"),

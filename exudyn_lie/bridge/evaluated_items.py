@@ -98,14 +98,13 @@ def check_model(mbs):
                               f"items the compiled kernel does not have, or evaluation='exudyn'); solve with "
                               f"exudyn.SolveDynamic, or use a NodeRigidBodyEP / Rxyz node")
         if t == "JointSliding2D" and d.get("activeConnector", True):
-            # bridge/evaluated_sliding.py: the classical formulation's rows (a point on the curve,
-            # s from the positions); the other mixes s into rows with multipliers
-            if not d.get("useClassicalFormulation", True) or d.get("constrainRotation", False):
-                what = ("useClassicalFormulation=False" if not d.get("useClassicalFormulation", True)
-                        else "constrainRotation=True")
-                raise BridgeError(f"{_describe_object(mbs, o, d)}: {what} is not supported by exudyn_lie (only "
-                                  f"Exudyn's default, useClassicalFormulation=True without constrainRotation, whose "
-                                  f"sliding coordinate it takes from the positions); solve with exudyn.SolveDynamic")
+            # bridge/evaluated_sliding.py: both formulations (a point on the curve, s from the
+            # positions); Exudyn's Jacobian of the rotation row leaves out its dependence on s
+            if d.get("constrainRotation", False):
+                raise BridgeError(f"{_describe_object(mbs, o, d)}: constrainRotation=True is not supported by "
+                                  f"exudyn_lie (Exudyn's Jacobian of its rotation row leaves out the row's dependence "
+                                  f"on the sliding coordinate, which exudyn_lie takes from the positions); solve with "
+                                  f"exudyn.SolveDynamic")
         if t == "JointSliding" and d.get("activeConnector", True):
             raise BridgeError(f"{_describe_object(mbs, o, d)}: ObjectJointSliding is not supported by exudyn_lie "
                               f"(Exudyn has no velocity-level equation for it; the 2D ObjectJointSliding2D is "

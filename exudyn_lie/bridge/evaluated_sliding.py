@@ -27,7 +27,18 @@ and the index-1 solve cannot take ``s`` as a multiplier.  This module eliminates
   ``-C_q^T c^ mu0`` is a known force moved to the right-hand side.
 
 So the solve is that of a point on a curve without friction (and with F_ax along it), which is
-what Exudyn's generalized-alpha converges to as its step falls.  (Exudyn's implicit solvers add
+what Exudyn's generalized-alpha converges to as its step falls.
+
+``useClassicalFormulation=False`` writes the same joint with the normal ``n = (-c_y, c_x)``:
+
+    lam_0 = 0                                      row 0 (a dummy: lam_0 is no force),
+    (r(s) - p0) . n = 0                            row 1 (the constraint, multiplier lam_1),
+    (r(s) - p0) . c = 0                            row of s (the closest point),
+
+without ``axialForce``.  Row 1 already is the normal row of the elimination above (its ``s``
+column ``(r - p0) . n'`` vanishes on the constraint), so only ``s`` is eliminated: Newton on
+the row of s with Exudyn's ``J(s, s)``, ``sdot = -(C_q v)_s / J(s, s)``; rows 0 and s become
+equations of their multipliers alone, and Exudyn's AE coordinates get ``(0, lam_1, s)``.  (Exudyn's implicit solvers add
 the Jacobian transposed times *all* AE unknowns to the forces, ``s`` included: a force of order
 ``|lam| Delta s / L`` per step that vanishes with the step; it is not reproduced.)
 """
@@ -42,15 +53,15 @@ MAX_ITER = 30
 
 
 def sliding_joints(mbs):
-    """The active ObjectJointSliding2D of mbs (the classical formulation; evaluated_items refuses
-    the other and constrainRotation): ``[(object, AE rows P (2), AE slot of s)]``."""
+    """The active ObjectJointSliding2D of mbs (evaluated_items refuses constrainRotation):
+    ``[(object, AE rows P (2), AE slot of s, classical formulation)]``."""
     sd = mbs.systemData
     out = []
     for o in range(sd.NumberOfObjects()):
         d = mbs.GetObject(o)
         if d["objectType"] == "JointSliding2D" and d.get("activeConnector", True):
             rows = [int(r) for r in sd.GetObjectLTGAE(o)]
-            out.append((o, rows[:2], rows[2]))
+            out.append((o, rows[:2], rows[2], bool(d.get("useClassicalFormulation", True))))
     return out
 
 
@@ -63,8 +74,11 @@ class SlidingCoordinates:
         self.objects = [j[0] for j in joints]
         self.P = np.array([j[1] for j in joints], np.int64).reshape(-1, 2)
         self.slots = np.array([j[2] for j in joints], np.int64)
+        self.classical = np.array([j[3] for j in joints], bool)
+        self._nc = ~self.classical                    # the joints of useClassicalFormulation=False
         k = len(joints)
         self.c = np.zeros((k, 2))
+        self.jss = np.ones(k)              # J(s, s) of the row of s (the other formulation's Newton)
         self.sdot = np.zeros(k)
         self.fs = np.zeros(k)              # c . lam, the force along the curve (|c| F_ax)
         self._haveC = False
@@ -78,6 +92,7 @@ class SlidingCoordinates:
         o = self.model.n + self.model.n1
         self.c[:, 0] = J[o + self.P[:, 0], o + self.slots]
         self.c[:, 1] = J[o + self.P[:, 1], o + self.slots]
+        self.jss[:] = J[o + self.slots, o + self.slots]
         self._haveC = True
 
     def _fresh_jacobian(self):
@@ -111,7 +126,8 @@ class SlidingCoordinates:
             m._ae(m.mbs, False)
             g = m._residual()[o:]
             ds = -np.sum(self.c * g[P], axis=1) / np.sum(self.c * self.c, axis=1)
-            self.fs[:] = -g[slots]
+            ds[self._nc] = -g[slots[self._nc]] / self.jss[self._nc]      # Newton on the row of s
+            self.fs[:] = np.where(self.classical, -g[slots], 0.0)
             step = float(np.max(np.abs(ds)))
             # converged, or at the rounding floor (the step no longer halves)
             if step <= 1e-15 * self.scale or (it >= 3 and step > 0.5 * last and step <= 1e-9 * self.scale):
@@ -136,6 +152,9 @@ class SlidingCoordinates:
         self._jacobian_columns(J)
         n, o = self.model.n, self.model.n + self.model.n1
         for k in range(len(self.slots)):
+            if not self.classical[k]:
+                self.sdot[k] = -float(J[o + self.slots[k], :n] @ qt) / self.jss[k]
+                continue
             cq = J[o + self.P[k], :n] @ qt
             c = self.c[k]
             self.sdot[k] = -float(c @ cq) / float(c @ c)
@@ -146,9 +165,13 @@ class SlidingCoordinates:
 
     # ------------------------------------------------------------------ the rows in the basis [c^, n^]
     def _bases(self):
+        """``c^``, ``n^``, ``|c|``; for the other formulation ``c^ = (1, 0)``, ``n^ = (0, 1)``, whose
+        rows are already in its basis (row 0 the dummy, row 1 the normal one)."""
         c = self.c
         nc = np.sqrt(np.sum(c * c, axis=1))
+        nc[self._nc] = 1.0             # (its c is Exudyn's J(rows 0, 1; s): no slope; its fs is 0)
         ch = c / nc[:, None]
+        ch[self._nc] = (1.0, 0.0)
         nh = np.stack([-ch[:, 1], ch[:, 0]], axis=1)
         return ch, nh, nc
 
@@ -181,7 +204,8 @@ class SlidingCoordinates:
 
     def forces(self, lam, ae):
         """Exudyn's AE coordinates from the solve's multipliers: the joints' forces
-        ``c^ mu0 + n^ mu`` and their sliding coordinates (as in ``ae``)."""
+        ``c^ mu0 + n^ mu`` (the other formulation: ``(0, mu)``, _bases) and their sliding
+        coordinates (as in ``ae``)."""
         out = np.array(lam, float)
         ch, nh, nc = self._bases()
         mu0, mu = self.fs / nc, out[self.P[:, 1]]

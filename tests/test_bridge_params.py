@@ -457,11 +457,10 @@ def test_unhonoured_system_features_are_refused_with_mbs_unchanged(what, assembl
     if assemble:
         mbs.Assemble()
     before = _state(mbs)
-    # a PostNewtonUserFunction is honoured on the Exudyn-evaluated path (tests/test_evaluated.py):
-    # the compiled path refuses it
-    kw = dict(evaluation="compiled") if what == "PostNewtonUserFunction" else {}
+    # all three are honoured on the Exudyn-evaluated path (tests/test_evaluated.py,
+    # tests/test_pre_newton_residual.py): the compiled path refuses them
     with pytest.raises(BridgeError) as e:
-        exl.SolveDynamic(mbs, settings(0.01, 1e-3), showProgress=False, **kw)
+        exl.SolveDynamic(mbs, settings(0.01, 1e-3), showProgress=False, evaluation="compiled")
     assert what in str(e.value) and "exudyn.SolveDynamic" in str(e.value)
     assert _state(mbs) == before
 

@@ -126,6 +126,20 @@ class Layout:
         return order.astype(np.int64), ptr
 
 
+def mbs_user_function(mbs, name):
+    """The function of ``mbs.Get<name>()`` (Exudyn gives ``{'function': f, 'type': ...}``, or 0 when
+    none is set) if it is set, else None; a function this path cannot call raises BridgeError."""
+    fn = getattr(mbs, "Get" + name, None)
+    uf = fn() if fn is not None else 0
+    if (isinstance(uf, (int, float)) and uf == 0) or uf is None:
+        return None
+    f = uf.get("function") if isinstance(uf, dict) else uf
+    if not callable(f):
+        raise BridgeError(f"mbs' {name} is not a Python callable ({uf!r}); exudyn_lie calls it from Python; solve "
+                          f"with exudyn.SolveDynamic")
+    return f
+
+
 def check_dense_size(n, nJacobian):
     """Exudyn's interface gives M (n x n) and the system Jacobian (nJacobian x nJacobian; 0: not
     needed, no constraints) as dense copies; refuse a model whose copies exceed half of the memory
@@ -182,6 +196,8 @@ class EvaluatedModel:
         self._zeroJ = self._fastest_zeroing() if layout.nAE else None
         self._ae = s.ComputeAlgebraicEquations
         self._setTime = self.sd.SetTime
+        self._preNewton = mbs_user_function(mbs, "PreNewtonResidualUserFunction")
+        self._jacobianUser = mbs_user_function(mbs, "SystemJacobianUserFunction")
         import exudyn as exu
         self._cur = exu.ConfigurationType.Current
         self.aeCur = self.sd.GetAECoordinates(configuration=self._cur, copy=False) if m else np.zeros(0)
@@ -269,6 +285,10 @@ class EvaluatedModel:
             M = self._getM()
             if self.constantMass:
                 self.kkt.constantM = M
+        if self._preNewton is not None:
+            # Exudyn calls it before each residual of its Newton iteration (a load that follows the
+            # state, say); a stage evaluation is this path's residual.  newtonIt 0: no Newton here
+            self._preNewton(mbs, t, 0, 0)
         self._ode2rhs(mbs)
         f = self._residual()[:self.n]
         if self.n1:
@@ -289,6 +309,19 @@ class EvaluatedModel:
                 self.sliding.velocities(J, self.qt)
                 f = self.sliding.transform(Cq, f, self._lamlam)
         return M, f, Cq
+
+    def user_jacobian(self, t, factorODE2, factorODE2_t):
+        """The mbs' SystemJacobianUserFunction's part of df/dq (factorODE2 = 1) or df/dv
+        (factorODE2_t = 1) on the ODE2 coordinates (n x n, dense), or None without one; Exudyn adds it
+        to its Newton Jacobian, bridge/evaluated_jacobian.py to the implicit stages' one."""
+        if self._jacobianUser is None:
+            return None
+        mc = self._jacobianUser(self.mbs, t, factorODE2, factorODE2_t, 0.0)
+        A = np.asarray(mc.Convert2DenseMatrix(), float)
+        out = np.zeros((self.n, self.n))
+        k = min(self.n, A.shape[0]), min(self.n, A.shape[1])
+        out[:k[0], :k[1]] = A[:k[0], :k[1]]
+        return out
 
     def position_residual(self, t):
         """Exudyn's position-level residual at the state in mbs; a velocity-level row has none

@@ -90,10 +90,16 @@ class ExudynNewtonJacobian:
         s.ComputeJacobianODE2RHS(mbs, scalarFactor_ODE2=1.0, scalarFactor_ODE2_t=0.0, scalarFactor_ODE1=0.0,
                                  computeLoadsJacobian=1)
         K = np.asarray(s.GetSystemJacobian())[:n, :n]
+        user = m.user_jacobian(t, 1.0, 0.0)          # (the mbs' SystemJacobianUserFunction, as Exudyn's Newton)
+        if user is not None:
+            K = K + user
         Aq = P @ K
         s.ComputeJacobianODE2RHS(mbs, scalarFactor_ODE2=0.0, scalarFactor_ODE2_t=1.0, scalarFactor_ODE1=0.0,
                                  computeLoadsJacobian=2)
         D = np.asarray(s.GetSystemJacobian())[:n, :n]
+        user = m.user_jacobian(t, 0.0, 1.0)
+        if user is not None:
+            D = D + user
         Av = P @ D
         v, cols = self.vec, self.cols
         ix = np.ix_(cols, cols)

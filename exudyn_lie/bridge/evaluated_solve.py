@@ -40,13 +40,13 @@ from ..errors import StepSizeError
 from ..mbs.codes import STATUS_BLOWUP
 from .constraint_check import ConsistencyAccount, ConstraintCheck, check_tolerance
 from .general_contact import general_contacts, use_full_search
-from .reader import BridgeError, UNHONOURED_MBS_FUNCTIONS, check_system_level
+from .reader import EVALUATED_MBS_FUNCTIONS, UNHONOURED_MBS_FUNCTIONS, BridgeError, check_system_level
 from .run_plan import adaptive_settings, needs_accelerations, plan_substeps, time_settings
 from .solver import loop_settings
 from .time_loop import TimeLoop, off_plan, update_initial_values
 
-#: mbs-level user functions this path cannot honour (Exudyn calls the PostNewton one itself)
-UNHONOURED_HERE = {k: v for k, v in UNHONOURED_MBS_FUNCTIONS.items() if k != "PostNewtonUserFunction"}
+#: mbs-level user functions this path cannot honour (none of Exudyn's today: EVALUATED_MBS_FUNCTIONS)
+UNHONOURED_HERE = {k: v for k, v in UNHONOURED_MBS_FUNCTIONS.items() if k not in EVALUATED_MBS_FUNCTIONS}
 #: time of a stage measured at the start, per coordinate row (for the announced estimate)
 ESTIMATE_EVALUATIONS = 5
 

@@ -36,6 +36,10 @@ def linear_eigenvalues(model):
     s.ComputeJacobianODE2RHS(mbs, scalarFactor_ODE2=0.0, scalarFactor_ODE2_t=-1.0, scalarFactor_ODE1=0.0,
                              computeLoadsJacobian=2)
     D = np.array(s.GetSystemJacobian()[:n, :n])
+    for A, f0, f1 in ((K, 1.0, 0.0), (D, 0.0, 1.0)):     # the mbs' SystemJacobianUserFunction (its df/dq, df/dv)
+        user = model.user_jacobian(model.sd.GetTime(), f0, f1)
+        if user is not None:
+            A -= user
     ev1 = np.zeros(0, complex)
     n1 = model.n1
     if n1:

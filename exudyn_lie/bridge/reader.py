@@ -123,6 +123,13 @@ UNHONOURED_MBS_FUNCTIONS = {
                                   "not use",
 }
 
+#: the mbs-level user functions that the Exudyn-evaluated path honours (bridge/evaluated.py): why
+EVALUATED_MBS_FUNCTIONS = {
+    "PostNewtonUserFunction": "which Exudyn's PostNewton calls after each step of its discontinuous iteration",
+    "PreNewtonResidualUserFunction": "which Exudyn calls before each evaluation of the model",
+    "SystemJacobianUserFunction": "which Exudyn adds to the Jacobian of an implicit method",
+}
+
 
 def check_system_level(mbs, unhonoured=None, generalContact=False):
     """Refuse what is not an item but changes the model: GeneralContact (unless ``generalContact``:
@@ -140,10 +147,10 @@ def check_system_level(mbs, unhonoured=None, generalContact=False):
             continue
         uf = fn()
         if not (isinstance(uf, (int, float)) and uf == 0) and uf is not None:
-            if name == "PostNewtonUserFunction":
-                # Exudyn's PostNewton calls it on the Exudyn-evaluated path (the reason it is taken)
-                raise NotCompiled(f"mbs has a {name} (mbs.Set{name}), which Exudyn's PostNewton calls after each "
-                                  f"step of its discontinuous iteration")
+            if name in EVALUATED_MBS_FUNCTIONS:
+                # the Exudyn-evaluated path honours it (the reason it is taken)
+                raise NotCompiled(f"mbs has a {name} (mbs.Set{name}), {EVALUATED_MBS_FUNCTIONS[name]} (on the "
+                                  f"Exudyn-evaluated path: evaluation='auto' or 'exudyn'; or exudyn.SolveDynamic)")
             raise BridgeError(f"mbs has a {name} (mbs.Set{name}): exudyn_lie does not call it ({why}); "
                               f"solve with exudyn.SolveDynamic, or remove it with mbs.Set{name}(0)")
 

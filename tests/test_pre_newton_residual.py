@@ -21,6 +21,9 @@ K, D, MASS = 4000.0, 8.0, 2.0
 
 def build(replicate, h=1e-3, T=0.5, stiff=1.0):
     mbs = exu.SystemContainer().AddSystem()
+    # a free mass first: the spring's coordinate is ODE2 index 3, beyond the size of the user's
+    # Jacobian container (Exudyn adds its triplets whatever that size, as the TestModel relies on)
+    mbs.AddObject(MassPoint(physicsMass=MASS, nodeNumber=mbs.AddNode(Point(initialVelocities=[0, 0.1, 0]))))
     n = mbs.AddNode(Point(referenceCoordinates=[0, 0, 0], initialCoordinates=[0.1, 0, 0]))
     mbs.AddObject(MassPoint(physicsMass=MASS, nodeNumber=n))
     mN = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=n, coordinate=0))
@@ -37,7 +40,7 @@ def build(replicate, h=1e-3, T=0.5, stiff=1.0):
 
         def jacobian(mbs, t, factorODE2, factorODE2_t, factorODE1):
             mc = exu.MatrixContainer()
-            mc.SetWithSparseMatrix([[i, i, -factorODE2 * k - factorODE2_t * d]], 3, 3)
+            mc.SetWithSparseMatrix([[i, i, -factorODE2 * k - factorODE2_t * d]], 1, 1)    # (the size Exudyn ignores)
             return mc
         mbs.SetPreNewtonResidualUserFunction(preNewton)
         mbs.SetSystemJacobianUserFunction(jacobian)

@@ -317,10 +317,13 @@ class EvaluatedModel:
         if self._jacobianUser is None:
             return None
         mc = self._jacobianUser(self.mbs, t, factorODE2, factorODE2_t, 0.0)
-        A = np.asarray(mc.Convert2DenseMatrix(), float)
+        # its triplets, in system indices (Exudyn adds them to its sparse Newton Jacobian whatever the
+        # container's declared size, which scripts leave smaller than the indices they use)
+        T = np.asarray(mc.GetPythonObject()["triplets"], float).reshape(-1, 3)
         out = np.zeros((self.n, self.n))
-        k = min(self.n, A.shape[0]), min(self.n, A.shape[1])
-        out[:k[0], :k[1]] = A[:k[0], :k[1]]
+        i, j = T[:, 0].astype(np.int64), T[:, 1].astype(np.int64)
+        keep = (i < self.n) & (j < self.n)          # (the ODE2 block; ODE1 and AE rows are not this Jacobian's)
+        np.add.at(out, (i[keep], j[keep]), T[keep, 2])
         return out
 
     def position_residual(self, t):

@@ -4,7 +4,8 @@ Exudyn-evaluated path, in the style of Exudyn's ``mainSystemUserFunctionsTest.py
 every evaluation replicates a spring-damper, and a SystemJacobianUserFunction gives Exudyn's
 Newton its Jacobian.  Exudyn calls the first before each Newton residual; exudyn_lie before each
 stage's evaluation (bridge/evaluated.py), and adds the second to an implicit method's Jacobian
-(bridge/evaluated_jacobian.py).  The reference is the same mass on a CoordinateSpringDamper."""
+(bridge/evaluated_jacobian.py).  The reference is the same mass on a CoordinateSpringDamper,
+evaluated by Exudyn too."""
 import warnings
 
 import numpy as np
@@ -72,7 +73,7 @@ def test_a_load_set_before_each_evaluation_replicates_the_spring_damper(stiff, m
     mbs, ss, s = build(False, stiff=stiff)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        exl.SolveDynamic(mbs, ss, showProgress=False)
+        exl.SolveDynamic(mbs, ss, showProgress=False, evaluation="exudyn")     # (the same path: no other kernel)
     ref = _x(mbs, s)
     mbs, ss, s = build(True, stiff=stiff)
     with pytest.warns(RuntimeWarning, match="PreNewtonResidualUserFunction"):

@@ -48,10 +48,13 @@ SETTINGS = (
     ("timeIntegration.solverType", HONOURED, "read as Exudyn reads it (when SolveDynamic's solverType is None): "
                                              "an explicit type selects its tableau, the implicit ones are replaced "
                                              "by method=...; see bridge/solvertype.py"),
-    ("timeIntegration.discontinuous", IGNORED, "explicit steps: the data coordinates of contacts (penalty rolling "
+    ("timeIntegration.discontinuous", IGNORED, "compiled path: the data coordinates of contacts (penalty rolling "
                                                "disc) are updated after every step from its end state, as Exudyn's "
                                                "PostNewton does, and no step is repeated (Exudyn's discontinuous "
-                                               "iteration would repeat it with the updated data)"),
+                                               "iteration would repeat it with the updated data); the "
+                                               "Exudyn-evaluated path runs Exudyn's own iteration and, with data "
+                                               "coordinates, a PostNewtonUserFunction or a GeneralContact, its step "
+                                               "reduction (adaptiveStep, useRecommendedStepSize, minimumStepSize)"),
     ("timeIntegration.reuseConstantMassMatrix", HONOURED, "Exudyn-evaluated path: True, a mass matrix that all "
                                                           "bodies declare constant is evaluated once, as Exudyn's "
                                                           "own solvers do; False: at every stage"),

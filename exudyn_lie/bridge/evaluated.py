@@ -54,7 +54,7 @@ from ..mbs.row_drives import offset_and_derivatives
 from .evaluated_items import LIE_GROUP_NODES, coordinate_constraint_rows, node_rows, position_derived_rows
 from .evaluated_kernels import write_exudyn_state, write_moved_positions
 from .evaluated_sliding import SlidingCoordinates, sliding_joints
-from .reader import BridgeError
+from .reader import BridgeError, mbs_user_function
 
 EPS_CBRT = float(np.finfo(float).eps) ** (1.0 / 3.0)
 EPS_SIXTH = float(np.finfo(float).eps) ** (1.0 / 6.0)
@@ -126,12 +126,11 @@ class Layout:
         return order.astype(np.int64), ptr
 
 
-def mbs_user_function(mbs, name):
-    """The function of ``mbs.Get<name>()`` (Exudyn gives ``{'function': f, 'type': ...}``, or 0 when
-    none is set) if it is set, else None; a function this path cannot call raises BridgeError."""
-    fn = getattr(mbs, "Get" + name, None)
-    uf = fn() if fn is not None else 0
-    if (isinstance(uf, (int, float)) and uf == 0) or uf is None:
+def callable_user_function(mbs, name):
+    """The Python function of the mbs' ``name`` (reader.mbs_user_function), or None without one; one
+    this path cannot call raises BridgeError."""
+    uf = mbs_user_function(mbs, name)
+    if uf is None:
         return None
     f = uf.get("function") if isinstance(uf, dict) else uf
     if not callable(f):
@@ -196,8 +195,8 @@ class EvaluatedModel:
         self._zeroJ = self._fastest_zeroing() if layout.nAE else None
         self._ae = s.ComputeAlgebraicEquations
         self._setTime = self.sd.SetTime
-        self._preNewton = mbs_user_function(mbs, "PreNewtonResidualUserFunction")
-        self._jacobianUser = mbs_user_function(mbs, "SystemJacobianUserFunction")
+        self._preNewton = callable_user_function(mbs, "PreNewtonResidualUserFunction")
+        self._jacobianUser = callable_user_function(mbs, "SystemJacobianUserFunction")
         import exudyn as exu
         self._cur = exu.ConfigurationType.Current
         self.aeCur = self.sd.GetAECoordinates(configuration=self._cur, copy=False) if m else np.zeros(0)
@@ -310,12 +309,24 @@ class EvaluatedModel:
                 f = self.sliding.transform(Cq, f, self._lamlam)
         return M, f, Cq
 
-    def user_jacobian(self, t, factorODE2, factorODE2_t):
+    def force_jacobians(self, t):
+        """``(K, D) = (df/dq, df/dv)`` on the ODE2 coordinates at the state in mbs (Exudyn's
+        ``ComputeJacobianODE2RHS``, loads included), with the part of the mbs'
+        SystemJacobianUserFunction, which Exudyn adds to its Newton Jacobian."""
+        s, mbs, n = self.solver, self.mbs, self.n
+        out = []
+        for fq, fv, loads in ((1.0, 0.0, 1), (0.0, 1.0, 2)):
+            s.ComputeJacobianODE2RHS(mbs, scalarFactor_ODE2=fq, scalarFactor_ODE2_t=fv, scalarFactor_ODE1=0.0,
+                                     computeLoadsJacobian=loads)
+            A = np.array(s.GetSystemJacobian()[:n, :n])
+            if self._jacobianUser is not None:
+                A += self._user_jacobian(t, fq, fv)
+            out.append(A)
+        return out[0], out[1]
+
+    def _user_jacobian(self, t, factorODE2, factorODE2_t):
         """The mbs' SystemJacobianUserFunction's part of df/dq (factorODE2 = 1) or df/dv
-        (factorODE2_t = 1) on the ODE2 coordinates (n x n, dense), or None without one; Exudyn adds it
-        to its Newton Jacobian, bridge/evaluated_jacobian.py to the implicit stages' one."""
-        if self._jacobianUser is None:
-            return None
+        (factorODE2_t = 1) on the ODE2 coordinates (n x n, dense)."""
         mc = self._jacobianUser(self.mbs, t, factorODE2, factorODE2_t, 0.0)
         # its triplets, in system indices (Exudyn adds them to its sparse Newton Jacobian whatever the
         # container's declared size, which scripts leave smaller than the indices they use)

@@ -80,26 +80,14 @@ class ExudynNewtonJacobian:
         """``newton.Dth``, ``newton.Dv`` at the simulator's state and time ``t``; marks the Jacobian as
         current (the kernel refactors the Newton matrix at its next stage)."""
         m, p = self.model, self.problem
-        s, mbs, n = m.solver, m.mbs, m.n
         p.write()
         M, _, Cq = m.mass_force_jacobian(t)
         P = self._projector(M, Cq)
         if P is None:
             self.everyStep = False                 # (still stale: the kernel's differences; not
             return                                 #  tried again at every step)
-        s.ComputeJacobianODE2RHS(mbs, scalarFactor_ODE2=1.0, scalarFactor_ODE2_t=0.0, scalarFactor_ODE1=0.0,
-                                 computeLoadsJacobian=1)
-        K = np.asarray(s.GetSystemJacobian())[:n, :n]
-        user = m.user_jacobian(t, 1.0, 0.0)          # (the mbs' SystemJacobianUserFunction, as Exudyn's Newton)
-        if user is not None:
-            K = K + user
+        K, D = m.force_jacobians(t)
         Aq = P @ K
-        s.ComputeJacobianODE2RHS(mbs, scalarFactor_ODE2=0.0, scalarFactor_ODE2_t=1.0, scalarFactor_ODE1=0.0,
-                                 computeLoadsJacobian=2)
-        D = np.asarray(s.GetSystemJacobian())[:n, :n]
-        user = m.user_jacobian(t, 0.0, 1.0)
-        if user is not None:
-            D = D + user
         Av = P @ D
         v, cols = self.vec, self.cols
         ix = np.ix_(cols, cols)

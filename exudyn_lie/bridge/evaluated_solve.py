@@ -40,7 +40,8 @@ from ..errors import StepSizeError
 from ..mbs.codes import STATUS_BLOWUP
 from .constraint_check import ConsistencyAccount, ConstraintCheck, check_tolerance
 from .general_contact import general_contacts, use_full_search
-from .reader import EVALUATED_MBS_FUNCTIONS, UNHONOURED_MBS_FUNCTIONS, BridgeError, check_system_level
+from .reader import (EVALUATED_MBS_FUNCTIONS, UNHONOURED_MBS_FUNCTIONS, BridgeError, check_system_level,
+                     mbs_user_function)
 from .run_plan import adaptive_settings, needs_accelerations, plan_substeps, time_settings
 from .solver import loop_settings
 from .time_loop import TimeLoop, off_plan, update_initial_values
@@ -152,9 +153,7 @@ class EvaluatedSolver:
         what = []
         if mbs.systemData.DataSize() > 0:
             what.append(f"{mbs.systemData.DataSize()} data coordinates")
-        fn = getattr(mbs, "GetPostNewtonUserFunction", None)
-        uf = fn() if fn is not None else 0
-        if not (isinstance(uf, (int, float)) and uf == 0) and uf is not None:
+        if mbs_user_function(mbs, "PostNewtonUserFunction") is not None:
             what.append("the PostNewtonUserFunction")
         return " and ".join(what)
 

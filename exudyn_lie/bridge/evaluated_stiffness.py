@@ -26,20 +26,12 @@ from .general_contact import general_contacts
 
 def linear_eigenvalues(model):
     """Eigenvalues of the linearised, constrained equations at the state in mbs."""
-    s, mbs, n = model.solver, model.mbs, model.n
+    n = model.n
     M, f, Cq = model.mass_force_jacobian(model.sd.GetTime())
     M = np.array(M)
     Cq = None if Cq is None else np.array(Cq)
-    s.ComputeJacobianODE2RHS(mbs, scalarFactor_ODE2=-1.0, scalarFactor_ODE2_t=0.0, scalarFactor_ODE1=0.0,
-                             computeLoadsJacobian=1)
-    K = np.array(s.GetSystemJacobian()[:n, :n])
-    s.ComputeJacobianODE2RHS(mbs, scalarFactor_ODE2=0.0, scalarFactor_ODE2_t=-1.0, scalarFactor_ODE1=0.0,
-                             computeLoadsJacobian=2)
-    D = np.array(s.GetSystemJacobian()[:n, :n])
-    for A, f0, f1 in ((K, 1.0, 0.0), (D, 0.0, 1.0)):     # the mbs' SystemJacobianUserFunction (its df/dq, df/dv)
-        user = model.user_jacobian(model.sd.GetTime(), f0, f1)
-        if user is not None:
-            A -= user
+    K, D = model.force_jacobians(model.sd.GetTime())
+    K, D = -K, -D                       # (the linearisation M q'' + D q' + K q = 0)
     ev1 = np.zeros(0, complex)
     n1 = model.n1
     if n1:

@@ -131,6 +131,14 @@ EVALUATED_MBS_FUNCTIONS = {
 }
 
 
+def mbs_user_function(mbs, name):
+    """``mbs.Get<name>()`` if a function is set (Exudyn gives ``{'function': f, 'type': ...}``, and 0
+    when none is), else None."""
+    fn = getattr(mbs, "Get" + name, None)
+    uf = fn() if fn is not None else 0
+    return None if uf is None or (isinstance(uf, (int, float)) and uf == 0) else uf
+
+
 def check_system_level(mbs, unhonoured=None, generalContact=False):
     """Refuse what is not an item but changes the model: GeneralContact (unless ``generalContact``:
     the Exudyn-evaluated path, bridge/general_contact.py) and mbs-level user functions that
@@ -142,11 +150,7 @@ def check_system_level(mbs, unhonoured=None, generalContact=False):
                           f"have GeneralContact; evaluation='auto' (the default) or 'exudyn' lets Exudyn evaluate "
                           f"the model")
     for name, why in (UNHONOURED_MBS_FUNCTIONS if unhonoured is None else unhonoured).items():
-        fn = getattr(mbs, "Get" + name, None)
-        if fn is None:
-            continue
-        uf = fn()
-        if not (isinstance(uf, (int, float)) and uf == 0) and uf is not None:
+        if mbs_user_function(mbs, name) is not None:
             if name in EVALUATED_MBS_FUNCTIONS:
                 # the Exudyn-evaluated path honours it (the reason it is taken)
                 raise NotCompiled(f"mbs has a {name} (mbs.Set{name}), {EVALUATED_MBS_FUNCTIONS[name]} (on the "

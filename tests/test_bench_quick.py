@@ -1,7 +1,13 @@
 """The bench machinery on a tiny --quick configuration (functional checks only: no
-timing is asserted)."""
+timing is asserted).
+
+The runs on worker processes go through a child process of their own: Exudyn's
+ParameterVariation forks, and a fork of a pytest-xdist worker (which has execnet's
+thread) can deadlock on a lock that thread held."""
 import json
 import os
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -20,7 +26,9 @@ def quick_run(tmp_path_factory):
     argv = ["--quick", "--models", "heavytop", "--sections", "wp,perstep,scaling", "--chain", "1,3",
             "--methods", "RK4,RK6", "--groups", "SE3,SO3xR3", "--rounds", "2", "--jobs", "2",
             "--out", str(out), "--no-progress"]
-    assert bench.main(argv) == 0
+    run = subprocess.run([sys.executable, "-m", "exudyn_lie", "bench", *argv],
+                         capture_output=True, text=True, timeout=900)
+    assert run.returncode == 0, run.stdout[-2000:] + run.stderr[-2000:]
     return out, argv
 
 
@@ -78,10 +86,17 @@ def test_per_step_and_scaling_recorded(quick_run):
 def test_sweep_uses_worker_processes_and_keeps_order():
     cases = [dict(kind="exl", model="heavytop", solver="RK4", group=g, T=0.01, nsteps=n, repeat=1, tag=i)
              for i, (g, n) in enumerate([("SE3", 5), ("SO3xR3", 10), ("SE3", 20), ("SO3xR3", 40)])]
-    res = BR.sweep(cases, jobs=2)
+    code = ("import json, os, sys; from exudyn_lie.apps import bench_runs as BR; "
+            "res = BR.sweep(json.loads(sys.argv[1]), jobs=2); "
+            "print(json.dumps(dict(pid=os.getpid(), res=res), default=lambda a: a.tolist()))")
+    run = subprocess.run([sys.executable, "-c", code, json.dumps(cases)],
+                         capture_output=True, text=True, timeout=600)
+    assert run.returncode == 0, run.stderr[-2000:]
+    out = json.loads(run.stdout.strip().splitlines()[-1])
+    res = out["res"]
     assert [r["case"]["tag"] for r in res] == [0, 1, 2, 3]
     assert all(r["ok"] for r in res)
-    assert all(r["pid"] != os.getpid() for r in res)
+    assert all(r["pid"] != out["pid"] for r in res)
     serial = BR.sweep(cases[:2], jobs=1)
     np.testing.assert_allclose(serial[1]["r"], res[1]["r"], rtol=0, atol=0)
 

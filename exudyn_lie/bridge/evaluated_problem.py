@@ -71,12 +71,18 @@ class EvaluatedProblem:
         self._stiffness = StageStiffnessWatch(self.tableau)
         self._jacobian_for_method()
 
+    def watch_stiffness(self, strict):
+        """A fixed step beyond the explicit method's stability radius (by its stages) fails at once
+        (``strict``, for a caller that repeats it with the implicit method: mbs/stiffness.py), or
+        after a few such steps."""
+        self._stiffness = StageStiffnessWatch(self.tableau, strict)
+
     def set_method(self, tableau):
         """Integrate with ``tableau`` from now on (bridge/method_choice.py)."""
         self.sim.SetMethod(tableau)
         self.tableau = self.sim.tableau
         self.stages = self.sim.method.stages
-        self._stiffness = StageStiffnessWatch(self.tableau)
+        self._stiffness = StageStiffnessWatch(self.tableau, self._stiffness.strict)
         self._jacobian_for_method()
 
     def _jacobian_for_method(self):

@@ -36,7 +36,7 @@ from .evaluated_problem import EvaluatedProblem
 from .evaluated_initial import project_initial
 from .evaluated_stiffness import check_step
 from .method_choice import auto_choice_text, stiff_choice, unstable_choice
-from ..errors import StepSizeError
+from ..errors import StepSizeError, step_size_error
 from ..mbs.codes import STATUS_BLOWUP
 from .constraint_check import ConsistencyAccount, ConstraintCheck, check_tolerance
 from .general_contact import general_contacts, use_full_search
@@ -44,7 +44,7 @@ from .reader import (EVALUATED_MBS_FUNCTIONS, UNHONOURED_MBS_FUNCTIONS, BridgeEr
                      mbs_user_function)
 from .run_plan import adaptive_settings, needs_accelerations, plan_substeps, time_settings
 from .solver import loop_settings
-from .time_loop import TimeLoop, off_plan, update_initial_values
+from .time_loop import NewtonFailed, TimeLoop, off_plan, update_initial_values
 
 #: mbs-level user functions this path cannot honour (none of Exudyn's today: EVALUATED_MBS_FUNCTIONS)
 UNHONOURED_HERE = {k: v for k, v in UNHONOURED_MBS_FUNCTIONS.items() if k not in EVALUATED_MBS_FUNCTIONS}
@@ -238,7 +238,13 @@ class EvaluatedSolver:
         # t = t0 + i h as on the compiled path
         follow = k == 1 and bool(postNewton or mbs.NumberOfGeneralContacts())
         ss2 = loop_settings(ss, nsteps // k, info, followSteps=follow)
+        # ... and after a failed Newton iteration, where the user's adaptiveStep lets it: its steps
+        # (PostNewton between them) then replace the simulator's own division of the step
+        # (mbs/implicit_run.substeps), which keeps the data coordinates of the step's start: a
+        # friction contact that sticks inside the step has no solution in its slipping mode
+        reduces = follow and bool(ss.timeIntegration.adaptiveStep)
         self._loopPlan = dict(k=k, h=h, t0=t0, tEnd=tEnd, nsteps=nsteps, needAcc=needAcc, groups=groups, why=why,
+                              exudynReduces=reduces,
                               tolCheck=tolCheck, ticTotal=ticTotal, log=self.verbose or ss.timeIntegration.verboseMode >= 1,
                               reuseMass=bool(ss.timeIntegration.reuseConstantMassMatrix))
         self._integration = 0.0
@@ -297,6 +303,8 @@ class EvaluatedSolver:
         model = self.model = EvaluatedModel(mbs, solver, layout, q, qt, verbose=self.verbose)
         model.constantMass = P["reuseMass"] and constant_mass_matrix(mbs)
         problem = self.problem = EvaluatedProblem(model, tab)
+        if P["exudynReduces"]:
+            problem.sim.SetNewtonFallbacks(False)
         problem.read_state(q, qt, y, t0)
         fixed = project_initial(model, problem, t0, self.projectInitial)
         if fixed and self._takeOver is not None:
@@ -313,6 +321,7 @@ class EvaluatedSolver:
         auto = self.autoImplicit and self._adaptive is None
         rate, stable = check_step(model, tab, h, self._adaptive is None and not auto)
         if auto:
+            problem.watch_stiffness(strict=True)
             chosen, line = stiff_choice(tab, h, stable, rate, "Exudyn's linearisation at the initial state")
             if line:
                 problem.set_method(chosen)
@@ -389,6 +398,7 @@ class EvaluatedSolver:
         data coordinates PostNewton updated are Exudyn's); a user function set the state: from it."""
         if repeat:
             self.problem.restore(self._snap)
+            self._recheck_stiffness(t)
         else:
             m = self.model
             self.problem.read_state(m.q, m.qt, None, t)
@@ -415,18 +425,17 @@ class EvaluatedSolver:
             k = max(1, int(np.ceil((t1 - t0) / h * (1.0 - 1e-9))))
             h = (t1 - t0) / k
         try:
-            problem.advance(t0, t1, k, h, self._adaptive is not None)
-        except StepSizeError:
-            if not (self.autoImplicit and self._adaptive is None and not problem.tableau.implicit):
+            self._advance(t0, t1, k, h)
+        except StepSizeError as e:
+            if not (getattr(e, "newton", False) and P["exudynReduces"]):
                 raise
-            # the explicit method the user did not name became unstable (bridge/method_choice.py): this
-            # Exudyn step again from its start, with the implicit method
-            tab, line = unstable_choice(problem.tableau, h, t0, STATUS_BLOWUP)
             problem.restore(self._snap)
-            problem.set_method(tab)
-            self.tableau = tab
-            print(line)
-            problem.advance(t0, t1, k, h, False)
+            # (the run's error if Exudyn cannot reduce the step further)
+            raise NewtonFailed(step_size_error(
+                problem.tableau.name, h, t0, "the Newton iteration of an implicit stage did not converge "
+                "(with a Jacobian of this step, then at each iterate)", "Exudyn reduced its step after each "
+                "failure (adaptiveStep) down to this one", "decrease timeIntegration.minimumStepSize or the "
+                "step size")) from None
         problem.write()
         if P["needAcc"]:
             self._write_accelerations()
@@ -434,6 +443,41 @@ class EvaluatedSolver:
             model.sliding.project(t1, model.aeCur)     # for Exudyn's PostNewton (its data nodes)
         self.mbs.systemData.SetTime(t1)
         self._integration += time.perf_counter() - tic
+
+    def _recheck_stiffness(self, t):
+        """Exudyn repeats a step after its PostNewton changed the data coordinates (a contact that
+        closed): a mode that the check at the start could not see may be stiff now.  The explicit
+        method the user did not name is checked again, by Exudyn's linearisation with the new data,
+        before the step is done again: the stages' watch sees such a mode only once the explicit
+        method has amplified it, and the state it then restarts from is already off."""
+        problem, h = self.problem, self._loopPlan["h"]
+        if not (self.autoImplicit and self._adaptive is None and not problem.tableau.implicit):
+            return
+        problem.write()
+        rate, stable = check_step(self.model, problem.tableau, h, False)
+        tab, line = stiff_choice(problem.tableau, h, stable, rate, f"Exudyn's linearisation at t = {t:.6g} s, "
+                                 f"after its PostNewton changed the data coordinates")
+        if line:
+            problem.set_method(tab)
+            self.tableau = tab
+            print(line)
+
+    def _advance(self, t0, t1, k, h):
+        """The MK steps of one Exudyn step; the explicit method the user did not name, unstable,
+        replaced by the implicit one (bridge/method_choice.py) for this step from its start on."""
+        problem = self.problem
+        try:
+            problem.advance(t0, t1, k, h, self._adaptive is not None)
+        except StepSizeError as e:
+            if not (self.autoImplicit and self._adaptive is None and not problem.tableau.implicit):
+                raise
+            tab, line = unstable_choice(problem.tableau, h, t0,
+                                        None if hasattr(e, "stiffStages") else STATUS_BLOWUP)
+            problem.restore(self._snap)
+            problem.set_method(tab)
+            self.tableau = tab
+            print(line)
+            problem.advance(t0, t1, k, h, False)
 
     def loop_end(self):
         if not self._loopPlan["needAcc"]:

@@ -27,10 +27,12 @@ def stiff_choice(explicit, h, hmax, rate, source):
 
 def unstable_choice(explicit, h, t, status):
     """``(implicit default, line)`` when ``explicit`` became unstable during a run (a contact that
-    closed, a friction zone entered: a mode the check at the start could not see)."""
+    closed, a friction zone entered: a mode the check at the start could not see); ``status``: the
+    kernel's, or None for the stages' estimate (mbs/stiffness.StageStiffnessWatch)."""
     imp = get_method(IMPLICIT_DEFAULT)
     what = {STATUS_BLOWUP: "the state blew up", STATUS_NONFINITE: "the state became non-finite",
-            STATUS_STAGE_ARG: "a stage rotation exceeded 2 pi"}[status]
+            STATUS_STAGE_ARG: "a stage rotation exceeded 2 pi"}.get(
+        status, "its stages show a mode beyond its stability region")
     line = (f"exudyn_lie: {explicit.name} became unstable after t = {t:.6g} s at the step h = {h:.4g} s ({what}): "
             f"continuing from Exudyn's state at t = {t:.6g} s with the L-stable implicit {imp.name} (order "
             f"{imp.order}); method='{explicit.name}' keeps the explicit method")

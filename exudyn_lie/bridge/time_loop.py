@@ -16,7 +16,8 @@ compiled :class:`~.solver.LieGroupSolver`, the Exudyn-evaluated
 
 * ``loop_begin(solver)``: after ``InitializeSolver`` (mbs holds the initial values);
 * ``loop_advance(t0, t1, outputsLeft)``: the state at ``t1`` into mbs, from the step that
-  starts at ``t0``;
+  starts at ``t0``; it raises :class:`NewtonFailed` for a step that Exudyn shall take as its
+  own failed Newton iteration (and reduce, as its settings allow);
 * ``loop_restart(t, repeat)``: continue from the state in mbs at ``t`` (``repeat``: Exudyn's
   discontinuous iteration repeats the step; else a user function changed the state);
 * ``loop_end()``: after a successful ``SolveSteps`` (the final writes);
@@ -40,6 +41,16 @@ from .solve_timing import compile_seconds, record_loop
 
 PROGRESS_FIRST = 2.0         # seconds before the first progress check (it measures the rate, prints nothing)
 PROGRESS_EVERY = 2.0         # seconds between progress lines
+
+
+class NewtonFailed(Exception):
+    """A driver's step did not converge, as Exudyn's own Newton iteration may not: the hook returns
+    False, and Exudyn reduces its step (its adaptiveStep) and asks for the step again, or stops;
+    then ``error`` is the run's error."""
+
+    def __init__(self, error):
+        super().__init__(str(error))
+        self.error = error
 
 
 class Progress:
@@ -214,7 +225,11 @@ class TimeLoop:
             self.output(t1)
             if self.watch:
                 self._remember()
+            self.hookError = None
             return True
+        except NewtonFailed as e:
+            self.hookError = name_exudyn_setting(e.error)
+            return False
         except BaseException as e:      # noqa: BLE001 - re-raised after Exudyn unwinds
             self.hookError = name_exudyn_setting(e)
             raise

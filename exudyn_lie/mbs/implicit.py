@@ -62,10 +62,10 @@ Newton = namedtuple("Newton", [
     "x",                   # (n,) the right-hand side of the Newton system, then the correction dV
     "k6", "m6",            # (6,) scratch
     "st",                  # float state: NS_* below
-    "par",                 # [tolerance, maximum iterations]
+    "par",                 # [tolerance, maximum iterations, of Newton's own iteration (0: not tried)]
 ])
 NS_STALE, NS_FRESH, NS_H, NS_JACOBIANS, NS_FACTORS, NS_ITERATIONS, NS_STAGES, NS_RETRIES, NS_RATE, NS_FULL = range(10)
-NP_TOL, NP_MAXIT = range(2)
+NP_TOL, NP_MAXIT, NP_MAXIT_FULL = range(3)
 
 # the correction relative to the step's velocity scale (and h gamma times it).  The last stage's
 # velocity is the step's (stiffly accurate), so its Newton error adds up over the steps: about
@@ -113,7 +113,7 @@ def newton_arrays(gid, tol=NEWTON_TOL, maxIterations=NEWTON_MAXIT):
     st[NS_STALE] = 1.0
     return Newton(E=np.zeros((n, n)), piv=np.zeros(n, np.int64), Dv=np.zeros((n, n)), Dth=np.zeros((n, n)),
                   axes=axes, P=z(), W=z(), Th=z(), F1=z(), Ap=z(), A1=z(), x=np.zeros(n), k6=np.zeros(6),
-                  m6=np.zeros(6), st=st, par=np.array([float(tol), float(maxIterations)]))
+                  m6=np.zeros(6), st=st, par=np.array([float(tol), float(maxIterations), float(NEWTON_MAXIT_FULL)]))
 
 
 def newton_counters(nw):
@@ -222,7 +222,7 @@ def newton_iterate(sd, wk, nw, j, jprev, hg, tj, R, r, V, vscale, full):
     nb = gid.shape[0]
     Th, P, W, F1, x, Ap, axes = nw.Th, nw.P, nw.W, nw.F1, nw.x, nw.Ap, nw.axes
     tol = nw.par[NP_TOL]
-    maxit = NEWTON_MAXIT_FULL if full else int(nw.par[NP_MAXIT])
+    maxit = int(nw.par[NP_MAXIT_FULL]) if full else int(nw.par[NP_MAXIT])
     tscale = hg * vscale
     eps8 = 8.0 * 2.220446049250313e-16
     for i in range(nb):
@@ -351,7 +351,7 @@ def solve_stage(sd, wk, A, c, gamma, nw, stages, j, h, t, R, r, V):
             return st
         nw.st[NS_H] = hg
         st = newton_iterate(sd, wk, nw, j, jprev, hg, t + c[j] * h, R, r, V, vscale, False)
-    if st == STATUS_NEWTON:
+    if st == STATUS_NEWTON and nw.par[NP_MAXIT_FULL] > 0.0:
         nw.st[NS_FULL] += 1.0
         st = newton_iterate(sd, wk, nw, j, jprev, hg, t + c[j] * h, R, r, V, vscale, True)
         nw.st[NS_H] = 0.0                # (the matrix of the last iterate serves this step's later stages;

@@ -5,7 +5,7 @@ counted (:func:`newton_counters_of`).  The iteration itself is compiled: :mod:`.
 from __future__ import annotations
 
 from . import kernel
-from .implicit import implicit_method, newton_counters
+from .implicit import NEWTON_MAXIT_FULL, NP_MAXIT_FULL, implicit_method, newton_counters
 from .stepper import method_arrays
 
 #: the parts an implicit step whose Newton iteration does not converge is tried in, in turn
@@ -16,6 +16,14 @@ def method_arrays_of(tableau, gid):
     """The stepper's form of ``tableau``: an explicit ``Method``, or an ``ImplicitMethod`` with its
     Newton arrays for the bodies of group ids ``gid``."""
     return implicit_method(tableau, gid) if tableau.implicit else method_arrays(tableau)
+
+
+def apply_fallbacks(sim):
+    """Newton's own iteration after a failed simplified one for ``sim``'s implicit method, where
+    ``sim.newtonSubsteps`` divides failed steps too (:meth:`~.simulator.Simulator.SetNewtonFallbacks`)."""
+    nw = getattr(sim.method, "newton", None)
+    if nw is not None:
+        nw.par[NP_MAXIT_FULL] = NEWTON_MAXIT_FULL if sim.newtonSubsteps else 0.0
 
 
 def newton_counters_of(sim):
@@ -33,13 +41,14 @@ def newton_counters_of(sim):
 
 def advance(sim, n, h):
     """``n`` fixed steps of ``h`` from ``sim``'s state, a step whose Newton iteration fails done in
-    parts (:func:`substeps`); returns the kernel status (``sim.t`` at the last accepted step)."""
+    parts (:func:`substeps`, unless ``sim.newtonSubsteps`` is empty: a caller that reduces the step
+    itself); returns the kernel status (``sim.t`` at the last accepted step)."""
     done = 0
     while True:
         st, d = sim._mk_steps(n - done, h)
         done += d
         sim.t += d * h
-        if st != kernel.STATUS_NEWTON or not sim.tableau.implicit:
+        if st != kernel.STATUS_NEWTON or not sim.tableau.implicit or not sim.newtonSubsteps:
             return st
         st = substeps(sim, h, sim.t)
         if st != kernel.STATUS_OK:
@@ -51,14 +60,14 @@ def advance(sim, n, h):
 
 
 def substeps(sim, h, t):
-    """One step of size ``h`` from ``sim``'s state at ``t`` in ``SUBSTEPS`` equal parts, the first
+    """One step of size ``h`` from ``sim``'s state at ``t`` in ``sim.newtonSubsteps`` equal parts, the first
     division whose every part converges (its Newton iteration); a failed division leaves the state and
     the path state as they were.  Returns the kernel status (``STATUS_NEWTON`` when every division
     failed).  A force that switches on inside a step (a contact that closes) can stall the iteration at
     the user's step."""
     start = (sim.R.copy(), sim.r.copy(), sim.V.copy())
     path = [None if a is None else a.copy() for a in sim.wk.path]
-    for m in SUBSTEPS:
+    for m in sim.newtonSubsteps:
         st, _ = sim._mk_steps(m, h / m, t)
         if st == kernel.STATUS_OK:
             sim.dividedSteps += 1

@@ -73,6 +73,7 @@ class Simulator(ExternalSeams):
         self.sd = self.sd._replace(stabilization={None: None, "velocity": kernel.STAB_VELOCITY,
                                                   "position": kernel.STAB_POSITION}[self.stabilization])
         self.method = implicit_run.method_arrays_of(self.tableau, self.sd.gid)
+        implicit_run.apply_fallbacks(self)
         self.control = fixed_step_control()
         self._extViews = None
         self._extToken = (0 if not self.sd.hasQext else
@@ -96,6 +97,7 @@ class Simulator(ExternalSeams):
         the solve stay.  Adaptive steps: call :meth:`SetAdaptive` again."""
         self.tableau = resolve_pair(method)
         self.method = implicit_run.method_arrays_of(self.tableau, self.sd.gid)
+        implicit_run.apply_fallbacks(self)
         self.wk = self._make_work()        # (a new Work keeps the path state: compile_carried)
         self._ad = None
 
@@ -349,6 +351,18 @@ class Simulator(ExternalSeams):
 
     #: steps done in parts so far (implicit methods, fixed steps: implicit_run.substeps)
     dividedSteps = 0
+    #: the parts a fixed implicit step whose Newton iteration fails is tried in, in turn
+    #: (:meth:`SetNewtonFallbacks`)
+    newtonSubsteps = implicit_run.SUBSTEPS
+
+    def SetNewtonFallbacks(self, on):
+        """Whether an implicit stage whose simplified Newton iteration fails is solved by Newton's own
+        iteration (a Jacobian at every iterate), and a fixed step that still fails is done again in
+        parts (``implicit_run.SUBSTEPS``), as by default.  Off: the step fails at once with a
+        StepSizeError whose ``newton`` is True, for a caller that reduces its steps itself and
+        updates what the right-hand side holds fixed between them (the bridge's evaluated path)."""
+        self.newtonSubsteps = implicit_run.SUBSTEPS if on else ()
+        implicit_run.apply_fallbacks(self)
 
     def NoOutputs(self):
         """The output arguments of ``stepper.mk_steps`` for a call that records nothing:

@@ -10,7 +10,6 @@ from . import external, kernel
 from .codes import INFO_BODY, INFO_ROW
 from .linalg import REL_PIVOT_TOL
 from .stiffness import suggest_step
-from .implicit_run import SUBSTEPS
 
 
 def raise_status(sim, st, h):
@@ -59,10 +58,14 @@ def raise_status(sim, st, h):
             f"(max |h| = {np.max(np.abs(hres)):.3g}); the constraints of joints "
             f"{', '.join(sim._joints_of_rows(bad))} may not be satisfiable")
     if st == kernel.STATUS_NEWTON:
-        raise step_size_error(
+        parts = sim.newtonSubsteps
+        exc = step_size_error(
             sim.tableau.name, h, sim.t, "the Newton iteration of an implicit stage did not converge (with a "
-            f"Jacobian of this step, then at each iterate, and with the step in up to {SUBSTEPS[-1]} parts)",
-            "the step is too large for the nonlinearity of the model", h / SUBSTEPS[-1])
+            "Jacobian of this step, then at each iterate" + (f", and with the step in up to {parts[-1]} parts)"
+                                                              if parts else ")"),
+            "the step is too large for the nonlinearity of the model", h / parts[-1] if parts else h / 2)
+        exc.newton = True
+        raise exc
     sugg = suggest_step(sim, h)
     what = "non-finite (NaN/inf)" if st == kernel.STATUS_NONFINITE else "unbounded (blow-up)"
     raise step_size_error(sim.tableau.name, h, sim.t, f"the state became {what}",

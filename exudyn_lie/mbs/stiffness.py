@@ -80,12 +80,18 @@ class StageStiffnessWatch:
     """A mode that became stiff during a run of fixed steps (a contact that closes, a
     friction zone that is entered): Shampine's estimate from the last step's stages
     (:func:`stage_stiffness_of`) against the method's stability radius; the StepSizeError
-    after ``STIFF_STEPS`` steps beyond it in a row, or one step ``STIFF_FACTOR`` beyond."""
+    after ``STIFF_STEPS`` steps beyond it in a row, or one step ``STIFF_FACTOR`` beyond.
 
-    def __init__(self, tableau):
+    ``strict``: after the first step beyond it, for a caller that repeats that step with an
+    implicit method.  The explicit method amplifies the stiff mode in every step beyond its
+    radius (RK4 at h |lambda| = 5.5: about 20 times per step), so the state at the start of the
+    third such step is already far off, and a run continued from there is wrong without a sign."""
+
+    def __init__(self, tableau, strict=False):
         self.tableau = tableau
         self.radius = stability_radius(tableau)
         self.count = 0
+        self.strict = bool(strict)
 
     def check(self, sim, h, nb=None):
         from ..errors import step_size_error
@@ -96,13 +102,15 @@ class StageStiffnessWatch:
             self.count = 0
             return
         self.count += 1
-        if self.count >= STIFF_STEPS or h * rho > STIFF_FACTOR * self.radius:
-            raise step_size_error(
+        if self.strict or self.count >= STIFF_STEPS or h * rho > STIFF_FACTOR * self.radius:
+            exc = step_size_error(
                 self.tableau.name, h, sim.t, "the step size is beyond the stability limit of the method",
                 f"the stages of the last step(s) show a mode of rate |lambda| ~ {rho:.4g} 1/s (Shampine's "
                 f"estimate from the stages; e.g. a contact or a friction zone that became active), h |lambda| = "
                 f"{h * rho:.3g} > {self.radius:.3g} (the method's stability radius); the state is not reliable",
                 SAFETY * self.radius / rho)
+            exc.stiffStages = rho
+            raise exc
 
 
 def stage_stiffness_of(sim, h, nb=None):

@@ -186,6 +186,22 @@ class NodeTable:
                           self.flags, jrow, jae, ae[None], np.array([float(sim.t)]), self.tracked, self.scratch,
                           self.present)
 
+    def write_state(self, sim, t, R, r, V, q, qt):
+        """Node coordinates and their rates of the state ``(R, r, V)`` at ``t`` (a stage's, for user
+        functions that read mbs: bridge/stage_state.py), continuing from the last written."""
+        nb = len(sim.gid)
+        if self.tracked is None or self.tracked.shape[1] != nb:
+            self.tracked = np.zeros((1, nb, 4))
+        if getattr(self, "_stage", None) is None or self._stage[0].shape[1] != nb:
+            self._stage = (np.zeros((1, nb, 6)), np.zeros((1, 0)), np.zeros(0, np.int64), np.zeros((1, 0)),
+                           np.zeros((1, q.size)), np.zeros(1))
+        Vdot, lam, none, ae, qtt, tt = self._stage
+        tt[0] = t
+        sim.TrackedParameters(self.tracked[0])
+        return write_rows(1, sim.gid, R[None], r[None], V[None], Vdot, lam, False, self.code, self.body, self.idx,
+                          self.nq, self.qref, self.prev, q[None], qt[None], qtt, self.flags, none, none, ae, tt,
+                          self.tracked, self.scratch, self.present)
+
     def warn_flags(self):
         for i in np.nonzero(self.flags)[0]:
             kind, k = self.kindOfRow[i]

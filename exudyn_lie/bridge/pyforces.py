@@ -496,11 +496,17 @@ class Combined:
     and ``add_into(t, st, F, T)``, which the simulator's Python-force seam calls to add
     into its own arrays (no allocation per stage)."""
 
+    #: ``before(t, st)``, called first at every stage when set (bridge/stage_state.py: the stage
+    #: state into mbs for user functions that read it)
+    before = None
+
     def __init__(self, items, nb):
         self.items = items
         self.nb = nb
 
     def add_into(self, t, st, F, T):
+        if self.before is not None:
+            self.before(t, st)
         for it in self.items:
             if it.active:
                 it.add(t, st, F, T)
@@ -540,8 +546,11 @@ class Combined:
                 fast = None                 # its probe is not in this work set
             steps.append((it, fast))
         steps = tuple(steps)
+        combined = self
 
         def add(t, st, F, T):
+            if combined.before is not None:
+                combined.before(t, st)
             for it, fast in steps:
                 if not it.active:
                     it.idle(st)

@@ -44,6 +44,7 @@ from ..mbs.simulator import Simulator
 from ..userwarn import warn_user
 from .constraint_check import ConstraintCheck, check_tolerance, kernel_explanation
 from .fast import CHUNK_ROWS, AdaptiveOutputChunks, OutputChunks
+from . import stage_state
 from .method_choice import choose_at_start, replace_after_failure
 from .moving_offsets import ParameterOffsets
 from .params import ParameterWatch
@@ -475,6 +476,7 @@ class LieGroupSolver(StateIO):
         state with accelerations, the output chunks of the one compiled stepper."""
         plan, sim = self._loopPlan, self.sim
         self._init_buffers_from_mbs()
+        stage_state.install(self)
         vmax = sim.vmax
         self._write(True)                    # initial state with accelerations / multipliers
         # chunks of outputs from the one compiled stepper; one output per chunk if a user

@@ -27,7 +27,7 @@ from ..groups import so3
 from ..mbs.codes import BODY_TWIST, GROUP_NAMES
 from ..mbs.scene import Scene
 from ..mbs.simulator import Simulator
-from ..mbs.stiffness import StageStiffnessWatch
+from ..mbs.stiffness import StageStiffnessWatch, watch_stages
 from .evaluated_jacobian import ExudynNewtonJacobian, applies as jacobian_applies
 from .evaluated_kernels import pack_rates, pack_state, unpack_state
 
@@ -69,20 +69,23 @@ class EvaluatedProblem:
         self.tableau = self.sim.tableau
         self.stages = self.sim.method.stages
         self._stiffness = StageStiffnessWatch(self.tableau)
+        self._strict = False
         self._jacobian_for_method()
 
     def watch_stiffness(self, strict):
         """A fixed step beyond the explicit method's stability radius (by its stages) fails at once
-        (``strict``, for a caller that repeats it with the implicit method: mbs/stiffness.py), or
-        after a few such steps."""
-        self._stiffness = StageStiffnessWatch(self.tableau, strict)
+        (``strict``, for a caller that repeats it with the implicit method: mbs/stiffness.watch_stages),
+        or after a few such steps (StageStiffnessWatch)."""
+        self._strict = bool(strict)
+        watch_stages(self.sim, self._strict, self.nl + self.nvb)
 
     def set_method(self, tableau):
         """Integrate with ``tableau`` from now on (bridge/method_choice.py)."""
         self.sim.SetMethod(tableau)
         self.tableau = self.sim.tableau
         self.stages = self.sim.method.stages
-        self._stiffness = StageStiffnessWatch(self.tableau, self._stiffness.strict)
+        self._stiffness = StageStiffnessWatch(self.tableau)
+        watch_stages(self.sim, self._strict, self.nl + self.nvb)
         self._jacobian_for_method()
 
     def _jacobian_for_method(self):

@@ -5,10 +5,11 @@ largest stable step of the explicit method at the initial state: the compiled pa
 spectral radius of its linearised equations (``Simulator.SpectralRadius``), the evaluated path
 from the eigenvalues of Exudyn's own linearisation (``evaluated_stiffness.check_step``)."""
 from ..integrators.tableau import get_method
-from ..mbs.codes import STATUS_BLOWUP, STATUS_NONFINITE, STATUS_STAGE_ARG
+from ..mbs.codes import STATUS_BLOWUP, STATUS_NONFINITE, STATUS_STAGE_ARG, STATUS_STIFF
+from ..mbs.stiffness import watch_stages
 
 #: the kernel statuses of an explicit method that a stiff mode makes unstable
-UNSTABLE_STATUS = (STATUS_BLOWUP, STATUS_NONFINITE, STATUS_STAGE_ARG)
+UNSTABLE_STATUS = (STATUS_BLOWUP, STATUS_NONFINITE, STATUS_STAGE_ARG, STATUS_STIFF)
 
 IMPLICIT_DEFAULT = "ESDIRK3"
 
@@ -32,7 +33,7 @@ def unstable_choice(explicit, h, t, status):
     imp = get_method(IMPLICIT_DEFAULT)
     what = {STATUS_BLOWUP: "the state blew up", STATUS_NONFINITE: "the state became non-finite",
             STATUS_STAGE_ARG: "a stage rotation exceeded 2 pi"}.get(
-        status, "its stages show a mode beyond its stability region")
+        status, "its stages show a mode beyond its stability region")     # (None, STATUS_STIFF)
     line = (f"exudyn_lie: {explicit.name} became unstable after t = {t:.6g} s at the step h = {h:.4g} s ({what}): "
             f"continuing from Exudyn's state at t = {t:.6g} s with the L-stable implicit {imp.name} (order "
             f"{imp.order}); method='{explicit.name}' keeps the explicit method")
@@ -61,6 +62,7 @@ def choose_at_start(solver, h):
                              "initial state")
     if tab is not sim.tableau:
         sim.SetMethod(tab)
+    watch_stages(sim, True)             # a mode that becomes stiff later (off for ESDIRK3)
     solver.tableau, solver.method = tab, tab.name
     if line:
         print(line)
@@ -74,6 +76,7 @@ def replace_after_failure(solver, status, h, t):
         return False
     tab, line = unstable_choice(sim.tableau, h, t, status)
     sim.SetMethod(tab)
+    watch_stages(sim, False)
     solver._chunks.out._ep.clear()
     solver.tableau, solver.method = tab, tab.name
     print(line)

@@ -582,6 +582,9 @@ class LieGroupSolver(StateIO):
         self._fresh = False
         self._warn_projection()
         self.sim.t = float(startTime)
+        if stage_state.needed(self):
+            self._init_buffers_from_mbs(t0=float(startTime))
+            stage_state.install(self)
         tic = time.perf_counter()
         res = self.sim.Run(endTime, stepSize, outputEvery=outputEvery, startTime=float(startTime),
                            progress=progress)

@@ -68,15 +68,25 @@ def user_functions(items):
     return [it.uf for it in items if getattr(it, "uf", None) is not None]
 
 
+def _combined(solver):
+    found = [pf.fn for pf in solver.scene.pythonForces if isinstance(pf.fn, pyforces.Combined)]
+    return found[0] if found else None
+
+
+def needed(solver):
+    """Whether a user function of ``solver``'s Python items may read the state from mbs."""
+    comb = _combined(solver)
+    return comb is not None and any(may_read_mbs(f) for f in user_functions(comb.items))
+
+
 def install(solver):
     """Before the compiled path's Python items are called at a stage, the stage state into mbs'
     coordinates (a :class:`~.solver.LieGroupSolver` after its buffers are made), when one of their
     user functions may read it; returns whether it did."""
-    combined = [pf.fn for pf in solver.scene.pythonForces if isinstance(pf.fn, pyforces.Combined)]
-    if not combined:
+    comb = _combined(solver)
+    if comb is None:
         return False
-    comb = combined[0]
-    if not any(may_read_mbs(f) for f in user_functions(comb.items)):
+    if not needed(solver):
         comb.before = None
         return False
     sim, nodes = solver.sim, solver._nodes

@@ -54,6 +54,7 @@ STATUS_STAGE_ARG = 5       # a stage argument Psi_j left the domain of dexpinv (
 STATUS_EXTERNAL = 6        # the right-hand side evaluated in Python raised (mbs.external)
 STATUS_STEP_MIN = 7        # adaptive steps: the error control asks for a step below the minimum (mbs.adaptive)
 STATUS_NEWTON = 8          # an implicit stage's Newton iteration did not converge (mbs.implicit)
+STATUS_STIFF = 9           # fixed steps watched: the stages show a mode beyond the stability radius (mbs.stiffness)
 # what a failed status refers to (Work.failInfo): the failing constraint row, the numerical rank of
 # redundant rows, the body whose stage argument left the domain of dexpinv
 INFO_ROW, INFO_RANK, INFO_BODY = 0, 1, 2

@@ -66,6 +66,12 @@ def raise_status(sim, st, h):
             "the step is too large for the nonlinearity of the model", h / parts[-1] if parts else h / 2)
         exc.newton = True
         raise exc
+    if st == kernel.STATUS_STIFF:
+        exc = step_size_error(sim.tableau.name, h, sim.t, "the step size is beyond the stability limit of the method",
+                              "the stages of a step show a mode beyond the method's stability radius (e.g. a contact "
+                              "that closed)", suggest_step(sim, h))
+        exc.stiffStages = True
+        raise exc
     sugg = suggest_step(sim, h)
     what = "non-finite (NaN/inf)" if st == kernel.STATUS_NONFINITE else "unbounded (blow-up)"
     raise step_size_error(sim.tableau.name, h, sim.t, f"the state became {what}",

@@ -73,7 +73,8 @@ from . import external
 from .external_probes import probe_kinematics
 from .bodies import body_dexpinv_stage, body_world_velocity, exp_compose, add_point_force_origin, add_world_torque_row
 from .codes import (EXTERNAL_RATES, INFO_BODY, STAGE_ARG_MAX2, STATUS_BLOWUP, STATUS_EXTERNAL, STATUS_NONFINITE,
-                    STATUS_OK, STATUS_STAGE_ARG)
+                    STATUS_OK, STATUS_STAGE_ARG, STATUS_STIFF)
+from .diagnostics import stage_stiffness
 from .rotation_parameters import record_tracked
 from .index1 import rhs
 from .presence import guarded
@@ -117,8 +118,10 @@ def method_arrays(tableau):
 
 
 def fixed_step_control():
-    """The controller of fixed steps."""
-    return Control(kind=CONTROL_FIXED, par=np.zeros(0), state=np.zeros(0))
+    """The controller of fixed steps; ``par = [radius, nb]``: with ``radius > 0``, a step whose stages
+    show a mode beyond it (``h |lambda|`` of the first ``nb`` bodies by
+    :func:`~.diagnostics.stage_stiffness`) is undone with STATUS_STIFF (mbs/stiffness.watch_stages)."""
+    return Control(kind=CONTROL_FIXED, par=np.zeros(2), state=np.zeros(0))
 
 
 # --------------------------------------------------------------------------- the stages
@@ -560,6 +563,9 @@ def mk_steps(sd, wk, tab, ctl, t0, h, nsteps, R, r, V, vmax, every, Ro, ro, Vo, 
             if act == ACT_STOP:
                 return st, n
         else:
+            if st == STATUS_OK and ctl.par[0] > 0.0 and \
+                    hs * stage_stiffness(A, hs, stages[ns - 1], wk.K, wk.Vd, int(ctl.par[1])) > ctl.par[0]:
+                st = STATUS_STIFF
             if st != STATUS_OK:
                 copy_state(wk.Rb, wk.rb, wk.Vb, R, r, V)
                 return st, n

@@ -80,18 +80,13 @@ class StageStiffnessWatch:
     """A mode that became stiff during a run of fixed steps (a contact that closes, a
     friction zone that is entered): Shampine's estimate from the last step's stages
     (:func:`stage_stiffness_of`) against the method's stability radius; the StepSizeError
-    after ``STIFF_STEPS`` steps beyond it in a row, or one step ``STIFF_FACTOR`` beyond.
+    after ``STIFF_STEPS`` steps beyond it in a row, or one step ``STIFF_FACTOR`` beyond (a caller
+    that repeats the step with an implicit method watches every step: :func:`watch_stages`)."""
 
-    ``strict``: after the first step beyond it, for a caller that repeats that step with an
-    implicit method.  The explicit method amplifies the stiff mode in every step beyond its
-    radius (RK4 at h |lambda| = 5.5: about 20 times per step), so the state at the start of the
-    third such step is already far off, and a run continued from there is wrong without a sign."""
-
-    def __init__(self, tableau, strict=False):
+    def __init__(self, tableau):
         self.tableau = tableau
         self.radius = stability_radius(tableau)
         self.count = 0
-        self.strict = bool(strict)
 
     def check(self, sim, h, nb=None):
         from ..errors import step_size_error
@@ -102,7 +97,7 @@ class StageStiffnessWatch:
             self.count = 0
             return
         self.count += 1
-        if self.strict or self.count >= STIFF_STEPS or h * rho > STIFF_FACTOR * self.radius:
+        if self.count >= STIFF_STEPS or h * rho > STIFF_FACTOR * self.radius:
             exc = step_size_error(
                 self.tableau.name, h, sim.t, "the step size is beyond the stability limit of the method",
                 f"the stages of the last step(s) show a mode of rate |lambda| ~ {rho:.4g} 1/s (Shampine's "
@@ -111,6 +106,19 @@ class StageStiffnessWatch:
                 SAFETY * self.radius / rho)
             exc.stiffStages = rho
             raise exc
+
+
+def watch_stages(sim, on, nb=None):
+    """With ``on``, every fixed step of ``sim``'s explicit method whose stages show a mode beyond its
+    stability radius (:func:`stage_stiffness_of`'s estimate, in the stepper) is undone and the run
+    stops with STATUS_STIFF: for a caller that repeats the step with an implicit method.  The
+    explicit method amplifies the stiff mode in every step beyond its radius (RK4 at h |lambda| =
+    5.5: about 20 times per step): after a few such steps the state is far off, and a run that
+    continued from there with the implicit method was wrong without a sign.  Off for an implicit
+    method.  ``nb``: the first bodies watched (default all)."""
+    radius = stability_radius(sim.tableau) if on and not sim.tableau.implicit else 0.0
+    sim.control.par[0] = radius if np.isfinite(radius) else 0.0
+    sim.control.par[1] = sim.sd.nb if nb is None else int(nb)
 
 
 def stage_stiffness_of(sim, h, nb=None):

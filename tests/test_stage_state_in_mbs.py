@@ -133,3 +133,40 @@ def test_which_functions_may_read_mbs():
 
 
 mbs_global = None
+
+
+def resting_floor(h):
+    """A point mass dropped 10 um onto a floor written as a load (2.5e7 N/m, critically damped): the
+    contact closes after 1.4 ms and stays closed, h omega = 5 at h = 1e-3 s, beyond RK4's radius."""
+    SC = exu.SystemContainer()
+    mbs = SC.AddSystem()
+    b = mbs.CreateMassPoint(referencePosition=[0, 0, 1e-5], physicsMass=1.0, initialVelocity=[0.1, 0, 0],
+                            gravity=[0, 0, -9.81])
+    n = mbs.GetObject(b)["nodeNumber"]
+
+    def UFfloor(mbs, t, load):
+        z = mbs.GetNodeOutput(n, O.Position)[2]
+        vz = mbs.GetNodeOutput(n, O.Velocity)[2]
+        return [0, 0, -2.5e7 * z - 1e4 * vz if z < 0 else 0.0]
+    mbs.CreateForce(bodyNumber=b, loadVectorUserFunction=UFfloor)
+    s = mbs.AddSensor(SensorBody(bodyNumber=b, outputVariableType=O.Position, storeInternal=True))
+    mbs.Assemble()
+    ss = settings(h)
+    ss.timeIntegration.numberOfSteps, ss.timeIntegration.endTime = int(round(0.1 / h)), 0.1
+    return mbs, s, ss
+
+
+def test_a_contact_that_closes_during_the_run_switches_from_the_right_state(capsys):
+    """The drop-in's RK4 sees the closed contact in its stages (mbs/stiffness.watch_stages) and does
+    the step again with ESDIRK3 from the start of its Exudyn step: from mbs' state there, which the
+    stage writes had moved 2 ms ahead (x 2 % off) until mbs is put back after the stepper returns."""
+    mbs, s, ss = resting_floor(H / 50)
+    mbs.SolveDynamic(ss)
+    ref = np.asarray(mbs.GetSensorStoredData(s))
+    mbs, s, ss = resting_floor(H)
+    exl_run(mbs, ss)
+    out = capsys.readouterr().out
+    d = np.asarray(mbs.GetSensorStoredData(s))
+    assert "RK4 became unstable" in out and "its stages show a mode beyond" in out and "ESDIRK3" in out
+    assert np.abs(d[:, 1] - 0.1 * d[:, 0]).max() < 1e-12          # x = v t, unchanged by the restart
+    assert np.abs(d - ref)[:, 1:].max() < 1e-9                     # at rest on the floor: -mg/k

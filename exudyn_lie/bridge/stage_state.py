@@ -8,7 +8,9 @@ evaluates those functions at its own stages, between the outputs it writes into 
 function read the state of the last output, up to several steps old, and the run integrated a
 different model without a sign (a ball on a penalty floor written as a load: 35 m high at the
 end, where it lies on the floor).  So, when a user function may read mbs, the stage state is
-written into mbs' coordinates before the functions are called (:func:`install`).
+written into mbs' coordinates before the functions are called (:func:`install`), and mbs' state
+is put back after the stepper returns (``StateIO._next_output``): a restart from the step's
+start (an explicit method replaced, a run handed over) reads it there.
 
 Whether a function may read mbs is decided from its code (:func:`may_read_mbs`): only a plain
 Python function whose code, and that of the functions it calls by name, names no ``Get*``
@@ -84,11 +86,13 @@ def install(solver):
     coordinates (a :class:`~.solver.LieGroupSolver` after its buffers are made), when one of their
     user functions may read it; returns whether it did."""
     comb = _combined(solver)
+    solver._stageWrites = False
     if comb is None:
         return False
     if not needed(solver):
         comb.before = None
         return False
+    solver._stageWrites = True
     sim, nodes = solver.sim, solver._nodes
     q, qt, live, mbs = solver._q, solver._qt, solver._live, solver.mbs
 

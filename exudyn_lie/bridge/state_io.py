@@ -17,6 +17,9 @@ from .time_loop import off_plan
 class StateIO:
     """State in and out of mbs for :class:`~.solver.LieGroupSolver`."""
 
+    #: the stage states are written into mbs while the stepper runs (bridge/stage_state.py)
+    _stageWrites = False
+
     def _build_buffers(self):
         sc, sim = self.scene, self.sim
         # kernel rows of every joint, and their AE slots in Exudyn
@@ -141,7 +144,11 @@ class StateIO:
                 self._failed(ch, t1)     # raises, or continues from Exudyn's state with another method
                 ch = self._chunks
             tic = time.perf_counter()
+            keep = (self._q.copy(), self._qt.copy()) if self._stageWrites else None
             rows, nflag = ch.refill(outputsLeft)
+            if keep is not None:              # mbs holds the step's start again (bridge/stage_state.py)
+                self._q[:], self._qt[:] = keep
+                self._push(False)
             sec = time.perf_counter() - tic
             ch.adapt(sec, rows)
             self.timing["integration"] += sec

@@ -145,10 +145,12 @@ class StateIO:
                 ch = self._chunks
             tic = time.perf_counter()
             keep = (self._q.copy(), self._qt.copy()) if self._stageWrites else None
-            rows, nflag = ch.refill(outputsLeft)
-            if keep is not None:              # mbs holds the step's start again (bridge/stage_state.py)
-                self._q[:], self._qt[:] = keep
-                self._push(False)
+            try:
+                rows, nflag = ch.refill(outputsLeft)
+            finally:
+                if keep is not None:          # mbs holds the step's start again (bridge/stage_state.py),
+                    self._q[:], self._qt[:] = keep      # also for a hand-over a user function raised
+                    self._push(False)
             sec = time.perf_counter() - tic
             ch.adapt(sec, rows)
             self.timing["integration"] += sec

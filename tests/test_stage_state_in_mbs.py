@@ -22,14 +22,14 @@ K, D, H, T = 400.0, 2.0, 1e-3, 0.5
 O = exu.OutputVariableType
 
 
-def body(mbs):
-    return mbs.CreateRigidBody(referencePosition=[0, 0, 0.05], initialVelocity=[0.2, 0, 0], gravity=[0, 0, -9.81],
+def body(mbs, z0=0.05, vx=0.2):
+    return mbs.CreateRigidBody(referencePosition=[0, 0, z0], initialVelocity=[vx, 0, 0], gravity=[0, 0, -9.81],
                                inertia=InertiaSphere(1.0, 0.1), initialAngularVelocity=[0, 0, 1])
 
 
-def settings(h=H, period=1e-2):
+def settings(h=H, period=1e-2, tEnd=T):
     ss = exu.SimulationSettings()
-    ss.timeIntegration.numberOfSteps, ss.timeIntegration.endTime = int(round(T / h)), T
+    ss.timeIntegration.numberOfSteps, ss.timeIntegration.endTime = int(round(tEnd / h)), tEnd
     ss.timeIntegration.verboseMode = 0
     ss.solution.file.write = False
     ss.solution.sensors.writePeriod = period        # ten steps per Exudyn step
@@ -75,20 +75,22 @@ def test_a_load_that_reads_mbs_is_the_spring_it_writes():
     assert np.abs(out[0] - out[1]).max() < 1e-10       # (1.3e-11; 0.028 before)
 
 
-def floor_model(h):
+def floor_model(h, k=1e6, d=50.0, z0=0.05, vx=0.2, tEnd=T):
+    """A ball over a floor written as a load of stiffness ``k`` and damping ``d`` that reads the
+    ball's position and velocity from mbs."""
     SC = exu.SystemContainer()
     mbs = SC.AddSystem()
-    b = body(mbs)
+    b = body(mbs, z0, vx)
     n = mbs.GetObject(b)["nodeNumber"]
 
     def UFfloor(mbs, t, load):
         z = mbs.GetNodeOutput(n, O.Position)[2]
         vz = mbs.GetNodeOutput(n, O.Velocity)[2]
-        return [0, 0, -1e6 * z - 50 * vz if z < 0 else 0.0]
+        return [0, 0, -k * z - d * vz if z < 0 else 0.0]
     mbs.CreateForce(bodyNumber=b, loadVectorUserFunction=UFfloor)
     s = mbs.AddSensor(SensorBody(bodyNumber=b, outputVariableType=O.Position, storeInternal=True))
     mbs.Assemble()
-    return mbs, s, settings(h)
+    return mbs, s, settings(h, tEnd=tEnd)
 
 
 def test_a_floor_written_as_a_load():
@@ -136,22 +138,7 @@ mbs_global = None
 def resting_floor(h):
     """A ball dropped 10 um onto a floor written as a load (2.5e7 N/m, critically damped): the
     contact closes after 1.4 ms and stays closed, h omega = 5 at h = 1e-3 s, beyond RK4's radius."""
-    SC = exu.SystemContainer()
-    mbs = SC.AddSystem()
-    b = mbs.CreateRigidBody(referencePosition=[0, 0, 1e-5], inertia=InertiaSphere(1.0, 0.1),
-                            initialVelocity=[0.1, 0, 0], gravity=[0, 0, -9.81])
-    n = mbs.GetObject(b)["nodeNumber"]
-
-    def UFfloor(mbs, t, load):
-        z = mbs.GetNodeOutput(n, O.Position)[2]
-        vz = mbs.GetNodeOutput(n, O.Velocity)[2]
-        return [0, 0, -2.5e7 * z - 1e4 * vz if z < 0 else 0.0]
-    mbs.CreateForce(bodyNumber=b, loadVectorUserFunction=UFfloor)
-    s = mbs.AddSensor(SensorBody(bodyNumber=b, outputVariableType=O.Position, storeInternal=True))
-    mbs.Assemble()
-    ss = settings(h)
-    ss.timeIntegration.numberOfSteps, ss.timeIntegration.endTime = int(round(0.1 / h)), 0.1
-    return mbs, s, ss
+    return floor_model(h, k=2.5e7, d=1e4, z0=1e-5, vx=0.1, tEnd=0.1)
 
 
 def test_a_contact_that_closes_during_the_run_switches_from_the_right_state(capsys):

@@ -324,9 +324,8 @@ class EvaluatedSolver:
             problem.watch_stiffness(strict=True)
             chosen, line = stiff_choice(tab, h, stable, rate, "Exudyn's linearisation at the initial state")
             if line:
-                problem.set_method(chosen)
-                self.tableau = tab = chosen
-                print(line)
+                self._switch(chosen, line)
+                tab = chosen
         if self._adaptive is not None:
             problem.sim.SetAdaptive(**self._adaptive)
         # the initial accelerations (and a measured estimate of the cost per step)
@@ -451,16 +450,24 @@ class EvaluatedSolver:
         before the step is done again: the stages' watch sees such a mode only once the explicit
         method has amplified it, and the state it then restarts from is already off."""
         problem, h = self.problem, self._loopPlan["h"]
-        if not (self.autoImplicit and self._adaptive is None and not problem.tableau.implicit):
+        if not self._may_switch():
             return
         problem.write()
         rate, stable = check_step(self.model, problem.tableau, h, False)
         tab, line = stiff_choice(problem.tableau, h, stable, rate, f"Exudyn's linearisation at t = {t:.6g} s, "
                                  f"after its PostNewton changed the data coordinates")
         if line:
-            problem.set_method(tab)
-            self.tableau = tab
-            print(line)
+            self._switch(tab, line)
+
+    def _may_switch(self):
+        """Whether the run may still replace its explicit method (the user named none; fixed steps)."""
+        return self.autoImplicit and self._adaptive is None and not self.problem.tableau.implicit
+
+    def _switch(self, tab, line):
+        """Integrate with ``tab`` from now on, and say why (``line``)."""
+        self.problem.set_method(tab)
+        self.tableau = tab
+        print(line)
 
     def _advance(self, t0, t1, k, h):
         """The MK steps of one Exudyn step; the explicit method the user did not name, unstable,
@@ -469,14 +476,10 @@ class EvaluatedSolver:
         try:
             problem.advance(t0, t1, k, h, self._adaptive is not None)
         except StepSizeError as e:
-            if not (self.autoImplicit and self._adaptive is None and not problem.tableau.implicit):
+            if not self._may_switch():
                 raise
-            tab, line = unstable_choice(problem.tableau, h, t0,
-                                        None if hasattr(e, "stiffStages") else STATUS_BLOWUP)
             problem.restore(self._snap)
-            problem.set_method(tab)
-            self.tableau = tab
-            print(line)
+            self._switch(*unstable_choice(problem.tableau, h, t0, None if hasattr(e, "stiffStages") else STATUS_BLOWUP))
             problem.advance(t0, t1, k, h, False)
 
     def loop_end(self):

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from exudyn_lie.groups import so3
-from exudyn_lie.mbs import GROUND, Scene, Simulator, compiled, force_elements
+from exudyn_lie.mbs import GROUND, Scene, Simulator, compiled, force_elements, kernel
 from exudyn_lie.mbs.codes import ROW_DIST, ROW_ROT, ROW_TRANS_LOCAL, ROW_TRANS_WORLD
 
 
@@ -82,6 +82,24 @@ def test_one_other_item_makes_a_scene_full(kind):
     sd, _ = compiled.compile_scene(sc, ["SE3"] * sc.nBodies)
     assert sd.rowsAll is True
     assert all(sd._asdict()[f] is not None for f in force_elements.scene_fields())
+
+
+def test_stabilization_makes_a_scene_full_with_the_switches_at_run_time(monkeypatch):
+    """Stabilisation (like an offset function or probes) compiles the scene full, where it is a
+    run-time switch as are the row drives and probes: the kernel kinds a first run compiles are one
+    per method kind, not one per combination of features.  The full scene steps as the lean one
+    (the projection of the velocity-stabilised run aside: same states without it, bit for bit)."""
+    sc = lean_scene()
+    assert compiled.scene_is_lean(sc) and not compiled.scene_is_lean(sc, "velocity")
+    sim = Simulator(sc, "RK4", "SE3", stabilization="velocity", projectInitial=True)
+    assert sim.sd.rowsAll is True and sim.sd.stabilization == kernel.STAB_VELOCITY
+    assert sim.wk.drive is not None and sim.wk.drive[0] == 0 and sim.wk.probe.shape[0] == 0
+    sim.Advance(100, 1e-3)
+    assert np.abs(sim._residuals_and_JV()[1]).max() < 1e-12
+    full = run(lean_scene(), False, "SE3", monkeypatch)
+    assert full.sd.stabilization == kernel.STAB_NONE and full.wk.drive[0] == 0
+    lean = run(lean_scene(), True, "SE3", monkeypatch)
+    assert np.array_equal(full.V, lean.V) and np.abs(lean.V).max() > 0.1
 
 
 def test_lean_stage_has_no_code_of_absent_features(monkeypatch):

@@ -11,7 +11,8 @@ import numpy as np
 
 from .force_elements import compile_elements, lean_elements_only, scene_fields
 from .codes import (EXTERNAL_FORCES, EXTERNAL_NONE, EXTERNAL_RATES, GROUP_NAMES, J_NROW, J_ROW0, ROW_COORD,
-                    ROW_COORD_VEL, ROW_DIST, ROW_KIND, ROW_ROLL, ROW_ROT, ROW_TRANS_LOCAL, ROW_TRANS_WORLD)
+                    ROW_COORD_VEL, ROW_DIST, ROW_KIND, ROW_ROLL, ROW_ROT, ROW_TRANS_LOCAL, ROW_TRANS_WORLD,
+                    STAB_NONE, STAB_POSITION, STAB_VELOCITY)
 from .rotation_parameters import TRACK_ANGLE, TRACK_NONE
 from .external_probes import N_PROBE, probe_table
 from .linalg import REL_PIVOT_TOL, rcm_order
@@ -318,20 +319,30 @@ def auto_groups(scene: Scene):
 LEAN_ROW_KINDS = (ROW_TRANS_LOCAL, ROW_TRANS_WORLD, ROW_ROT, ROW_DIST)
 
 
+#: ``SceneData.stabilization`` of a full scene for ``Simulator(stabilization=...)``
+STABILIZATION_CODES = {None: STAB_NONE, "velocity": STAB_VELOCITY, "position": STAB_POSITION}
+
 #: False compiles every scene full (tests compare the two kinds on one scene)
 LEAN_SCENES = True
 
 
-def scene_is_lean(scene: Scene):
-    """A lean scene (mbs/presence.py): force elements registered ``lean`` only and joints
-    whose rows are of ``LEAN_ROW_KINDS``.  Its other features' tables are None, so the kernel
-    compiled for it has none of their code (a first run compiles less)."""
-    return LEAN_SCENES and lean_elements_only(scene) and all(kind in LEAN_ROW_KINDS for j in scene.joints
-                                             for kind, _, _ in joint_rows_of(j))
+def scene_is_lean(scene: Scene, stabilization=None):
+    """A lean scene (mbs/presence.py): force elements registered ``lean`` only, joints whose rows
+    are of ``LEAN_ROW_KINDS``, no stabilisation (``stabilization`` None), no row with an offset
+    function and no probes.  Its other features' tables are None, so the kernel compiled for it
+    has none of their code: the paper's models, whose step time the specialisation serves.  Every
+    other scene is compiled *full*, with stabilisation, row drives and probes as run-time
+    switches: one kernel kind per method kind instead of one per combination of features, each a
+    compile of tens of seconds on a first run (23 kinds in the test suite before, 10 after)."""
+    return (LEAN_SCENES and stabilization is None and probe_table(scene).shape[0] == 0
+            and all(getattr(j, "offset", None) is None for j in scene.joints)
+            and lean_elements_only(scene) and all(kind in LEAN_ROW_KINDS for j in scene.joints
+                                                  for kind, _, _ in joint_rows_of(j)))
 
 
-def compile_scene(scene: Scene, groups):
-    """Flat arrays for the kernel.  ``groups`` is the per-body list of group names."""
+def compile_scene(scene: Scene, groups, stabilization=None):
+    """Flat arrays for the kernel.  ``groups`` is the per-body list of group names;
+    ``stabilization``: None, 'velocity' or 'position' (mbs/projection.py)."""
     nb = scene.nBodies
     if nb == 0:
         raise SceneError("the scene has no bodies")
@@ -358,7 +369,7 @@ def compile_scene(scene: Scene, groups):
     jrow0, jnrow, cols, bw = choose_solve(nb, J)
     rkind, rax, rbx, rA, rB, rjoint = cols
     m = len(rkind)
-    lean = scene_is_lean(scene)
+    lean = scene_is_lean(scene, stabilization)
     sd = SceneData(
         nb=nb, gid=gid, mass=mass, com=com, M=M, Minv=Minv,
         gravity=scene.gravity.astype(float), hasGravity=bool(np.any(scene.gravity != 0)),
@@ -372,7 +383,8 @@ def compile_scene(scene: Scene, groups):
         jointFrames=arr([[j.rotA, j.rotB] for j in J], (-1, 2, 3, 3)),
         jointParams=arr([joint_parameters(j) for j in J], (-1, N_JOINT_PARAMS)),
         rowIndex=arr([list(x) for x in zip(rkind, rax, rbx, rA, rB)], (-1, 5), np.int64),
-        nrows=m, bandwidth=bw, redundant=False, pivotTol=REL_PIVOT_TOL, stabilization=None,
+        nrows=m, bandwidth=bw, redundant=False, pivotTol=REL_PIVOT_TOL,
+        stabilization=None if lean else STABILIZATION_CODES[stabilization],
         rowsAll=None if lean else True,
     )
     return sd, np.array(rjoint, dtype=np.int64)
@@ -494,10 +506,10 @@ def _rows(rows, shape, dtype=float):
     return a.reshape(shape) if a.size else np.zeros(tuple(0 if d == -1 else d for d in shape), dtype)
 
 
-def compile_carried(scene: Scene):
+def compile_carried(scene: Scene, stabilization=None):
     """The :class:`TrackPlan`, the initial :class:`PathState` and the probes of the Python
     forces' items of a scene, carried by every Work of its simulator (:func:`make_work`)."""
-    lean = scene_is_lean(scene)
+    lean = scene_is_lean(scene, stabilization)
     track = TrackPlan(
         trackCodes=_rows([body_track(b) for b in scene.bodies], (-1,), np.int64),
         angleFrames=_rows([np.eye(3) if b.angleFrame is None else b.angleFrame for b in scene.bodies], (-1, 3, 3)),
@@ -550,7 +562,7 @@ def constant_drives(sd):
 def make_work(sd, nstages, solve="auto", carried=None):
     """The workspace of a simulator; ``carried`` (:func:`compile_carried`): its track plan, path
     state and probes, shared (not copied) so that a new Work keeps their state."""
-    nb = sd.nb
+    nb, lean = sd.nb, sd.rowsAll is None
     carried = nothing_carried(sd) if carried is None else carried
     m = sd.nrows
     plan = solve_plan(sd, solve)
@@ -566,10 +578,12 @@ def make_work(sd, nstages, solve="auto", carried=None):
         tmp6=np.zeros(6), tmp12=np.zeros(12), v3=np.zeros((N_SCRATCH3, 3)), m3=np.zeros((4, 3, 3)),
         ident=np.eye(3), zero3=np.zeros(3), zero6=np.zeros(6),
         ext=np.zeros(2,
-                     np.int64), rdrive=constant_drives(sd), drive=None, Vw=np.zeros((nb, 6) if sd.hasQext else (0, 6)),
+                     np.int64), rdrive=constant_drives(sd),
+        # a full scene's [handle] of the row drives' evaluator (0: none; Simulator._make_work)
+        drive=None if lean else np.zeros(1, np.int64), Vw=np.zeros((nb, 6) if sd.hasQext else (0, 6)),
         tplan=plan, Tw=np.zeros(work_size(nb, m, plan)) if tree else None,
         track=carried.track, path=carried.path,
-        # None without probes: external_forces then compiles without probe_kinematics (about 2 s of
-        # a first run; the call of external_forces itself stays, see stepper.stage_rhs)
-        probe=carried.probe if carried.probe.shape[0] > 0 else None,
+        # None in a lean scene (no probes): external_forces then compiles without probe_kinematics
+        # (the call of external_forces itself stays, see stepper.stage_rhs)
+        probe=None if lean else carried.probe,
     )

@@ -39,26 +39,31 @@ def all_rows(sd, wk, R, r, V, h, Jr, eta, e):
 
 
 @njit(cache=True)
-def stage_stiffness(A, h, jl, K, Vd, nb):
+def stage_stiffness(A, h, stages, K, Vd, nb):
     """The fastest rate |lambda| the last step met, from its stages (Shampine's idea, for
-    second-order equations): between the first and the last evaluated stage ``jl`` the
-    configuration of bodies ``0 .. nb-1`` moved by ``dq = h sum_l a_jl k_l`` (in the algebra)
-    and the acceleration changed by ``dVdot``; ``rho = sqrt(|dVdot| / |dq|)``.  For
+    second-order equations): between the first and an evaluated stage ``j`` (of ``stages``)
+    the configuration of bodies ``0 .. nb-1`` moved by ``dq = h sum_l a_jl k_l`` (in the
+    algebra) and the acceleration changed by ``dVdot``; ``rho = sqrt(|dVdot| / |dq|)``.  For
     ``Vdot = -K q - D V`` it gives omega for a stiffness-dominated mode (``dVdot = -K dq``) and
     c for a damping-dominated one (``dVdot = -c dV``, ``dV = c dq``); ``h rho`` beyond the
-    method's stability radius means the step amplifies that mode."""
-    num = 0.0
-    den = 0.0
-    for i in range(nb):
-        for k in range(6):
-            dq = 0.0
-            for l in range(jl):
-                dq += A[jl, l] * K[l, i, k]
-            den += (h * dq) ** 2
-            num += (Vd[jl, i, k] - Vd[0, i, k]) ** 2
-    if den == 0.0 or num == 0.0:
-        return 0.0
-    return np.sqrt(np.sqrt(num / den))
+    method's stability radius means the step amplifies that mode.  The largest over the stages:
+    a contact that only some stages reach (an impact inside one step) shows at those stages
+    alone (RK4 across a floor at h omega = 10: 10 at the second stage, 0.15 at the last)."""
+    rho = 0.0
+    for jj in range(1, stages.shape[0]):
+        j = stages[jj]
+        num = 0.0
+        den = 0.0
+        for i in range(nb):
+            for k in range(6):
+                dq = 0.0
+                for l in range(j):
+                    dq += A[j, l] * K[l, i, k]
+                den += (h * dq) ** 2
+                num += (Vd[j, i, k] - Vd[0, i, k]) ** 2
+        if den > 0.0 and num > 0.0:
+            rho = max(rho, np.sqrt(np.sqrt(num / den)))
+    return rho
 
 
 def joint_rows_at(sd, wk, R, r, V, h, Jr, eta):

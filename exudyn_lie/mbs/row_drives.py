@@ -64,10 +64,10 @@ def evaluate_row_drives(token, t):
 
 
 def update_row_drives(drive, t):
-    """The row drives ``wk.rdrive`` at time ``t``: ``drive = wk.drive`` is None without
-    offset functions (compiled to nothing, as the tree solve's ``index1._is_tree``: the call,
-    then through numba's objmode, present but not taken cost the heavy top about 0.1 us of
-    2.9 us per step, measured), else ``[handle]`` of the evaluator (:func:`evaluate_row_drives`)."""
+    """The row drives ``wk.rdrive`` at time ``t``: ``drive = wk.drive`` is None in a lean scene
+    (compiled to nothing, as the tree solve's ``index1._is_tree``: the call, then through numba's
+    objmode, present but not taken cost the heavy top about 0.1 us of 2.9 us per step, measured),
+    else ``[handle]`` of the evaluator (:func:`evaluate_row_drives`), 0 without offset functions."""
     raise NotImplementedError("compiled only")
 
 
@@ -79,6 +79,8 @@ def _update_row_drives(drive, t):
         return no_drives
 
     def drives(drive, t):
+        if drive[0] == 0:           # a full scene without offset functions
+            return STATUS_OK
         return evaluate_row_drives(drive[0], t)
     return drives
 

@@ -68,10 +68,8 @@ class Simulator(ExternalSeams):
             raise ValueError(f"unknown stabilization {stabilization!r}; use None, 'velocity' or 'position'")
         self.stabilization = None if stabilization == "none" else stabilization
         self.verbose = verbose
-        self.sd, self.rowJoint = compile_scene(scene, self.groups)
-        self._carried = compile_carried(scene)       # track plan, path state, probes: kept by every Work
-        self.sd = self.sd._replace(stabilization={None: None, "velocity": kernel.STAB_VELOCITY,
-                                                  "position": kernel.STAB_POSITION}[self.stabilization])
+        self.sd, self.rowJoint = compile_scene(scene, self.groups, self.stabilization)
+        self._carried = compile_carried(scene, self.stabilization)   # track plan, path state, probes: kept by every Work
         self.method = implicit_run.method_arrays_of(self.tableau, self.sd.gid)
         implicit_run.apply_fallbacks(self)
         self.control = fixed_step_control()

@@ -564,7 +564,7 @@ def mk_steps(sd, wk, tab, ctl, t0, h, nsteps, R, r, V, vmax, every, Ro, ro, Vo, 
                 return st, n
         else:
             if st == STATUS_OK and ctl.par[0] > 0.0 and \
-                    hs * stage_stiffness(A, hs, stages[ns - 1], wk.K, wk.Vd, int(ctl.par[1])) > ctl.par[0]:
+                    hs * stage_stiffness(A, hs, stages, wk.K, wk.Vd, int(ctl.par[1])) > ctl.par[0]:
                 st = STATUS_STIFF
             if st != STATUS_OK:
                 copy_state(wk.Rb, wk.rb, wk.Vb, R, r, V)

@@ -127,7 +127,7 @@ def stage_stiffness_of(sim, h, nb=None):
     a mode that became stiff during the run (a contact that closed) shows here before it
     blows up."""
     tab = sim.method
-    return float(stage_stiffness(tab.A, float(h), int(tab.stages[-1]), sim.wk.K, sim.wk.Vd,
+    return float(stage_stiffness(tab.A, float(h), tab.stages, sim.wk.K, sim.wk.Vd,
                                  sim.sd.nb if nb is None else int(nb)))
 
 

@@ -43,26 +43,34 @@ def stage_stiffness(A, h, stages, K, Vd, nb):
     """The fastest rate |lambda| the last step met, from its stages (Shampine's idea, for
     second-order equations): between the first and an evaluated stage ``j`` (of ``stages``)
     the configuration of bodies ``0 .. nb-1`` moved by ``dq = h sum_l a_jl k_l`` (in the
-    algebra) and the acceleration changed by ``dVdot``; ``rho = sqrt(|dVdot| / |dq|)``.  For
-    ``Vdot = -K q - D V`` it gives omega for a stiffness-dominated mode (``dVdot = -K dq``) and
-    c for a damping-dominated one (``dVdot = -c dV``, ``dV = c dq``); ``h rho`` beyond the
-    method's stability radius means the step amplifies that mode.  The largest over the stages:
-    a contact that only some stages reach (an impact inside one step) shows at those stages
-    alone (RK4 across a floor at h omega = 10: 10 at the second stage, 0.15 at the last)."""
+    algebra), the velocity by ``dV = h sum_l a_jl Vdot_l`` and the acceleration by ``dVdot``.
+    For ``Vdot = -K q - D V`` a mode ``lambda^2 + c lambda + omega^2 = 0`` has ``|lambda| <= c +
+    omega``, and ``|dVdot| <= omega^2 |dq| + c |dV|``; the estimate is the positive root ``rho`` of
+    ``rho^2 |dq| + rho |dV| = |dVdot|``: omega for a stiffness-dominated mode (``dV = 0``), c for a
+    damping-dominated one (``dq = 0``).  (``sqrt(|dVdot| / |dq|)`` alone saw the damping force of a
+    step that starts at a turning point, ``dq ~ h V ~ 0``, as a mode of any rate.)  ``h rho``
+    beyond the method's stability radius means the step amplifies that mode.  The largest over the
+    stages: a contact that only some stages reach (an impact inside one step) shows at those
+    stages alone (RK4 across a floor at h omega = 10: 10 at the second stage, 0.15 at the last)."""
     rho = 0.0
     for jj in range(1, stages.shape[0]):
         j = stages[jj]
-        num = 0.0
-        den = 0.0
+        a = 0.0
+        c = 0.0
+        e = 0.0
         for i in range(nb):
             for k in range(6):
                 dq = 0.0
+                dv = 0.0
                 for l in range(j):
                     dq += A[j, l] * K[l, i, k]
-                den += (h * dq) ** 2
-                num += (Vd[j, i, k] - Vd[0, i, k]) ** 2
-        if den > 0.0 and num > 0.0:
-            rho = max(rho, np.sqrt(np.sqrt(num / den)))
+                    dv += A[j, l] * Vd[l, i, k]
+                a += (h * dq) ** 2
+                c += (h * dv) ** 2
+                e += (Vd[j, i, k] - Vd[0, i, k]) ** 2
+        a, c, e = np.sqrt(a), np.sqrt(c), np.sqrt(e)
+        if e > 0.0 and (a > 0.0 or c > 0.0):
+            rho = max(rho, 2.0 * e / (c + np.sqrt(c * c + 4.0 * a * e)))
     return rho
 
 

@@ -329,12 +329,12 @@ LEAN_SCENES = True
 def scene_is_lean(scene: Scene, stabilization=None):
     """A lean scene (mbs/presence.py): force elements registered ``lean`` only, joints whose rows
     are of ``LEAN_ROW_KINDS``, no stabilisation (``stabilization`` None), no row with an offset
-    function, no probes and no right-hand side of its own (the Exudyn-evaluated path's).  Its other
+    function, no probes and no right-hand side of its own (``Scene.SetRightHandSide``).  Its other
     features' tables are None, so the kernel compiled for it has none of their code: the paper's
     models, whose step time the specialisation serves.  Every other scene is compiled *full*, with
     stabilisation, row drives and probes as run-time switches: one kernel kind per method kind
     instead of one per combination of features, each a compile of tens of seconds on a first run
-    (23 kinds in the test suite before, 10 after); the evaluated path shares the compiled path's."""
+    (23 kinds in the test suite before, 10 after); a scene with a right-hand side shares them."""
     return (LEAN_SCENES and stabilization is None and scene.rightHandSide is None
             and probe_table(scene).shape[0] == 0
             and all(getattr(j, "offset", None) is None for j in scene.joints)

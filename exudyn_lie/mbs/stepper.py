@@ -291,7 +291,7 @@ def stage_rhs(sd, wk, t, Vdot):
     """``Vdot_j = F(t, g_j, V_j)`` at the stage state ``wk.Rs, wk.rs, wk.Vs``: the
     external part first (if the scene has one: Python forces; the rows' moving offsets at
     ``t``, :mod:`.row_drives`), then the compiled index-1 rhs."""
-    st = update_row_drives(wk.drive, t)      # no code without offset functions (wk.drive None)
+    st = update_row_drives(wk.drive, t)      # no code in a lean scene (wk.drive None)
     if st != STATUS_OK:
         return st
     # A run-time branch, compiled in every scene (about 0.4 s of a first run; the probes inside

@@ -508,10 +508,11 @@ def _rows(rows, shape, dtype=float):
     return a.reshape(shape) if a.size else np.zeros(tuple(0 if d == -1 else d for d in shape), dtype)
 
 
-def compile_carried(scene: Scene, stabilization=None):
+def compile_carried(scene: Scene, sd=None):
     """The :class:`TrackPlan`, the initial :class:`PathState` and the probes of the Python
-    forces' items of a scene, carried by every Work of its simulator (:func:`make_work`)."""
-    lean = scene_is_lean(scene, stabilization)
+    forces' items of a scene, carried by every Work of its simulator (:func:`make_work`); lean or
+    full as its SceneData ``sd`` (default: as :func:`compile_scene` without stabilisation)."""
+    lean = scene_is_lean(scene) if sd is None else sd.rowsAll is None
     track = TrackPlan(
         trackCodes=_rows([body_track(b) for b in scene.bodies], (-1,), np.int64),
         angleFrames=_rows([np.eye(3) if b.angleFrame is None else b.angleFrame for b in scene.bodies], (-1, 3, 3)),

@@ -69,7 +69,7 @@ class Simulator(ExternalSeams):
         self.stabilization = None if stabilization == "none" else stabilization
         self.verbose = verbose
         self.sd, self.rowJoint = compile_scene(scene, self.groups, self.stabilization)
-        self._carried = compile_carried(scene, self.stabilization)   # track plan, path state, probes: kept by every Work
+        self._carried = compile_carried(scene, self.sd)     # track plan, path state, probes: kept by every Work
         self.method = implicit_run.method_arrays_of(self.tableau, self.sd.gid)
         implicit_run.apply_fallbacks(self)
         self.control = fixed_step_control()

@@ -157,6 +157,24 @@ def test_no_growth_right_after_a_rejection():
     assert S[C.S_N_ACCEPT] == 2 and S[C.S_N_REJECT] == 1
 
 
+def test_the_minimum_step_stops_or_is_accepted_beyond_the_tolerance():
+    """Without accept_min a retry below h_min stops (StepSizeError); with it the retry is made at
+    h_min and a step there is accepted and counted, as Exudyn's explicit solvers continue; a NaN
+    error still stops."""
+    P = C.controller_params(4, h_min=0.1)
+    S = C.controller_state()
+    assert C.control_step(P, S, 0.3, 1e6) == C.STATUS_H_MIN
+    P = C.controller_params(4, h_min=0.1, accept_min=True)
+    S = C.controller_state()
+    assert C.control_step(P, S, 0.3, 1e6) == C.STATUS_REJECT and S[C.S_H] == 0.1
+    assert C.control_step(P, S, 0.1, 1e6) == C.STATUS_ACCEPT and S[C.S_H] == 0.1
+    assert S[C.S_N_FLOOR] == 1 and S[C.S_N_ACCEPT] == 1 and S[C.S_N_REJECT] == 1
+    assert C.control_step(P, S, 0.1, 0.5) == C.STATUS_ACCEPT and S[C.S_N_FLOOR] == 1     # within: not counted
+    assert C.control_step(P, S, 0.1, np.nan) == C.STATUS_H_MIN
+    with pytest.raises(ValueError, match="accept_min needs h_min > 0"):
+        C.controller_params(4, accept_min=True)
+
+
 def test_rejection_happens_and_the_next_step_does_not_grow():
     """A first step far too large (h0 = 1 s for tol 1e-8) is rejected, and the first accepted
     step after each rejection is not followed by a larger one."""

@@ -107,13 +107,17 @@ class AdaptiveOutputChunks(OutputChunks):
     """Exudyn's output times on adaptive steps (:class:`~exudyn_lie.mbs.outputs.
     AdaptiveOutputRows`): the same grid of outputs every ``nsub * h`` as
     :class:`OutputChunks` (the last at ``tEnd``), each from the dense output on the group of
-    the step that contains it; no step is shortened for an output."""
+    the step that contains it; no step is shortened for an output, unless ``clip``: then every
+    chunk's last step ends at its last output, where a user function (a pre-step function, a
+    sensor's) may change the state or the parameters and the run continues from that state (from a
+    dense output instead, each such restart would add the interpolation's error)."""
 
     _rows = AdaptiveOutputRows
 
-    def __init__(self, sim, nodes, vmax, bufs, jac, nsub, h, doacc, tEnd, maxRows=CHUNK_ROWS):
+    def __init__(self, sim, nodes, vmax, bufs, jac, nsub, h, doacc, tEnd, maxRows=CHUNK_ROWS, clip=False):
         super().__init__(sim, nodes, vmax, bufs, jac, nsub, h, doacc, maxRows=maxRows)
         self.tEnd = float(tEnd)
+        self.clip = bool(clip)
         self.restart(sim.t)
 
     def restart(self, t):
@@ -131,7 +135,7 @@ class AdaptiveOutputChunks(OutputChunks):
     def refill(self, nout):
         n = max(1, min(int(nout), self.out.size, self.total - self.done))
         tout = self._output_times(n)
-        rows = self.out.integrate_at(self.tEnd, tout)
+        rows = self.out.integrate_at(float(tout[-1]) if self.clip else self.tEnd, tout)
         nflag = self._write(rows, tout)
         self.tStart, self.rows, self.next = self.t0 + self.done * self.nsub * self.h, rows, 0
         self.done += rows

@@ -39,7 +39,8 @@ SETTINGS = (
                                                "steps"),
     ("timeIntegration.absoluteTolerance", HONOURED, "adaptive steps: atol of every SI quantity (rad, m, rad/s, m/s)"),
     ("timeIntegration.relativeTolerance", HONOURED, "adaptive steps: rtol"),
-    ("timeIntegration.minimumStepSize", HONOURED, "adaptive steps: a step below it stops with StepSizeError"),
+    ("timeIntegration.minimumStepSize", HONOURED, "adaptive steps: a step below it stops with StepSizeError "
+     "(after the drop-in's own switch to ESDIRK3: accepted at it, docs/IMPLICIT.md)"),
     ("timeIntegration.initialStepSize", HONOURED, "adaptive steps: the first step if automaticStepSize and > 0"),
     ("timeIntegration.automaticStepSize", HONOURED, "adaptive steps: False starts at the largest step, as Exudyn; "
                                                     "True with initialStepSize = 0: Hairer's HINIT"),

@@ -45,7 +45,7 @@ from ..userwarn import warn_user
 from .constraint_check import ConstraintCheck, check_tolerance, kernel_explanation
 from .fast import CHUNK_ROWS, AdaptiveOutputChunks, OutputChunks
 from . import stage_state
-from .method_choice import choose_at_start, replace_after_failure
+from .method_choice import choose_at_start, replace_after_failure, warn_steps_at_minimum
 from .moving_offsets import ParameterOffsets
 from .params import ParameterWatch
 from .settings import liegroup_argument, positive_float
@@ -152,7 +152,7 @@ class LieGroupSolver(StateIO):
         self.constraintTolerance = self._check_constraint_tolerance(constraintTolerance, stabilization)
         self.projectInitial = bool(projectInitial)
         self.verbose = bool(verbose)
-        self._liegroup_arg = self._check_liegroup(liegroup)
+        self._liegroup_arg = liegroup_argument(liegroup)
         self.timing = {}
         self.scene = None
         self.sim = None
@@ -161,9 +161,6 @@ class LieGroupSolver(StateIO):
         self._prepare(announce=self.verbose, scene=_scene)
 
     # ------------------------------------------------------------------ set-up
-    def _check_liegroup(self, liegroup):
-        return liegroup_argument(liegroup)
-
     def _groups(self, sc: ExudynScene):
         auto = auto_groups(sc)
         tied = set(sc.pyConnectedBodies)
@@ -251,7 +248,7 @@ class LieGroupSolver(StateIO):
         choose_at_start(self, h)
 
     def _replace_after_failure(self, status, h, t):
-        return replace_after_failure(self, status, h, t)
+        return replace_after_failure(self, status, h, t, self._loopPlan)
 
     def _announce(self, why):
         sc = self.scene
@@ -438,7 +435,8 @@ class LieGroupSolver(StateIO):
             disc.maxIterations = 1
             disc.ignoreMaxIterations = True
 
-        self._loopPlan = dict(k=k, h=h, tEnd=tEnd, adaptive=adaptive, needAcc=needAcc, since=ticTotal - pendingPrepare)
+        self._loopPlan = dict(k=k, h=h, tEnd=tEnd, adaptive=adaptive, needAcc=needAcc, since=ticTotal - pendingPrepare,
+                              ss=ss)
         self.timing = dict(integration=0.0, steps=nsteps, exudynSteps=nsteps // k, substeps=k)
         loop = TimeLoop(self.mbs, self, ss, ss2, t0, tEnd, nsteps // k, storeSolver=storeSolver,
                         showProgress=showProgress, watch=self._watch)
@@ -456,7 +454,9 @@ class LieGroupSolver(StateIO):
         integ = self.timing["integration"]
         self.timing.update(total=setUp + loop, setUp=setUp, loop=loop, compile=compiled,
                            bridgeOverhead=max(loopNet - integ, 0.0) / loopNet if loopNet > 0 else 0.0)
+        adaptive = self._loopPlan["adaptive"]          # (also after a switch to ESDIRK3)
         if adaptive is not None:
+            warn_steps_at_minimum(sim)
             acc, rej, nrhs = sim.adaptiveCounters
             self.timing.update(adaptive=True, accepted=acc, rejected=rej, rhsEvaluations=nrhs, steps=acc,
                                constraintProjections=sim.constraintProjections)
@@ -474,26 +474,26 @@ class LieGroupSolver(StateIO):
     def loop_begin(self, solver):
         """After InitializeSolver (bridge/time_loop.py): buffers on mbs' coordinates, the initial
         state with accelerations, the output chunks of the one compiled stepper."""
-        plan, sim = self._loopPlan, self.sim
         self._init_buffers_from_mbs()
         stage_state.install(self)
-        vmax = sim.vmax
         self._write(True)                    # initial state with accelerations / multipliers
-        # chunks of outputs from the one compiled stepper; one output per chunk if a user
-        # function may change the state in between or Python forces (Exudyn user
-        # functions) run, so that they are called in step with Exudyn's outputs
+        self._chunks = self._new_chunks()
+        self.loop_check = self._make_constraint_check(solver, self._loopPlan["since"])
+        self._params = ParameterWatch(self)
+        self._offsets, self._actual = self._parameter_offsets(self.sim.t)
+
+    def _new_chunks(self):
+        """Chunks of outputs from the one compiled stepper, fixed or adaptive steps by the plan; one
+        output per chunk if a user function may change the state in between or Python forces (Exudyn
+        user functions) run, so that they are called in step with Exudyn's outputs."""
+        plan, sim = self._loopPlan, self.sim
         bufs, jac = (self._q, self._qt, self._qtt, self._ae), (self._jrow, self._jae)
         maxRows = 1 if (self._watch or sim.hasPythonStage) else CHUNK_ROWS
-        k, h, needAcc = plan["k"], plan["h"], plan["needAcc"]
+        args = (sim, self._nodes, sim.vmax, bufs, jac, plan["k"], plan["h"], plan["needAcc"])
         if plan["adaptive"] is None:
-            self._chunks = OutputChunks(sim, self._nodes, vmax, bufs, jac, k, h, needAcc, maxRows=maxRows)
-        else:
-            sim.SetAdaptive(**plan["adaptive"])
-            self._chunks = AdaptiveOutputChunks(sim, self._nodes, vmax, bufs, jac, k, h, needAcc, plan["tEnd"],
-                                                maxRows=maxRows)
-        self.loop_check = self._make_constraint_check(solver, plan["since"])
-        self._params = ParameterWatch(self)
-        self._offsets, self._actual = self._parameter_offsets(sim.t)
+            return OutputChunks(*args, maxRows=maxRows)
+        sim.SetAdaptive(**plan["adaptive"])
+        return AdaptiveOutputChunks(*args, plan["tEnd"], maxRows=maxRows, clip=self._watch)
 
     def loop_context(self):
         return self._params                  # Set*Parameter / Modify* recorded during the loop

@@ -49,7 +49,10 @@ is the error of the last accepted step (at least 1e-4; 1e-4 before the first).  
 clipped to ``[h_min, h_max]``; a rejected step whose retry would be below ``h_min`` stops
 the integration (the tolerance cannot be met with steps >= h_min): the caller raises
 :class:`~exudyn_lie.errors.StepSizeError` with the time and the step
-(:func:`raise_step_size_error`).
+(:func:`raise_step_size_error`).  With ``accept_min`` the retry is made at ``h_min`` and a
+step of ``h_min`` with a finite error is accepted beyond the tolerance and counted
+(``S_N_FLOOR``), as Exudyn's explicit solvers continue at their minimum step with a warning
+(CSolverExplicit.cpp): a force with a jump has a local error O(h) that no step meets.
 
 The initial step (:func:`hinit_first`, :func:`hinit_second`)
 -------------------------------------------------------------
@@ -81,11 +84,12 @@ __all__ = [
 ]
 
 # ---------------------------------------------------------------- parameter array layout
-P_SAFETY, P_FAC_MIN, P_FAC_MAX, P_BETA, P_EXPO, P_H_MIN, P_H_MAX, P_Q = range(8)
+P_SAFETY, P_FAC_MIN, P_FAC_MAX, P_BETA, P_EXPO, P_H_MIN, P_H_MAX, P_Q, P_ACCEPT_MIN = range(9)
 # ---------------------------------------------------------------- state array layout
 #: error of the last accepted step (PI memory), 1 if the last attempt was rejected,
-#: counters (accepted, rejected steps; right-hand-side evaluations), proposed step, last err
-S_ERR_OLD, S_REJECTED, S_N_ACCEPT, S_N_REJECT, S_N_RHS, S_H, S_ERR = range(7)
+#: counters (accepted, rejected steps; right-hand-side evaluations), proposed step, last err,
+#: steps accepted at h_min beyond the tolerance (``accept_min``)
+S_ERR_OLD, S_REJECTED, S_N_ACCEPT, S_N_REJECT, S_N_RHS, S_H, S_ERR, S_N_FLOOR = range(8)
 # ---------------------------------------------------------------- tolerance array layout
 TOL_ANGLE, TOL_LENGTH, TOL_OMEGA, TOL_VEL, TOL_RTOL = range(5)
 
@@ -96,7 +100,7 @@ ERR_OLD_MIN = 1e-4
 
 
 def controller_params(order_hat, safety=0.9, fac_min=0.2, fac_max=10.0, beta=0.04,
-                      h_min=0.0, h_max=np.inf):
+                      h_min=0.0, h_max=np.inf, accept_min=False):
     """Parameter array of the PI controller for an embedded pair whose lower order is
     ``order_hat`` (q = order_hat + 1; exponent 1/q - 0.75 beta; DOPRI5(4): 0.17)."""
     q = int(order_hat) + 1
@@ -107,16 +111,19 @@ def controller_params(order_hat, safety=0.9, fac_min=0.2, fac_max=10.0, beta=0.0
                          f"0 <= beta < 1/q; got {safety}, {fac_min}, {fac_max}, {beta}")
     if not (0.0 <= h_min < h_max):
         raise ValueError(f"controller_params: need 0 <= h_min < h_max, got {h_min}, {h_max}")
-    P = np.empty(8)
+    if accept_min and not h_min > 0.0:
+        raise ValueError("controller_params: accept_min needs h_min > 0")
+    P = np.empty(9)
     P[P_SAFETY], P[P_FAC_MIN], P[P_FAC_MAX], P[P_BETA] = safety, fac_min, fac_max, beta
     P[P_EXPO] = 1.0 / q - 0.75 * beta
     P[P_H_MIN], P[P_H_MAX], P[P_Q] = h_min, h_max, q
+    P[P_ACCEPT_MIN] = 1.0 if accept_min else 0.0
     return P
 
 
 def controller_state(h0=0.0):
     """Fresh controller state (no step taken yet; proposed step ``h0``)."""
-    S = np.zeros(7)
+    S = np.zeros(8)
     S[S_ERR_OLD] = ERR_OLD_MIN
     S[S_H] = h0
     return S
@@ -198,14 +205,19 @@ def control_step(P, S, h, err):
     """Decide on a step of size ``h`` with scaled error ``err`` (PI controller, module
     docstring).  Updates the state ``S`` (counters, PI memory, ``S[S_H]`` = the next step
     to try) and returns a status: STATUS_ACCEPT, STATUS_REJECT (retry with ``S[S_H]``) or
-    STATUS_H_MIN (rejected and the retry would be below ``P[P_H_MIN]``: stop).  A NaN or
-    infinite error is a rejection with the largest decrease."""
+    STATUS_H_MIN (rejected and the retry would be below ``P[P_H_MIN]``: stop; with
+    ``P[P_ACCEPT_MIN]`` the retry is at ``h_min`` and a step there is accepted, module docstring).
+    A NaN or infinite error is a rejection with the largest decrease."""
     safety, expo, beta = P[P_SAFETY], P[P_EXPO], P[P_BETA]
     dec_max = 1.0 / P[P_FAC_MIN]            # largest decrease h / h_new (dopri5.f FACC1)
     inc_max = 1.0 / P[P_FAC_MAX]            # largest increase, as h / h_new (FACC2)
     S[S_ERR] = err
-    if not (err <= 1.0):                    # reject (also NaN / inf)
-        if err == err and err < np.inf:
+    finite = err == err and err < np.inf
+    floor = P[P_ACCEPT_MIN] != 0.0 and finite
+    if not (err <= 1.0) and floor and h <= P[P_H_MIN] * (1.0 + 1e-12):
+        S[S_N_FLOOR] += 1.0                 # no smaller step: accepted beyond the tolerance
+    elif not (err <= 1.0):                  # reject (also NaN / inf)
+        if finite:
             fac11 = err ** expo
             h_new = h / min(dec_max, fac11 / safety)
         else:
@@ -214,7 +226,9 @@ def control_step(P, S, h, err):
         S[S_N_REJECT] += 1.0
         S[S_H] = h_new
         if h_new < P[P_H_MIN]:
-            return STATUS_H_MIN
+            if not floor:
+                return STATUS_H_MIN
+            S[S_H] = P[P_H_MIN]
         return STATUS_REJECT
     fac11 = err ** expo if err > 0.0 else 0.0
     fac = fac11 / S[S_ERR_OLD] ** beta

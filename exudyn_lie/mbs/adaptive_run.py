@@ -24,7 +24,7 @@ class AdaptiveRun:
     """Adaptive steps of ``sim``'s embedded pair (the keywords of ``Simulator.SetAdaptive``)."""
 
     def __init__(self, sim, rtol=1e-3, atol=1e-6, maxStep=np.inf, minStep=0.0, firstStep=None, safety=0.9,
-                 maxIncrease=10.0, lengthScale=1.0, timeScale=1.0, constraintTolerance=None):
+                 maxIncrease=10.0, lengthScale=1.0, timeScale=1.0, constraintTolerance=None, acceptAtMinStep=False):
         tab = sim.tableau
         maxStep = float(np.inf if maxStep is None else maxStep)
         minStep = float(0.0 if minStep is None else minStep)
@@ -52,7 +52,7 @@ class AdaptiveRun:
             self.method.newton.par[_implicit.NP_TOL] = _implicit.newton_tolerance(rtol)
         self.tol = _control.tolerances(atol, rtol, lengthScale, timeScale)
         self.par = _control.controller_params(tab.order_hat, safety=safety, fac_max=maxIncrease, h_min=minStep,
-                                              h_max=maxStep)
+                                              h_max=maxStep, accept_min=acceptAtMinStep)
         self.S = _control.controller_state()           # the PI controller's state and counters
         self.fs = np.zeros(_adaptive.FS_SIZE)           # time, step, end time (mbs/adaptive.py FS_*)
         self.ist = np.zeros(3, np.int64)                # flags (mbs/adaptive.py IS_*)
@@ -148,6 +148,11 @@ class AdaptiveRun:
         two evaluations and the dense extra stages included)."""
         S = self.S
         return int(S[_control.S_N_ACCEPT]), int(S[_control.S_N_REJECT]), int(S[_control.S_N_RHS])
+
+    @property
+    def stepsAtMinStep(self):
+        """Steps accepted at the minimum step beyond the tolerance (``acceptAtMinStep``)."""
+        return int(self.S[_control.S_N_FLOOR])
 
     @property
     def projections(self):

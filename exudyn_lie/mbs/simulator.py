@@ -511,7 +511,7 @@ class Simulator(ExternalSeams):
 
     # ----------------------------------------------------------------- adaptive steps
     def SetAdaptive(self, rtol=1e-3, atol=1e-6, maxStep=np.inf, minStep=0.0, firstStep=None, safety=0.9,
-                    maxIncrease=10.0, lengthScale=1.0, timeScale=1.0, constraintTolerance=None):
+                    maxIncrease=10.0, lengthScale=1.0, timeScale=1.0, constraintTolerance=None, acceptAtMinStep=False):
         """Prepare adaptive steps of the embedded pair (:mod:`.adaptive`) with the scaled
         error ``atol + rtol * size`` per physical kind (``integrators/control.py``: angles
         atol [rad], lengths atol L, angular velocities atol / T, velocities atol L / T with
@@ -523,9 +523,10 @@ class Simulator(ExternalSeams):
         (positions, then velocities), and when max |J V| exceeds ``constraintTolerance / T``
         the velocities; the error estimate of every step is projected onto the tangent space of
         the constraint manifold (docs/ADAPTIVE.md, "Constraint tolerance").  The next
-        :meth:`AdvanceTo` starts afresh from the current state."""
+        :meth:`AdvanceTo` starts afresh from the current state.  ``acceptAtMinStep``: a step of
+        ``minStep`` is accepted beyond the tolerance instead of stopping (``integrators/control.py``)."""
         self._ad = AdaptiveRun(self, rtol, atol, maxStep, minStep, firstStep, safety, maxIncrease, lengthScale,
-                               timeScale, constraintTolerance)
+                               timeScale, constraintTolerance, acceptAtMinStep)
 
     @property
     def adaptiveRun(self):

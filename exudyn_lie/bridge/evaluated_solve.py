@@ -319,7 +319,7 @@ class EvaluatedSolver:
         # stability of the step at the initial state (stiff items at the script's step); adaptive
         # steps find a stable step themselves
         auto = self.autoImplicit and self._adaptive is None
-        rate, stable = check_step(model, tab, h, self._adaptive is None and not auto)
+        rate, stable = check_step(model, tab, h, self._adaptive is None and not auto, nsteps=nsteps)
         if auto:
             problem.watch_stiffness(strict=True)
             chosen, line = stiff_choice(tab, h, stable, rate, "Exudyn's linearisation at the initial state")

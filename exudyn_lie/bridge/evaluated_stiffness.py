@@ -85,7 +85,7 @@ def _ode1_jacobian(model):
     return J
 
 
-def check_step(model, tableau, h, refuse=True):
+def check_step(model, tableau, h, refuse=True, nsteps=None):
     """The stability check before a run (:func:`~exudyn_lie.mbs.stiffness.check_linear_stability`)
     with the eigenvalues of Exudyn's linearisation at the state in mbs; returns (fastest rate,
     largest stable step).
@@ -100,4 +100,4 @@ def check_step(model, tableau, h, refuse=True):
         return 0.0, float("inf")
     return check_linear_stability(tableau, h, model.sd.GetTime(), linear_eigenvalues(model),
                                   "Exudyn's stiffness, damping and mass matrices on the constraint manifold at "
-                                  "this state", refuse)
+                                  "this state", refuse, nsteps)

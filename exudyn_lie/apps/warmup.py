@@ -123,6 +123,9 @@ def cases():
         ("planar bodies, point masses, coordinate constraints", _planar, {}, _settings()),
         ("3D point masses on springs", _mass_springs, {}, _settings()),
         ("a stiff model (the implicit ESDIRK3, chosen by itself)", _stiff_springs, {}, _settings()),
+        # the steps ESDIRK3 takes after an event made RK4 unstable during a run (method_choice.py)
+        ("3D rigid bodies with joints, ESDIRK3 with adaptive steps (after an impact)", _pendulum,
+         {"method": "ESDIRK3"}, _settings()),
         ("a Python load user function", _python_load, {}, _settings()),
         ("the Exudyn-evaluated path (an item the kernel does not have)", _evaluated, {}, _settings()),
         ("the same, stiff (ESDIRK3)", _evaluated_stiff, {}, _settings()),

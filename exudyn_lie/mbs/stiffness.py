@@ -42,10 +42,9 @@ def largest_stable_step(tableau, ev, nsteps=None):
     ``nsteps`` (a run's number of steps): ``|R(h lambda)|^nsteps <= RUN_GROWTH`` instead.  Most
     explicit methods of order 5 and above (DOPRI5, RK67) leave the imaginary axis at the origin:
     ``|R(i y)| = 1 + O(y^(p+2))`` grows for every step of an undamped oscillation, RK67 by 5.3e-4 per
-    step at h omega = 1.  Over the 20 steps of Exudyn's ``solverExplicitODE1ODE2test.py`` (RK67 at
-    h = 0.1 s, omega = 10 1/s) that is 1 %, an error of the size of the method's own at that step,
-    which Exudyn runs; ``connectorGravityTest.py`` (RK67, h omega = 0.91, 1000 steps) grows 1.3 times,
-    and Exudyn's own run ends with the satellite 1e8 m from where its run at h/10 puts it."""
+    step at h omega = 1: 1 % over a run of 20 such steps, an error of the size of the method's own
+    at that step; over 1000 steps at h omega = 0.91, 1.3 times (docs/EVALUATED.md, Stiffness,
+    names the two scripts these figures come from)."""
     # a mode that grows physically (Re lambda > 0: an inverted pendulum, gyroscopic
     # coupling) grows for every h; only its oscillation must be resolved: Re lambda -> 0
     ev = np.asarray(ev, complex)

@@ -108,9 +108,9 @@ class AdaptiveOutputChunks(OutputChunks):
     AdaptiveOutputRows`): the same grid of outputs every ``nsub * h`` as
     :class:`OutputChunks` (the last at ``tEnd``), each from the dense output on the group of
     the step that contains it; no step is shortened for an output, unless ``clip``: then every
-    chunk's last step ends at its last output, where a user function (a pre-step function, a
-    sensor's) may change the state or the parameters and the run continues from that state (from a
-    dense output instead, each such restart would add the interpolation's error)."""
+    chunk's last step ends at its last output, where a pre- or post-step function may change the
+    state or the parameters and the run continues from that state (from a dense output instead,
+    each such restart would add the interpolation's error)."""
 
     _rows = AdaptiveOutputRows
 

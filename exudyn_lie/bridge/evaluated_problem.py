@@ -30,6 +30,7 @@ from ..mbs.simulator import Simulator
 from ..mbs.stiffness import StageStiffnessWatch, watch_stages
 from .evaluated_jacobian import ExudynNewtonJacobian, applies as jacobian_applies
 from .evaluated_kernels import pack_rates, pack_state, unpack_state
+from .evaluated_stiffness import ode1_rate
 
 
 
@@ -93,6 +94,15 @@ class EvaluatedProblem:
         (bridge/evaluated_jacobian.py), else the kernel's differences."""
         self.jacobian = (ExudynNewtonJacobian(self.model, self)
                          if self.tableau.implicit and jacobian_applies(self.model) else None)
+
+    def _ode1_rate(self):
+        """The ODE1 coordinates' fastest rate for the stability radius, at the last stage's state in
+        mbs (evaluated_stiffness.ode1_rate).  The stages' estimate reads the ODE2 bodies only: a
+        first-order estimate over the ODE1 bodies (|d ydot| / |d y| between stages) was tried and
+        saw the coupling as stiffness where ODE1 rates follow the mechanical state (a hydraulic
+        actuator's pressure, tests/test_foreign_items.py); d(ydot)/dy at a fixed mechanical state
+        does not."""
+        return ode1_rate(self.model, self.tableau, self._h, self._stiffness.radius)
 
     # ------------------------------------------------------------------ the right-hand side
     def bind(self, Rs, rs, Vs, Vdot):
@@ -205,5 +215,7 @@ class EvaluatedProblem:
             sim.AdvanceTo(t1)
         else:
             sim.Advance(nsteps, h)
-            self._stiffness.check(sim, h, self.nl + self.nvb)     # (the last of the nsteps steps; the ODE2 bodies)
+            self._h = h
+            # (the last of the nsteps steps; the ODE2 bodies, and the ODE1 coordinates' own modes)
+            self._stiffness.check(sim, h, self.nl + self.nvb, self._ode1_rate if self.n1 else None, self._strict)
         sim.t = t1

@@ -479,7 +479,9 @@ class EvaluatedSolver:
             if not self._may_switch():
                 raise
             problem.restore(self._snap)
-            self._switch(*unstable_choice(problem.tableau, h, t0, None if hasattr(e, "stiffStages") else STATUS_BLOWUP))
+            stiff = hasattr(e, "stiffStages")
+            self._switch(*unstable_choice(problem.tableau, h, t0, None if stiff else STATUS_BLOWUP,
+                                          getattr(e, "stiffWhat", None)))
             problem.advance(t0, t1, k, h, False)
 
     def loop_end(self):

@@ -12,15 +12,15 @@ coefficients); :func:`check_step` raises the StepSizeError of
 :func:`~exudyn_lie.mbs.stiffness.check_linear_stability` before a run whose step is beyond the
 largest such ``h`` (a blow-up during the run is the stepper's error, with the simulator's
 suggestion).  A mode whose stiffness appears only later (a contact that closes,
-a regularised friction zone that is entered) is not seen at the initial state: that is
-what the blow-up check of the stepper is for; a regularised friction that only chatters
-(bounded) is not detected (docs/EVALUATED.md).
+a regularised friction zone that is entered) is not seen at the initial state: the stages'
+watch sees it in the ODE2 coordinates, :func:`ode1_rate` in the ODE1 coordinates
+(docs/EVALUATED.md, Stiffness).
 """
 from __future__ import annotations
 
 import numpy as np
 
-from ..mbs.stiffness import check_linear_stability
+from ..mbs.stiffness import check_linear_stability, largest_stable_step
 from .general_contact import general_contacts
 
 
@@ -83,6 +83,24 @@ def _ode1_jacobian(model):
         J[:, k] = (out[0] - out[1]) / (2 * d)
     sd.SetODE1Coordinates(y0, configuration=cur)
     return J
+
+
+def ode1_rate(model, tableau, h, radius):
+    """The rate of the ODE1 coordinates' own modes (the eigenvalues ``lambda`` of d(ydot)/dy at the
+    state in mbs, the mechanical state held) for ``tableau``'s stability ``radius`` at the step ``h``:
+    ``max |lambda|`` where ``h max |lambda|`` is inside the radius (the half-disk lies in the
+    stability region), else ``radius / largest stable step`` (the region itself, for modes beyond the
+    half-disk that it still contains: a pure damping inside RK4's real interval).  A regularised
+    friction state (Exudyn's ``lugreFrictionTest.py``: ``Zdot = V - Z |V| / G``, G ~ 1e-5) is stiff
+    only while it slides, which the check at the initial state (at rest) cannot see."""
+    ev = np.linalg.eigvals(_ode1_jacobian(model))
+    ev = ev[np.isfinite(ev)]
+    ev = np.minimum(ev.real, 0.0) + 1j * ev.imag        # (largest_stable_step's physical growth)
+    rho = float(np.max(np.abs(ev))) if ev.size else 0.0
+    if h * rho <= radius:
+        return rho
+    hmax = largest_stable_step(tableau, ev)
+    return radius / hmax if 0.0 < hmax < np.inf else 0.0
 
 
 def check_step(model, tableau, h, refuse=True, nsteps=None):

@@ -28,13 +28,14 @@ def stiff_choice(explicit, h, hmax, rate, source):
     return imp, line
 
 
-def unstable_choice(explicit, h, t, status):
+def unstable_choice(explicit, h, t, status, what=None):
     """``(implicit default, line)`` when ``explicit`` became unstable during a run (a contact that
     closed, a friction zone entered: a mode the check at the start could not see); ``status``: the
-    kernel's, or None for the stages' estimate (mbs/stiffness.StageStiffnessWatch)."""
+    kernel's, or None for the watch's estimate (mbs/stiffness.StageStiffnessWatch, which says
+    ``what`` it saw)."""
     imp = get_method(IMPLICIT_DEFAULT)
-    what = {STATUS_BLOWUP: "the state blew up", STATUS_NONFINITE: "the state became non-finite",
-            STATUS_STAGE_ARG: "a stage rotation exceeded 2 pi"}.get(
+    what = what or {STATUS_BLOWUP: "the state blew up", STATUS_NONFINITE: "the state became non-finite",
+                    STATUS_STAGE_ARG: "a stage rotation exceeded 2 pi"}.get(
         status, "its stages show a mode beyond its stability region")     # (None, STATUS_STIFF)
     line = (f"exudyn_lie: {explicit.name} became unstable after t = {t:.6g} s at the step h = {h:.4g} s ({what}): "
             f"continuing from Exudyn's state at t = {t:.6g} s with the L-stable implicit {imp.name} (order "

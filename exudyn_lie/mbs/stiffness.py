@@ -98,23 +98,35 @@ class StageStiffnessWatch:
         self.radius = stability_radius(tableau)
         self.count = 0
 
-    def check(self, sim, h, nb=None):
+    def check(self, sim, h, nb=None, firstOrder=None, strict=False):
+        """``firstOrder``: a function giving the rate of the first-order coordinates' own modes at
+        the last stage (``radius / largest stable step``, from their eigenvalues), which the
+        second-order estimate of the stages does not see; ``strict``: fail at the first step beyond
+        (a caller that repeats it with an implicit method)."""
         from ..errors import step_size_error
         if self.radius == np.inf:       # an A-stable method: no mode is beyond its region
             return
         rho = stage_stiffness_of(sim, h, nb)
+        source = ("Shampine's estimate from the stages; e.g. a contact or a friction zone that became "
+                  "active")
+        what = "its stages show a mode beyond its stability region"
+        rho1 = firstOrder() if firstOrder is not None else 0.0
+        if rho1 > rho:
+            rho, source = rho1, ("the eigenvalues of d(ydot)/dy of the first-order coordinates at the last "
+                                 "stage; e.g. a regularised friction state that became stiff")
+            what = "its first-order coordinates have a mode beyond its stability region, by d(ydot)/dy"
         if h * rho <= self.radius:
             self.count = 0
             return
         self.count += 1
-        if self.count >= STIFF_STEPS or h * rho > STIFF_FACTOR * self.radius:
+        if strict or self.count >= STIFF_STEPS or h * rho > STIFF_FACTOR * self.radius:
             exc = step_size_error(
                 self.tableau.name, h, sim.t, "the step size is beyond the stability limit of the method",
-                f"the stages of the last step(s) show a mode of rate |lambda| ~ {rho:.4g} 1/s (Shampine's "
-                f"estimate from the stages; e.g. a contact or a friction zone that became active), h |lambda| = "
+                f"the last step(s) show a mode of rate |lambda| ~ {rho:.4g} 1/s ({source}), h |lambda| = "
                 f"{h * rho:.3g} > {self.radius:.3g} (the method's stability radius); the state is not reliable",
                 SAFETY * self.radius / rho)
             exc.stiffStages = rho
+            exc.stiffWhat = what
             raise exc
 
 

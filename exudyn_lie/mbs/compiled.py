@@ -86,6 +86,7 @@ Work = namedtuple("Work", [
     "Rs", "rs", "Vs",                 # the stage state (g_j, V_j of eq. MK1)
     "Rb", "rb", "Vb",                 # the step's start, restored when a step fails
     "Psi", "K", "Vd",                 # Psi_j, k_j and Vdot_j of the stages (eq. MK1)
+    "Ve",                             # Vdot at a step's end and near it (the fixed steps' watch: stepper.fixed_step_watch)
     "Q", "Qext",                      # generalised forces of a stage: compiled, and evaluated in Python
     "Jr", "W", "eta", "h", "lam",     # constraint rows (eq. index1): Jacobian, M^-1 J^T, eta, h, multipliers
     "Sb", "Sd", "perm", "ytmp",       # the Schur complement: band, dense (redundant rows), pivots, scratch
@@ -573,7 +574,7 @@ def make_work(sd, nstages, solve="auto", carried=None):
     return Work(
         Rs=np.zeros((nb, 3, 3)), rs=np.zeros((nb, 3)), Vs=np.zeros((nb, 6)),
         Rb=np.zeros((nb, 3, 3)), rb=np.zeros((nb, 3)), Vb=np.zeros((nb, 6)), Psi=np.zeros((nb, 6)),
-        K=np.zeros((nstages, nb, 6)), Vd=np.zeros((nstages, nb, 6)), Q=np.zeros((nb, 6)), Qext=np.zeros((nb, 6)),
+        K=np.zeros((nstages, nb, 6)), Vd=np.zeros((nstages, nb, 6)), Ve=np.zeros((2, nb, 6)), Q=np.zeros((nb, 6)), Qext=np.zeros((nb, 6)),
         Jr=np.zeros((m, 12)), W=np.zeros((m, 12)), eta=np.zeros(m), h=np.zeros(m), lam=np.zeros(m),
         Sb=np.zeros((0 if tree and not sd.redundant else m, sd.bandwidth + 1)),
         Sd=np.zeros((m, m)) if sd.redundant else np.zeros((0, 0)),

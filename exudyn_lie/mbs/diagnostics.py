@@ -38,40 +38,63 @@ def all_rows(sd, wk, R, r, V, h, Jr, eta, e):
     e[2] = spring_energy(sd, wk, R, r, V)       # the registered force elements' (mbs/force_elements.py)
 
 
-@njit(cache=True)
-def stage_stiffness(A, h, stages, K, Vd, nb):
-    """The fastest rate |lambda| the last step met, from its stages (Shampine's idea, for
-    second-order equations): between the first and an evaluated stage ``j`` (of ``stages``)
-    the configuration of bodies ``0 .. nb-1`` moved by ``dq = h sum_l a_jl k_l`` (in the
-    algebra), the velocity by ``dV = h sum_l a_jl Vdot_l`` and the acceleration by ``dVdot``.
-    For ``Vdot = -K q - D V`` a mode ``lambda^2 + c lambda + omega^2 = 0`` has ``|lambda| <= c +
-    omega``, and ``|dVdot| <= omega^2 |dq| + c |dV|``; the estimate is the positive root ``rho`` of
-    ``rho^2 |dq| + rho |dV| = |dVdot|``: omega for a stiffness-dominated mode (``dV = 0``), c for a
-    damping-dominated one (``dq = 0``).  (``sqrt(|dVdot| / |dq|)`` alone saw the damping force of a
-    step that starts at a turning point, ``dq ~ h V ~ 0``, as a mode of any rate.)  ``h rho``
-    beyond the method's stability radius means the step amplifies that mode.  The largest over the
-    stages: a contact that only some stages reach (an impact inside one step) shows at those
-    stages alone (RK4 across a floor at h omega = 10: 10 at the second stage, 0.15 at the last)."""
-    rho = 0.0
+@njit(cache=True, inline="always", _nrt=False)
+def secant_rate(a, c, e):
+    """The positive root ``rho`` of ``rho^2 a + rho c = e`` (0 without a change ``e`` or a motion):
+    for ``Vdot = -K q - D V``, a change ``e = |dVdot|`` over a motion ``a = |dq|``, ``c = |dV|`` bounds
+    ``omega^2 a + gamma c`` of a mode ``lambda^2 + gamma lambda + omega^2 = 0``, ``|lambda| <= gamma +
+    omega``: omega for a stiffness-dominated mode (``c = 0``), gamma for a damping-dominated one."""
+    if e > 0.0 and (a > 0.0 or c > 0.0):
+        return 2.0 * e / (c + np.sqrt(c * c + 4.0 * a * e))
+    return 0.0
+
+
+@njit(cache=True, _nrt=False)
+def stage_rate(u, v, upto, h, K, Vd, V0, Vj, nb):
+    """Shampine's estimate between a state of rate ``V0`` and the state reached from it with the
+    weights ``w_l = u_l - v_l`` (``l < upto``), whose rate is ``Vj``: the configuration of bodies
+    ``0 .. nb-1`` moved by ``dq = h sum_l w_l k_l`` (in the algebra), the velocity by ``dV = h sum_l
+    w_l Vdot_l``; ``Vj - V0`` is the change of the acceleration (:func:`secant_rate`).  From the first
+    stage to stage ``m``: ``u = A[m]``, ``v = 0``, ``upto = m``."""
+    a = 0.0
+    c = 0.0
+    e = 0.0
+    for i in range(nb):
+        for k in range(6):
+            dq = 0.0
+            dv = 0.0
+            for l in range(upto):
+                dq += (u[l] - v[l]) * K[l, i, k]
+                dv += (u[l] - v[l]) * Vd[l, i, k]
+            a += (h * dq) ** 2
+            c += (h * dv) ** 2
+            e += (Vj[i, k] - V0[i, k]) ** 2
+    return secant_rate(np.sqrt(a), np.sqrt(c), np.sqrt(e))
+
+
+@njit(cache=True, _nrt=False)
+def stage_rates(A, h, stages, K, Vd, nb):
+    """``(largest, last, before)``: the fastest rate |lambda| the last step met, from its stages
+    (Shampine's idea, for second-order equations, :func:`stage_rate` between the first and each
+    evaluated stage), that of the last stage alone, and the largest of the stages before it.  ``h rho`` beyond the method's stability radius means the step
+    amplifies that mode.  The largest over the stages: a contact that only some stages reach (an
+    impact inside one step) shows at those stages alone (RK4 across a floor at h omega = 10: 10 at the
+    second stage, 0.15 at the last).  (``sqrt(|dVdot| / |dq|)`` alone saw the damping force of a step
+    that starts at a turning point, ``dq ~ h V ~ 0``, as a mode of any rate.)"""
+    before = 0.0
+    last = 0.0
+    zero = A[0]                          # (the first stage's row: explicit, all zero)
     for jj in range(1, stages.shape[0]):
         j = stages[jj]
-        a = 0.0
-        c = 0.0
-        e = 0.0
-        for i in range(nb):
-            for k in range(6):
-                dq = 0.0
-                dv = 0.0
-                for l in range(j):
-                    dq += A[j, l] * K[l, i, k]
-                    dv += A[j, l] * Vd[l, i, k]
-                a += (h * dq) ** 2
-                c += (h * dv) ** 2
-                e += (Vd[j, i, k] - Vd[0, i, k]) ** 2
-        a, c, e = np.sqrt(a), np.sqrt(c), np.sqrt(e)
-        if e > 0.0 and (a > 0.0 or c > 0.0):
-            rho = max(rho, 2.0 * e / (c + np.sqrt(c * c + 4.0 * a * e)))
-    return rho
+        before = max(before, last)
+        last = stage_rate(A[j], zero, j, h, K, Vd, Vd[0], Vd[j], nb)
+    return max(before, last), last, before
+
+
+@njit(cache=True, _nrt=False)
+def stage_stiffness(A, h, stages, K, Vd, nb):
+    """The largest of :func:`stage_rates`."""
+    return stage_rates(A, h, stages, K, Vd, nb)[0]
 
 
 def joint_rows_at(sd, wk, R, r, V, h, Jr, eta):

@@ -11,7 +11,7 @@ a problem implementation such as the bridge's evaluation of a whole model).
 An evaluator is a Python callable ``f(t)``: the stage state and the output are arrays
 of the evaluator's owner that the compiled code shares (``wk.Rs, wk.rs``, the world
 velocities ``wk.Vw``, the items' kinematics ``wk.probe`` (:mod:`.external_probes`) and the
-output ``wk.Qext``, see ``stepper.external_forces``), so the call boxes no array and the
+output ``wk.Qext``, see ``external_calls.external_forces``), so the call boxes no array and the
 evaluator allocates nothing of its own.  It is registered under an integer token; the
 compiled code holds its :func:`handle` (in ``Work.ext[0]``, as numba cannot hold a Python
 object); an exception it raises is kept and the stepper returns ``STATUS_EXTERNAL``, after

@@ -5,7 +5,7 @@ needs a few scalars of the stage state: a torsional spring its angle and angular
 Python these cost far more than the user function itself (scalar arithmetic on
 the rotation matrices: about 0.9 us of a PD controller's 1.7 us per call, measured on the
 heavy top, ``python -m exudyn_lie bench --sections userfunctions``).  So the compiled stage
-computes them (:func:`probe_kinematics`, called by ``stepper.external_forces`` right before
+computes them (:func:`probe_kinematics`, called by ``external_calls.external_forces`` right before
 the one call of the Python side per stage) into ``Work.probe``, one row per *probe*, and the Python
 side only reads floats, calls the user function and adds the result.
 

@@ -102,3 +102,35 @@ def test_a_named_rk4_stops_and_says_why():
     msg = str(e.value)
     assert "d(ydot)/dy" in msg and "first-order coordinates" in msg
     assert 0.1 < e.value.time < 0.2
+
+
+def test_the_watch_costs_a_bounded_number_of_evaluations():
+    """Forty ODE1 coordinates (decays, one of them stiff for RK4 at this step only while t > 0.05 s):
+    the watch's Jacobian needs n1 + 1 evaluations of Exudyn's ODE1 right-hand side; it runs every
+    ceil(41 / 16) = 3 steps, so each step costs at most about 16 more calls of the user function
+    than RK4's 4 stages, and the stiff mode is still found (within 3 steps of its start)."""
+    n1, h, T1 = 40, 1e-3, 0.1
+    calls = [0]
+    SC = exu.SystemContainer()
+    mbs = SC.AddSystem()
+    n = mbs.AddNode(NodeGenericODE1(referenceCoordinates=[0] * n1, initialCoordinates=[1.0] * n1,
+                                    numberOfODE1Coordinates=n1))
+
+    def rhs(mbs, t, itemNumber, q):
+        calls[0] += 1
+        rates = -np.asarray(q)
+        if t > 0.05:
+            rates[7] *= 3.2e3                 # h |lambda| = 3.2 > RK4's 2.79: grows 1.8 times per step
+        return rates
+    mbs.AddObject(ObjectGenericODE1(nodeNumbers=[n], rhsUserFunction=rhs))
+    mbs.Assemble()
+    ss = exu.SimulationSettings()
+    ss.timeIntegration.endTime, ss.timeIntegration.numberOfSteps = T1, int(round(T1 / h))
+    ss.timeIntegration.verboseMode = 0
+    ss.solution.file.write = False
+    with warnings.catch_warnings(), pytest.raises(StepSizeError) as e:
+        warnings.simplefilter("ignore")
+        exl.SolveDynamic(mbs, ss, method="RK4")
+    steps = int(round(e.value.time / h))
+    assert 0.05 <= e.value.time <= 0.05 + 4 * h and "d(ydot)/dy" in str(e.value)
+    assert calls[0] <= (4 + 16) * (steps + 1) + 200       # (200: the set-up's evaluations, a margin)

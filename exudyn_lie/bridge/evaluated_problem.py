@@ -32,6 +32,8 @@ from .evaluated_jacobian import ExudynNewtonJacobian, applies as jacobian_applie
 from .evaluated_kernels import pack_rates, pack_state, unpack_state
 from .evaluated_stiffness import ode1_rate
 
+ODE1_CHECK_EVALUATIONS = 16      # evaluations of the ODE1 right-hand side per step for its watch, at most
+
 
 
 class EvaluatedScene(Scene):
@@ -71,6 +73,7 @@ class EvaluatedProblem:
         self.stages = self.sim.method.stages
         self._stiffness = StageStiffnessWatch(self.tableau)
         self._strict = False
+        self._ode1Steps, self._ode1Last = 0, 0.0
         self._jacobian_for_method()
 
     def watch_stiffness(self, strict):
@@ -97,12 +100,18 @@ class EvaluatedProblem:
 
     def _ode1_rate(self):
         """The ODE1 coordinates' fastest rate for the stability radius, at the last stage's state in
-        mbs (evaluated_stiffness.ode1_rate).  The stages' estimate reads the ODE2 bodies only: a
+        mbs (evaluated_stiffness.ode1_rate; n1 + 1 evaluations of Exudyn's ODE1 right-hand side),
+        after every Exudyn step, or every ``ceil((n1 + 1) / ODE1_CHECK_EVALUATIONS)``-th one for many
+        ODE1 coordinates (the cost per step bounded; a stiff mode is then seen up to that many steps
+        late).  The stages' estimate reads the ODE2 bodies only: a
         first-order estimate over the ODE1 bodies (|d ydot| / |d y| between stages) was tried and
         saw the coupling as stiffness where ODE1 rates follow the mechanical state (a hydraulic
         actuator's pressure, tests/test_foreign_items.py); d(ydot)/dy at a fixed mechanical state
         does not."""
-        return ode1_rate(self.model, self.tableau, self._h, self._stiffness.radius)
+        self._ode1Steps += 1
+        if self._ode1Steps % -(-(self.n1 + 1) // ODE1_CHECK_EVALUATIONS) == 0:
+            self._ode1Last = ode1_rate(self.model, self.tableau, self._h, self._stiffness.radius)
+        return self._ode1Last          # (between two checks, the last one's)
 
     # ------------------------------------------------------------------ the right-hand side
     def bind(self, Rs, rs, Vs, Vdot):

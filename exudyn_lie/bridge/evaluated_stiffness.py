@@ -65,22 +65,30 @@ def linear_eigenvalues(model):
     return np.concatenate([ev[np.isfinite(ev)], ev1])
 
 
-def _ode1_jacobian(model):
+def _ode1_jacobian(model, central=True):
+    """d(ydot)/dy at the state in mbs by central differences of ComputeODE1RHS (2 n1 evaluations),
+    or forward ones (n1 + 1: the watch during a run, evaluated_problem.EvaluatedProblem._ode1_rate)."""
     import exudyn as exu
     s, mbs, sd, n, n1 = model.solver, model.mbs, model.sd, model.n, model.n1
     cur = exu.ConfigurationType.Current
     y0 = np.array(sd.GetODE1Coordinates(configuration=cur), float)
+
+    def rates(y):
+        sd.SetODE1Coordinates(y, configuration=cur)
+        s.ComputeODE1RHS(mbs)
+        return np.array(s.GetSystemResidual()[n:n + n1])
     J = np.zeros((n1, n1))
+    base = None if central else rates(y0)
     for k in range(n1):
         d = 1e-6 * max(1.0, abs(y0[k]))
-        out = []
-        for sgn in (1.0, -1.0):
-            y = y0.copy()
-            y[k] += sgn * d
-            sd.SetODE1Coordinates(y, configuration=cur)
-            s.ComputeODE1RHS(mbs)
-            out.append(np.array(s.GetSystemResidual()[n:n + n1]))
-        J[:, k] = (out[0] - out[1]) / (2 * d)
+        y = y0.copy()
+        y[k] += d
+        plus = rates(y)
+        if central:
+            y[k] -= 2 * d
+            J[:, k] = (plus - rates(y)) / (2 * d)
+        else:
+            J[:, k] = (plus - base) / d
     sd.SetODE1Coordinates(y0, configuration=cur)
     return J
 
@@ -93,7 +101,7 @@ def ode1_rate(model, tableau, h, radius):
     half-disk that it still contains: a pure damping inside RK4's real interval).  A regularised
     friction state (Exudyn's ``lugreFrictionTest.py``: ``Zdot = V - Z |V| / G``, G ~ 1e-5) is stiff
     only while it slides, which the check at the initial state (at rest) cannot see."""
-    ev = np.linalg.eigvals(_ode1_jacobian(model))
+    ev = np.linalg.eigvals(_ode1_jacobian(model, central=False))
     ev = ev[np.isfinite(ev)]
     ev = np.minimum(ev.real, 0.0) + 1j * ev.imag        # (largest_stable_step's physical growth)
     rho = float(np.max(np.abs(ev))) if ev.size else 0.0

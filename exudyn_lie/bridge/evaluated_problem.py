@@ -73,7 +73,7 @@ class EvaluatedProblem:
         self.stages = self.sim.method.stages
         self._stiffness = StageStiffnessWatch(self.tableau)
         self._strict = False
-        self._ode1Steps, self._ode1Last = 0, 0.0
+        self._ode1Steps, self._ode1Last, self._ode1H = 0, 0.0, None
         self._jacobian_for_method()
 
     def watch_stiffness(self, strict):
@@ -99,19 +99,23 @@ class EvaluatedProblem:
                          if self.tableau.implicit and jacobian_applies(self.model) else None)
 
     def _ode1_rate(self):
-        """The ODE1 coordinates' fastest rate for the stability radius, at the last stage's state in
-        mbs (evaluated_stiffness.ode1_rate; n1 + 1 evaluations of Exudyn's ODE1 right-hand side),
-        after every Exudyn step, or every ``ceil((n1 + 1) / ODE1_CHECK_EVALUATIONS)``-th one for many
-        ODE1 coordinates (the cost per step bounded; a stiff mode is then seen up to that many steps
-        late).  The stages' estimate reads the ODE2 bodies only: a
-        first-order estimate over the ODE1 bodies (|d ydot| / |d y| between stages) was tried and
-        saw the coupling as stiffness where ODE1 rates follow the mechanical state (a hydraulic
-        actuator's pressure, tests/test_foreign_items.py); d(ydot)/dy at a fixed mechanical state
-        does not."""
+        """The ODE1 coordinates' fastest rate for the stability radius, at the state last evaluated
+        in mbs (the last stage's, or the step's end after the stepper's end-state check;
+        evaluated_stiffness.ode1_rate: n1 + 1 evaluations of Exudyn's ODE1 right-hand side and the
+        eigenvalues of an n1 x n1 matrix), after every Exudyn step, or every
+        ``ceil((n1 + 1) / ODE1_CHECK_EVALUATIONS)``-th one for many ODE1 coordinates (the evaluations
+        per step bounded; a stiff mode is then seen up to that many steps late; in between, the last
+        rate; measured again after a step size change or a step done again).  The stages' estimate
+        reads the ODE2 bodies only: a first-order estimate over the ODE1 bodies (|d ydot| / |d y|
+        between stages) was tried and saw the coupling as stiffness where ODE1 rates follow the
+        mechanical state (a hydraulic actuator's pressure, tests/test_foreign_items.py); d(ydot)/dy
+        at a fixed mechanical state does not."""
+        fresh = self._ode1Steps % -(-(self.n1 + 1) // ODE1_CHECK_EVALUATIONS) == 0 or self._ode1H != self._h
         self._ode1Steps += 1
-        if self._ode1Steps % -(-(self.n1 + 1) // ODE1_CHECK_EVALUATIONS) == 0:
+        if fresh:
             self._ode1Last = ode1_rate(self.model, self.tableau, self._h, self._stiffness.radius)
-        return self._ode1Last          # (between two checks, the last one's)
+            self._ode1H = self._h
+        return self._ode1Last
 
     # ------------------------------------------------------------------ the right-hand side
     def bind(self, Rs, rs, Vs, Vdot):
@@ -199,6 +203,7 @@ class EvaluatedProblem:
         sim.R[:], sim.r[:], sim.V[:], self.prev[:] = R, r, V, prev
         sim.t = t
         sim.RestartAdaptive()
+        self._ode1Steps = 0                  # (the step done again: its ODE1 rate measured again)
 
     def write(self):
         """Write the state into mbs (Current) and remember the rotation vectors written."""

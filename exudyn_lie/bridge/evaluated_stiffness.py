@@ -101,8 +101,10 @@ def ode1_rate(model, tableau, h, radius):
     half-disk that it still contains: a pure damping inside RK4's real interval).  A regularised
     friction state (Exudyn's ``lugreFrictionTest.py``: ``Zdot = V - Z |V| / G``, G ~ 1e-5) is stiff
     only while it slides, which the check at the initial state (at rest) cannot see."""
-    ev = np.linalg.eigvals(_ode1_jacobian(model, central=False))
-    ev = ev[np.isfinite(ev)]
+    J = _ode1_jacobian(model, central=False)
+    if not np.all(np.isfinite(J)):
+        return np.inf                  # (the rates are not finite near this state: stop or switch)
+    ev = np.linalg.eigvals(J)
     ev = np.minimum(ev.real, 0.0) + 1j * ev.imag        # (largest_stable_step's physical growth)
     rho = float(np.max(np.abs(ev))) if ev.size else 0.0
     if h * rho <= radius:

@@ -92,12 +92,11 @@ def replace_after_failure(solver, status, h, t, plan):
     watch_stages(sim, False)
     solver.tableau, solver.method = tab, tab.name
     adaptive = adaptive_settings(tab, plan["ss"], h)
-    if adaptive is None:
-        solver._chunks.out._ep.clear()
-    else:
+    if adaptive is not None:
         adaptive.update(minStep=adaptive["minStep"] or 1e-6 * h, acceptAtMinStep=True)
         plan["adaptive"] = adaptive
-        solver._chunks = solver._new_chunks()
+    solver._chunks = solver._new_chunks()          # (for the new method's stepper, fixed or adaptive)
+    if adaptive is not None:
         line += (f"; with adaptive steps of at most {h:.4g} s (timeIntegration.adaptiveStep; relativeTolerance "
                  f"{adaptive['rtol']:g}, absoluteTolerance {adaptive['atol']:g})")
     print(line)

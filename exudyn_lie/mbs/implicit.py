@@ -50,7 +50,7 @@ from . import stepper
 from .bodies import body_dexpinv_stage, exp_compose
 from .codes import INFO_BODY, STAGE_ARG_MAX2, STATUS_EXTERNAL, STATUS_NEWTON, STATUS_OK
 from .linalg import lu_factor_inplace, lu_solve_inplace
-from .stepper import ImplicitMethod, copy_state, needed_stages, stage_rhs  # noqa: F401 (ImplicitMethod: its home is stepper)
+from .stepper import ImplicitMethod, copy_state, needed_stages, stage_rhs_at  # noqa: F401 (ImplicitMethod: its home is stepper)
 
 # The Newton iteration's arrays and state (one per simulator: tab.newton)
 Newton = namedtuple("Newton", [
@@ -123,13 +123,6 @@ def newton_counters(nw):
     return {"jacobians": int(s[NS_JACOBIANS]), "factorizations": int(s[NS_FACTORS]),
             "iterations": int(s[NS_ITERATIONS]), "stages": int(s[NS_STAGES]), "retries": int(s[NS_RETRIES]),
             "fullNewton": int(s[NS_FULL])}
-
-
-@njit(cache=True, _nrt=False)
-def stage_rhs_at(sd, wk, t, out):
-    """``stepper.stage_rhs`` compiled once for the Newton iteration's many call sites (it is inlined
-    wherever it is called: each inlined copy costs seconds of compile time)."""
-    return stage_rhs(sd, wk, t, out)
 
 
 # --------------------------------------------------------------------------- the Newton matrix

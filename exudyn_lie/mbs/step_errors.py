@@ -68,8 +68,8 @@ def raise_status(sim, st, h):
         raise exc
     if st == kernel.STATUS_STIFF:
         exc = step_size_error(sim.tableau.name, h, sim.t, "the step size is beyond the stability limit of the method",
-                              "the stages of a step show a mode beyond the method's stability radius (e.g. a contact "
-                              "that closed)", suggest_step(sim, h))
+                              "a step shows a mode beyond the method's stability radius, by its stages or, where its "
+                              "last stage alone entered it, at its end (e.g. a contact that closed)", suggest_step(sim, h))
         exc.stiffStages = True
         raise exc
     sugg = suggest_step(sim, h)

@@ -144,14 +144,14 @@ def fixed_step_watch(sd, wk, tab, ctl, t, h, R, r, V):
     rho, last, before = stage_rates(tab.A, h, tab.stages, wk.K, wk.Vd, nb)
     if h * rho > radius:
         return STATUS_STIFF
-    if h * last > KINK_MIN * radius and last > KINK_RATIO * before:
+    if tab.stages.shape[0] > 2 and h * last > KINK_MIN * radius and last > KINK_RATIO * before:
         j = tab.stages[tab.stages.shape[0] - 1]
         copy_state(R, r, V, wk.Rs, wk.rs, wk.Vs)
-        st = end_rhs(sd, wk, t + h, wk.Ve[0])
+        st = stage_rhs_at(sd, wk, t + h, wk.Ve[0])
         if st == STATUS_OK:
             st = mk_stage_state(sd, wk, tab.A, j, KINK_EPS * h, R, r, V)      # the end moved on
         if st == STATUS_OK:
-            st = end_rhs(sd, wk, t + h, wk.Ve[1])
+            st = stage_rhs_at(sd, wk, t + h, wk.Ve[1])
         if st != STATUS_OK:
             return st
         if h * stage_rate(tab.A[j], tab.A[0], j, KINK_EPS * h, wk.K, wk.Vd, wk.Ve[0], wk.Ve[1], nb) > radius:
@@ -160,9 +160,10 @@ def fixed_step_watch(sd, wk, tab, ctl, t, h, R, r, V):
 
 
 @njit(cache=True, _nrt=False)
-def end_rhs(sd, wk, t, Vdot):
-    """:func:`stage_rhs` at the stage state, not inlined (a second inlined copy in ``mk_steps`` would
-    compile the right-hand side once more into it)."""
+def stage_rhs_at(sd, wk, t, Vdot):
+    """:func:`stage_rhs` compiled once for its call sites outside the stage loop (the implicit stages'
+    Newton iteration, :func:`fixed_step_watch`): it is inlined wherever it is called, and each inlined
+    copy costs seconds of compile time."""
     return stage_rhs(sd, wk, t, Vdot)
 
 

@@ -99,10 +99,11 @@ class StageStiffnessWatch:
         self.count = 0
 
     def check(self, sim, h, nb=None, firstOrder=None, strict=False):
-        """``firstOrder``: a function giving the rate of the first-order coordinates' own modes at
-        the last stage (``radius / largest stable step``, from their eigenvalues), which the
-        second-order estimate of the stages does not see; ``strict``: fail at the first step beyond
-        (a caller that repeats it with an implicit method)."""
+        """``firstOrder``: a function giving the rate of the first-order coordinates' own modes (from
+        their eigenvalues; ``radius / largest stable step`` beyond the half-disk), which the
+        second-order estimate of the stages does not see (a rate measured some steps before counts
+        for each of them); ``strict``: fail at the first step beyond (a caller that repeats it with
+        an implicit method)."""
         from ..errors import step_size_error
         if self.radius == np.inf:       # an A-stable method: no mode is beyond its region
             return
@@ -123,7 +124,8 @@ class StageStiffnessWatch:
             exc = step_size_error(
                 self.tableau.name, h, sim.t, "the step size is beyond the stability limit of the method",
                 f"the last step(s) show a mode of rate |lambda| ~ {rho:.4g} 1/s ({source}), h |lambda| = "
-                f"{h * rho:.3g} > {self.radius:.3g} (the method's stability radius); the state is not reliable",
+                f"{h * rho:.3g} > {self.radius:.3g} (the method's stability radius, or the rate at which the "
+                f"mode leaves its stability region); the state is not reliable",
                 SAFETY * self.radius / rho)
             exc.stiffStages = rho
             exc.stiffWhat = what

@@ -167,7 +167,7 @@ def test_an_impact_inside_one_step_is_not_passed_with_energy_gained(capsys):
     """A ball dropped onto a floor load of 1e8 N/m: h omega = 10, the contact is shorter than the step.
     RK4 passed the impact in one step and gained energy (the ball rose to 1.08 m from 0.05 m); the
     watch saw only its last stage, which left the floor (h |lambda| = 1.7).  The stages inside the
-    contact show h |lambda| = 10 (mbs/diagnostics.stage_stiffness, the largest over the stages): the
+    contact show h |lambda| = 10 (mbs/diagnostics.stage_rates, the largest over the stages): the
     step is done again with ESDIRK3.  The damped floor takes energy only: the ball never rises above
     its start, and stays within 0.05 m of generalized-alpha at h/20 (it damps the rebound more)."""
     d, err, native = three_runs(lambda h: floor_model(h, k=1e8, d=500.0, tEnd=0.3))

@@ -95,10 +95,9 @@ def replace_after_failure(solver, status, h, t, plan):
     if adaptive is not None:
         adaptive.update(minStep=adaptive["minStep"] or 1e-6 * h, acceptAtMinStep=True)
         plan["adaptive"] = adaptive
-    solver._chunks = solver._new_chunks()          # (for the new method's stepper, fixed or adaptive)
-    if adaptive is not None:
         line += (f"; with adaptive steps of at most {h:.4g} s (timeIntegration.adaptiveStep; relativeTolerance "
                  f"{adaptive['rtol']:g}, absoluteTolerance {adaptive['atol']:g})")
+    solver._chunks = solver._new_chunks()          # (for the new method's stepper, fixed or adaptive)
     print(line)
     return True
 

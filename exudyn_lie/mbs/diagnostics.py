@@ -50,12 +50,12 @@ def secant_rate(a, c, e):
 
 
 @njit(cache=True, _nrt=False)
-def stage_rate(u, v, upto, h, K, Vd, V0, Vj, nb):
+def stage_rate(w, upto, h, K, Vd, V0, Vj, nb):
     """Shampine's estimate between a state of rate ``V0`` and the state reached from it with the
-    weights ``w_l = u_l - v_l`` (``l < upto``), whose rate is ``Vj``: the configuration of bodies
-    ``0 .. nb-1`` moved by ``dq = h sum_l w_l k_l`` (in the algebra), the velocity by ``dV = h sum_l
-    w_l Vdot_l``; ``Vj - V0`` is the change of the acceleration (:func:`secant_rate`).  From the first
-    stage to stage ``m``: ``u = A[m]``, ``v = 0``, ``upto = m``."""
+    weights ``w_l`` (``l < upto``), whose rate is ``Vj``: the configuration of bodies ``0 .. nb-1``
+    moved by ``dq = h sum_l w_l k_l`` (in the algebra), the velocity by ``dV = h sum_l w_l Vdot_l``;
+    ``Vj - V0`` is the change of the acceleration (:func:`secant_rate`).  From the first stage to
+    stage ``m``: ``w = A[m]``, ``upto = m``."""
     a = 0.0
     c = 0.0
     e = 0.0
@@ -64,8 +64,8 @@ def stage_rate(u, v, upto, h, K, Vd, V0, Vj, nb):
             dq = 0.0
             dv = 0.0
             for l in range(upto):
-                dq += (u[l] - v[l]) * K[l, i, k]
-                dv += (u[l] - v[l]) * Vd[l, i, k]
+                dq += w[l] * K[l, i, k]
+                dv += w[l] * Vd[l, i, k]
             a += (h * dq) ** 2
             c += (h * dv) ** 2
             e += (Vj[i, k] - V0[i, k]) ** 2
@@ -76,25 +76,18 @@ def stage_rate(u, v, upto, h, K, Vd, V0, Vj, nb):
 def stage_rates(A, h, stages, K, Vd, nb):
     """``(largest, last, before)``: the fastest rate |lambda| the last step met, from its stages
     (Shampine's idea, for second-order equations, :func:`stage_rate` between the first and each
-    evaluated stage), that of the last stage alone, and the largest of the stages before it.  ``h rho`` beyond the method's stability radius means the step
-    amplifies that mode.  The largest over the stages: a contact that only some stages reach (an
+    evaluated stage), that of the last stage alone, and the largest of the stages before it.
+    ``h rho`` beyond the method's stability radius means the step amplifies that mode.  The largest over the stages: a contact that only some stages reach (an
     impact inside one step) shows at those stages alone (RK4 across a floor at h omega = 10: 10 at the
     second stage, 0.15 at the last).  (``sqrt(|dVdot| / |dq|)`` alone saw the damping force of a step
     that starts at a turning point, ``dq ~ h V ~ 0``, as a mode of any rate.)"""
     before = 0.0
     last = 0.0
-    zero = A[0]                          # (the first stage's row: explicit, all zero)
     for jj in range(1, stages.shape[0]):
         j = stages[jj]
         before = max(before, last)
-        last = stage_rate(A[j], zero, j, h, K, Vd, Vd[0], Vd[j], nb)
+        last = stage_rate(A[j], j, h, K, Vd, Vd[0], Vd[j], nb)
     return max(before, last), last, before
-
-
-@njit(cache=True, _nrt=False)
-def stage_stiffness(A, h, stages, K, Vd, nb):
-    """The largest of :func:`stage_rates`."""
-    return stage_rates(A, h, stages, K, Vd, nb)[0]
 
 
 def joint_rows_at(sd, wk, R, r, V, h, Jr, eta):

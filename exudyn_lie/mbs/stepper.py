@@ -154,7 +154,7 @@ def fixed_step_watch(sd, wk, tab, ctl, t, h, R, r, V):
             st = stage_rhs_at(sd, wk, t + h, wk.Ve[1])
         if st != STATUS_OK:
             return st
-        if h * stage_rate(tab.A[j], tab.A[0], j, KINK_EPS * h, wk.K, wk.Vd, wk.Ve[0], wk.Ve[1], nb) > radius:
+        if h * stage_rate(tab.A[j], j, KINK_EPS * h, wk.K, wk.Vd, wk.Ve[0], wk.Ve[1], nb) > radius:
             return STATUS_STIFF
     return STATUS_OK
 

@@ -21,7 +21,7 @@ from ..errors import SimulationError
 from ..integrators.stability import is_a_stable, stability_coefficients, stability_radius
 from . import kernel
 from .bodies import body_dexpinv_stage, exp_compose
-from .diagnostics import stage_stiffness
+from .diagnostics import stage_rates
 
 SAFETY = 0.9                 # a suggested step: this fraction of the largest stable one
 GROWTH_TOL = 1e-9            # |R(z)| <= 1 + GROWTH_TOL counts as stable (R(0) = 1 exactly)
@@ -113,8 +113,8 @@ class StageStiffnessWatch:
         what = "its stages show a mode beyond its stability region"
         rho1 = firstOrder() if firstOrder is not None else 0.0
         if rho1 > rho:
-            rho, source = rho1, ("the eigenvalues of d(ydot)/dy of the first-order coordinates at the last "
-                                 "stage; e.g. a regularised friction state that became stiff")
+            rho, source = rho1, ("the eigenvalues of d(ydot)/dy of the first-order coordinates at the state "
+                                 "last evaluated; e.g. a regularised friction state that became stiff")
             what = "its first-order coordinates have a mode beyond its stability region, by d(ydot)/dy"
         if h * rho <= self.radius:
             self.count = 0
@@ -147,12 +147,12 @@ def watch_stages(sim, on, nb=None):
 
 def stage_stiffness_of(sim, h, nb=None):
     """Shampine's estimate of the fastest rate the last fixed step of size ``h`` met, from
-    its stages (:func:`~.diagnostics.stage_stiffness`; the first ``nb`` bodies, default all):
+    its stages (the largest of :func:`~.diagnostics.stage_rates`; the first ``nb`` bodies, default all):
     a mode that became stiff during the run (a contact that closed) shows here before it
     blows up."""
     tab = sim.method
-    return float(stage_stiffness(tab.A, float(h), tab.stages, sim.wk.K, sim.wk.Vd,
-                                 sim.sd.nb if nb is None else int(nb)))
+    return float(stage_rates(tab.A, float(h), tab.stages, sim.wk.K, sim.wk.Vd,
+                             sim.sd.nb if nb is None else int(nb))[0])
 
 
 def suggest_step(sim, h):

@@ -104,8 +104,8 @@ def test_unknown_method_group_and_solver_type():
     expect_error(mbs, BridgeError, r"unknown Lie group 'SE2'", liegroup="SE2")
     expect_error(mbs, BridgeError, r"liegroup\[1\]: unknown Lie group 'SO2'", liegroup={1: "SO2"})
     expect_error(mbs, BridgeError, r"object 2 is not an ObjectRigidBody", liegroup={2: "SE3"})
-    expect_error(mbs, BridgeError, r"solverType=DynamicSolverType.VelocityVerlet: .*no Munthe-Kaas counterpart",
-                 solverType=exu.DynamicSolverType.VelocityVerlet)
+    expect_error(mbs, BridgeError, r"solverType=DynamicSolverType.DVERK6: .*does not implement DVERK6",
+                 solverType=exu.DynamicSolverType.DVERK6)
     expect_error(mbs, BridgeError, r"unknown stabilization", stabilization="baumgarte")
     ss = quiet_settings(0.0, 10)
     expect_error(mbs, BridgeError, r"endTime > startTime", ss=ss)

@@ -57,7 +57,9 @@ def test_explicit_type_is_its_tableau_and_agrees_with_exudyns_run(name):
     """solverType=X runs exactly method=EXPLICIT[X] (bit-identical), also when X comes from
     the settings; on an unconstrained RotVecLG body Exudyn's explicit Lie group solver makes
     the same SO3xR3 Munthe-Kaas update, so with the same tableau and h the two agree to
-    round-off (measured ~5e-15 on sensor values of size 0.77)."""
+    round-off (measured ~5e-15 on sensor values of size 0.77).  VelocityVerlet: this body's
+    damping and gyroscopic forces depend on the velocity, where Exudyn's scheme and the partitioned
+    tableau differ by their order-1 errors (tests/test_velocity_verlet.py compares them)."""
     T, h = 0.3, 1e-3
     tab = EXPLICIT[name]
     mbs, by_type, q = exl_run(T, h, solverType=getattr(DST, name))
@@ -68,7 +70,7 @@ def test_explicit_type_is_its_tableau_and_agrees_with_exudyns_run(name):
     assert np.array_equal(q, q2) and np.array_equal(q, q3)
     native = native_run(T, h, getattr(DST, name))
     assert native.shape == by_type.shape
-    assert np.max(np.abs(native - by_type)) < 1e-13
+    assert np.max(np.abs(native - by_type)) < (1e-13 if not tab.partitioned else 2e-2)
 
 
 @pytest.mark.parametrize("name,classical", [("RK33", "RK3"), ("RK67", "RK6")])
@@ -133,12 +135,12 @@ def expect_refused(match, ss=None, **kw):
 
 
 def test_types_without_counterpart_and_inconsistent_combinations_are_refused_untouched():
-    expect_refused(r"solverType=DynamicSolverType.VelocityVerlet: .*not a Runge-Kutta tableau",
-                   solverType=DST.VelocityVerlet)
     expect_refused(r"solverType=DynamicSolverType.DVERK6: Exudyn 1.13.6's own SolveDynamic does not",
                    solverType=DST.DVERK6)
-    expect_refused(r"simulationSettings.timeIntegration.solverType=DynamicSolverType.VelocityVerlet",
-                   ss=fixed_settings(0.01, 1e-3, DST.VelocityVerlet))
+    expect_refused(r"simulationSettings.timeIntegration.solverType=DynamicSolverType.DVERK6",
+                   ss=fixed_settings(0.01, 1e-3, DST.DVERK6))
+    expect_refused(r"solverType=DynamicSolverType.VelocityVerlet \(the tableau VelocityVerlet\) and method='Heun'",
+                   solverType=DST.VelocityVerlet, method="Heun")
     expect_refused(r"solverType=DynamicSolverType.RK44 \(the tableau RK4\) and method='DOPRI5' name different",
                    solverType=DST.RK44, method="DOPRI5")
     expect_refused(r"timeIntegration.solverType=DynamicSolverType.RK67 \(the tableau RK67\) and method='RK4'",

@@ -14,7 +14,7 @@ from exudyn_lie.integrators import ButcherTableau, get_method
 import reference_mk as mk
 from exudyn_lie.integrators.stability import stability_coefficients, stability_radius
 from exudyn_lie.mbs import stepper
-from exudyn_lie.mbs.stepper import Method, needed_stages
+from exudyn_lie.mbs.methods import Method, needed_stages
 
 
 def _two_bodies(python_force=None):

@@ -20,6 +20,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..integrators.partitioned import first_order_part
+from ..integrators.stability import stability_radius
 from ..mbs.stiffness import check_linear_stability, largest_stable_step
 from .general_contact import general_contacts
 
@@ -107,9 +109,13 @@ def ode1_rate(model, tableau, h, radius):
     ev = np.linalg.eigvals(J)
     ev = np.minimum(ev.real, 0.0) + 1j * ev.imag        # (largest_stable_step's physical growth)
     rho = float(np.max(np.abs(ev))) if ev.size else 0.0
-    if h * rho <= radius:
-        return rho
-    hmax = largest_stable_step(tableau, ev)
+    # a partitioned method (velocity Verlet) advances first-order coordinates with its (A, b) alone, whose
+    # own half-disk decides; the rate is scaled to the watch's radius (stable iff h rate <= radius)
+    first = first_order_part(tableau)
+    own = radius if first is tableau else stability_radius(first)
+    if h * rho <= own:
+        return rho * radius / own
+    hmax = largest_stable_step(first, ev)
     return radius / hmax if 0.0 < hmax < np.inf else 0.0
 
 

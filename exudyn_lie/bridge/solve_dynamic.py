@@ -57,7 +57,8 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
     The positional arguments are Exudyn's.  ``solverType`` (else
     ``timeIntegration.solverType``, as Exudyn reads them): an explicit type selects its
     tableau (RK44 -> RK4, ODE23 -> BS3, ...), GeneralizedAlpha is replaced by ``method``,
-    TrapezoidalIndex2 too but with a warning, VelocityVerlet and DVERK6 are refused
+    TrapezoidalIndex2 too but with a warning, VelocityVerlet selects the partitioned velocity Verlet,
+    DVERK6 is refused
     (:mod:`exudyn_lie.bridge.solvertype`); ``showHints`` / ``showCausingItems`` are accepted for
     compatibility.  Keyword-only extras: ``method`` (default: the explicit solverType's tableau,
     else RK4, or the L-stable implicit ESDIRK3 where RK4 is not stable at the step, at the start or

@@ -8,7 +8,10 @@ and then:
 * an explicit type is a Butcher tableau (Exudyn's ``CSolverExplicit.cpp``,
   ``ComputeButcherTableau``) and selects the same tableau of exudyn_lie's catalogue
   (:data:`EXPLICIT`); the Munthe-Kaas method with that tableau runs on the bodies' Lie
-  groups.  With ``method=`` given as well, both must name the same tableau.
+  groups.  With ``method=`` given as well, both must name the same tableau.  VelocityVerlet
+  is the partitioned tableau of the same scheme (integrators/partitioned.py: Exudyn reuses the
+  last stage's accelerations as the next step's first, this package evaluates them at the
+  step's start; the same for forces of the configuration alone).
 * GeneralizedAlpha (the default) is what the drop-in replaces by its explicit method, as
   without ``solverType``.
 * TrapezoidalIndex2 names another implicit solver that the drop-in replaces just like
@@ -34,6 +37,7 @@ EXPLICIT = {
     "RK67": T.RK67,
     "ODE23": T.BS3,
     "DOPRI5": T.DOPRI5,
+    "VelocityVerlet": T.VelocityVerlet,
 }
 
 #: Exudyn's implicit solvers, replaced by the explicit Munthe-Kaas method
@@ -41,8 +45,6 @@ REPLACED = ("GeneralizedAlpha", "TrapezoidalIndex2")
 
 #: types with no counterpart: why
 REFUSED = {
-    "VelocityVerlet": "Exudyn's velocity Verlet is a symplectic scheme for second-order ODEs that is not a "
-                      "Runge-Kutta tableau; exudyn_lie has no Munthe-Kaas counterpart",
     "DVERK6": "Exudyn 1.13.6's own SolveDynamic does not implement DVERK6 (NotImplementedFeatureError)",
 }
 
@@ -56,7 +58,10 @@ def _type_name(solverType, where):
 
 
 def _same_tableau(a, b):
-    return all(np.array_equal(x, y) for x, y in ((a.A, b.A), (a.b, b.b), (a.c, b.c)))
+    return a.partitioned == b.partitioned and all(
+        np.array_equal(x, y) for x, y in ((a.A, b.A), (a.b, b.b), (a.c, b.c),
+                                          (getattr(a, "Aq", None), getattr(b, "Aq", None)),
+                                          (getattr(a, "bq", None), getattr(b, "bq", None))))
 
 
 def resolve_solver_type(solverType, settingsSolverType, method, check_method):

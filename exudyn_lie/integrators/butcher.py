@@ -293,6 +293,11 @@ class ButcherTableau:
         return s > 1 and not self.implicit and bool(np.array_equal(self.A[s - 1], self.b))
 
     @property
+    def partitioned(self):
+        """True for a :class:`~.partitioned.PartitionedTableau` (the configurations' own coefficients)."""
+        return False
+
+    @property
     def implicit(self):
         """True for a diagonally implicit method (``a_jj = gamma > 0`` for the stages after the first)."""
         return bool(self.A[-1, -1] != 0.0)

@@ -61,6 +61,31 @@ def is_a_stable(method, weights=None):
     return bool(np.max(np.abs(stability_function(tab, 1j * y, weights))) <= 1.0 + 1e-12)
 
 
+def pair_growth(method, z):
+    """A partitioned method's (integrators/partitioned.py) growth per step of the mode pair ``z,
+    conj(z)`` (``z = h lambda``): the spectral radius of its step on ``q'' = -|z|^2 q + 2 Re(z) q'``
+    (``h = 1``), the damped oscillator with those eigenvalues; a real ``z`` is the critically damped
+    one.  The configurations and the velocities have different coefficients, so no scalar ``R(z)``
+    describes the method on second-order equations."""
+    tab = get_method(method)
+    A, b, Aq, bq = (np.asarray(x, float) for x in (tab.A, tab.b, tab.Aq, tab.bq))
+    s = len(b)
+    zs = np.atleast_1d(np.asarray(z, complex))
+    out = np.empty(zs.size)
+    for n, zz in enumerate(zs.ravel()):
+        k, c = abs(zz) ** 2, -2.0 * zz.real
+        M = np.empty((2, 2))
+        for col, (q, v) in enumerate(((1.0, 0.0), (0.0, 1.0))):
+            Vs, acc = np.zeros(s), np.zeros(s)
+            for j in range(s):
+                Vs[j] = v + A[j, :j] @ acc[:j]
+                Q = q + Aq[j, :j] @ Vs[:j] + Aq[j, j] * Vs[j]
+                acc[j] = -k * Q - c * Vs[j]
+            M[:, col] = (q + bq @ Vs, v + b @ acc)
+        out[n] = np.max(np.abs(np.linalg.eigvals(M)))
+    return out.reshape(zs.shape)
+
+
 def stability_coefficients(method):
     """Coefficients ``[1, g1, ..., gs]`` (Fractions when the tableau is exact) of the
     stability polynomial ``R(z) = sum g_k z^k``, ``g_k = b^T A^(k-1) e``, of an explicit method
@@ -198,6 +223,8 @@ def stability_radius(method, tol=1e-3, nangles=181):
         if is_a_stable(method):
             return float("inf")
         raise ValueError(f"{get_method(method).name}: implicit but not A-stable")
+    if get_method(method).partitioned:       # second-order modes: the pair's growth (pair_growth)
+        return _stability_radius_of(lambda zs: pair_growth(method, zs), float(tol), int(nangles))
     coeffs = tuple(float(x) for x in stability_coefficients(method))
     return _stability_radius_of_polynomial(coeffs, float(tol), int(nangles))
 
@@ -205,11 +232,15 @@ def stability_radius(method, tol=1e-3, nangles=181):
 @lru_cache(maxsize=None)
 def _stability_radius_of_polynomial(coeffs, tol, nangles):
     c = np.array(coeffs[::-1])
+    return _stability_radius_of(lambda zs: np.abs(np.polyval(c, zs)), tol, nangles)
+
+
+def _stability_radius_of(growth, tol, nangles):
     theta = np.linspace(0.5 * np.pi, 1.5 * np.pi, nangles)
     rays = np.exp(1j * theta)
 
     def ok(r):
-        return bool(np.max(np.abs(np.polyval(c, r * rays))) <= 1.0 + tol)
+        return bool(np.max(growth(r * rays)) <= 1.0 + tol)
 
     grid = np.geomspace(1e-4, 20.0, 300)
     bad = [r for r in grid if not ok(r)]

@@ -30,6 +30,7 @@ from fractions import Fraction
 import numpy as np
 
 from .butcher import ButcherTableau, ContinuousExtension
+from .partitioned import PARTITIONED_METHODS, PartitionedTableau, VelocityVerlet  # noqa: F401
 from .order_conditions import (MAX_CHECK_ORDER, achieved_order, continuous_order_residuals,  # noqa: F401
                                order_condition_residuals, quadrature_order, rooted_trees)
 
@@ -62,6 +63,10 @@ __all__ = [
     # --- implicit methods ---
     "IMPLICIT_METHODS",
     "ESDIRK3",
+    # --- partitioned methods ---
+    "PARTITIONED_METHODS",
+    "PartitionedTableau",
+    "VelocityVerlet",
 ]
 
 def _F(*xs):
@@ -469,7 +474,7 @@ def _check_catalogue(methods):
 
 _check_catalogue(METHODS)
 _check_catalogue(METHODS + PAIRS[1:])     # embedded pairs: no name clashes
-_check_catalogue(METHODS + NAMED_EXTRA + PAIRS[1:] + IMPLICIT_METHODS)
+_check_catalogue(METHODS + NAMED_EXTRA + PAIRS[1:] + IMPLICIT_METHODS + PARTITIONED_METHODS)
 
 
 def method_names():
@@ -494,7 +499,7 @@ def get_method(name):
     if not isinstance(name, str):
         raise TypeError(f"method name must be a string or ButcherTableau, got {type(name)}")
     key = _name_key(name)
-    for m in METHODS + NAMED_EXTRA + IMPLICIT_METHODS:
+    for m in METHODS + NAMED_EXTRA + IMPLICIT_METHODS + PARTITIONED_METHODS:
         if key in (_name_key(n) for n in (m.name,) + tuple(m.aliases)):
             return m
     raise ValueError(f"unknown integration method '{name}'; available: "

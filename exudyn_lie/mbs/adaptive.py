@@ -52,8 +52,9 @@ from .projection import (CT_N_PROJ, CT_POS, enforce_constraint_tolerance, is_sta
 from .row_drives import update_row_drives
 from .rotation_parameters import tracked_at
 from . import stepper
+from .methods import needed_stages
 from .stepper import (ACT_ACCEPT, ACT_RETRY, ACT_STOP, controller_is, copy_state, mk_stage_k, mk_stage_state,
-                      needed_stages, stage_rhs)
+                      stage_rhs)
 
 # A tableau as the adaptive loop uses it: the stage matrix and nodes extended by the dense
 # extra stages, b (s), the stages of a step (b or bhat needs them), e = b - bhat, the dense

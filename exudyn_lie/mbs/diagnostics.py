@@ -50,12 +50,13 @@ def secant_rate(a, c, e):
 
 
 @njit(cache=True, _nrt=False)
-def stage_rate(w, upto, h, K, Vd, V0, Vj, nb):
+def stage_rate(wq, w, upto, h, K, Vd, V0, Vj, nb):
     """Shampine's estimate between a state of rate ``V0`` and the state reached from it with the
     weights ``w_l`` (``l < upto``), whose rate is ``Vj``: the configuration of bodies ``0 .. nb-1``
-    moved by ``dq = h sum_l w_l k_l`` (in the algebra), the velocity by ``dV = h sum_l w_l Vdot_l``;
-    ``Vj - V0`` is the change of the acceleration (:func:`secant_rate`).  From the first stage to
-    stage ``m``: ``w = A[m]``, ``upto = m``."""
+    moved by ``dq = h sum_l wq_l k_l`` (in the algebra; ``wq_upto``, a partitioned method's diagonal,
+    on the stage's own velocity), the velocity by ``dV = h sum_l w_l Vdot_l``; ``Vj - V0`` is the
+    change of the acceleration (:func:`secant_rate`).  From the first stage to stage ``m``: ``w =
+    A[m]``, ``wq = Aq[m]`` (``A[m]`` but for a partitioned method), ``upto = m``."""
     a = 0.0
     c = 0.0
     e = 0.0
@@ -64,8 +65,10 @@ def stage_rate(w, upto, h, K, Vd, V0, Vj, nb):
             dq = 0.0
             dv = 0.0
             for l in range(upto):
-                dq += w[l] * K[l, i, k]
+                dq += wq[l] * K[l, i, k]
                 dv += w[l] * Vd[l, i, k]
+            if wq[upto] != 0.0:          # a partitioned method's configuration on its own stage velocity
+                dq += wq[upto] * K[upto, i, k]
             a += (h * dq) ** 2
             c += (h * dv) ** 2
             e += (Vj[i, k] - V0[i, k]) ** 2
@@ -73,7 +76,7 @@ def stage_rate(w, upto, h, K, Vd, V0, Vj, nb):
 
 
 @njit(cache=True, _nrt=False)
-def stage_rates(A, h, stages, K, Vd, nb):
+def stage_rates(A, Aq, h, stages, K, Vd, nb):
     """``(largest, last, before)``: the fastest rate |lambda| the last step met, from its stages
     (Shampine's idea, for second-order equations, :func:`stage_rate` between the first and each
     evaluated stage), that of the last stage alone, and the largest of the stages before it.
@@ -86,7 +89,7 @@ def stage_rates(A, h, stages, K, Vd, nb):
     for jj in range(1, stages.shape[0]):
         j = stages[jj]
         before = max(before, last)
-        last = stage_rate(A[j], j, h, K, Vd, Vd[0], Vd[j], nb)
+        last = stage_rate(Aq[j], A[j], j, h, K, Vd, Vd[0], Vd[j], nb)
     return max(before, last), last, before
 
 

@@ -1,7 +1,7 @@
 """Diagonally implicit Munthe-Kaas stages, compiled: the implicit methods' side of the stepper.
 
 An ESDIRK tableau (``integrators.tableau.IMPLICIT_METHODS``: ``a_11 = 0``, ``a_jj = gamma`` for
-``j > 1``) run by :func:`~.stepper.mk_steps` as an :class:`~.stepper.ImplicitMethod`: stage 1 is
+``j > 1``) run by :func:`~.stepper.mk_steps` as an :class:`~.methods.ImplicitMethod`: stage 1 is
 the explicit stage at the step's start, every later stage ``j`` solves, per body in its own group
 (eq. MK1 with the stage's own term)::
 
@@ -50,7 +50,8 @@ from . import stepper
 from .bodies import body_dexpinv_stage, exp_compose
 from .codes import INFO_BODY, STAGE_ARG_MAX2, STATUS_EXTERNAL, STATUS_NEWTON, STATUS_OK
 from .linalg import lu_factor_inplace, lu_solve_inplace
-from .stepper import ImplicitMethod, copy_state, needed_stages, stage_rhs_at  # noqa: F401 (ImplicitMethod: its home is stepper)
+from .methods import ImplicitMethod, needed_stages
+from .stepper import copy_state, stage_rhs_at
 
 # The Newton iteration's arrays and state (one per simulator: tab.newton)
 Newton = namedtuple("Newton", [
@@ -84,7 +85,7 @@ FD_STEP = 1.4901161193847656e-08     # sqrt(eps): forward differences of F
 
 
 def implicit_method(tableau, gid, tol=NEWTON_TOL, maxIterations=NEWTON_MAXIT):
-    """The :class:`~.stepper.ImplicitMethod` of a diagonally implicit tableau for the bodies of group
+    """The :class:`~.methods.ImplicitMethod` of a diagonally implicit tableau for the bodies of group
     ids ``gid``, with its Newton arrays."""
     if not tableau.implicit:
         raise ValueError(f"{tableau.name} is explicit")

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 from . import kernel
 from .implicit import NEWTON_MAXIT_FULL, NP_MAXIT_FULL, implicit_method, newton_counters
-from .stepper import method_arrays
+from .methods import method_arrays
 
 #: the parts an implicit step whose Newton iteration does not converge is tried in, in turn
 SUBSTEPS = (2, 4, 8, 16, 32, 64)

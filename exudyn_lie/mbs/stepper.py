@@ -1,8 +1,10 @@
 """The one Munthe-Kaas stepper (eq. MK1), compiled: every path of the package runs it.
 
 ``mk_steps`` advances the state ``(R, r, V)`` of all bodies, each in its own group
-(:mod:`.bodies`), with the tableau ``tab`` (:class:`Method`; an implicit one: :class:`ImplicitMethod`,
-the last section below).  Its users: the
+(:mod:`.bodies`), with the tableau ``tab`` (:mod:`.methods`: a :class:`~.methods.Method`; an implicit
+one: :class:`~.methods.ImplicitMethod`, the last section below; a partitioned one, velocity Verlet:
+:class:`~.methods.PartitionedMethod`, whose configurations have coefficients of their own, ``Aq, bq``
+in place of ``A, b`` in the first and third lines below).  Its users: the
 fixed-step loop of :class:`~exudyn_lie.mbs.Simulator` (``Advance`` / ``Run``), the
 accelerations at a state (``nsteps = 0``), and the bridge's output chunks
 (:class:`~exudyn_lie.bridge.fast.OutputChunks`), with or without forces evaluated in
@@ -73,6 +75,7 @@ from .bodies import body_dexpinv_stage, exp_compose
 from .codes import (EXTERNAL_RATES, INFO_BODY, STAGE_ARG_MAX2, STATUS_BLOWUP, STATUS_NONFINITE,
                     STATUS_OK, STATUS_STAGE_ARG, STATUS_STIFF)
 from .diagnostics import stage_rate, stage_rates
+from .methods import config_coefficients
 from .external_calls import external_forces, external_rates
 from .rotation_parameters import record_tracked
 from .index1 import rhs
@@ -80,39 +83,9 @@ from .projection import is_stabilized, project_state_if
 from .row_drives import update_row_drives
 from .step_observers import after_accepted_step
 
-# A tableau as the stepper uses it: A, b, c, the indices of the evaluated stages and the
-# embedded weights (no rows without a pair).
-Method = namedtuple("Method", ["A", "b", "c", "stages", "bhat"])
-
-# A diagonally implicit tableau (ESDIRK) with its Newton iteration's arrays and state (mbs/implicit.py,
-# which registers the implicit overloads of is_implicit and implicit_stage)
-ImplicitMethod = namedtuple("ImplicitMethod", ["A", "b", "c", "stages", "bhat", "gamma", "newton"])
-
 # Step controller: kind, parameters, state (CONTROL_FIXED: none)
 Control = namedtuple("Control", ["kind", "par", "state"])
 CONTROL_FIXED = 0
-
-
-def needed_stages(A, b):
-    """Indices of the stages that can influence a step: ``b_j != 0`` or used by a needed
-    later stage (``a_lj != 0``).  Stage 0 is always evaluated (it is also the
-    accelerations at the step's initial state, recorded at outputs)."""
-    A = np.asarray(A, float)
-    b = np.asarray(b, float)
-    s = len(b)
-    need = [bool(b[j] != 0.0) for j in range(s)]
-    for j in range(s - 1, -1, -1):
-        if not need[j]:
-            need[j] = any(need[l] and A[l, j] != 0.0 for l in range(j + 1, s))
-    need[0] = True
-    return np.array([j for j in range(s) if need[j]], dtype=np.int64)
-
-
-def method_arrays(tableau):
-    """The :class:`Method` of a :class:`~exudyn_lie.integrators.tableau.ButcherTableau`."""
-    A, b, c = tableau.arrays()
-    bh = np.zeros(0) if tableau.b_hat is None else np.array(tableau.b_hat, dtype=np.float64)
-    return Method(A=A, b=b, c=c, stages=needed_stages(A, b), bhat=bh)
 
 
 def fixed_step_control():
@@ -141,7 +114,8 @@ def fixed_step_watch(sd, wk, tab, ctl, t, h, R, r, V):
     them sees the damping only."""
     radius = ctl.par[0]
     nb = int(ctl.par[1])
-    rho, last, before = stage_rates(tab.A, h, tab.stages, wk.K, wk.Vd, nb)
+    Aq = config_coefficients(tab)[0]
+    rho, last, before = stage_rates(tab.A, Aq, h, tab.stages, wk.K, wk.Vd, nb)
     if h * rho > radius:
         return STATUS_STIFF
     if tab.stages.shape[0] > 2 and h * last > KINK_MIN * radius and last > KINK_RATIO * before:
@@ -149,12 +123,12 @@ def fixed_step_watch(sd, wk, tab, ctl, t, h, R, r, V):
         copy_state(R, r, V, wk.Rs, wk.rs, wk.Vs)
         st = stage_rhs_at(sd, wk, t + h, wk.Ve[0])
         if st == STATUS_OK:
-            st = mk_stage_state(sd, wk, tab.A, j, KINK_EPS * h, R, r, V)      # the end moved on
+            st = method_stage_state(sd, wk, tab, j, KINK_EPS * h, R, r, V)      # the end moved on
         if st == STATUS_OK:
             st = stage_rhs_at(sd, wk, t + h, wk.Ve[1])
         if st != STATUS_OK:
             return st
-        if h * stage_rate(tab.A[j], j, KINK_EPS * h, wk.K, wk.Vd, wk.Ve[0], wk.Ve[1], nb) > radius:
+        if h * stage_rate(Aq[j], tab.A[j], j, KINK_EPS * h, wk.K, wk.Vd, wk.Ve[0], wk.Ve[1], nb) > radius:
             return STATUS_STIFF
     return STATUS_OK
 
@@ -169,8 +143,10 @@ def stage_rhs_at(sd, wk, t, Vdot):
 
 # --------------------------------------------------------------------------- the stages
 @njit(cache=True, inline="always", _nrt=False)
-def stage_state(gid, A, j, h, R, r, V, K, Vd, Psi, Rs, rs, Vs, ER, Er):
-    """Stage configuration ``g exp(Psi_j)`` and velocity ``V + h sum a_jl Vdot_l`` (eq. MK1).
+def stage_state(gid, A, Aq, j, h, R, r, V, K, Vd, Psi, Rs, rs, Vs, ER, Er):
+    """Stage configuration ``g exp(Psi_j)`` and velocity ``V + h sum a_jl Vdot_l`` (eq. MK1); the
+    configuration with its own coefficients ``Aq`` (``A`` itself but for a partitioned method, whose
+    diagonal ``aq_jj`` makes ``Psi_j = h aq_jj V_j``: integrators/partitioned.py).
 
     Returns -1, or the first body whose stage argument has ``|rotation part of Psi_j|``
     beyond STAGE_ARG_MAX (dexpinv_{-Psi_j} of the stage is singular at 2 pi); then the
@@ -181,8 +157,10 @@ def stage_state(gid, A, j, h, R, r, V, K, Vd, Psi, Rs, rs, Vs, ER, Er):
             ps = 0.0
             vs = V[i, k]
             for l in range(j):
-                ps += A[j, l] * K[l, i, k]
+                ps += Aq[j, l] * K[l, i, k]
                 vs += h * A[j, l] * Vd[l, i, k]
+            if Aq[j, j] != 0.0:          # (a partitioned method only: an implicit stage is not formed here)
+                ps += Aq[j, j] * vs
             Pi[k] = h * ps
             Vs[i, k] = vs
         if j == 0:
@@ -214,9 +192,9 @@ def stage_k(gid, j, Psi, Vs, K, tmp6):
 
 
 @njit(cache=True, inline="always", _nrt=False)
-def finish(gid, stages, b, h, R, r, V, K, Vd, Psi, Rn, C, rn, Er):
-    """``g <- g exp(h sum b_j k_j)``, ``V <- V + h sum b_j Vdot_j`` over the evaluated
-    stages; re-orthonormalise R with one Newton step ``R <- R (3 I - R^T R) / 2``
+def finish(gid, stages, bq, b, h, R, r, V, K, Vd, Psi, Rn, C, rn, Er):
+    """``g <- g exp(h sum bq_j k_j)``, ``V <- V + h sum b_j Vdot_j`` over the evaluated
+    stages (``bq`` is ``b`` but for a partitioned method); re-orthonormalise R with one Newton step ``R <- R (3 I - R^T R) / 2``
     (changes R by O(eps) only)."""
     ns = stages.shape[0]
     for i in range(gid.shape[0]):
@@ -226,7 +204,7 @@ def finish(gid, stages, b, h, R, r, V, K, Vd, Psi, Rn, C, rn, Er):
             vv = 0.0
             for jj in range(ns):
                 j = stages[jj]
-                ph += b[j] * K[j, i, k]
+                ph += bq[j] * K[j, i, k]
                 vv += b[j] * Vd[j, i, k]
             Phi[k] = h * ph
             V[i, k] += h * vv
@@ -251,7 +229,20 @@ def finish(gid, stages, b, h, R, r, V, K, Vd, Psi, Rn, C, rn, Er):
 def mk_stage_state(sd, wk, A, j, h, R, r, V):
     """:func:`stage_state` on the scene tuples; a stage argument out of the domain of
     dexpinv gives STATUS_STAGE_ARG with the body in ``wk.failInfo[INFO_BODY]``."""
-    bad = stage_state(sd.gid, A, j, h, R, r, V, wk.K, wk.Vd, wk.Psi, wk.Rs, wk.rs, wk.Vs, wk.m3[0], wk.v3[0])
+    return _stage_state_status(wk, stage_state(sd.gid, A, A, j, h, R, r, V, wk.K, wk.Vd, wk.Psi, wk.Rs, wk.rs, wk.Vs,
+                                               wk.m3[0], wk.v3[0]))
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def method_stage_state(sd, wk, tab, j, h, R, r, V):
+    """:func:`mk_stage_state` with the configuration's coefficients of ``tab`` (:func:`config_coefficients`)."""
+    Aq = config_coefficients(tab)[0]
+    return _stage_state_status(wk, stage_state(sd.gid, tab.A, Aq, j, h, R, r, V, wk.K, wk.Vd, wk.Psi, wk.Rs, wk.rs,
+                                               wk.Vs, wk.m3[0], wk.v3[0]))
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def _stage_state_status(wk, bad):
     if bad >= 0:
         wk.failInfo[INFO_BODY] = bad
         return STATUS_STAGE_ARG
@@ -265,7 +256,8 @@ def mk_stage_k(sd, wk, j):
 
 @njit(cache=True, inline="always", _nrt=False)
 def mk_finish(sd, wk, tab, h, R, r, V):
-    finish(sd.gid, tab.stages, tab.b, h, R, r, V, wk.K, wk.Vd, wk.Psi, wk.m3[1], wk.m3[0], wk.v3[1], wk.v3[0])
+    finish(sd.gid, tab.stages, config_coefficients(tab)[1], tab.b, h, R, r, V, wk.K, wk.Vd, wk.Psi, wk.m3[1],
+           wk.m3[0], wk.v3[1], wk.v3[0])
 
 
 @njit(cache=True, inline="always", _nrt=False)
@@ -479,7 +471,6 @@ def mk_steps(sd, wk, tab, ctl, t0, h, nsteps, R, r, V, vmax, every, Ro, ro, Vo, 
     """Advance MK steps in place.  Returns (status, steps done / outputs written); on a
     failure (R, r, V) hold the last accepted step (the rejected one is undone).  Its arguments and
     outputs, fixed and adaptive steps: the module docstring's "The loop"."""
-    A = tab.A
     c = tab.c
     stages = tab.stages
     ns = stages.shape[0]
@@ -512,7 +503,7 @@ def mk_steps(sd, wk, tab, ctl, t0, h, nsteps, R, r, V, vmax, every, Ro, ro, Vo, 
             if solved:
                 st = implicit_stage(sd, wk, tab, j, hs, t, R, r, V)
             else:
-                st = mk_stage_state(sd, wk, A, j, hs, R, r, V)
+                st = method_stage_state(sd, wk, tab, j, hs, R, r, V)
             if st != STATUS_OK:          # only for j >= 1: any pending output is written
                 if adaptive:             # a rejection with the largest decrease
                     ok = False

@@ -18,7 +18,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import SimulationError
-from ..integrators.stability import is_a_stable, stability_coefficients, stability_radius
+from ..integrators.stability import is_a_stable, pair_growth, stability_coefficients, stability_radius
 from . import kernel
 from .bodies import body_dexpinv_stage, exp_compose
 from .diagnostics import stage_rates
@@ -52,18 +52,25 @@ def largest_stable_step(tableau, ev, nsteps=None):
     ev = ev[np.abs(ev) > 0]
     if ev.size == 0 or (tableau.implicit and is_a_stable(tableau)):
         return float("inf")
-    c = np.array([float(x) for x in stability_coefficients(tableau)])
+    if tableau.partitioned:          # every mode as a second-order one (the configurations' own coefficients)
+        def grows(z, tol):
+            return pair_growth(tableau, z) > 1.0 + tol
+    else:
+        c = np.array([float(x) for x in stability_coefficients(tableau)])
+
+        def grows(z, tol):
+            return _grows(c, z, tol)
     tol = GROWTH_TOL if not nsteps else max(GROWTH_TOL, RUN_GROWTH ** (1.0 / nsteps) - 1.0)
     rho = float(np.max(np.abs(ev)))
     hi = 1.0 / rho
-    while not np.any(_grows(c, hi * ev, tol)):
+    while not np.any(grows(hi * ev, tol)):
         hi *= 2.0
         if hi * rho > 1e6:
             return float("inf")
     lo = 0.0
     for _ in range(60):
         mid = 0.5 * (lo + hi)
-        if np.any(_grows(c, mid * ev, tol)):
+        if np.any(grows(mid * ev, tol)):
             hi = mid
         else:
             lo = mid
@@ -151,7 +158,7 @@ def stage_stiffness_of(sim, h, nb=None):
     a mode that became stiff during the run (a contact that closed) shows here before it
     blows up."""
     tab = sim.method
-    return float(stage_rates(tab.A, float(h), tab.stages, sim.wk.K, sim.wk.Vd,
+    return float(stage_rates(tab.A, getattr(tab, "Aq", tab.A), float(h), tab.stages, sim.wk.K, sim.wk.Vd,
                              sim.sd.nb if nb is None else int(nb))[0])
 
 

@@ -105,6 +105,34 @@ def test_stiff_damped_chain_converges_at_the_stage_order_at_least():
         run(chain(1e6, 2000.0), "RK4", "SE3", T, 4e-3)
 
 
+def test_fixed_steps_newton_tolerance_follows_the_local_error():
+    """Fixed steps: the next step's Newton tolerance is a hundredth of the embedded estimate of the
+    last step's local error (relative to its velocity scale), within [NEWTON_TOL, FIXED_TOL_MAX]
+    (implicit.follow_local_error); recomputed here from the stages the step left behind.  At coarse
+    steps of the stiff chain it is looser than NEWTON_TOL: fewer iterations than with NEWTON_TOL held
+    (implicit_run.set_newton_tolerance), the same result within a hundredth of the method's error
+    (against RK4 at h = 1e-5); at fine steps it is NEWTON_TOL."""
+    from exudyn_lie.mbs import implicit as I
+    from exudyn_lie.mbs.implicit_run import set_newton_tolerance
+    T, h = 0.05, 2e-3
+    ref = run(chain(1e6, 2000.0), "RK4", "SE3", T, 1e-5)
+    sim = run(chain(1e6, 2000.0), "ESDIRK3", "SE3", T, h)
+    tab, nw, wk = sim.method, sim.method.newton, sim.wk
+    est = np.max(np.abs(h * np.einsum("j,jik->ik", (tab.b - tab.bhat)[tab.stages], wk.Vd[tab.stages])) * nw.axes)
+    vscale = max(np.max(np.abs(wk.Vb) * nw.axes), 1e-300)
+    expected = min(I.FIXED_TOL_MAX, max(I.NEWTON_TOL, I.FIXED_KAPPA * est / vscale))
+    assert nw.par[I.NP_TOL] == pytest.approx(expected, rel=1e-12) and expected > 10 * I.NEWTON_TOL
+    held = Simulator(chain(1e6, 2000.0), "ESDIRK3", "SE3", projectInitial=True)
+    set_newton_tolerance(held, I.NEWTON_TOL)
+    held.Run(T, h, outputEvery=int(round(T / h)))
+    assert held.method.newton.par[I.NP_TOL] == I.NEWTON_TOL
+    assert sim.newtonCounters["iterations"] < held.newtonCounters["iterations"]
+    err = np.abs(held.r - ref.r).max()
+    assert np.abs(sim.r - held.r).max() < 1e-2 * err, (np.abs(sim.r - held.r).max(), err)
+    fine = run(chain(1e6, 2000.0), "ESDIRK3", "SE3", 2e-3, 1e-5)
+    assert fine.method.newton.par[I.NP_TOL] == I.NEWTON_TOL
+
+
 def pendulum():
     """A body on a revolute joint to the ground whose frame is off the axis (corollary 1 needs the
     screw, not a pure rotation about the frame's origin), with a stiff torsional spring about it."""

@@ -299,6 +299,9 @@ def relative_difference(a, b):
     return abs(a - b) / max(abs(a), abs(b))
 
 
+STATE_FLOOR = 1e-12      # states below this size compare absolutely (round-off of a state at rest)
+
+
 def state_difference(a, b):
     """The largest difference of the final states of the solves of two runs (records),
     paired by their number, relative to the larger state's largest entry: ``max |a - b| /
@@ -312,8 +315,9 @@ def state_difference(a, b):
         x, y = s.get("state") if s["status"] == "ok" else None, sb.get(s["n"])
         if not x or not y or len(x) != len(y):
             continue
-        scale = max(max(abs(v) for v in x), max(abs(v) for v in y))
-        d = 0.0 if scale == 0 else max(abs(u - v) for u, v in zip(x, y)) / scale
+        # (a floor: a model at rest, zero natively, 3e-17 here, was a relative difference of 1)
+        scale = max(max(abs(v) for v in x), max(abs(v) for v in y), STATE_FLOOR)
+        d = max(abs(u - v) for u, v in zip(x, y)) / scale
         worst = d if worst is None else max(worst, d)
     return worst
 

@@ -5,7 +5,7 @@ counted (:func:`newton_counters_of`).  The iteration itself is compiled: :mod:`.
 from __future__ import annotations
 
 from . import kernel
-from .implicit import NEWTON_MAXIT_FULL, NP_MAXIT_FULL, implicit_method, newton_counters
+from .implicit import NEWTON_MAXIT_FULL, NEWTON_TOL, NP_FOLLOW, NP_MAXIT_FULL, NP_TOL, implicit_method, newton_counters
 from .methods import method_arrays
 
 #: the parts an implicit step whose Newton iteration does not converge is tried in, in turn
@@ -24,6 +24,17 @@ def apply_fallbacks(sim):
     nw = getattr(sim.method, "newton", None)
     if nw is not None:
         nw.par[NP_MAXIT_FULL] = NEWTON_MAXIT_FULL if sim.newtonSubsteps else 0.0
+
+
+def set_newton_tolerance(sim, tol):
+    """The Newton tolerance of ``sim``'s implicit method with fixed steps: ``None`` (default) makes it
+    follow each step's local error (:func:`~.implicit.follow_local_error`), a number holds it (relative
+    to the step's velocity scale).  Adaptive steps derive it from ``rtol`` (:func:`~.implicit.newton_tolerance`)."""
+    nw = getattr(sim.method, "newton", None)
+    if nw is None:
+        raise ValueError(f"{sim.tableau.name} is explicit: no Newton iteration")
+    nw.par[NP_FOLLOW] = 1.0 if tol is None else 0.0
+    nw.par[NP_TOL] = NEWTON_TOL if tol is None else float(tol)
 
 
 def newton_counters_of(sim):

@@ -11,8 +11,8 @@ from exudyn.utilities import InertiaSphere, SensorBody
 import exudyn_lie as exl
 from exudyn_lie.errors import StepSizeError
 from exudyn_lie.integrators import get_method
-from exudyn_lie.integrators.partitioned import PartitionedTableau, VelocityVerlet
-from exudyn_lie.integrators.stability import pair_growth, stability_radius
+from exudyn_lie.integrators.partitioned import PartitionedTableau, VelocityVerlet, first_order_part
+from exudyn_lie.integrators.stability import pair_growth, stability_function, stability_radius
 
 from test_bridge_common import new_mbs
 from test_bridge_solve import data
@@ -29,6 +29,9 @@ def test_tableau_checks_itself_and_is_found_by_name():
     with pytest.raises(ValueError, match=r"sum_j bq_j c_j = 1.0, not 1/2"):     # the drift on V, not V_1/2
         PartitionedTableau(name="x", order=1, A=[[0, 0], [1, 0]], b=["1/2", "1/2"], c=[0, 1],
                            Aq=[[0, 0], [0, 1]], bq=[0, 1])
+    with pytest.raises(ValueError, match=r"the first stage must be the step's start"):
+        PartitionedTableau(name="x", order=1, A=[[0, 0], ["1/2", 0]], b=["1/2", "1/2"], c=[0, "1/2"],
+                           Aq=[[1, 0], [0, 1]], bq=[0, 1])
     with pytest.raises(ValueError, match=r"diagonal entry needs the rest of the row zero"):
         PartitionedTableau(name="x", order=1, A=[[0, 0], ["1/2", 0]], b=["1/2", "1/2"], c=[0, "1/2"],
                            Aq=[[0, 0], ["1/2", "1/2"]], bq=[0, 1])
@@ -43,6 +46,13 @@ def test_stability_of_the_mode_pair():
     r = stability_radius(VelocityVerlet)
     assert 1.5 < r < 2.0
     assert pair_growth(VelocityVerlet, -0.99 * r)[()] <= 1.0 + 1e-3
+    # first-order coordinates: its (A, b) alone, R(z) = 1 + z + z^2 / 4 (stable on [-4, 0], not on the
+    # imaginary axis); no scalar function of the partitioned method itself
+    first = first_order_part(VelocityVerlet)
+    assert abs(stability_function(first, -2.5)[0] - (1 - 2.5 + 2.5 ** 2 / 4)) < 1e-15
+    assert abs(stability_function(first, 0.5j)[0]) > 1.0
+    with pytest.raises(ValueError, match="partitioned"):
+        stability_function(VelocityVerlet, -1.0)
 
 
 def spring_body(damping=0.0, stiffness=(300, 200, 100), torque=(0.1, 0, 0.2)):
@@ -79,12 +89,21 @@ def run(solve, T, h, **kw):
 def test_configuration_forces_agree_with_exudyns_velocity_verlet_to_round_off(evaluation):
     """Exudyn's SO(3)xR3 update is the same exp of the half-step velocity: with forces of the
     configuration alone the two schemes are one (Exudyn reuses the last stage's accelerations,
-    which then equal those at the next step's start)."""
+    which then equal those at the next step's start).  The type as argument, as setting, and
+    method='VelocityVerlet' run the same."""
     T, h = 0.3, 1e-3
     ours = run("exl", T, h, evaluation=evaluation)
     native = run("native", T, h)
     assert ours.shape == native.shape
     assert np.max(np.abs(ours - native)) < 1e-12
+    if evaluation == "compiled":
+        mbs, s = spring_body()
+        exl.SolveDynamic(mbs, fixed_settings(T, h), solverType=DST.VelocityVerlet, liegroup="SO3xR3")
+        assert mbs.sys["lieGroupSolver"].tableau is VelocityVerlet
+        assert np.array_equal(data(mbs, s), ours)
+        mbs, s = spring_body()
+        exl.SolveDynamic(mbs, fixed_settings(T, h), method="velocity-verlet", liegroup="SO3xR3")
+        assert np.array_equal(data(mbs, s), ours)
 
 
 def test_velocity_forces_converge_at_first_order_like_exudyns():

@@ -299,13 +299,13 @@ def relative_difference(a, b):
     return abs(a - b) / max(abs(a), abs(b))
 
 
-STATE_FLOOR = 1e-12      # states below this size compare absolutely (round-off of a state at rest)
+STATE_FLOOR = 1e-12      # the least scale of a state (round-off of a state at rest is not a difference of 1)
 
 
 def state_difference(a, b):
     """The largest difference of the final states of the solves of two runs (records),
     paired by their number, relative to the larger state's largest entry: ``max |a - b| /
-    max(|a|_inf, |b|_inf)``; None without a pair of finished solves of equal size.  The
+    max(|a|_inf, |b|_inf, STATE_FLOOR)``; None without a pair of finished solves of equal size.  The
     comparison for scripts that set no testResult (most Examples)."""
     if not a or not b:
         return None

@@ -231,7 +231,7 @@ class EvaluatedSolver:
                     f"{adaptive['rtol']:g}, step size <= {h:.6g} s) on the Exudyn-evaluated model, from t = {t0:g} to "
                     f"{tEnd:g} s in {nsteps} Exudyn steps")
         else:
-            info = (f"exudyn_lie: Munthe-Kaas {name} (order {tab.order}) on the Exudyn-evaluated model, "
+            info = (f"exudyn_lie: Munthe-Kaas {name} (order {tab.order_label}) on the Exudyn-evaluated model, "
                     f"step size h = {h:.6g} s, {nsteps} steps from t = {t0:g} to {tEnd:g} s")
         # Exudyn reduces its steps only after a failed discontinuous iteration, which needs items
         # with a PostNewton (GeneralContact's active sets too); without them the steps stay fixed,

@@ -26,8 +26,9 @@ from ..mbs.stiffness import check_linear_stability, largest_stable_step
 from .general_contact import general_contacts
 
 
-def linear_eigenvalues(model):
-    """Eigenvalues of the linearised, constrained equations at the state in mbs."""
+def linear_eigenvalues(model, split=False):
+    """Eigenvalues of the linearised, constrained equations at the state in mbs (with ``split``: those
+    of the ODE2 coordinates and those of the ODE1 coordinates apart)."""
     n = model.n
     M, f, Cq = model.mass_force_jacobian(model.sd.GetTime())
     M = np.array(M)
@@ -51,19 +52,22 @@ def linear_eigenvalues(model):
     else:
         N = np.eye(n)
     k = N.shape[1]
+    none = np.zeros(0, complex)
     if k == 0 or not (np.any(K) or np.any(D)):
-        return ev1
+        return (none, ev1) if split else ev1
     Mr = N.T @ M @ N
     try:
         MK = np.linalg.solve(Mr, N.T @ K @ N)
         MD = np.linalg.solve(Mr, N.T @ D @ N)
     except np.linalg.LinAlgError:
-        return ev1
+        return (none, ev1) if split else ev1
     A = np.zeros((2 * k, 2 * k))
     A[:k, k:] = np.eye(k)
     A[k:, :k] = -MK
     A[k:, k:] = -MD
     ev = np.linalg.eigvals(A)
+    if split:
+        return ev[np.isfinite(ev)], ev1
     return np.concatenate([ev[np.isfinite(ev)], ev1])
 
 
@@ -132,6 +136,13 @@ def check_step(model, tableau, h, refuse=True, nsteps=None):
     run remain."""
     if general_contacts(model.mbs):
         return 0.0, float("inf")
-    return check_linear_stability(tableau, h, model.sd.GetTime(), linear_eigenvalues(model),
-                                  "Exudyn's stiffness, damping and mass matrices on the constraint manifold at "
-                                  "this state", refuse, nsteps)
+    source = "Exudyn's stiffness, damping and mass matrices on the constraint manifold at this state"
+    if not tableau.partitioned:
+        return check_linear_stability(tableau, h, model.sd.GetTime(), linear_eigenvalues(model), source, refuse,
+                                      nsteps)
+    # a partitioned method: the second-order modes by its pair growth, the ODE1 modes by its (A, b)
+    ev2, ev1 = linear_eigenvalues(model, split=True)
+    rate2, h2 = check_linear_stability(tableau, h, model.sd.GetTime(), ev2, source, refuse, nsteps)
+    rate1, h1 = check_linear_stability(first_order_part(tableau), h, model.sd.GetTime(), ev1,
+                                       "the eigenvalues of d(ydot)/dy of the first-order coordinates", refuse, nsteps)
+    return max(rate1, rate2), min(h1, h2)

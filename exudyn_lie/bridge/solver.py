@@ -234,12 +234,12 @@ class LieGroupSolver(StateIO):
                            for g in dict.fromkeys(self.groups))
         tab = self.tableau
         if adaptive is not None:
-            return (f"exudyn_lie {__version__}: {self._kind()} Munthe-Kaas {tab.name} (order {tab.order}, {tab.stages} "
+            return (f"exudyn_lie {__version__}: {self._kind()} Munthe-Kaas {tab.name} (order {tab.order_label}, {tab.stages} "
                     f"stages) with adaptive steps (error control on the group, absoluteTolerance = "
                     f"{adaptive['atol']:g}, relativeTolerance = {adaptive['rtol']:g}, step size <= {h:.6g} s, >= "
                     f"{adaptive['minStep']:g} s{self._constraint_tolerance_text()}), Lie group {groups or 'none'}, from t = {t0:g} to {tEnd:g} s; "
                     f"Exudyn's time loop made {nsteps // k} output steps (dense output at their exact times)")
-        return (f"exudyn_lie {__version__}: {self._kind()} Munthe-Kaas {tab.name} (order {tab.order}, {tab.stages} stages), "
+        return (f"exudyn_lie {__version__}: {self._kind()} Munthe-Kaas {tab.name} (order {tab.order_label}, {tab.stages} stages), "
                 f"Lie group {groups or 'none'}, step size h = {h:.6g} s, {nsteps} steps from t = {t0:g} to "
                 f"{tEnd:g} s; Exudyn's time loop made {nsteps // k} steps of {k} integration step(s) each (the "
                 f"header's 'number of time steps (planned)' counts those)")

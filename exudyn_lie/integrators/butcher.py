@@ -293,6 +293,11 @@ class ButcherTableau:
         return s > 1 and not self.implicit and bool(np.array_equal(self.A[s - 1], self.b))
 
     @property
+    def order_label(self):
+        """The order as reported in a solution file's header."""
+        return str(self.order)
+
+    @property
     def partitioned(self):
         """True for a :class:`~.partitioned.PartitionedTableau` (the configurations' own coefficients)."""
         return False

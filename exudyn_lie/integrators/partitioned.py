@@ -13,19 +13,22 @@ only in a row with no other entry, where ``Psi_j = h aq_jj V_j`` is parallel to 
 tableau's) holds the row sums of ``A``, as Butcher's conditions of the first-order part need;
 ``cq``, the row sums of ``Aq``, are the times at which the stages are evaluated.
 
-Checked on construction, exactly for exact coefficients: the triangular forms above, ``sum b =
-sum bq = 1``, and the order-2 conditions of second-order equations ``Vdot = F(t, g)``:
+Checked on construction (the conditions below to 1e-14, in rational arithmetic for exact
+coefficients): the triangular forms above, a first stage at the step's start, ``sum b = sum bq = 1``,
+and the order-2 conditions of second-order equations ``Vdot = F(t, g)``:
 ``sum_j b_j cq_j = 1/2`` (the velocity) and ``sum_j bq_j c_j = 1/2`` (the configuration, through
 the stage velocities).  The first-order part ``(A, b)`` carries Butcher's conditions of its own
 ``order`` (of the velocity-dependent forces and the first-order coordinates).
 
 Exudyn's velocity Verlet (``CSolverExplicit.cpp``; Swope et al. 1982) as such a method: the half
 kick ``V_2 = V + h/2 Vdot_1``, the drift ``g exp(h V_2)`` and the second half kick with
-``Vdot_2 = F(t + h, g exp(h V_2), V_2)``.  It is symplectic for forces that depend on the
-configuration alone, of order 2 there and of order 1 for velocity-dependent forces (the second
-stage reads the half-step velocity).  Exudyn reuses the last stage's ``Vdot`` as the next step's
-first (one evaluation per step); here each step evaluates its first stage at its own start (two
-per step): the same scheme for forces of the configuration alone.
+``Vdot_2 = F(t + h, g exp(h V_2), V_2)``.  It is symplectic where ``Vdot`` depends on the
+configuration alone, of order 2 there and of order 1 where it depends on the velocity (the second
+stage reads the half-step velocity).  Velocity-dependent are dampers, but also a rigid body's
+gyroscopic term unless its inertia is isotropic (and, on SE(3), the coupling of the body-frame
+twist).  Exudyn reuses the last stage's ``Vdot`` as the next step's first (one evaluation per
+step); here each step evaluates its first stage at its own start (two per step): the same scheme
+where ``Vdot`` depends on the configuration alone.
 """
 import functools
 from dataclasses import dataclass, field
@@ -56,6 +59,8 @@ class PartitionedTableau(ButcherTableau):
             raise ValueError(f"partitioned tableau '{name}': {msg}")
 
         s = len(self.b)
+        if self.Aq is None or self.bq is None:
+            fail("Aq and bq (the configurations' coefficients) are required")
         try:
             Aq = [[_to_exact(x) for x in row] for row in self.Aq]
             bq = [_to_exact(x) for x in self.bq]
@@ -63,6 +68,8 @@ class PartitionedTableau(ButcherTableau):
             fail(f"configuration coefficients are not numbers ({exc})")
         if len(Aq) != s or any(len(row) != s for row in Aq) or len(bq) != s:
             fail(f"Aq must be {s}x{s} and bq have {s} entries")
+        if any(x != 0 for x in Aq[0]) or any(x != 0 for x in A_row0(self.A)):
+            fail("the first stage must be the step's start (row 1 of A and Aq zero)")
         for j in range(s):
             if any(Aq[j][l] != 0 for l in range(j + 1, s)):
                 fail(f"Aq row {j + 1} is not lower triangular")
@@ -108,11 +115,16 @@ class PartitionedTableau(ButcherTableau):
         for j in range(s - 1, -1, -1):
             if not need[j]:
                 need[j] = any(need[l] and (self.A[l, j] != 0.0 or self.Aq[l, j] != 0.0) for l in range(j + 1, s))
+        need[0] = True                   # (the step's start: accelerations recorded at outputs)
         return tuple(j for j in range(s) if need[j])
 
     @property
     def fsal(self):
         return False
+
+    @property
+    def order_label(self):
+        return f"{self.order2}; {self.order} where the forces depend on the velocity"
 
     @functools.lru_cache(maxsize=None)
     def first_order_part(self):
@@ -122,6 +134,10 @@ class PartitionedTableau(ButcherTableau):
 
     def __repr__(self):
         return f"PartitionedTableau(name={self.name!r}, stages={self.stages}, order2={self.order2})"
+
+
+def A_row0(A):
+    return [float(x) for x in np.asarray(A, float)[0]]
 
 
 def first_order_part(tableau):
@@ -144,8 +160,8 @@ VelocityVerlet = PartitionedTableau(
     bq=[0, 1],
     aliases=("Verlet", "StormerVerlet"),
     description="Velocity Verlet (kick-drift-kick) as Exudyn's VelocityVerlet defines it: V_2 = V + h/2 "
-                "Vdot_1, g+ = g exp(h V_2), V+ = V_2 + h/2 F(t + h, g+, V_2); symplectic, order 2 for "
-                "forces of the configuration alone.",
+                "Vdot_1, g+ = g exp(h V_2), V+ = V_2 + h/2 F(t + h, g+, V_2); symplectic and of order 2 "
+                "where F depends on the configuration alone, order 1 otherwise.",
 )
 
 PARTITIONED_METHODS: Tuple[PartitionedTableau, ...] = (VelocityVerlet,)

@@ -42,6 +42,8 @@ def stability_function(method, z, weights=None):
     """``R(z) = 1 + z w^T (I - z A)^-1 e`` for an array of complex ``z``, with the weights ``w``
     (default ``b``; ``b_hat`` for the embedded method): explicit and implicit tableaus alike."""
     tab = get_method(method)
+    if tab.partitioned:
+        raise ValueError(f"{tab.name} is partitioned: pair_growth, or first_order_part for its (A, b)")
     A = np.asarray(tab.A, float)
     w = np.asarray(tab.b if weights is None else weights, float)
     s = len(w)
@@ -65,25 +67,26 @@ def pair_growth(method, z):
     """A partitioned method's (integrators/partitioned.py) growth per step of the mode pair ``z,
     conj(z)`` (``z = h lambda``): the spectral radius of its step on ``q'' = -|z|^2 q + 2 Re(z) q'``
     (``h = 1``), the damped oscillator with those eigenvalues; a real ``z`` is the critically damped
-    one.  The configurations and the velocities have different coefficients, so no scalar ``R(z)``
-    describes the method on second-order equations."""
+    one, which bounds an overdamped pair's growth from above (conservative).  The configurations and
+    the velocities have different coefficients, so no scalar ``R(z)`` describes the method on
+    second-order equations."""
     tab = get_method(method)
     A, b, Aq, bq = (np.asarray(x, float) for x in (tab.A, tab.b, tab.Aq, tab.bq))
     s = len(b)
     zs = np.atleast_1d(np.asarray(z, complex))
-    out = np.empty(zs.size)
-    for n, zz in enumerate(zs.ravel()):
-        k, c = abs(zz) ** 2, -2.0 * zz.real
-        M = np.empty((2, 2))
-        for col, (q, v) in enumerate(((1.0, 0.0), (0.0, 1.0))):
-            Vs, acc = np.zeros(s), np.zeros(s)
-            for j in range(s):
-                Vs[j] = v + A[j, :j] @ acc[:j]
-                Q = q + Aq[j, :j] @ Vs[:j] + Aq[j, j] * Vs[j]
-                acc[j] = -k * Q - c * Vs[j]
-            M[:, col] = (q + bq @ Vs, v + b @ acc)
-        out[n] = np.max(np.abs(np.linalg.eigvals(M)))
-    return out.reshape(zs.shape)
+    k, c = np.abs(zs.ravel()) ** 2, -2.0 * zs.ravel().real
+    M = np.empty((k.size, 2, 2))
+    for col, (q, v) in enumerate(((1.0, 0.0), (0.0, 1.0))):      # the step is linear in (q, v)
+        Vs, acc = np.zeros((s, k.size)), np.zeros((s, k.size))
+        for j in range(s):
+            Vs[j] = v + A[j, :j] @ acc[:j]
+            Q = q + Aq[j, :j] @ Vs[:j] + Aq[j, j] * Vs[j]
+            acc[j] = -k * Q - c * Vs[j]
+        M[:, 0, col] = q + bq @ Vs
+        M[:, 1, col] = v + b @ acc
+    half = 0.5 * (M[:, 0, 0] + M[:, 1, 1])
+    root = np.sqrt(half.astype(complex) ** 2 - (M[:, 0, 0] * M[:, 1, 1] - M[:, 0, 1] * M[:, 1, 0]))
+    return np.maximum(np.abs(half + root), np.abs(half - root)).reshape(zs.shape)
 
 
 def stability_coefficients(method):
@@ -93,6 +96,9 @@ def stability_coefficients(method):
     if get_method(method).implicit:
         raise ValueError(f"{get_method(method).name} is implicit: its stability function is rational "
                          "(stability_function), not a polynomial")
+    if get_method(method).partitioned:
+        raise ValueError(f"{get_method(method).name} is partitioned: no scalar stability function on "
+                         "second-order equations (pair_growth); its first-order part: first_order_part")
     A, b = exact_tableau(get_method(method))
     s = len(b)
     coeffs = [Fraction(1)]
@@ -224,9 +230,14 @@ def stability_radius(method, tol=1e-3, nangles=181):
             return float("inf")
         raise ValueError(f"{get_method(method).name}: implicit but not A-stable")
     if get_method(method).partitioned:       # second-order modes: the pair's growth (pair_growth)
-        return _stability_radius_of(lambda zs: pair_growth(method, zs), float(tol), int(nangles))
+        return _partitioned_radius(get_method(method), float(tol), int(nangles))
     coeffs = tuple(float(x) for x in stability_coefficients(method))
     return _stability_radius_of_polynomial(coeffs, float(tol), int(nangles))
+
+
+@lru_cache(maxsize=None)
+def _partitioned_radius(tab, tol, nangles):
+    return _stability_radius_of(lambda zs: pair_growth(tab, zs), tol, nangles)
 
 
 @lru_cache(maxsize=None)

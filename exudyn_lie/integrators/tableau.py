@@ -503,7 +503,8 @@ def get_method(name):
         if key in (_name_key(n) for n in (m.name,) + tuple(m.aliases)):
             return m
     raise ValueError(f"unknown integration method '{name}'; available: "
-                     + ", ".join(method_names()) + " (case-insensitive; aliases: "
+                     + ", ".join(method_names()) + ", " + ", ".join(m.name for m in PARTITIONED_METHODS)
+                     + " (case-insensitive; aliases: "
                      + ", ".join(f"{a} = {m.name}" for m in METHODS for a in m.aliases) + ")")
 
 

@@ -272,12 +272,17 @@ class ButcherTableau:
         (``a_lj != 0``).  E.g. the 7th (FSAL) stage of DOPRI5 has ``b_7 = 0`` and is unused
         by the fixed-step 5th-order update.
         """
+        A, b = self._stage_coupling()
         s = self.stages
-        need = [self.b[j] != 0.0 for j in range(s)]
+        need = [b[j] != 0.0 for j in range(s)]
         for j in range(s - 1, -1, -1):
             if not need[j]:
-                need[j] = any(need[l] and self.A[l, j] != 0.0 for l in range(j + 1, s))
+                need[j] = any(need[l] and A[l, j] != 0.0 for l in range(j + 1, s))
         return tuple(j for j in range(s) if need[j])
+
+    def _stage_coupling(self):
+        """``(A, b)`` as :attr:`active_stages` reads them: which stage feeds which, and the result."""
+        return self.A, self.b
 
     # --- embedded pairs ----------------------------------------------------
     @property

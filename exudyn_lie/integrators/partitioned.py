@@ -68,8 +68,8 @@ class PartitionedTableau(ButcherTableau):
             fail(f"configuration coefficients are not numbers ({exc})")
         if len(Aq) != s or any(len(row) != s for row in Aq) or len(bq) != s:
             fail(f"Aq must be {s}x{s} and bq have {s} entries")
-        if any(x != 0 for x in Aq[0]) or any(x != 0 for x in A_row0(self.A)):
-            fail("the first stage must be the step's start (row 1 of A and Aq zero)")
+        if any(x != 0 for x in Aq[0]):       # (row 1 of A: zero for any explicit tableau)
+            fail("the first stage must be the step's start (row 1 of Aq zero)")
         for j in range(s):
             if any(Aq[j][l] != 0 for l in range(j + 1, s)):
                 fail(f"Aq row {j + 1} is not lower triangular")
@@ -106,17 +106,10 @@ class PartitionedTableau(ButcherTableau):
     def partitioned(self):
         return True
 
-    @property
-    def active_stages(self):
-        """Every stage whose velocity or configuration weight is non-zero, or that a needed later
-        stage uses."""
-        s = self.stages
-        need = [self.b[j] != 0.0 or self.bq[j] != 0.0 for j in range(s)]
-        for j in range(s - 1, -1, -1):
-            if not need[j]:
-                need[j] = any(need[l] and (self.A[l, j] != 0.0 or self.Aq[l, j] != 0.0) for l in range(j + 1, s))
-        need[0] = True                   # (the step's start: accelerations recorded at outputs)
-        return tuple(j for j in range(s) if need[j])
+    def _stage_coupling(self):
+        """A stage feeds the velocities and the configurations (``active_stages``; the first stage,
+        the step's start, is always used: Aq has a zero first row and bq or Aq reads it)."""
+        return np.abs(self.A) + np.abs(self.Aq), np.abs(self.b) + np.abs(self.bq)
 
     @property
     def fsal(self):
@@ -136,18 +129,10 @@ class PartitionedTableau(ButcherTableau):
         return f"PartitionedTableau(name={self.name!r}, stages={self.stages}, order2={self.order2})"
 
 
-def A_row0(A):
-    return [float(x) for x in np.asarray(A, float)[0]]
-
-
 def first_order_part(tableau):
     """The tableau that advances first-order coordinates: a partitioned method's ``(A, b)``, else the
     tableau itself."""
-    return tableau.first_order_part() if getattr(tableau, "partitioned", False) else tableau
-
-
-def is_partitioned(tableau):
-    return bool(getattr(tableau, "partitioned", False))
+    return tableau.first_order_part() if tableau.partitioned else tableau
 
 
 VelocityVerlet = PartitionedTableau(

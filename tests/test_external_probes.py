@@ -19,7 +19,7 @@ import exudyn as exu
 from exudyn.utilities import InertiaCuboid, RotationMatrixX, RotationMatrixY, RotationMatrixZ, SensorBody
 
 import exudyn_lie as exl
-from exudyn_lie.bridge import SceneFromExudyn, pyforces
+from exudyn_lie.bridge import SceneFromExudyn, pyforces, pyforces_coordinates
 from exudyn_lie.mbs import Simulator
 
 ii = exu.itemInterface
@@ -105,7 +105,8 @@ def spring_pair(config):
 
 def python_path(monkeypatch):
     """From now on the items run as Python items (the stage adder then calls ``add``)."""
-    for cls in (pyforces.TorsionalSpringDamperUF, pyforces.SpringDamperUF, pyforces.LoadUF):
+    for cls in (pyforces.TorsionalSpringDamperUF, pyforces.SpringDamperUF, pyforces.LoadUF,
+                pyforces_coordinates.CoordinateSpringDamperUF, pyforces_coordinates.CoordinateLoadUF):
         monkeypatch.delattr(cls, "add_stage")
 
 
@@ -185,3 +186,54 @@ def test_frames_changed_during_a_solve_reach_the_probe(monkeypatch):
     assert np.max(np.abs(probed - frames_moved(False))) > 1e-3      # the change matters
     python_path(monkeypatch)
     np.testing.assert_array_equal(probed, frames_moved(True))
+
+
+def uf_coordinate_spring(mbs, t, itemNumber, u, v, k, d, offset):
+    return k * (u - offset) * (1.0 + u * u) + d * v
+
+
+def coordinate_items():
+    """Coordinate items with user functions, probed by the compiled stage (``PROBE_COORD``): a
+    mass point on a cubic spring to a ground coordinate and a load on another of its
+    coordinates; two planar bodies spinning (over turns) with springs between their angles and
+    between a position coordinate of each; a spring on a rotation parameter of an Rxyz node,
+    which has no probe (it runs ``add``) next to them."""
+    mbs = exu.SystemContainer().AddSystem()
+    ng = mbs.AddNode(ii.NodePointGround())
+    n1 = mbs.AddNode(ii.NodePoint(referenceCoordinates=[0.5, 0, 0], initialVelocities=[0.3, -0.2, 0.1]))
+    mbs.AddObject(ii.MassPoint(mass=1.6, nodeNumber=n1))
+    mg = mbs.AddMarker(ii.MarkerNodeCoordinate(nodeNumber=ng, coordinate=0))
+    m10 = mbs.AddMarker(ii.MarkerNodeCoordinate(nodeNumber=n1, coordinate=0))
+    m11 = mbs.AddMarker(ii.MarkerNodeCoordinate(nodeNumber=n1, coordinate=1))
+    mbs.AddObject(ii.CoordinateSpringDamper(markerNumbers=[mg, m10], stiffness=400.0, damping=0.4, offset=0.1,
+                                            springForceUserFunction=uf_coordinate_spring))
+    mbs.AddLoad(ii.LoadCoordinate(markerNumber=m11, load=2.0,
+                                  loadUserFunction=lambda mbs, t, load: load * np.sin(7 * t)))
+    coords = []
+    for x, w in ((1.0, 9.0), (2.0, 11.0)):
+        n = mbs.AddNode(ii.NodeRigidBody2D(referenceCoordinates=[x, 0, 0.3], initialVelocities=[0, 0.1, w]))
+        mbs.AddObject(ii.ObjectRigidBody2D(mass=2.0, inertia=0.05, nodeNumber=n))
+        coords.append([mbs.AddMarker(ii.MarkerNodeCoordinate(nodeNumber=n, coordinate=c)) for c in range(3)])
+    mbs.AddObject(ii.CoordinateSpringDamper(markerNumbers=[coords[0][2], coords[1][2]], stiffness=1e-3, damping=1e-4,
+                                            springForceUserFunction=uf_coordinate_spring))
+    mbs.AddObject(ii.CoordinateSpringDamper(markerNumbers=[coords[0][0], coords[1][1]], stiffness=50.0, damping=0.1,
+                                            offset=-1.0, springForceUserFunction=uf_coordinate_spring))
+    b = mbs.CreateRigidBody(inertia=InertiaCuboid(1000, [0.1, 0.2, 0.3]), referencePosition=[0, 2, 0],
+                            nodeType=exu.NodeType.RotationRxyz, initialAngularVelocity=[0.4, 0.2, 1.0])
+    nb = mbs.GetObject(b)["nodeNumber"]
+    mr = mbs.AddMarker(ii.MarkerNodeCoordinate(nodeNumber=nb, coordinate=5))
+    mbs.AddObject(ii.CoordinateSpringDamper(markerNumbers=[mg, mr], stiffness=0.5, damping=0.01,
+                                            springForceUserFunction=uf_coordinate_spring))
+    mbs.Assemble()
+    return mbs
+
+
+def test_probed_coordinate_items_integrate_as_the_python_items(monkeypatch):
+    probed, items = integrate(coordinate_items(), steps=2000)
+    springs = [it for it in items if isinstance(it, pyforces_coordinates.CoordinateSpringDamperUF)]
+    assert [it.probeIndex is not None for it in springs] == [True, True, True, False]     # the last: Rxyz
+    assert abs(springs[1].A.prev) > 4 * np.pi and abs(springs[1].B.prev) > 4 * np.pi     # tracked over turns
+    python_path(monkeypatch)
+    python, _ = integrate(coordinate_items(), steps=2000)
+    assert np.all(np.isfinite(probed))
+    np.testing.assert_array_equal(probed, python)

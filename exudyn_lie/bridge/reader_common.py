@@ -53,6 +53,10 @@ class CoordinateMarker:
     param: Optional[RotationParameterCoordinate] = None
     paramPrev: Optional[np.ndarray] = None  # its node's parameters (4) last seen (Python items, pyforces)
 
+    def __post_init__(self):
+        # ``direction`` as three floats, read by the Python items at every stage (pyforces_coordinates)
+        self.axis = tuple(float(c) for c in self.direction)
+
     @property
     def spec(self):
         """The coordinate for Scene.AddCoordinate*: a direction, the AngleCoordinate or the

@@ -29,7 +29,13 @@ the bit):
   the world arms ``R s`` of both points (the only kinematics of the bridge's Python
   spring-damper, in a stage or not);
 * :data:`PROBE_ARM`: a point of a body (a load's point of application), output its world
-  arm ``R s`` (the bridge's ``pyforces._add_force``).
+  arm ``R s`` (the bridge's ``pyforces._add_force``);
+* :data:`PROBE_COORD`: the node coordinates of a coordinate item's two markers (a single one
+  for a load: side B on the ground), each a position coordinate (input its world axis ``d``;
+  outputs ``d . r``, 0, ``d . v``) or a rotation coordinate (inputs the axis ``d`` and the
+  first column ``f`` of its reference frame; outputs ``f . R e_x``, ``f . R e_y`` and
+  ``d . R omega``, from which the item takes the angle and tracks it over turns; the bridge's
+  ``pyforces_coordinates.coordinate_state``).
 """
 import math
 
@@ -41,6 +47,7 @@ GROUND = -1
 PROBE_TORSION = 1
 PROBE_SPRING = 2
 PROBE_ARM = 3
+PROBE_COORD = 4
 
 # the columns of a row: kind and bodies, then per kind its inputs and outputs
 P_KIND, P_BODY_A, P_BODY_B = 0, 1, 2
@@ -59,7 +66,15 @@ SPRING_ARM_B = 17
 ARM_POS = 3           # inputs: the point in body coordinates, 1.0 if it is not the frame origin
 ARM_HAS = 6
 ARM_WORLD = 7         # output: the world arm R s (3)
-N_PROBE = 20
+COORD_DIR_A = 3       # inputs per side: world axis d (3), frame column f (3), 1.0 for a rotation coordinate
+COORD_F_A = 6
+COORD_DIR_B = 9
+COORD_F_B = 12
+COORD_ANGLE_A = 15
+COORD_ANGLE_B = 16
+COORD_OUT_A = 17      # outputs per side: (d . r, 0, d . v) or (f . R e_x, f . R e_y, d . R omega)
+COORD_OUT_B = 20
+N_PROBE = 24
 
 
 def _row(kind, bodyA, bodyB, *groups):
@@ -86,6 +101,16 @@ def arm_probe_row(body, pos):
     coordinates)."""
     pos = [float(c) for c in pos]
     return _row(PROBE_ARM, body, GROUND, pos, [0.0 if pos == [0.0, 0.0, 0.0] else 1.0])
+
+
+def coord_probe_row(bodyA, dirA, frameA, bodyB, dirB, frameB):
+    """The input row of a :data:`PROBE_COORD` probe: per side the body, the coordinate's
+    world axis and, for a rotation coordinate, its frame's first column (None otherwise)."""
+    row = _row(PROBE_COORD, bodyA, bodyB, dirA, [0.0] * 3 if frameA is None else frameA,
+               dirB, [0.0] * 3 if frameB is None else frameB)
+    row[COORD_ANGLE_A] = 0.0 if frameA is None else 1.0
+    row[COORD_ANGLE_B] = 0.0 if frameB is None else 1.0
+    return row
 
 
 def probe_table(scene):
@@ -138,6 +163,29 @@ def probe_kinematics(Rs, rs, Vw, probe):
         elif kind == PROBE_ARM:
             b = int(p[P_BODY_A])
             p[ARM_WORLD], p[ARM_WORLD + 1], p[ARM_WORLD + 2] = _world_column(Rs[b], p, ARM_POS)
+        elif kind == PROBE_COORD:
+            coordinate_probe(Rs, rs, Vw, p, int(p[P_BODY_A]), COORD_DIR_A, COORD_F_A, COORD_ANGLE_A, COORD_OUT_A)
+            coordinate_probe(Rs, rs, Vw, p, int(p[P_BODY_B]), COORD_DIR_B, COORD_F_B, COORD_ANGLE_B, COORD_OUT_B)
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def coordinate_probe(Rs, rs, Vw, p, b, dcol, fcol, acol, out):
+    """:data:`PROBE_COORD`, one side: as ``pyforces_coordinates.coordinate_state`` without the
+    reference value and the tracking (nothing on the ground)."""
+    if b == GROUND:
+        return
+    d0, d1, d2 = p[dcol], p[dcol + 1], p[dcol + 2]
+    if p[acol] != 0.0:
+        R = Rs[b]
+        f0, f1, f2 = p[fcol], p[fcol + 1], p[fcol + 2]
+        w0, w1, w2 = _world_column(R, Vw[b], 0)
+        p[out] = f0 * R[0, 0] + f1 * R[1, 0] + f2 * R[2, 0]
+        p[out + 1] = f0 * R[0, 1] + f1 * R[1, 1] + f2 * R[2, 1]
+        p[out + 2] = d0 * w0 + d1 * w1 + d2 * w2
+    else:
+        p[out] = d0 * rs[b, 0] + d1 * rs[b, 1] + d2 * rs[b, 2]
+        p[out + 1] = 0.0
+        p[out + 2] = d0 * Vw[b, 3] + d1 * Vw[b, 4] + d2 * Vw[b, 5]
 
 
 @njit(cache=True, inline="always", _nrt=False)

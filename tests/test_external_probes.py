@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 import exudyn as exu
-from exudyn.utilities import InertiaCuboid, RotationMatrixX, RotationMatrixY, RotationMatrixZ, SensorBody
+from exudyn.utilities import InertiaCuboid, RotationMatrixX, RotationMatrixZ, SensorBody
 
 import exudyn_lie as exl
 from exudyn_lie.bridge import SceneFromExudyn, pyforces, pyforces_coordinates

@@ -110,3 +110,50 @@ def test_rank_rule_finds_a_dependent_row_of_any_scale(rng, scale):
     rank, null = schur_rank_and_null(S)
     assert rank == m - 1 and null.shape[1] == 1
     assert rows_in_null_space(null) == [0, 3]
+
+
+@pytest.mark.parametrize("m,kl,ku", [(1, 0, 0), (7, 2, 1), (30, 3, 5), (30, 29, 29), (50, 1, 0), (64, 6, 6)])
+def test_band_lu_with_pivoting_solves_like_numpy(m, kl, ku, rng):
+    """Band LU with partial pivoting (linalg.band_lu_factor_inplace): a band of half-widths kl,
+    ku with small diagonal entries (the pivots come from below), the fill region zero on entry,
+    everything outside it NaN (not read)."""
+    from exudyn_lie.mbs.linalg import band_lu_factor_inplace, band_lu_solve_inplace
+    A = rng.standard_normal((m, m))
+    A[np.tril_indices(m, -kl - 1)] = 0.0
+    A[np.triu_indices(m, ku + 1)] = 0.0
+    A[np.diag_indices(m)] *= 1e-3
+    E = A.copy()
+    E[np.tril_indices(m, -kl - 1)] = np.nan              # outside the band and its fill: never read
+    E[np.triu_indices(m, kl + ku + 1)] = np.nan
+    fill = np.triu(np.ones((m, m), bool), ku + 1) & ~np.triu(np.ones((m, m), bool), kl + ku + 1)
+    E[fill] = 0.0
+    piv = np.zeros(m, np.int64)
+    assert band_lu_factor_inplace(E, m, kl, ku, piv) == -1
+    b = rng.standard_normal(m)
+    x = b.copy()
+    band_lu_solve_inplace(E, m, kl, ku, piv, x)
+    assert np.all(np.isfinite(x))
+    # backward stable: the residual is round-off of |A| |x|
+    assert np.abs(A @ x - b).max() <= 1e-12 * (np.abs(A).max() * np.abs(x).max() * m + np.abs(b).max())
+
+
+def test_reverse_cuthill_mckee_finds_the_band_of_a_shuffled_one(rng):
+    """A tridiagonal block pattern (blocks of 6) numbered at random: the numbering of
+    band_order.rcm_order is a permutation and brings the half-widths back to the order of the
+    blocks (the shuffled pattern spans nearly the whole matrix)."""
+    from exudyn_lie.mbs.band_order import bandwidths, rcm_order
+    n = 120
+    D = np.zeros((n, n))
+    for blk in range(n // 6):
+        for other in (blk - 1, blk, blk + 1):
+            if 0 <= other < n // 6:
+                D[6 * blk:6 * blk + 6, 6 * other:6 * other + 6] = rng.standard_normal((6, 6))
+    p = rng.permutation(n)
+    Ds = D[np.ix_(p, p)]
+    Z = np.zeros((n, n))
+    ident = np.arange(n)
+    assert max(bandwidths(Ds, Z, n, ident)) > n // 2
+    perm, iperm, deg, nbr = (np.zeros(n, np.int64) for _ in range(4))
+    rcm_order(Ds, Z, n, perm, iperm, deg, nbr)
+    assert sorted(perm) == list(range(n)) and np.all(iperm[perm] == ident)
+    assert max(bandwidths(Ds, Z, n, iperm)) <= 17

@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..mbs.implicit import NS_FRESH, NS_H, NS_JACOBIANS, NS_STALE
+from ..mbs.implicit import NS_FRESH, NS_H, NS_JACOBIANS, NS_STALE, newton_band
 from .general_contact import general_contacts
 
 
@@ -95,6 +95,7 @@ class ExudynNewtonJacobian:
         newton.Dv[:] = 0.0
         newton.Dth[ix] = Aq[np.ix_(v, v)]
         newton.Dv[ix] = Av[np.ix_(v, v)]
+        newton_band(newton, newton.Dv.shape[0])
         st = newton.st
         st[NS_STALE] = 0.0
         st[NS_H] = 0.0                         # a new matrix: factored at the next stage

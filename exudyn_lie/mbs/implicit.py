@@ -49,7 +49,8 @@ from ..groups.interface import algebra_axes
 from . import stepper
 from .bodies import body_dexpinv_stage, exp_compose
 from .codes import INFO_BODY, STAGE_ARG_MAX2, STATUS_EXTERNAL, STATUS_NEWTON, STATUS_OK
-from .linalg import lu_factor_inplace, lu_solve_inplace
+from .band_order import BAND_MIN_N, band_worthwhile, bandwidths, rcm_order
+from .linalg import band_lu_factor_inplace, band_lu_solve_inplace, lu_factor_inplace, lu_solve_inplace
 from .methods import ImplicitMethod, needed_stages
 from .stepper import copy_state, stage_rhs_at
 
@@ -62,12 +63,19 @@ Newton = namedtuple("Newton", [
     "F1", "Ap", "A1",      # (nb, 6) the residual F1, F at the iterate (A1: kept over a Jacobian there)
     "x",                   # (n,) the right-hand side of the Newton system, then the correction dV
     "k6", "m6",            # (6,) scratch
+    "perm", "iperm",       # (n,) int: a band numbering of the unknowns (mbs/band_order.py) and its inverse
+    "deg", "nbr",          # (n,) int: the ordering's scratch
+    "lo", "hi",            # (n,) int: the first and last column of each row of Dth that is not zero
+    "Db",                  # (n, n) Dth in the band numbering, row a's band (kl + ku + 1 columns) first
+    "y",                   # (n,) the Newton system's right-hand side and correction in the band numbering
     "st",                  # float state: NS_* below
     "par",                 # [tolerance, maximum iterations, of Newton's own iteration (0: not tried),
-                           #  1: fixed steps' tolerance follows the local error (follow_local_error)]
+                           #  1: fixed steps' tolerance follows the local error (follow_local_error),
+                           #  1: a band numbering where it pays (newton_band; 0: dense always)]
 ])
-NS_STALE, NS_FRESH, NS_H, NS_JACOBIANS, NS_FACTORS, NS_ITERATIONS, NS_STAGES, NS_RETRIES, NS_RATE, NS_FULL = range(10)
-NP_TOL, NP_MAXIT, NP_MAXIT_FULL, NP_FOLLOW = range(4)
+NS_STALE, NS_FRESH, NS_H, NS_JACOBIANS, NS_FACTORS, NS_ITERATIONS, NS_STAGES, NS_RETRIES, NS_RATE, NS_FULL, \
+    NS_BAND, NS_KL, NS_KU = range(13)
+NP_TOL, NP_MAXIT, NP_MAXIT_FULL, NP_FOLLOW, NP_BAND = range(5)
 
 # the correction relative to the step's velocity scale (and h gamma times it).  The last stage's
 # velocity is the step's (stiffly accurate), so its Newton error adds up over the steps: about
@@ -123,12 +131,14 @@ def newton_arrays(gid, tol=NEWTON_TOL, maxIterations=NEWTON_MAXIT):
     for i, g in enumerate(gid):
         axes[i, list(algebra_axes(GROUPS[names[int(g)]]))] = 1.0
     z = lambda: np.zeros((nb, 6))      # noqa: E731
-    st = np.zeros(10)
+    st = np.zeros(13)
     st[NS_STALE] = 1.0
-    return Newton(E=np.zeros((n, n)), piv=np.zeros(n, np.int64), Dv=np.zeros((n, n)), Dth=np.zeros((n, n)),
+    iz = lambda: np.zeros(n, np.int64)      # noqa: E731
+    return Newton(E=np.zeros((n, n)), Db=np.zeros((n, n)), piv=iz(), Dv=np.zeros((n, n)), Dth=np.zeros((n, n)),
                   axes=axes, P=z(), W=z(), Th=z(), F1=z(), Ap=z(), A1=z(), x=np.zeros(n), k6=np.zeros(6),
-                  m6=np.zeros(6), st=st, par=np.array([float(tol), float(maxIterations), float(NEWTON_MAXIT_FULL),
-                                         1.0 if tol == NEWTON_TOL else 0.0]))
+                  m6=np.zeros(6), perm=iz(), iperm=iz(), deg=iz(), nbr=iz(), lo=iz(), hi=np.full(n, n - 1, np.int64),
+                  y=np.zeros(n), st=st, par=np.array([float(tol), float(maxIterations), float(NEWTON_MAXIT_FULL),
+                                         1.0 if tol == NEWTON_TOL else 0.0, 1.0]))
 
 
 def newton_counters(nw):
@@ -185,14 +195,61 @@ def newton_jacobian(sd, wk, nw, t, R, r, V, A0):
                 return st
             _difference_column(nw.Ap, A0, FD_STEP, nw.Dth, col)
     nw.st[NS_JACOBIANS] += 1.0
+    newton_band(nw, 6 * nb)
     return STATUS_OK
 
 
 @njit(cache=True, _nrt=False)
+def newton_band(nw, n):
+    """A band numbering of the Newton matrix from the pattern of the Jacobians where it makes
+    the factorisation cheaper (mbs/band_order.py): ``NS_BAND`` and its half-widths; and the
+    extent of each row of ``Dth`` (``lo``, ``hi``), the columns the iteration's product reads."""
+    for row in range(n):
+        lo, hi = n, -1
+        for col in range(n):
+            if nw.Dth[row, col] != 0.0:
+                lo = min(lo, col)
+                hi = col
+        nw.lo[row] = lo
+        nw.hi[row] = hi
+    nw.st[NS_BAND] = 0.0
+    if n < BAND_MIN_N or nw.par[NP_BAND] == 0.0:
+        return
+    rcm_order(nw.Dv, nw.Dth, n, nw.perm, nw.iperm, nw.deg, nw.nbr)
+    kl, ku = bandwidths(nw.Dv, nw.Dth, n, nw.iperm)
+    if band_worthwhile(n, kl, ku):
+        nw.st[NS_BAND] = 1.0
+        nw.st[NS_KL] = kl
+        nw.st[NS_KU] = ku
+        for a in range(n):              # contiguous rows for the iteration's product (the band numbering
+            row = nw.perm[a]            # scatters a row of Dth over the whole of it)
+            for c in range(max(0, a - kl), min(n - 1, a + ku) + 1):
+                nw.Db[a, c - a + kl] = nw.Dth[row, nw.perm[c]]
+
+
+@njit(cache=True, _nrt=False)
 def newton_factor(nw, hg):
-    """``E = I - hg Dv - hg^2 Dth``, factored; returns a status."""
+    """``E = I - hg Dv - hg^2 Dth``, factored (in the band numbering where ``NS_BAND``); returns a
+    status."""
     n = nw.E.shape[0]
     hg2 = hg * hg
+    if nw.st[NS_BAND] != 0.0:
+        kl, ku = int(nw.st[NS_KL]), int(nw.st[NS_KU])
+        for a in range(n):
+            ra = nw.perm[a]
+            for c in range(max(0, a - kl), min(n - 1, a + kl + ku) + 1):
+                if c > a + ku:                # the fill of the row exchanges
+                    nw.E[a, c] = 0.0
+                    continue
+                rc = nw.perm[c]
+                v = -hg * nw.Dv[ra, rc] - hg2 * nw.Dth[ra, rc]
+                if c == a:
+                    v += 1.0
+                nw.E[a, c] = v
+        nw.st[NS_FACTORS] += 1.0
+        if band_lu_factor_inplace(nw.E, n, kl, ku, nw.piv) >= 0:
+            return STATUS_NEWTON
+        return STATUS_OK
     for a in range(n):
         for c in range(n):
             nw.E[a, c] = -hg * nw.Dv[a, c] - hg2 * nw.Dth[a, c]
@@ -201,6 +258,41 @@ def newton_factor(nw, hg):
     if lu_factor_inplace(nw.E, n, nw.piv, 0.0) >= 0:
         return STATUS_NEWTON
     return STATUS_OK
+
+
+@njit(cache=True, _nrt=False)
+def newton_correction(nw, n, hg, Vs, W, Ap, F1, x):
+    """``x = E^-1 (-F2 - hg Dth F1)``, in the band numbering where ``NS_BAND`` (the product from
+    ``Db``).  Otherwise the product reads each row of ``Dth`` from its first to its last entry that
+    is not zero (the sum is the whole row's: the zeros add nothing)."""
+    axes = nw.axes
+    if nw.st[NS_BAND] == 0.0:
+        for row in range(n):
+            i, k = row // 6, row % 6
+            s = 0.0
+            for col in range(nw.lo[row], nw.hi[row] + 1):
+                s += nw.Dth[row, col] * F1[col // 6, col % 6]
+            x[row] = (-(Vs[i, k] - W[i, k] - hg * Ap[i, k]) - hg * s) * axes[i, k]
+        lu_solve_inplace(nw.E, n, nw.piv, x)
+        return
+    kl, ku = int(nw.st[NS_KL]), int(nw.st[NS_KU])
+    perm, y = nw.perm, nw.y
+    for c in range(n):
+        col = perm[c]
+        y[c] = F1[col // 6, col % 6]
+    for a in range(n):
+        row = perm[a]
+        i, k = row // 6, row % 6
+        s = 0.0
+        c0 = max(0, a - kl)
+        for c in range(c0, min(n - 1, a + ku) + 1):
+            s += nw.Db[a, c - a + kl] * y[c]
+        x[a] = (-(Vs[i, k] - W[i, k] - hg * Ap[i, k]) - hg * s) * axes[i, k]
+    for a in range(n):
+        y[a] = x[a]
+    band_lu_solve_inplace(nw.E, n, kl, ku, nw.piv, y)
+    for a in range(n):
+        x[perm[a]] = y[a]
 
 
 # --------------------------------------------------------------------------- one stage
@@ -273,15 +365,7 @@ def newton_iterate(sd, wk, nw, j, jprev, hg, tj, R, r, V, vscale, full):
             body_dexpinv_stage(gid[i], nw.m6, wk.Vs[i], nw.k6)
             for k in range(6):
                 F1[i, k] = (Th[i, k] - P[i, k] - hg * nw.k6[k]) * axes[i, k]
-        # x = -F2 - hg Dth F1
-        n = 6 * nb
-        for row in range(n):
-            i, k = row // 6, row % 6
-            s = 0.0
-            for col in range(n):
-                s += nw.Dth[row, col] * F1[col // 6, col % 6]
-            x[row] = (-(wk.Vs[i, k] - W[i, k] - hg * Ap[i, k]) - hg * s) * axes[i, k]
-        lu_solve_inplace(nw.E, n, nw.piv, x)
+        newton_correction(nw, 6 * nb, hg, wk.Vs, W, Ap, F1, x)
         d = 0.0
         for i in range(nb):
             for k in range(6):

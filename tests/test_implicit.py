@@ -429,3 +429,39 @@ def test_band_newton_matrix_of_a_sparse_model_gives_the_dense_result():
     assert np.abs(band.V - dense.V).max() < 1e-3 * np.abs(dense.V - ref.V).max()
     counts, dcounts = band.newtonCounters, dense.newtonCounters
     assert abs(counts["iterations"] - dcounts["iterations"]) <= 0.05 * dcounts["iterations"], (counts, dcounts)
+
+
+def test_newton_band_numbering_and_its_rows_of_dth():
+    """implicit.newton_band on given Jacobians: two separate chains of bodies numbered at random
+    get a band, and ``Db`` holds the rows of D_Theta in the band numbering (row a, column c at
+    ``c - a + kl``); a lopsided pattern (every body depends on body 0, body 0 on none) whose band
+    rows would be as long as the matrix's stays dense; below BAND_MIN_N unknowns no numbering."""
+    from exudyn_lie.mbs import implicit as I
+    from exudyn_lie.mbs.band_order import BAND_MIN_N
+    rng = np.random.default_rng(5)
+    nb = 24
+    n = 6 * nb
+    nw = I.newton_arrays(np.zeros(nb, np.int64))
+    order = rng.permutation(nb)
+    for c in range(2):
+        chain_ = order[c * 12:(c + 1) * 12]
+        for a, b in zip(chain_[:-1], chain_[1:]):
+            for p, q in ((a, b), (b, a), (a, a)):
+                nw.Dv[6 * p:6 * p + 6, 6 * q:6 * q + 6] = rng.standard_normal((6, 6))
+                nw.Dth[6 * p:6 * p + 6, 6 * q:6 * q + 6] = rng.standard_normal((6, 6))
+    I.newton_band(nw, n)
+    kl, ku = int(nw.st[I.NS_KL]), int(nw.st[I.NS_KU])
+    assert nw.st[I.NS_BAND] == 1.0 and kl + ku < n // 3
+    P = nw.Dth[np.ix_(nw.perm, nw.perm)]
+    assert np.all(np.tril(P, -kl - 1) == 0) and np.all(np.triu(P, ku + 1) == 0)
+    for a in range(n):
+        for c in range(max(0, a - kl), min(n - 1, a + ku) + 1):
+            assert nw.Db[a, c - a + kl] == P[a, c]
+    lop = I.newton_arrays(np.zeros(nb, np.int64))
+    lop.Dv[:, :6] = rng.standard_normal((n, 6))
+    I.newton_band(lop, n)
+    assert lop.st[I.NS_BAND] == 0.0
+    small = I.newton_arrays(np.zeros(BAND_MIN_N // 6 - 1, np.int64))
+    small.Dv[:6, 6:12] = 1.0
+    I.newton_band(small, small.Dv.shape[0])
+    assert small.st[I.NS_BAND] == 0.0 and small.Db.shape == (0, 0)

@@ -139,9 +139,9 @@ def test_band_lu_with_pivoting_solves_like_numpy(m, kl, ku, rng):
 
 def test_reverse_cuthill_mckee_finds_the_band_of_a_shuffled_one(rng):
     """A tridiagonal block pattern (blocks of 6) numbered at random: the numbering of
-    band_order.rcm_order is a permutation and brings the half-widths back to the order of the
+    band_order.rcm_numbering is a permutation and brings the half-widths back to the order of the
     blocks (the shuffled pattern spans nearly the whole matrix)."""
-    from exudyn_lie.mbs.band_order import bandwidths, rcm_order
+    from exudyn_lie.mbs.band_order import bandwidths, rcm_numbering
     n = 120
     D = np.zeros((n, n))
     for blk in range(n // 6):
@@ -154,6 +154,6 @@ def test_reverse_cuthill_mckee_finds_the_band_of_a_shuffled_one(rng):
     ident = np.arange(n)
     assert max(bandwidths(Ds, Z, n, ident)) > n // 2
     perm, iperm, deg, nbr = (np.zeros(n, np.int64) for _ in range(4))
-    rcm_order(Ds, Z, n, perm, iperm, deg, nbr)
+    rcm_numbering(Ds, Z, n, perm, iperm, deg, nbr)
     assert sorted(perm) == list(range(n)) and np.all(iperm[perm] == ident)
     assert max(bandwidths(Ds, Z, n, iperm)) <= 17

@@ -345,7 +345,7 @@ class ParameterWatch(MainSystemPatch):
             item = sc.pyItems[k]
             item.lv, item.uf, item.mf, item.bodyFixed = lv, uf, mf, bodyFixed
             if getattr(item, "probeIndex", None) is not None:     # its point, read by the compiled stage
-                self.solver.sim.SetProbeRow(item.probeIndex, item.probe_row())
+                self.solver.sim.SetProbeRow(item.probeIndex, _probe_row(item, what, t))
             return
         vector, point, flags = self.solver.sim.LoadRow(k)       # flags: [body, kind, bodyFixed]
         vector[:] = mf.rotation() @ lv if bodyFixed else lv
@@ -453,4 +453,13 @@ class ParameterWatch(MainSystemPatch):
         item.__dict__.update(keep)
         item.active = bool(d.get("activeConnector", True))
         if getattr(item, "probeIndex", None) is not None:     # its frames, read by the compiled stage
-            self.solver.sim.SetProbeRow(item.probeIndex, item.probe_row())
+            self.solver.sim.SetProbeRow(item.probeIndex, _probe_row(item, self.what('object', o, d), t))
+
+
+def _probe_row(item, what, t):
+    """The changed item's probe row (mbs/external_probes.py): it had one, so it must keep one."""
+    row = item.probe_row()
+    if row is None:
+        raise BridgeError(f"{what}: changed at t = {t:.6g} s so that the compiled stage can no longer compute "
+                          f"its kinematics; set its parameters before the solve")
+    return row

@@ -11,8 +11,8 @@ the numbering reversed), the matrix is a band of half-widths ``kl``, ``ku``, fac
 
 The pattern is the exact one of the forward differences (an entry is zero where the difference
 is, so bodies of separate mechanisms are never coupled); whatever it is, the factors are those
-of the whole matrix, so the band changes the cost, never the Newton iteration's result beyond
-round-off.
+of the whole matrix, so the band changes the cost and the round-off, not the Newton iteration's
+result.
 """
 from numba import njit
 
@@ -39,7 +39,7 @@ def _degrees(Dv, Dth, n, deg):
 
 
 @njit(cache=True, _nrt=False)
-def rcm_order(Dv, Dth, n, perm, iperm, deg, nbr):
+def rcm_numbering(Dv, Dth, n, perm, iperm, deg, nbr):
     """Reverse Cuthill-McKee numbering of the symmetric pattern of ``Dv`` and ``Dth``: the
     unknown ``perm[a]`` gets the number ``a`` (``iperm`` the inverse); ``deg`` and ``nbr``
     scratch of length ``n``.  Every connected part starts at an unknown of least degree."""
@@ -99,5 +99,7 @@ def bandwidths(Dv, Dth, n, iperm):
 
 @njit(cache=True, _nrt=False)
 def band_worthwhile(n, kl, ku):
-    """True where the band factorisation saves :data:`BAND_GAIN` of the dense one."""
-    return n >= BAND_MIN_N and BAND_GAIN * n * kl * (kl + ku + 1.0) < n * n * n / 3.0
+    """True where the band factorisation saves :data:`BAND_GAIN` of the dense one and the band's
+    rows (``kl + ku + 1`` entries, stored in the Newton matrix's ``Db``) are shorter than the
+    matrix's (a lopsided pattern, one body that every other depends on, has ``ku`` near ``n``)."""
+    return n >= BAND_MIN_N and kl + ku < n and BAND_GAIN * n * kl * (kl + ku + 1.0) < n * n * n / 3.0

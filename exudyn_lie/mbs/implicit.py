@@ -49,7 +49,7 @@ from ..groups.interface import algebra_axes
 from . import stepper
 from .bodies import body_dexpinv_stage, exp_compose
 from .codes import INFO_BODY, STAGE_ARG_MAX2, STATUS_EXTERNAL, STATUS_NEWTON, STATUS_OK
-from .band_order import BAND_MIN_N, band_worthwhile, bandwidths, rcm_order
+from .band_order import BAND_MIN_N, band_worthwhile, bandwidths, rcm_numbering
 from .linalg import band_lu_factor_inplace, band_lu_solve_inplace, lu_factor_inplace, lu_solve_inplace
 from .methods import ImplicitMethod, needed_stages
 from .stepper import copy_state, stage_rhs_at
@@ -134,7 +134,8 @@ def newton_arrays(gid, tol=NEWTON_TOL, maxIterations=NEWTON_MAXIT):
     st = np.zeros(13)
     st[NS_STALE] = 1.0
     iz = lambda: np.zeros(n, np.int64)      # noqa: E731
-    return Newton(E=np.zeros((n, n)), Db=np.zeros((n, n)), piv=iz(), Dv=np.zeros((n, n)), Dth=np.zeros((n, n)),
+    nband = n if n >= BAND_MIN_N else 0      # (Db: only where a band numbering may be taken)
+    return Newton(E=np.zeros((n, n)), Db=np.zeros((nband, nband)), piv=iz(), Dv=np.zeros((n, n)), Dth=np.zeros((n, n)),
                   axes=axes, P=z(), W=z(), Th=z(), F1=z(), Ap=z(), A1=z(), x=np.zeros(n), k6=np.zeros(6),
                   m6=np.zeros(6), perm=iz(), iperm=iz(), deg=iz(), nbr=iz(), lo=iz(), hi=np.full(n, n - 1, np.int64),
                   y=np.zeros(n), st=st, par=np.array([float(tol), float(maxIterations), float(NEWTON_MAXIT_FULL),
@@ -180,6 +181,7 @@ def newton_jacobian(sd, wk, nw, t, R, r, V, A0):
             st = stage_rhs_at(sd, wk, t, nw.Ap)
             wk.Vs[i, k] = V[i, k]
             if st != STATUS_OK:
+                nw.st[NS_STALE] = 1.0        # Dv, Dth partly overwritten: the next stage makes them anew
                 return st
             _difference_column(nw.Ap, A0, e, nw.Dv, col)
             for m in range(6):
@@ -192,6 +194,7 @@ def newton_jacobian(sd, wk, nw, t, R, r, V, A0):
                 for c in range(3):
                     wk.Rs[i, a, c] = R[i, a, c]
             if st != STATUS_OK:
+                nw.st[NS_STALE] = 1.0
                 return st
             _difference_column(nw.Ap, A0, FD_STEP, nw.Dth, col)
     nw.st[NS_JACOBIANS] += 1.0
@@ -215,7 +218,7 @@ def newton_band(nw, n):
     nw.st[NS_BAND] = 0.0
     if n < BAND_MIN_N or nw.par[NP_BAND] == 0.0:
         return
-    rcm_order(nw.Dv, nw.Dth, n, nw.perm, nw.iperm, nw.deg, nw.nbr)
+    rcm_numbering(nw.Dv, nw.Dth, n, nw.perm, nw.iperm, nw.deg, nw.nbr)
     kl, ku = bandwidths(nw.Dv, nw.Dth, n, nw.iperm)
     if band_worthwhile(n, kl, ku):
         nw.st[NS_BAND] = 1.0

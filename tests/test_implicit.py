@@ -457,6 +457,8 @@ def test_newton_band_numbering_and_its_rows_of_dth():
     for a in range(n):
         for c in range(max(0, a - kl), min(n - 1, a + ku) + 1):
             assert nw.Db[a, c - a + kl] == P[a, c]
+        nz = np.nonzero(P[a])[0]              # the product's extent of row a, in band columns
+        assert (nw.lo[a], nw.hi[a]) == ((nz[0], nz[-1]) if nz.size else (n, -1))
     lop = I.newton_arrays(np.zeros(nb, np.int64))
     lop.Dv[:, :6] = rng.standard_normal((n, 6))
     I.newton_band(lop, n)

@@ -117,7 +117,7 @@ def test_band_lu_with_pivoting_solves_like_numpy(m, kl, ku, rng):
     """Band LU with partial pivoting (linalg.band_lu_factor_inplace): a band of half-widths kl,
     ku with small diagonal entries (the pivots come from below), the fill region zero on entry,
     everything outside it NaN (not read)."""
-    from exudyn_lie.mbs.linalg import band_lu_factor_inplace, band_lu_solve_inplace
+    from exudyn_lie.mbs.linalg import band_lu_extents, band_lu_factor_inplace, band_lu_solve_extents, band_lu_solve_inplace
     A = rng.standard_normal((m, m))
     A[np.tril_indices(m, -kl - 1)] = 0.0
     A[np.triu_indices(m, ku + 1)] = 0.0
@@ -133,6 +133,11 @@ def test_band_lu_with_pivoting_solves_like_numpy(m, kl, ku, rng):
     x = b.copy()
     band_lu_solve_inplace(E, m, kl, ku, piv, x)
     assert np.all(np.isfinite(x))
+    lend, uend = np.zeros(m, np.int64), np.zeros(m, np.int64)      # the solve up to the factors' extents
+    band_lu_extents(E, m, kl, ku, lend, uend)
+    xe = b.copy()
+    band_lu_solve_extents(E, m, piv, lend, uend, xe)
+    assert np.array_equal(xe, x)
     # backward stable: the residual is round-off of |A| |x|
     assert np.abs(A @ x - b).max() <= 1e-12 * (np.abs(A).max() * np.abs(x).max() * m + np.abs(b).max())
 

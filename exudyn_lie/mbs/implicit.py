@@ -50,7 +50,7 @@ from . import stepper
 from .bodies import body_dexpinv_stage, exp_compose
 from .codes import INFO_BODY, STAGE_ARG_MAX2, STATUS_EXTERNAL, STATUS_NEWTON, STATUS_OK
 from .band_order import BAND_MIN_N, band_worthwhile, bandwidths, rcm_numbering
-from .linalg import band_lu_factor_inplace, band_lu_solve_inplace, lu_factor_inplace, lu_solve_inplace
+from .linalg import band_lu_extents, band_lu_factor_inplace, band_lu_solve_extents, lu_factor_inplace, lu_solve_inplace
 from .methods import ImplicitMethod, needed_stages
 from .stepper import copy_state, stage_rhs_at
 
@@ -64,8 +64,10 @@ Newton = namedtuple("Newton", [
     "x",                   # (n,) the right-hand side of the Newton system, then the correction dV
     "k6", "m6",            # (6,) scratch
     "perm", "iperm",       # (n,) int: a band numbering of the unknowns (mbs/band_order.py) and its inverse
-    "deg", "nbr",          # (n,) int: the ordering's scratch
-    "lo", "hi",            # (n,) int: the first and last column of each row of Dth that is not zero
+    "deg", "nbr",          # (n,) int: the ordering's scratch; after a band factorisation the extents of its
+                           #   U rows and L columns (linalg.band_lu_extents)
+    "lo", "hi",            # (n,) int: the first and last column of each row of Dth that is not zero (in the
+                           #   band numbering where NS_BAND: of each row of Db, as band columns)
     "Db",                  # (n, n) Dth in the band numbering, row a's band (kl + ku + 1 columns) first
     "y",                   # (n,) the Newton system's right-hand side and correction in the band numbering
     "st",                  # float state: NS_* below
@@ -226,8 +228,15 @@ def newton_band(nw, n):
         nw.st[NS_KU] = ku
         for a in range(n):              # contiguous rows for the iteration's product (the band numbering
             row = nw.perm[a]            # scatters a row of Dth over the whole of it)
+            lo, hi = n, -1
             for c in range(max(0, a - kl), min(n - 1, a + ku) + 1):
-                nw.Db[a, c - a + kl] = nw.Dth[row, nw.perm[c]]
+                v = nw.Dth[row, nw.perm[c]]
+                nw.Db[a, c - a + kl] = v
+                if v != 0.0:
+                    lo = min(lo, c)
+                    hi = c
+            nw.lo[a] = lo
+            nw.hi[a] = hi
 
 
 @njit(cache=True, _nrt=False)
@@ -252,6 +261,7 @@ def newton_factor(nw, hg):
         nw.st[NS_FACTORS] += 1.0
         if band_lu_factor_inplace(nw.E, n, kl, ku, nw.piv) >= 0:
             return STATUS_NEWTON
+        band_lu_extents(nw.E, n, kl, ku, nw.nbr, nw.deg)
         return STATUS_OK
     for a in range(n):
         for c in range(n):
@@ -278,7 +288,7 @@ def newton_correction(nw, n, hg, Vs, W, Ap, F1, x):
             x[row] = (-(Vs[i, k] - W[i, k] - hg * Ap[i, k]) - hg * s) * axes[i, k]
         lu_solve_inplace(nw.E, n, nw.piv, x)
         return
-    kl, ku = int(nw.st[NS_KL]), int(nw.st[NS_KU])
+    kl = int(nw.st[NS_KL])
     perm, y = nw.perm, nw.y
     for c in range(n):
         col = perm[c]
@@ -287,13 +297,12 @@ def newton_correction(nw, n, hg, Vs, W, Ap, F1, x):
         row = perm[a]
         i, k = row // 6, row % 6
         s = 0.0
-        c0 = max(0, a - kl)
-        for c in range(c0, min(n - 1, a + ku) + 1):
+        for c in range(nw.lo[a], nw.hi[a] + 1):
             s += nw.Db[a, c - a + kl] * y[c]
         x[a] = (-(Vs[i, k] - W[i, k] - hg * Ap[i, k]) - hg * s) * axes[i, k]
     for a in range(n):
         y[a] = x[a]
-    band_lu_solve_inplace(nw.E, n, kl, ku, nw.piv, y)
+    band_lu_solve_extents(nw.E, n, nw.piv, nw.nbr, nw.deg, y)
     for a in range(n):
         x[perm[a]] = y[a]
 

@@ -345,3 +345,41 @@ def band_lu_solve_inplace(E, m, kl, ku, piv, x):
         for c in range(k + 1, min(m - 1, k + ku2) + 1):
             s -= E[k, c] * x[c]
         x[k] = s / E[k, k]
+
+
+@njit(cache=True, _nrt=False)
+def band_lu_extents(E, m, kl, ku, lend, uend):
+    """The last entry that is not zero of each column of ``L`` (``lend[k]``, a row) and of each
+    row of ``U`` (``uend[a]``, a column) of :func:`band_lu_factor_inplace`'s factors: a matrix of
+    separate mechanisms is block diagonal inside its band, and the solve need not run over the
+    band's zeros."""
+    for k in range(m):
+        last = k
+        for i in range(k + 1, min(m - 1, k + kl) + 1):
+            if E[i, k] != 0.0:
+                last = i
+        lend[k] = last
+        last = k
+        for c in range(k + 1, min(m - 1, k + kl + ku) + 1):
+            if E[k, c] != 0.0:
+                last = c
+        uend[k] = last
+
+
+@njit(cache=True, _nrt=False)
+def band_lu_solve_extents(E, m, piv, lend, uend, x):
+    """:func:`band_lu_solve_inplace` up to the extents of :func:`band_lu_extents` (the same sums:
+    the entries left out are zeros)."""
+    for k in range(m):
+        p = piv[k]
+        if p != k:
+            x[k], x[p] = x[p], x[k]
+        xk = x[k]
+        if xk != 0.0:
+            for i in range(k + 1, lend[k] + 1):
+                x[i] -= E[i, k] * xk
+    for k in range(m - 1, -1, -1):
+        s = x[k]
+        for c in range(k + 1, uend[k] + 1):
+            s -= E[k, c] * x[c]
+        x[k] = s / E[k, k]

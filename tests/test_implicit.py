@@ -63,11 +63,16 @@ def chain(k, damping, n=5):
             sc.AddRevoluteJoint(GROUND, b, [0, 0, 0], axis=[0, 1, 0])
             sc.AddSpringDamper(GROUND, [0, 0, 0], b, [-0.5, 0, 0], stiffness=10.0)
         else:
-            sc.AddCartesianSpringDamper(prev, [0.25, 0, 0], b, [-0.25, 0, 0], stiffness=[k] * 3,
-                                        damping=[damping] * 3)
-            sc.AddTorsionalSpringDamper(prev, b, stiffness=0.01 * k, damping=0.01 * damping)
+            stiff_link(sc, prev, b, k, damping)
         prev = b
     return sc
+
+
+def stiff_link(sc, prev, b, k, damping):
+    """Bodies ``prev`` and ``b`` on a Cartesian spring of stiffness ``k`` between their ends and a
+    torsional spring of ``0.01 k``."""
+    sc.AddCartesianSpringDamper(prev, [0.25, 0, 0], b, [-0.25, 0, 0], stiffness=[k] * 3, damping=[damping] * 3)
+    sc.AddTorsionalSpringDamper(prev, b, stiffness=0.01 * k, damping=0.01 * damping)
 
 
 def run(sc, method, group, T, h):
@@ -400,9 +405,7 @@ def shuffled_chains(k, damping, n, seed=3):
             if prev == GROUND:
                 sc.AddRevoluteJoint(GROUND, b, [0, c, 0], axis=[0, 1, 0])
             else:
-                sc.AddCartesianSpringDamper(prev, [0.25, 0, 0], b, [-0.25, 0, 0], stiffness=[k] * 3,
-                                            damping=[damping] * 3)
-                sc.AddTorsionalSpringDamper(prev, b, stiffness=0.01 * k, damping=0.01 * damping)
+                stiff_link(sc, prev, b, k, damping)
             prev = b
     return sc
 

@@ -117,7 +117,7 @@ def test_band_lu_with_pivoting_solves_like_numpy(m, kl, ku, rng):
     """Band LU with partial pivoting (linalg.band_lu_factor_inplace): a band of half-widths kl,
     ku with small diagonal entries (the pivots come from below), the fill region zero on entry,
     everything outside it NaN (not read)."""
-    from exudyn_lie.mbs.linalg import band_lu_extents, band_lu_factor_inplace, band_lu_solve_extents, band_lu_solve_inplace
+    from exudyn_lie.mbs.linalg import band_lu_extents, band_lu_factor_inplace, band_lu_solve_extents
     A = rng.standard_normal((m, m))
     A[np.tril_indices(m, -kl - 1)] = 0.0
     A[np.triu_indices(m, ku + 1)] = 0.0
@@ -130,11 +130,13 @@ def test_band_lu_with_pivoting_solves_like_numpy(m, kl, ku, rng):
     piv = np.zeros(m, np.int64)
     assert band_lu_factor_inplace(E, m, kl, ku, piv) == -1
     b = rng.standard_normal(m)
-    x = b.copy()
-    band_lu_solve_inplace(E, m, kl, ku, piv, x)
+    x = b.copy()                          # over the whole band
+    ks = np.arange(m)
+    band_lu_solve_extents(E, m, piv, np.minimum(ks + kl, m - 1), np.minimum(ks + kl + ku, m - 1), x)
     assert np.all(np.isfinite(x))
-    lend, uend = np.zeros(m, np.int64), np.zeros(m, np.int64)      # the solve up to the factors' extents
+    lend, uend = np.zeros(m, np.int64), np.zeros(m, np.int64)      # up to the factors' extents: the same sums
     band_lu_extents(E, m, kl, ku, lend, uend)
+    assert np.all(lend <= np.minimum(ks + kl, m - 1)) and np.all(uend <= np.minimum(ks + kl + ku, m - 1))
     xe = b.copy()
     band_lu_solve_extents(E, m, piv, lend, uend, xe)
     assert np.array_equal(xe, x)

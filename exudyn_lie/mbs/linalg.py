@@ -298,7 +298,7 @@ def band_lu_factor_inplace(E, m, kl, ku, piv):
     of lower bandwidth ``kl`` and upper ``ku`` (dense storage; entries outside the band are not
     read).  The row exchanges give ``U`` the upper bandwidth ``kl + ku``: those entries of ``E``
     must be zero on entry.  As LAPACK's gbtrf, each step exchanges only the columns from its own
-    on and the multipliers stay where they were computed, so :func:`band_lu_solve_inplace`
+    on and the multipliers stay where they were computed, so :func:`band_lu_solve_extents`
     applies the exchanges and the eliminations in turn.  ``m kl (kl + ku)`` operations against
     ``m^3 / 3`` for :func:`lu_factor_inplace`.  Returns -1, or the first column with a zero
     pivot."""
@@ -329,25 +329,6 @@ def band_lu_factor_inplace(E, m, kl, ku, piv):
 
 
 @njit(cache=True, _nrt=False)
-def band_lu_solve_inplace(E, m, kl, ku, piv, x):
-    """``x <- E_original^-1 x`` with the factors of :func:`band_lu_factor_inplace`."""
-    for k in range(m):
-        p = piv[k]
-        if p != k:
-            x[k], x[p] = x[p], x[k]
-        xk = x[k]
-        if xk != 0.0:
-            for i in range(k + 1, min(m - 1, k + kl) + 1):
-                x[i] -= E[i, k] * xk
-    ku2 = kl + ku
-    for k in range(m - 1, -1, -1):
-        s = x[k]
-        for c in range(k + 1, min(m - 1, k + ku2) + 1):
-            s -= E[k, c] * x[c]
-        x[k] = s / E[k, k]
-
-
-@njit(cache=True, _nrt=False)
 def band_lu_extents(E, m, kl, ku, lend, uend):
     """The last entry that is not zero of each column of ``L`` (``lend[k]``, a row) and of each
     row of ``U`` (``uend[a]``, a column) of :func:`band_lu_factor_inplace`'s factors: a matrix of
@@ -368,8 +349,9 @@ def band_lu_extents(E, m, kl, ku, lend, uend):
 
 @njit(cache=True, _nrt=False)
 def band_lu_solve_extents(E, m, piv, lend, uend, x):
-    """:func:`band_lu_solve_inplace` up to the extents of :func:`band_lu_extents` (the same sums:
-    the entries left out are zeros)."""
+    """``x <- E_original^-1 x`` with the factors of :func:`band_lu_factor_inplace`, running over
+    each column of ``L`` and row of ``U`` up to its extent (:func:`band_lu_extents`; or the band's
+    own, ``k + kl`` and ``k + kl + ku``, capped at ``m - 1``)."""
     for k in range(m):
         p = piv[k]
         if p != k:

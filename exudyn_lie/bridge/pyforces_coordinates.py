@@ -54,13 +54,16 @@ def _tracked_angle(cm, c, s):
     return a - cm.ref
 
 
+_GROUND_SIDE = (GROUND, (0.0, 0.0, 0.0), None)
+
+
 def probe_side(cm):
     """(body, world axis, frame column or None) of a marker for its coordinate probe
     (mbs/external_probes.coord_probe_row); None for a rotation parameter (no probe)."""
     if cm.param is not None:
         return None
     if cm.body == GROUND:
-        return GROUND, (0.0, 0.0, 0.0), None
+        return _GROUND_SIDE
     return cm.body, cm.axis, (None if cm.angle is None else _frame_column(cm))
 
 
@@ -68,7 +71,7 @@ def probe_row(A, B):
     """The coordinate probe of markers ``A`` and ``B`` (``B`` None: a load), None where either
     is a rotation parameter (the item then runs :meth:`add`)."""
     a = probe_side(A)
-    b = (GROUND, (0.0, 0.0, 0.0), None) if B is None else probe_side(B)
+    b = _GROUND_SIDE if B is None else probe_side(B)
     if a is None or b is None:
         return None
     return coord_probe_row(a[0], a[1], a[2], b[0], b[1], b[2])

@@ -42,7 +42,9 @@ def _degrees(Dv, Dth, n, deg):
 def rcm_numbering(Dv, Dth, n, perm, iperm, deg, nbr):
     """Reverse Cuthill-McKee numbering of the symmetric pattern of ``Dv`` and ``Dth``: the
     unknown ``perm[a]`` gets the number ``a`` (``iperm`` the inverse); ``deg`` and ``nbr``
-    scratch of length ``n``.  Every connected part starts at an unknown of least degree."""
+    scratch of length ``n``.  Every connected part starts at an unknown of least degree.  The
+    compiled twin of ``linalg.rcm_order`` (Python lists, for orders made once at set-up): this
+    one runs inside the compiled Newton iteration after each Jacobian, on the dense pattern."""
     _degrees(Dv, Dth, n, deg)
     for a in range(n):
         iperm[a] = -1

@@ -208,7 +208,28 @@ def newton_jacobian(sd, wk, nw, t, R, r, V, A0):
 def newton_band(nw, n):
     """A band numbering of the Newton matrix from the pattern of the Jacobians where it makes
     the factorisation cheaper (mbs/band_order.py): ``NS_BAND`` and its half-widths; and the
-    extent of each row of ``Dth`` (``lo``, ``hi``), the columns the iteration's product reads."""
+    extent (``lo``, ``hi``) of each row the iteration's product reads: of ``Db`` in the band
+    numbering, of ``Dth`` otherwise."""
+    nw.st[NS_BAND] = 0.0
+    if n >= BAND_MIN_N and nw.par[NP_BAND] != 0.0:
+        rcm_numbering(nw.Dv, nw.Dth, n, nw.perm, nw.iperm, nw.deg, nw.nbr)
+        kl, ku = bandwidths(nw.Dv, nw.Dth, n, nw.iperm)
+        if band_worthwhile(n, kl, ku):
+            nw.st[NS_BAND] = 1.0
+            nw.st[NS_KL] = kl
+            nw.st[NS_KU] = ku
+            for a in range(n):          # contiguous rows for the iteration's product (the band numbering
+                row = nw.perm[a]        # scatters a row of Dth over the whole of it)
+                lo, hi = n, -1
+                for c in range(max(0, a - kl), min(n - 1, a + ku) + 1):
+                    v = nw.Dth[row, nw.perm[c]]
+                    nw.Db[a, c - a + kl] = v
+                    if v != 0.0:
+                        lo = min(lo, c)
+                        hi = c
+                nw.lo[a] = lo
+                nw.hi[a] = hi
+            return
     for row in range(n):
         lo, hi = n, -1
         for col in range(n):
@@ -217,26 +238,6 @@ def newton_band(nw, n):
                 hi = col
         nw.lo[row] = lo
         nw.hi[row] = hi
-    nw.st[NS_BAND] = 0.0
-    if n < BAND_MIN_N or nw.par[NP_BAND] == 0.0:
-        return
-    rcm_numbering(nw.Dv, nw.Dth, n, nw.perm, nw.iperm, nw.deg, nw.nbr)
-    kl, ku = bandwidths(nw.Dv, nw.Dth, n, nw.iperm)
-    if band_worthwhile(n, kl, ku):
-        nw.st[NS_BAND] = 1.0
-        nw.st[NS_KL] = kl
-        nw.st[NS_KU] = ku
-        for a in range(n):              # contiguous rows for the iteration's product (the band numbering
-            row = nw.perm[a]            # scatters a row of Dth over the whole of it)
-            lo, hi = n, -1
-            for c in range(max(0, a - kl), min(n - 1, a + ku) + 1):
-                v = nw.Dth[row, nw.perm[c]]
-                nw.Db[a, c - a + kl] = v
-                if v != 0.0:
-                    lo = min(lo, c)
-                    hi = c
-            nw.lo[a] = lo
-            nw.hi[a] = hi
 
 
 @njit(cache=True, _nrt=False)
@@ -290,18 +291,16 @@ def newton_correction(nw, n, hg, Vs, W, Ap, F1, x):
         return
     kl = int(nw.st[NS_KL])
     perm, y = nw.perm, nw.y
-    for c in range(n):
+    for c in range(n):                  # x: F1 in the band numbering, y: the right-hand side
         col = perm[c]
-        y[c] = F1[col // 6, col % 6]
+        x[c] = F1[col // 6, col % 6]
     for a in range(n):
         row = perm[a]
         i, k = row // 6, row % 6
         s = 0.0
         for c in range(nw.lo[a], nw.hi[a] + 1):
-            s += nw.Db[a, c - a + kl] * y[c]
-        x[a] = (-(Vs[i, k] - W[i, k] - hg * Ap[i, k]) - hg * s) * axes[i, k]
-    for a in range(n):
-        y[a] = x[a]
+            s += nw.Db[a, c - a + kl] * x[c]
+        y[a] = (-(Vs[i, k] - W[i, k] - hg * Ap[i, k]) - hg * s) * axes[i, k]
     band_lu_solve_extents(nw.E, n, nw.piv, nw.nbr, nw.deg, y)
     for a in range(n):
         x[perm[a]] = y[a]

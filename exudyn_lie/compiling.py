@@ -13,11 +13,13 @@ import sys
 import threading
 import time
 
-#: Seconds a cold start compiles when this machine has not compiled the solver before: 16 s
-#: (kernel path) to 19 s (SolveDynamic) on an idle 2-core AMD EPYC, measured with an empty
-#: cache (``python -m exudyn_lie bench --sections startup --quick --cold``, README).  After one
-#: cold start the notice gives the compile time measured then on this machine (:data:`MEASURED_FILE`).
-COLD_COMPILE_SECONDS = 20
+#: Seconds a cold start compiles when this machine has not compiled the solver before, on an idle
+#: 2-core AMD EPYC with an empty cache: 97 s for the paper's heavy top through the kernel (a lean
+#: scene; ``python -m exudyn_lie bench --sections startup --quick --cold``) and 185 s for a pendulum
+#: read from an Exudyn script through ``SolveDynamic`` (the full kernel; by hand, docs/BENCH.md).
+#: The default is the drop-in's, which most first runs are.  After one cold start the notice
+#: gives the compile time measured then on this machine (:data:`MEASURED_FILE`).
+COLD_COMPILE_SECONDS = 190
 
 
 def _state_dir():
@@ -58,6 +60,11 @@ def estimated_seconds():
     except (OSError, ValueError, IndexError):
         pass
     return COLD_COMPILE_SECONDS
+
+
+def duration_text(seconds):
+    """``'about 40 s'``, from 90 s on in minutes: ``'about 3 min'``."""
+    return f"about {seconds} s" if seconds < 90 else f"about {round(seconds / 60)} min"
 
 
 def _measure_this_cold_start(disp):
@@ -120,7 +127,7 @@ def announce_cold_compile(disp, stream=None):
     if _announced or not cache_is_cold(disp):
         return False
     _announced = _coldInProgress = True
-    print(f"exudyn_lie: compiling the solver for this machine, first run only, about {estimated_seconds()} s",
+    print(f"exudyn_lie: compiling the solver for this machine, first run only, {duration_text(estimated_seconds())}",
           file=sys.stderr if stream is None else stream, flush=True)
     _measure_this_cold_start(disp)
     return True

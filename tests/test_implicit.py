@@ -470,3 +470,85 @@ def test_newton_band_numbering_and_its_rows_of_dth():
     small.Dv[:6, 6:12] = 1.0
     I.newton_band(small, small.Dv.shape[0])
     assert small.st[I.NS_BAND] == 0.0 and small.Db.shape == (0, 0)
+
+
+# --------------------------------------------------------------------------- Jacobians by groups of bodies
+def _jacobian_state(n=12):
+    """A simulator of the shuffled chains after a few steps, and F at its state (what the stages'
+    Jacobian differences from)."""
+    from exudyn_lie.mbs.stepper import stage_rhs_at
+    sim = Simulator(shuffled_chains(1e6, 2000.0, n), "ESDIRK3", "SE3", projectInitial=True)
+    sim.Run(0.004, 2e-3, outputEvery=2)
+    A0 = np.zeros_like(sim.V)
+    from exudyn_lie.mbs.stepper import copy_state
+    copy_state(sim.R, sim.r, sim.V, sim.wk.Rs, sim.wk.rs, sim.wk.Vs)
+    assert stage_rhs_at(sim.sd, sim.wk, sim.t, A0) == 0
+    return sim, A0
+
+
+def test_jacobian_by_groups_of_bodies_equals_the_one_column_by_column():
+    """Two chains of 12 bodies on springs: a body's motion reaches its neighbours' accelerations
+    only, so a few groups of bodies (a distance-2 colouring) take the place of the 24 bodies, and
+    the Jacobian by groups is the one made column by column, entry for entry."""
+    from exudyn_lie.mbs import implicit as I
+    sim, A0 = _jacobian_state()
+    dense = I.newton_arrays(sim.sd.gid)
+    assert I.newton_jacobian(sim.sd, sim.wk, dense, sim.t, sim.R, sim.r, sim.V, A0) == 0
+    ncol = int(dense.st[I.NS_COLORS])
+    assert 3 <= ncol <= 6, ncol                          # 24 bodies
+    for c in range(24):                                  # no two bodies of a group reach one body
+        rows = [np.nonzero(dense.coupled[:, b])[0] for b in range(24) if dense.color[b] == c]
+        allrows = np.concatenate(rows) if rows else np.zeros(0)
+        assert len(set(allrows.tolist())) == len(allrows)
+    from exudyn_lie.mbs.jacobian_groups import probe_coupling
+    probed = I.newton_arrays(sim.sd.gid)                 # one evaluation per body finds the same pattern
+    assert probe_coupling(sim.sd, sim.wk, sim.t, sim.R, sim.r, sim.V, A0, probed.Ap, probed.axes, probed.coupled,
+                          probed.m6) == 0
+    np.testing.assert_array_equal(probed.coupled, dense.coupled)
+    grouped = I.newton_arrays(sim.sd.gid)
+    for name in ("coupled", "color", "st"):
+        getattr(grouped, name)[:] = getattr(dense, name)
+    assert I.newton_jacobian_grouped(sim.sd, sim.wk, grouped, sim.t, sim.R, sim.r, sim.V, A0) == 0
+    assert grouped.st[I.NS_GROUPED] == 1.0
+    np.testing.assert_array_equal(grouped.Dv, dense.Dv)
+    np.testing.assert_array_equal(grouped.Dth, dense.Dth)
+    assert np.count_nonzero(dense.Dth) > 0.05 * dense.Dth.size
+
+
+def test_jacobian_by_groups_sees_a_coupling_outside_its_pattern():
+    """With a pattern that lacks the springs (each body alone) and bodies alternating between two
+    groups, the neighbours' rows change outside the pattern: the differences by groups stop
+    (NEW_COUPLING), and the Jacobian is made column by column, with the true pattern's groups."""
+    from exudyn_lie.mbs import implicit as I
+    from exudyn_lie.mbs.jacobian_groups import NEW_COUPLING, grouped_differences
+    sim, A0 = _jacobian_state()
+    nb = 24
+    nw = I.newton_arrays(sim.sd.gid)
+    nw.coupled[:] = np.eye(nb, dtype=np.uint8)
+    nw.color[:] = np.arange(nb) % 2
+    st = grouped_differences(sim.sd, sim.wk, sim.t, sim.R, sim.r, sim.V, A0, nw.Ap, nw.axes, nw.coupled,
+                             nw.color, 2, nw.eps, nw.claim, nw.m6, nw.Dv, nw.Dth)
+    assert st == NEW_COUPLING
+    nw.st[I.NS_COLORS] = 2.0
+    assert I.newton_jacobian_grouped(sim.sd, sim.wk, nw, sim.t, sim.R, sim.r, sim.V, A0) == 0
+    assert nw.st[I.NS_GROUPED] == 0.0 and nw.st[I.NS_JACOBIANS] == 1.0
+    dense = I.newton_arrays(sim.sd.gid)
+    assert I.newton_jacobian(sim.sd, sim.wk, dense, sim.t, sim.R, sim.r, sim.V, A0) == 0
+    np.testing.assert_array_equal(nw.Dth, dense.Dth)
+    assert nw.st[I.NS_COLORS] == dense.st[I.NS_COLORS] > 2
+
+
+def test_run_with_jacobians_by_groups_is_the_run_column_by_column():
+    """The stiff chains over 100 steps: the Jacobians are made by groups (the first with the pattern
+    probed), and the run is the same, bit for bit, as with every Jacobian made column by column."""
+    from exudyn_lie.mbs import implicit as I
+    T, h = 0.2, 2e-3
+    sims = [Simulator(shuffled_chains(1e6, 2000.0, 12), "ESDIRK3", "SE3", projectInitial=True) for _ in range(2)]
+    sims[1].method.newton.par[I.NP_GROUPS] = 0.0
+    for sim in sims:
+        sim.Run(T, h, outputEvery=int(round(T / h)))
+    grouped, dense = (s.newtonCounters for s in sims)
+    assert grouped["jacobians"] == dense["jacobians"] == grouped["groupedJacobians"] >= 2
+    assert dense["groupedJacobians"] == 0
+    np.testing.assert_array_equal(sims[0].r, sims[1].r)
+    np.testing.assert_array_equal(sims[0].V, sims[1].V)

@@ -127,8 +127,8 @@ def test_cold_compile_is_announced_once_and_timed(tmp_path, monkeypatch):
     assert compiling.cache_is_cold(f)
     buf = io.StringIO()
     assert compiling.announce_cold_compile(f, stream=buf)
-    assert buf.getvalue() == (f"exudyn_lie: compiling the solver for this machine, first run only, about "
-                              f"{compiling.estimated_seconds()} s\n")
+    assert buf.getvalue() == (f"exudyn_lie: compiling the solver for this machine, first run only, "
+                              f"{compiling.duration_text(compiling.estimated_seconds())}\n")
     assert not compiling.announce_cold_compile(f, stream=buf)          # once per process
     with compiling.compile_timer() as ct:
         assert f(2.0) == 4.0
@@ -159,6 +159,7 @@ def test_cold_compile_estimate_is_the_last_measured_one(tmp_path, monkeypatch):
     assert compiling.estimated_seconds() == 42
     (tmp_path / "cold_compile_seconds.txt").write_text("garbage\n")
     assert compiling.estimated_seconds() == compiling.COLD_COMPILE_SECONDS
+    assert compiling.duration_text(42) == "about 42 s" and compiling.duration_text(185) == "about 3 min"
 
 
 def test_kernel_warm_in_the_test_session():

@@ -51,6 +51,7 @@ from .bodies import body_dexpinv_stage, exp_compose
 from .codes import INFO_BODY, STAGE_ARG_MAX2, STATUS_EXTERNAL, STATUS_NEWTON, STATUS_OK
 from .band_order import BAND_MIN_N, band_worthwhile, bandwidths, rcm_numbering
 from .linalg import band_lu_extents, band_lu_factor_inplace, band_lu_solve_extents, lu_factor_inplace, lu_solve_inplace
+from .jacobian_groups import FD_STEP, NEW_COUPLING, body_coupling, color_bodies, grouped_differences, probe_coupling
 from .methods import ImplicitMethod, needed_stages
 from .stepper import copy_state, stage_rhs_at
 
@@ -70,14 +71,18 @@ Newton = namedtuple("Newton", [
                            #   band numbering where NS_BAND: of each row of Db, as band columns)
     "Db",                  # (n, n) Dth in the band numbering, row a's band (kl + ku + 1 columns) first
     "y",                   # (n,) the Newton system's right-hand side and correction in the band numbering
+    "coupled",             # (nb, nb) uint8: bodies coupled in the last Jacobian made column by column
+    "color", "claim",      # (nb,) int: the bodies' groups for the differences (mbs/jacobian_groups.py); scratch
+    "eps",                 # (nb,) the groups' difference steps
     "st",                  # float state: NS_* below
     "par",                 # [tolerance, maximum iterations, of Newton's own iteration (0: not tried),
                            #  1: fixed steps' tolerance follows the local error (follow_local_error),
-                           #  1: a band numbering where it pays (newton_band; 0: dense always)]
+                           #  1: a band numbering where it pays (newton_band; 0: dense always),
+                           #  1: Jacobians by groups of bodies where they pay (0: column by column)]
 ])
 NS_STALE, NS_FRESH, NS_H, NS_JACOBIANS, NS_FACTORS, NS_ITERATIONS, NS_STAGES, NS_RETRIES, NS_RATE, NS_FULL, \
-    NS_BAND, NS_KL, NS_KU = range(13)
-NP_TOL, NP_MAXIT, NP_MAXIT_FULL, NP_FOLLOW, NP_BAND = range(5)
+    NS_BAND, NS_KL, NS_KU, NS_COLORS, NS_GROUPED, NS_BY_GROUPS = range(16)
+NP_TOL, NP_MAXIT, NP_MAXIT_FULL, NP_FOLLOW, NP_BAND, NP_GROUPS = range(6)
 
 # the correction relative to the step's velocity scale (and h gamma times it).  The last stage's
 # velocity is the step's (stiffly accurate), so its Newton error adds up over the steps: about
@@ -104,7 +109,10 @@ FIXED_KAPPA = 1e-2
 FIXED_TOL_MAX = 1e-9
 NEWTON_MAXIT_FULL = 30     # Newton's own iteration (a Jacobian per iterate): quadratic only near the solution
 REFRESH_RATE = 0.25        # a contraction rate above this: new Jacobian at the next step's start
-FD_STEP = 1.4901161193847656e-08     # sqrt(eps): forward differences of F
+GROUPS_BELOW = 0.75        # Jacobians by groups of bodies where there are fewer groups than this times the
+                           # bodies (mbs/jacobian_groups.py: 12 evaluations per group against 12 per body)
+PROBE_MIN_BODIES = 8       # the pattern probed (nb evaluations) from this many bodies on; below, the first
+                           # Jacobian is made column by column
 
 
 def implicit_method(tableau, gid, tol=NEWTON_TOL, maxIterations=NEWTON_MAXIT):
@@ -133,22 +141,25 @@ def newton_arrays(gid, tol=NEWTON_TOL, maxIterations=NEWTON_MAXIT):
     for i, g in enumerate(gid):
         axes[i, list(algebra_axes(GROUPS[names[int(g)]]))] = 1.0
     z = lambda: np.zeros((nb, 6))      # noqa: E731
-    st = np.zeros(13)
+    st = np.zeros(16)
     st[NS_STALE] = 1.0
     iz = lambda: np.zeros(n, np.int64)      # noqa: E731
     nband = n if n >= BAND_MIN_N else 0      # (Db: only where a band numbering may be taken)
     return Newton(E=np.zeros((n, n)), Db=np.zeros((nband, nband)), piv=iz(), Dv=np.zeros((n, n)), Dth=np.zeros((n, n)),
                   axes=axes, P=z(), W=z(), Th=z(), F1=z(), Ap=z(), A1=z(), x=np.zeros(n), k6=np.zeros(6),
                   m6=np.zeros(6), perm=iz(), iperm=iz(), deg=iz(), nbr=iz(), lo=iz(), hi=np.full(n, n - 1, np.int64),
-                  y=np.zeros(n), st=st, par=np.array([float(tol), float(maxIterations), float(NEWTON_MAXIT_FULL),
-                                         1.0 if tol == NEWTON_TOL else 0.0, 1.0]))
+                  y=np.zeros(n), coupled=np.zeros((nb, nb), np.uint8), color=np.zeros(nb, np.int64),
+                  claim=np.zeros(nb, np.int64), eps=np.zeros(nb), st=st, par=np.array([float(tol), float(maxIterations), float(NEWTON_MAXIT_FULL),
+                                         1.0 if tol == NEWTON_TOL else 0.0, 1.0, 1.0]))
 
 
 def newton_counters(nw):
-    """``{'jacobians', 'factorizations', 'iterations', 'stages', 'retries', 'fullNewton'}`` so far: stages
-    solved again with a Jacobian of their step (retries) and by Newton's own iteration (fullNewton)."""
+    """``{'jacobians', 'groupedJacobians', 'factorizations', 'iterations', 'stages', 'retries', 'fullNewton'}``
+    so far: Jacobians (of them made by groups of bodies, mbs/jacobian_groups.py), stages solved again
+    with a Jacobian of their step (retries) and by Newton's own iteration (fullNewton)."""
     s = nw.st
-    return {"jacobians": int(s[NS_JACOBIANS]), "factorizations": int(s[NS_FACTORS]),
+    return {"jacobians": int(s[NS_JACOBIANS]), "groupedJacobians": int(s[NS_GROUPED]),
+            "factorizations": int(s[NS_FACTORS]),
             "iterations": int(s[NS_ITERATIONS]), "stages": int(s[NS_STAGES]), "retries": int(s[NS_RETRIES]),
             "fullNewton": int(s[NS_FULL])}
 
@@ -200,8 +211,44 @@ def newton_jacobian(sd, wk, nw, t, R, r, V, A0):
                 return st
             _difference_column(nw.Ap, A0, FD_STEP, nw.Dth, col)
     nw.st[NS_JACOBIANS] += 1.0
+    nw.st[NS_BY_GROUPS] = 0.0
+    body_coupling(nw.Dv, nw.Dth, nb, nw.coupled)
+    ncol = color_bodies(nw.coupled, nb, nw.color, nw.claim)
+    nw.st[NS_COLORS] = ncol if ncol < GROUPS_BELOW * nb else -1     # (-1: column by column from now on)
     newton_band(nw, 6 * nb)
     return STATUS_OK
+
+
+@njit(cache=True, _nrt=False)
+def newton_jacobian_grouped(sd, wk, nw, t, R, r, V, A0):
+    """:func:`newton_jacobian` by groups of bodies (mbs/jacobian_groups.py) where the pattern of the
+    last Jacobian made column by column, or else one found by ``probe_coupling``, gives fewer groups
+    than ``GROUPS_BELOW`` times the bodies; column by column otherwise, or where a coupling outside
+    the pattern appeared.  Returns a status."""
+    nb = sd.gid.shape[0]
+    if nw.par[NP_GROUPS] == 0.0 or nw.st[NS_COLORS] < 0.0:
+        return newton_jacobian(sd, wk, nw, t, R, r, V, A0)
+    if nw.st[NS_COLORS] == 0.0 and nb >= PROBE_MIN_BODIES:
+        st = probe_coupling(sd, wk, t, R, r, V, A0, nw.Ap, nw.axes, nw.coupled, nw.m6)
+        if st != STATUS_OK:
+            nw.st[NS_STALE] = 1.0
+            return st
+        ncol = color_bodies(nw.coupled, nb, nw.color, nw.claim)
+        nw.st[NS_COLORS] = ncol if ncol < GROUPS_BELOW * nb else -1
+    ncol = int(nw.st[NS_COLORS])
+    if ncol > 0:
+        st = grouped_differences(sd, wk, t, R, r, V, A0, nw.Ap, nw.axes, nw.coupled, nw.color, ncol, nw.eps,
+                                 nw.claim, nw.m6, nw.Dv, nw.Dth)
+        if st == STATUS_OK:
+            nw.st[NS_JACOBIANS] += 1.0
+            nw.st[NS_GROUPED] += 1.0
+            nw.st[NS_BY_GROUPS] = 1.0
+            newton_band(nw, nw.Dv.shape[0])
+            return STATUS_OK
+        if st != NEW_COUPLING:
+            nw.st[NS_STALE] = 1.0
+            return st
+    return newton_jacobian(sd, wk, nw, t, R, r, V, A0)
 
 
 @njit(cache=True, _nrt=False)
@@ -426,7 +473,7 @@ def solve_stage(sd, wk, A, c, gamma, nw, stages, j, h, t, R, r, V):
         nw.st[NS_FRESH] = 0.0
         nw.st[NS_RATE] = 0.0
         if nw.st[NS_STALE] != 0.0:
-            st = newton_jacobian(sd, wk, nw, t, R, r, V, wk.Vd[stages[0]])
+            st = newton_jacobian_grouped(sd, wk, nw, t, R, r, V, wk.Vd[stages[0]])
             if st != STATUS_OK:
                 return st
             nw.st[NS_STALE] = 0.0
@@ -444,7 +491,7 @@ def solve_stage(sd, wk, A, c, gamma, nw, stages, j, h, t, R, r, V):
             vscale = max(vscale, abs(V[i, k]), abs(nw.W[i, k]))
     st = newton_iterate(sd, wk, nw, j, jprev, hg, t + c[j] * h, R, r, V, vscale, False)
     if st == STATUS_NEWTON and nw.st[NS_FRESH] == 0.0:
-        nw.st[NS_RETRIES] += 1.0
+        nw.st[NS_RETRIES] += 1.0           # (column by column: the pattern of the last may be out of date)
         st = newton_jacobian(sd, wk, nw, t, R, r, V, wk.Vd[stages[0]])
         if st != STATUS_OK:
             return st
@@ -465,6 +512,9 @@ def solve_stage(sd, wk, A, c, gamma, nw, stages, j, h, t, R, r, V):
     nw.st[NS_STAGES] += 1.0
     if nw.st[NS_RATE] > REFRESH_RATE:
         nw.st[NS_STALE] = 1.0
+        if nw.st[NS_FRESH] != 0.0 and nw.st[NS_BY_GROUPS] != 0.0:
+            nw.st[NS_COLORS] = 0.0       # slow with this step's own Jacobian by groups: a coupling outside
+                                         # its pattern, perhaps (column by column, a new pattern)
     Kj = wk.K[j]
     Vdj = wk.Vd[j]
     for i in range(V.shape[0]):

@@ -608,3 +608,59 @@ def test_inconsistent_initial_state_is_refused_or_projected_by_the_one_rule(what
     arm = R @ np.array([-0.5, 0.0, 0.0])                    # the joint's point on the body
     assert np.linalg.norm(p + arm) < 1e-8
     assert np.linalg.norm(v + np.cross(om, arm)) < 1e-7
+
+
+def _ep_bodies_on_a_spring():
+    """Two rigid bodies on Euler parameters (Exudyn's default node) tumbling on a Cartesian spring:
+    the only AE rows are the nodes' |p|^2 = 1."""
+    SC = exu.SystemContainer()
+    mbs = SC.AddSystem()
+    b = [mbs.CreateRigidBody(inertia=InertiaCuboid(500, [0.3, 0.2, 0.1]), referencePosition=[x, 0, 0],
+                             initialVelocity=[0, 0.5 * x, 0], initialAngularVelocity=[1 + x, -2, 3 * x],
+                             gravity=[0, -9.81, 0]) for x in (0.0, 1.0)]
+    mbs.CreateCartesianSpringDamper(itemNumbers=b, localPosition0=[0.1, 0, 0], localPosition1=[-0.1, 0, 0],
+                                    stiffness=[800] * 3, damping=[1] * 3)
+    mbs.Assemble()
+    return mbs
+
+
+def test_eta_of_euler_parameter_rows_in_closed_form():
+    """A model whose AE rows are Euler parameters' only: eta = -2 p_t . p_t without Exudyn's two
+    velocity-level evaluations, the central difference's value at random states (to its error), and a
+    run of the evaluated path the same as with the differences to round-off."""
+    from test_bridge_common import random_state
+    from exudyn_lie.bridge.evaluated import EvaluatedModel
+    rng = np.random.default_rng(7)
+    mbs = _ep_bodies_on_a_spring()
+    solver, model, st = _evaluated_model(mbs)
+    assert model._etaClosed and model.m == 2
+    for _ in range(3):
+        q, qt = random_state(mbs, rng, scale=0.3)
+        model.q[:] = q
+        model.qt[:] = qt
+        st.read_state(model.q, model.qt)
+        closed = model.eta(0.0, st.R, st.r, st.prev, st.qv)
+        model._etaClosed = False
+        diff, err = model.eta_error(0.0, st.R, st.r, st.prev, st.qv)
+        model._etaClosed = True
+        assert np.all(np.abs(closed - diff) <= 10 * err + 1e-12 * np.abs(closed).max()), (closed, diff, err)
+        assert np.abs(closed).max() > 0.1
+    solver.FinalizeSolver(mbs, quiet_settings())
+
+    def run(closed):
+        mbs = _ep_bodies_on_a_spring()
+        ss = quiet_settings()
+        ss.timeIntegration.numberOfSteps, ss.timeIntegration.endTime = 200, 0.2
+        read = EvaluatedModel.read_rows
+
+        def read_rows(self):
+            read(self)
+            self._etaClosed = self._etaClosed and closed
+        EvaluatedModel.read_rows = read_rows
+        try:
+            exl.SolveDynamic(mbs, ss, evaluation="exudyn", method="RK4", showProgress=False)
+        finally:
+            EvaluatedModel.read_rows = read
+        return np.array(mbs.systemData.GetODE2Coordinates())
+    a, b = run(True), run(False)
+    assert np.abs(a - b).max() <= 1e-10 * np.abs(b).max()

@@ -51,7 +51,7 @@ import numpy as np
 from ..errors import ConstraintError, SimulationError
 from ..mbs.block_kkt import BlockKKT
 from ..mbs.row_drives import offset_and_derivatives
-from .evaluated_items import LIE_GROUP_NODES, coordinate_constraint_rows, node_rows, position_derived_rows
+from .evaluated_items import LIE_GROUP_NODES, coordinate_constraint_rows, ep_node_rows, node_rows, position_derived_rows
 from .evaluated_kernels import write_exudyn_state, write_moved_positions
 from .evaluated_sliding import SlidingCoordinates, sliding_joints
 from .reader import BridgeError, mbs_user_function
@@ -230,6 +230,10 @@ class EvaluatedModel:
             raise BridgeError("an ObjectJointSliding2D was switched on or off during the run (activeConnector); "
                               "exudyn_lie takes its sliding coordinate from the positions only for the joints "
                               "active at the start; solve with exudyn.SolveDynamic")
+        # rows of Euler parameters only: eta = -2 p_t . p_t (the derivative of 2 p . p_t along the motion)
+        # without the two velocity-level evaluations by Exudyn of the differences
+        self._epRows, self._epCoords = ep_node_rows(mbs)
+        self._etaClosed = len(self._epRows) == self.m and not len(self.positionRows) and self.sliding is None
 
     # ------------------------------------------------------------------ state
     def write_state(self, R, r, V, prev, qv, vv):
@@ -464,6 +468,10 @@ class EvaluatedModel:
         at the state last written (``R, r``: its Lie group part, ``qv`` its vector part).
         ``restore=False`` (the stage loop) leaves mbs at the last moved configuration and
         time: nothing reads them before the next stage writes its state."""
+        if self._etaClosed and not self._movingRows:
+            v = self.qt[self._epCoords]
+            self._etaBuf[self._epRows] = -2.0 * np.einsum("ij,ij->i", v, v)
+            return self._etaBuf.copy() if restore else self._etaBuf
         P = self.positionRows
         if len(P):
             # the position-derived rows (position_derived_rows): eta = -d2/ds2 g(q(s), t + s)

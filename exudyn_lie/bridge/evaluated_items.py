@@ -208,6 +208,19 @@ def node_rows(mbs):
     return np.array(out, np.int64)
 
 
+def ep_node_rows(mbs):
+    """The AE rows of the NodeRigidBodyEP nodes (``|p|^2 = 1``, at velocity level ``2 p . p_t``,
+    CNodeRigidBodyEP::ComputeAlgebraicEquations) and the ODE2 indices of their four parameters:
+    ``(rows, coords)``, coords of shape (rows, 4)."""
+    sd = mbs.systemData
+    rows, coords = [], []
+    for n in range(sd.NumberOfNodes()):
+        if mbs.GetNode(n)["nodeType"] == "RigidBodyEP":
+            rows += [int(r) for r in sd.GetNodeLTGAE(n)]
+            coords.append([int(c) for c in sd.GetNodeLTGODE2(n)][3:7])
+    return np.array(rows, np.int64), np.array(coords, np.int64).reshape(-1, 4)
+
+
 def _rotvec_coordinate_marker(mbs, d):
     """True if a marker of the item is a MarkerNodeCoordinate on a rotation coordinate (3..5)
     of a NodeRigidBodyRotVecLG."""

@@ -52,7 +52,7 @@ from ..errors import ConstraintError, SimulationError
 from ..mbs.block_kkt import BlockKKT
 from ..mbs.row_drives import offset_and_derivatives
 from .evaluated_items import LIE_GROUP_NODES, coordinate_constraint_rows, ep_node_rows, node_rows, position_derived_rows
-from .evaluated_kernels import write_exudyn_state, write_moved_positions
+from .evaluated_kernels import euler_parameter_eta, write_exudyn_state, write_moved_positions
 from .evaluated_sliding import SlidingCoordinates, sliding_joints
 from .reader import BridgeError, mbs_user_function
 
@@ -469,8 +469,7 @@ class EvaluatedModel:
         ``restore=False`` (the stage loop) leaves mbs at the last moved configuration and
         time: nothing reads them before the next stage writes its state."""
         if self._etaClosed and not self._movingRows:
-            v = self.qt[self._epCoords]
-            self._etaBuf[self._epRows] = -2.0 * np.einsum("ij,ij->i", v, v)
+            euler_parameter_eta(self.qt, self._epCoords, self._epRows, self._etaBuf)
             return self._etaBuf.copy() if restore else self._etaBuf
         P = self.positionRows
         if len(P):

@@ -148,3 +148,14 @@ def pack_state(gid, Rl, rl, Vl, qv, vv, y, nvb, R, r, V):
         V[nl + k // 3, 3 + k % 3] = vv[k]
     for k in range(y.shape[0]):
         V[nl + nvb + k // 3, 3 + k % 3] = y[k]
+
+
+@njit(cache=True)
+def euler_parameter_eta(qt, coords, rows, out):
+    """``out[rows[i]] = -2 |p_t|^2`` of the Euler parameters at ``coords[i]`` (evaluated.py, ``eta``)."""
+    for i in range(rows.shape[0]):
+        s = 0.0
+        for k in range(4):
+            v = qt[coords[i, k]]
+            s += v * v
+        out[rows[i]] = -2.0 * s

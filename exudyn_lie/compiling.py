@@ -64,7 +64,7 @@ def estimated_seconds():
 
 def duration_text(seconds):
     """``'about 40 s'``, from 90 s on in minutes: ``'about 3 min'``."""
-    return f"about {seconds} s" if seconds < 90 else f"about {round(seconds / 60)} min"
+    return f"about {seconds} s" if seconds < 90 else f"about {int(seconds / 60 + 0.5)} min"
 
 
 def _measure_this_cold_start(disp):

@@ -552,3 +552,28 @@ def test_run_with_jacobians_by_groups_is_the_run_column_by_column():
     assert dense["groupedJacobians"] == 0
     np.testing.assert_array_equal(sims[0].r, sims[1].r)
     np.testing.assert_array_equal(sims[0].V, sims[1].V)
+
+
+def test_a_wrong_pattern_of_the_groups_does_not_persist():
+    """A pattern that lacks every spring, with all bodies in one group, passes the groups' own check
+    (each body's rows are its own) and gives a wrong Jacobian: a stage that fails with it is solved
+    again with one made column by column, or a slow one makes the next Jacobian find the pattern anew;
+    with Newton's own iteration switched off the run ends where the run column by column ends, to
+    the Newton tolerance, and the wrong pattern is gone."""
+    from exudyn_lie.mbs import implicit as I
+    T, h = 0.1, 2e-3
+    sims = [Simulator(shuffled_chains(1e6, 2000.0, 12), "ESDIRK3", "SE3", projectInitial=True) for _ in range(2)]
+    wrong, dense = sims
+    dense.method.newton.par[I.NP_GROUPS] = 0.0
+    for sim in sims:
+        sim.method.newton.par[I.NP_MAXIT_FULL] = 0.0
+    nw = wrong.method.newton
+    nw.coupled[:] = np.eye(24, dtype=np.uint8)
+    nw.color[:] = 0
+    nw.st[I.NS_COLORS] = 1.0
+    for sim in sims:
+        sim.Run(T, h, outputEvery=int(round(T / h)))
+    counts = wrong.newtonCounters
+    assert counts["retries"] + counts["jacobians"] > dense.newtonCounters["jacobians"], counts
+    assert nw.st[I.NS_COLORS] > 1.0 and nw.coupled.sum() > 24
+    assert np.abs(wrong.r - dense.r).max() < 1e-8 and np.abs(wrong.V - dense.V).max() < 1e-6

@@ -212,9 +212,10 @@ def newton_jacobian(sd, wk, nw, t, R, r, V, A0):
             _difference_column(nw.Ap, A0, FD_STEP, nw.Dth, col)
     nw.st[NS_JACOBIANS] += 1.0
     nw.st[NS_BY_GROUPS] = 0.0
-    body_coupling(nw.Dv, nw.Dth, nb, nw.coupled)
-    ncol = color_bodies(nw.coupled, nb, nw.color, nw.claim)
-    nw.st[NS_COLORS] = ncol if ncol < GROUPS_BELOW * nb else -1     # (-1: column by column from now on)
+    if nw.par[NP_GROUPS] != 0.0:
+        body_coupling(nw.Dv, nw.Dth, nb, nw.coupled)
+        ncol = color_bodies(nw.coupled, nb, nw.color, nw.claim)
+        nw.st[NS_COLORS] = ncol if ncol < GROUPS_BELOW * nb else -1     # (-1: column by column from now on)
     newton_band(nw, 6 * nb)
     return STATUS_OK
 
@@ -490,8 +491,10 @@ def solve_stage(sd, wk, A, c, gamma, nw, stages, j, h, t, R, r, V):
         for k in range(6):
             vscale = max(vscale, abs(V[i, k]), abs(nw.W[i, k]))
     st = newton_iterate(sd, wk, nw, j, jprev, hg, t + c[j] * h, R, r, V, vscale, False)
-    if st == STATUS_NEWTON and nw.st[NS_FRESH] == 0.0:
-        nw.st[NS_RETRIES] += 1.0           # (column by column: the pattern of the last may be out of date)
+    if st == STATUS_NEWTON and (nw.st[NS_FRESH] == 0.0 or nw.st[NS_BY_GROUPS] != 0.0):
+        # an older Jacobian, or one of this step by groups (a coupling outside its pattern between two
+        # bodies of one group is not seen by its check): one of this step, column by column
+        nw.st[NS_RETRIES] += 1.0
         st = newton_jacobian(sd, wk, nw, t, R, r, V, wk.Vd[stages[0]])
         if st != STATUS_OK:
             return st
@@ -514,7 +517,7 @@ def solve_stage(sd, wk, A, c, gamma, nw, stages, j, h, t, R, r, V):
         nw.st[NS_STALE] = 1.0
         if nw.st[NS_FRESH] != 0.0 and nw.st[NS_BY_GROUPS] != 0.0:
             nw.st[NS_COLORS] = 0.0       # slow with this step's own Jacobian by groups: a coupling outside
-                                         # its pattern, perhaps (column by column, a new pattern)
+                                         # its pattern, perhaps (the next finds the pattern anew)
     Kj = wk.K[j]
     Vdj = wk.Vd[j]
     for i in range(V.shape[0]):

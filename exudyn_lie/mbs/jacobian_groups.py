@@ -17,9 +17,9 @@ rows that no body of its group reaches: if one of them changed at all, the patte
 and the caller makes the Jacobian column by column instead (:data:`NEW_COUPLING`).  A coupling
 that appears in a row some other body of the group reaches is not seen there (two bodies of one
 group that come into contact); the Jacobian then only slows the simplified Newton iteration, whose
-solution does not depend on it, and ``implicit.solve_stage`` makes the next Jacobian column by
-column, with a new pattern, after a stage that did not converge, or that converged slowly with a
-Jacobian by groups made at its own step's start.
+solution does not depend on it: ``implicit.solve_stage`` solves a stage that does not converge with
+it again with a Jacobian made column by column (a new pattern), and after a stage that converged
+slowly with a Jacobian by groups of its own step the next Jacobian probes the pattern anew.
 """
 from numba import njit
 

@@ -51,7 +51,8 @@ from .bodies import body_dexpinv_stage, exp_compose
 from .codes import INFO_BODY, STAGE_ARG_MAX2, STATUS_EXTERNAL, STATUS_NEWTON, STATUS_OK
 from .band_order import BAND_MIN_N, band_worthwhile, bandwidths, rcm_numbering
 from .linalg import band_lu_extents, band_lu_factor_inplace, band_lu_solve_extents, lu_factor_inplace, lu_solve_inplace
-from .jacobian_groups import FD_STEP, NEW_COUPLING, body_coupling, color_bodies, grouped_differences, probe_coupling
+from .jacobian_groups import (FD_STEP, NEW_COUPLING, body_coupling, color_bodies, grouped_differences, probe_coupling,
+                              restore_configuration)
 from .methods import ImplicitMethod, needed_stages
 from .stepper import copy_state, stage_rhs_at
 
@@ -202,10 +203,7 @@ def newton_jacobian(sd, wk, nw, t, R, r, V, A0):
             X[k] = FD_STEP
             exp_compose(gid[i], R[i], r[i], X, wk.Rs[i], wk.rs[i], wk.m3[0], wk.v3[0])
             st = stage_rhs_at(sd, wk, t, nw.Ap)
-            for a in range(3):
-                wk.rs[i, a] = r[i, a]
-                for c in range(3):
-                    wk.Rs[i, a, c] = R[i, a, c]
+            restore_configuration(i, R, r, wk.Rs, wk.rs)
             if st != STATUS_OK:
                 nw.st[NS_STALE] = 1.0
                 return st

@@ -32,6 +32,15 @@ NEW_COUPLING = -1
 FD_STEP = 1.4901161193847656e-08     # sqrt(eps): forward differences of F
 
 
+@njit(cache=True, inline="always", _nrt=False)
+def restore_configuration(i, R, r, Rs, rs):
+    """Body ``i``'s configuration in the stage arrays ``Rs, rs`` back to ``R, r`` after a difference."""
+    for a in range(3):
+        rs[i, a] = r[i, a]
+        for c in range(3):
+            Rs[i, a, c] = R[i, a, c]
+
+
 @njit(cache=True, _nrt=False)
 def body_coupling(Dv, Dth, nb, coupled):
     """``coupled[r, c] = 1`` where block ``(r, c)`` of ``Dv`` or ``Dth`` has an entry that is not zero,
@@ -65,10 +74,7 @@ def probe_coupling(sd, wk, t, R, r, V, A0, Ap, axes, coupled, X):
         st = stage_rhs_at(sd, wk, t, Ap)
         for k in range(6):
             wk.Vs[c, k] = V[c, k]
-        for a in range(3):
-            wk.rs[c, a] = r[c, a]
-            for b in range(3):
-                wk.Rs[c, a, b] = R[c, a, b]
+        restore_configuration(c, R, r, wk.Rs, wk.rs)
         if st != STATUS_OK:
             return st
         for row in range(nb):
@@ -173,10 +179,7 @@ def grouped_differences(sd, wk, t, R, r, V, A0, Ap, axes, coupled, color, ncol, 
             st = stage_rhs_at(sd, wk, t, Ap)
             for i in range(nb):
                 if color[i] == q:
-                    for a in range(3):
-                        wk.rs[i, a] = r[i, a]
-                        for c in range(3):
-                            wk.Rs[i, a, c] = R[i, a, c]
+                    restore_configuration(i, R, r, wk.Rs, wk.rs)
             if st != STATUS_OK:
                 return st
             if not _scatter(coupled, axes, color, q, k, eps, Ap, A0, Dth, claim):

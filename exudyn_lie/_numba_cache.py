@@ -312,3 +312,4 @@ def install():
 
 install()
 from . import _noinline  # noqa: E402,F401  (LLVM noinline on the group maps, before any compile)
+from . import _inline_overloads  # noqa: E402,F401  (inlined overloads compiled once, before any compile)

@@ -51,7 +51,7 @@ def select(table, {args}):
         return absent
     return present_rows if rows else present
 """
-    env = {"entry": entry, "types": types, "rows": rows}
+    env = {"entry": entry, "types": types, "rows": rows, "__name__": __name__}
     exec(compile(src, f"<guarded {entry.__name__}>", "exec"), env)
     g = env["g"]
     g.__name__ = g.__qualname__ = f"guarded_{entry.__name__}"

@@ -210,7 +210,7 @@ class CompileNotices:
                             f"no estimate yet (its time is kept for the next compile of this kind)")
             else:
                 self._print(f"exudyn_lie: compiling for a new kind of model ({name}), first run on this machine, "
-                            f"about {estimate:.0f} s (measured here before)")
+                            f"{duration_text(int(round(estimate)))} (measured here before)")
 
     def on_start(self, data):
         self.depth += 1

@@ -13,20 +13,27 @@ Here the implementation dispatcher of this package's always-inlined overloads is
 compile (``_can_compile``): numba's typing of the call still runs the inliner's own type
 inference, and the code inlined is the same typed IR as before, so the machine code does not
 change. Other overloads (numba's own, other packages') are left alone. Imported at the end of
-:mod:`exudyn_lie._numba_cache`, before any compiled function is defined; where numba's
-template lacks the methods this relies on, nothing is patched (the compile is then slower, not
-different).
+:mod:`exudyn_lie._numba_cache`, before any compiled function is defined.
+
+The compile numba skips here also bound a ``literally`` request of the implementation to the
+argument folding (``ForceLiteralArg.bind_fold_arguments``, as ``Dispatcher.compile`` does);
+:func:`install`'s ``generic`` binds it instead. Patched only on the numba versions it was read
+and tested against (:data:`TESTED_NUMBA`); on any other, numba compiles as it does by itself.
 """
+import numba
+from numba.core import errors
 from numba.core.typing import templates
 
 _PACKAGE = __name__.rpartition(".")[0]
 _Template = getattr(templates, "_OverloadFunctionTemplate", None)
+#: numba versions (major, minor) whose ``_OverloadFunctionTemplate`` this patch was checked against
+TESTED_NUMBA = ((0, 68),)
 
 
 def _ours_and_always_inlined(template):
     inline = getattr(template, "_inline", None)
     module = getattr(template._overload_func, "__module__", None) or ""
-    return (inline is not None and inline.is_always_inline
+    return (bool(_PACKAGE) and inline is not None and inline.is_always_inline
             and (module == _PACKAGE or module.startswith(_PACKAGE + ".")))
 
 
@@ -45,18 +52,30 @@ def _typing_only(jitter):
 
 
 def install():
-    if _Template is None or not all(hasattr(_Template, a) for a in ("_get_jit_decorator", "_build_impl", "generic")):
+    if (tuple(numba.version_info[:2]) not in TESTED_NUMBA or _Template is None
+            or not all(hasattr(_Template, a) for a in ("_get_jit_decorator", "_get_impl", "generic"))):
         return
     original = _Template._get_jit_decorator
     if getattr(original, "_exudyn_lie", False):
         return
+    typed = _Template.generic
 
     def _get_jit_decorator(self):
         jitter = original(self)
         return _typing_only(jitter) if _ours_and_always_inlined(self) else jitter
 
+    def generic(self, args, kws):
+        try:
+            return typed(self, args, kws)
+        except errors.ForceLiteralArg as e:
+            if e.fold_arguments is not None or not _ours_and_always_inlined(self):
+                raise
+            disp, _ = self._get_impl(args, kws)
+            raise e.bind_fold_arguments(lambda a, k: disp._compiler.fold_argument_types(a, k)[1])
+
     _get_jit_decorator._exudyn_lie = True
     _Template._get_jit_decorator = _get_jit_decorator
+    _Template.generic = generic
 
 
 install()

@@ -63,8 +63,9 @@ def estimated_seconds():
 
 
 def duration_text(seconds):
-    """``'about 40 s'``, from 90 s on in minutes: ``'about 3 min'``."""
-    return f"about {seconds} s" if seconds < 90 else f"about {int(seconds / 60 + 0.5)} min"
+    """``'about 40 s'`` (to the nearest second, halves up), from 90 s on in minutes: ``'about 3 min'``."""
+    s = int(seconds + 0.5)
+    return f"about {s} s" if s < 90 else f"about {int(s / 60 + 0.5)} min"
 
 
 def _measure_this_cold_start(disp):
@@ -210,7 +211,7 @@ class CompileNotices:
                             f"no estimate yet (its time is kept for the next compile of this kind)")
             else:
                 self._print(f"exudyn_lie: compiling for a new kind of model ({name}), first run on this machine, "
-                            f"{duration_text(int(round(estimate)))} (measured here before)")
+                            f"{duration_text(estimate)} (measured here before)")
 
     def on_start(self, data):
         self.depth += 1

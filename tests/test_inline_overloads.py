@@ -68,21 +68,21 @@ def test_a_guarded_call_is_inlined_and_not_compiled_on_its_own():
     assert names == ["two_sites", "two_sites"]
 
 
-def _overload_in(module):
-    """A fresh stub with an always-inlined overload whose typing function lives in ``module``."""
+def _overload_in(module, typing):
+    """A fresh stub with the always-inlined overload ``typing``, which then lives in ``module``."""
     def stub(x):
         raise NotImplementedError
 
-    def typing(x):
-        if isinstance(x, types.Float):
-            return lambda x: x + 1.0
     typing.__module__ = module
     overload(stub, inline="always")(typing)
     return stub
 
 
 def test_an_overload_of_another_module_is_compiled_as_numba_does():
-    stub = _overload_in(__name__)
+    def typing(x):
+        if isinstance(x, types.Float):
+            return lambda x: x + 1.0
+    stub = _overload_in(__name__, typing)
 
     @njit
     def caller(x):
@@ -98,16 +98,12 @@ def test_an_overload_of_another_module_is_compiled_as_numba_does():
 def test_a_literal_request_of_an_inlined_overload_is_honoured():
     """``literally`` in the implementation: numba's compile of it, skipped here, bound the
     request to the argument folding; the patch binds it itself (else numba's typing fails)."""
-    def stub(n):
-        raise NotImplementedError
-
     def typing(n):
         if isinstance(n, types.IntegerLiteral):
             k = n.literal_value
             return lambda n: k * 10
         return lambda n: literally(n)
-    typing.__module__ = _inline_overloads.__name__.rpartition(".")[0] + ".test_literal"
-    overload(stub, inline="always")(typing)
+    stub = _overload_in(_inline_overloads.__name__.rpartition(".")[0] + ".test_literal", typing)
 
     @njit
     def caller(n):

@@ -136,9 +136,9 @@ def dense_state(sd, wk, am, theta, h, R0, r0, V0, Ro, ro, Vo, w):
 def extra_stages(sd, wk, am, t, h, R0, r0, V0, S):
     """The dense-only stages s..s+m-1 of the last accepted step (from its start state), through the one
     compiled copy of the stage right-hand side outside the stage loop (``stage_rhs_at``, also the
-    fixed steps' and the implicit stages'): an inlined copy here cost the adaptive kind about a tenth
-    of its first compile (186 against 204 s, the revolute pendulum with DOPRI5, two compiles at once,
-    by hand), and these stages are evaluated only for outputs inside a step."""
+    fixed steps' and the implicit stages'): an inlined copy here would be a second right-hand side in
+    the adaptive kind's first compile (docs/BENCH.md), for stages evaluated only for outputs inside a
+    step."""
     for j in range(am.s, am.A.shape[0]):
         st = mk_stage_state(sd, wk, am.A, j, h, R0, r0, V0)
         if st != STATUS_OK:

@@ -14,3 +14,15 @@ def pytest_configure(config):
 def rng():
     """A seeded generator so that every 'random' test point is reproducible."""
     return np.random.default_rng(20131122)
+
+
+def pytest_sessionstart(session):
+    """Under ``pytest -n N`` (xdist), each worker compiles its share of the kernel's kinds before
+    the tests start, so that no kind is compiled by two workers at once (``tests/precompile.py``)."""
+    import os
+    import tempfile
+    workerinput = getattr(session.config, "workerinput", None)
+    if workerinput is None or int(workerinput.get("workercount", 1)) < 2:
+        return
+    from precompile import precompile
+    precompile(os.path.join(tempfile.gettempdir(), f"exudyn_lie_precompile_{workerinput['testrunuid']}"))

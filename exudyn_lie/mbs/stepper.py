@@ -135,10 +135,10 @@ def fixed_step_watch(sd, wk, tab, ctl, t, h, R, r, V):
 
 @njit(cache=True, _nrt=False)
 def stage_rhs_at(sd, wk, t, Vdot):
-    """:func:`stage_rhs` compiled once for its call sites outside the stage loop (the implicit stages'
-    Newton iteration, :func:`fixed_step_watch`): it is inlined wherever it is called, and each inlined
-    copy costs seconds of compile time."""
-    return stage_rhs(sd, wk, t, Vdot)
+    """:func:`stage_rhs` as a call, for its call sites outside the stage loop (the implicit stages'
+    Newton iteration, :func:`fixed_step_watch`, the adaptive steps' dense-only stages): each inlined
+    copy of the right-hand side costs seconds of LLVM's time."""
+    return stage_rhs_llvm_inlined(sd, wk, t, Vdot)
 
 
 # --------------------------------------------------------------------------- the stages
@@ -283,6 +283,19 @@ def stage_rhs(sd, wk, t, Vdot):
     return rhs(sd, wk, t, wk.Rs, wk.rs, wk.Vs, wk.Qext, Vdot)
 
 
+@njit(cache=True, _nrt=False)
+def stage_rhs_llvm_inlined(sd, wk, t, Vdot):
+    """:func:`stage_rhs` typed and lowered by numba once per kind of scene (its SceneData and Work
+    types), and inlined by LLVM into each kind of time loop that calls it: the explicit methods'
+    stage loops and :func:`stage_rhs_at`.  LLVM ``alwaysinline`` by name (``exudyn_lie/_noinline.py``),
+    not numba's ``forceinline``, which the functions compiled on its behalf would inherit (numba's
+    ``inherit_if_not_set``): the right-hand side's callees stay what they were, and compile faster than
+    with ``forceinline`` (docs/BENCH.md).  Inlined by numba instead (``stage_rhs``
+    is ``inline="always"``), every kind of time loop typed and lowered the whole right-hand side
+    again (docs/BENCH.md); LLVM's inlining gives the same states to the bit."""
+    return stage_rhs(sd, wk, t, Vdot)
+
+
 # --------------------------------------------------------------------------- the step controller seam
 # Python stubs: the implementations are numba overloads, one per controller type (the
 # fixed steps' below, the adaptive controller's in mbs/adaptive.py).  The fixed ones are
@@ -311,9 +324,10 @@ def is_implicit(tab):
 
 
 def evaluate_stage(sd, wk, tab, t, Vdot):
-    """``stage_rhs`` as the method's specialisation of ``mk_steps`` calls it: inlined for an explicit
-    method, through the one compiled copy the Newton iteration calls for an implicit one (each
-    inlined copy of the right-hand side costs seconds of compile time)."""
+    """``stage_rhs`` as the method's specialisation of ``mk_steps`` calls it: inlined by LLVM for an
+    explicit method (:func:`stage_rhs_llvm_inlined`), through the call the Newton iteration makes
+    for an implicit one (:func:`stage_rhs_at`; each inlined copy of the right-hand side costs
+    seconds of compile time)."""
 
 
 def implicit_stage(sd, wk, tab, j, h, t, R, r, V):
@@ -363,7 +377,7 @@ def _explicit_is_implicit(tab):
 @overload(evaluate_stage, inline="always")
 def _explicit_evaluate_stage(sd, wk, tab, t, Vdot):
     if not carries_newton(tab):
-        return lambda sd, wk, tab, t, Vdot: stage_rhs(sd, wk, t, Vdot)
+        return lambda sd, wk, tab, t, Vdot: stage_rhs_llvm_inlined(sd, wk, t, Vdot)
 
 
 @overload(implicit_stage, inline="always")

@@ -1,0 +1,59 @@
+"""LLVM inline attributes set by name (exudyn_lie/_noinline.py): the stage right-hand side is
+inlined by LLVM into the explicit time loops, the group maps stay calls."""
+from numba import njit
+
+from exudyn_lie import _noinline
+from exudyn_lie.mbs import stepper
+
+
+def test_the_stage_right_hand_side_is_registered_under_its_own_name():
+    """A rename of the function would silently drop its ``alwaysinline`` (and leave every explicit
+    stage a call that passes the scene's tuples field by field)."""
+    f = stepper.stage_rhs_llvm_inlined.py_func
+    assert (f.__module__, f.__qualname__) in _noinline._ALWAYS
+    assert not stepper.stage_rhs_llvm_inlined.targetoptions.get("forceinline", False)
+
+
+BIG = """
+def {name}(x):
+    s = 0.0
+    for i in range(x.shape[0]):
+        v = x[i]
+        s += v * v * v - 3.0 * v * v + 1.0 / (1.0 + v * v) + (v if v > 0 else -v) * 0.5
+        if s > 1e6:
+            s = s / 7.0 + v
+        elif s < -1e6:
+            s = s * 0.25 - v
+    for i in range(x.shape[0] - 1, -1, -1):
+        x[i] = x[i] * s + (x[i - 1] if i > 0 else 0.0)
+    return s
+"""
+
+
+def _calls_of(callee_name, caller, arg):
+    caller(arg)
+    ir = caller.inspect_llvm(caller.signatures[0])
+    return [line for line in ir.splitlines() if "call " in line and callee_name in line]
+
+
+def test_a_function_registered_by_name_is_inlined_by_llvm_without_forceinline(monkeypatch):
+    """The same callee, compiled as a plain function: LLVM keeps the call (twice, the callee is
+    not small) unless the callee's (module, qualname) is registered, then no call is left."""
+    import numpy as np
+    kept = _noinline._ALWAYS
+
+    def build(name, register):
+        ns = {"__name__": __name__}
+        exec(BIG.format(name=name), ns)
+        callee = njit(ns[name])
+        if register:
+            monkeypatch.setattr(_noinline, "_ALWAYS", kept | {(__name__, name)})
+
+        @njit
+        def caller(x):
+            return callee(x) + callee(x[::-1].copy())
+        return caller
+
+    x = np.linspace(-1.0, 1.0, 9)
+    assert _calls_of("plain_callee", build("plain_callee", False), x.copy())
+    assert not _calls_of("registered_callee", build("registered_callee", True), x.copy())

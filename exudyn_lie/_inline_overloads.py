@@ -2,7 +2,8 @@
 
 The kernel's compile-time choices are numba overloads with ``inline="always"``: the feature
 guards of :mod:`exudyn_lie.mbs.presence`, the method and step-controller seams of
-``stepper.mk_steps`` (one of them holds the whole stage right-hand side). numba inlines the
+``stepper.mk_steps`` (the explicit stage's held the whole stage right-hand side until that moved
+into ``stepper.stage_rhs_llvm_inlined``, which LLVM inlines). numba inlines the
 *typed IR* of such an overload's implementation at the call site, which is all it needs. But
 it first compiles the implementation completely, as a function nothing calls
 (``_OverloadFunctionTemplate._build_impl``: "make sure that the implementation can be fully

@@ -16,13 +16,35 @@ def rng():
     return np.random.default_rng(20131122)
 
 
-def pytest_sessionstart(session):
-    """Under ``pytest -n N`` (xdist), each worker compiles its share of the kernel's kinds before
-    the tests start, so that no kind is compiled by two workers at once (``tests/precompile.py``)."""
-    import os
+# ---------------------------------------------------------------- kinds compiled before the tests (tests/precompile.py)
+@pytest.hookimpl(optionalhook=True)
+def pytest_configure_node(node):
+    """Controller of ``pytest -n N``: one directory for the workers' claims of the kernel's kinds."""
     import tempfile
-    workerinput = getattr(session.config, "workerinput", None)
-    if workerinput is None or int(workerinput.get("workercount", 1)) < 2:
+    config = node.config
+    if not hasattr(config, "_exudyn_lie_precompile"):
+        config._exudyn_lie_precompile = tempfile.mkdtemp(prefix="exudyn_lie_precompile_")
+    node.workerinput["exudyn_lie_precompile"] = config._exudyn_lie_precompile
+
+
+def pytest_unconfigure(config):
+    import shutil
+    d = getattr(config, "_exudyn_lie_precompile", None)
+    if d is not None:
+        shutil.rmtree(d, ignore_errors=True)
+
+
+@pytest.hookimpl(trylast=True)
+def pytest_collection_modifyitems(session, config, items):
+    """A worker of ``pytest -n N`` (N >= 2) compiles its share of the kernel's kinds once its tests
+    are selected, so that no kind is compiled by two workers at once: only for runs of at least
+    ``precompile.MIN_TESTS`` tests, not with ``--collect-only``, not with
+    ``EXUDYN_LIE_TEST_PRECOMPILE=0``."""
+    import os
+    import sys
+    from precompile import MIN_TESTS, precompile
+    d = getattr(config, "workerinput", {}).get("exudyn_lie_precompile")
+    if (d is None or int(config.workerinput.get("workercount", 1)) < 2 or len(items) < MIN_TESTS
+            or config.option.collectonly or os.environ.get("EXUDYN_LIE_TEST_PRECOMPILE") == "0"):
         return
-    from precompile import precompile
-    precompile(os.path.join(tempfile.gettempdir(), f"exudyn_lie_precompile_{workerinput['testrunuid']}"))
+    precompile(d, log=lambda line: print(line, file=sys.stderr, flush=True))

@@ -4,14 +4,12 @@ numba compiles the time loop once per kind of model (method, step controller, le
 scene, solve; docs/ARCHITECTURE.md) and a first compile takes a minute or more.  Left to the
 tests, each worker compiles a kind when its first test needs it, and the two workers of
 ``pytest -n 2`` often need the same kind at the same time: both compile it, and the cache
-keeps one.  Here each worker, in ``pytest_sessionstart`` (``tests/conftest.py``), claims the
-kinds one at a time (a file created exclusively in a directory of the test run) and compiles
-those it claimed; xdist starts the tests once both workers have collected, so every test runs
-on a compiled kind and no kind is compiled twice.  Nothing is asserted here: a kind that fails
-to build is left to the tests that need it, which report it.
-
-``KINDS`` lists one small model per kind of ``mk_steps`` the suite compiles, in the order the
-workers take them.
+keeps one.  Here each worker, once it has collected (``tests/conftest.py``), claims the kinds one
+at a time (a file created exclusively in a directory the controller made for the run) and
+compiles those it claimed, a kind only after the kinds it needs; xdist starts the tests once
+every worker has collected, so the tests run on compiled kinds and no kind of ``KINDS`` is
+compiled twice.  Nothing is asserted here: a kind that fails to build is left to the tests that
+need it, which report it.
 """
 import os
 import time
@@ -68,50 +66,82 @@ def _drop_in(build, solverType=None, **kw):
     return run
 
 
-#: (name, build): one model per kind of the time loop that the suite compiles.  Every drop-in run also
-#: compiles the drop-in's RK4 kind (the accelerations at the start) and every kernel run the lean RK4
-#: kind, so those two come first (one per worker) and the runs that need them after a long one; the
-#: lean kinds, the shortest, last.
+#: (name, build, prerequisites): one model per kind of the time loop that the suite compiles.  Every
+#: drop-in run also compiles the drop-in's RK4 kind (the accelerations at the start) and every kernel
+#: run the lean RK4 kind: a kind is taken only once the kinds it needs are compiled (else the two
+#: workers would compile those at once), and the lean kinds, the shortest, come last.
+DROP_IN_RK4, LEAN_RK4 = 0, 1
 KINDS = [
-    ("drop-in, RK4", _drop_in("_pendulum")),
-    ("kernel, RK4 (lean scene)", _lean_fixed("RK4")),
-    ("rotation-vector coordinate rows (oblique solve)", _oblique),
-    ("tree solve, stabilised (full scene)", _tree("velocity")),
-    ("drop-in, adaptive steps (DOPRI5)", _drop_in("_pendulum", "DOPRI5")),
-    ("drop-in, ESDIRK3 (stiff, chosen by itself)", _drop_in("_stiff_springs")),
-    ("drop-in, velocity Verlet", _drop_in("_pendulum", "VelocityVerlet")),
-    ("drop-in, ESDIRK3 on adaptive steps", _drop_in("_pendulum", method="ESDIRK3")),
-    ("kernel, adaptive steps (lean scene)", _lean_adaptive),
-    ("kernel, ESDIRK3 (lean scene)", _lean_fixed("ESDIRK3")),
-    ("tree solve (lean scene)", _tree(None)),
+    ("drop-in, RK4", _drop_in("_pendulum"), ()),
+    ("kernel, RK4 (lean scene)", _lean_fixed("RK4"), ()),
+    ("rotation-vector coordinate rows (oblique solve)", _oblique, ()),
+    ("tree solve, stabilised (full scene)", _tree("velocity"), ()),
+    ("drop-in, adaptive steps (DOPRI5)", _drop_in("_pendulum", "DOPRI5"), (DROP_IN_RK4,)),
+    ("drop-in, ESDIRK3 (stiff, chosen by itself)", _drop_in("_stiff_springs"), (DROP_IN_RK4,)),
+    ("drop-in, velocity Verlet", _drop_in("_pendulum", "VelocityVerlet"), (DROP_IN_RK4,)),
+    ("drop-in, ESDIRK3 on adaptive steps", _drop_in("_pendulum", method="ESDIRK3"), (DROP_IN_RK4,)),
+    ("kernel, adaptive steps (lean scene)", _lean_adaptive, (LEAN_RK4,)),
+    ("kernel, ESDIRK3 (lean scene)", _lean_fixed("ESDIRK3"), (LEAN_RK4,)),
+    ("tree solve (lean scene)", _tree(None), (LEAN_RK4,)),
 ]
+#: a run that selects fewer tests (``-k``, one file) is not made to wait for every kind
+MIN_TESTS = 200
+#: seconds a worker waits at most for another's kind before it builds its own (a worker that died)
+WAIT_LIMIT = 1800.0
 
 
-def _claim(directory, k):
+def _create(path):
+    """True if this process created ``path`` (atomic: the claim of a kind)."""
     try:
-        os.close(os.open(os.path.join(directory, f"kind{k}"), os.O_CREAT | os.O_EXCL | os.O_WRONLY))
+        os.close(os.open(path, os.O_CREAT | os.O_EXCL | os.O_WRONLY))
         return True
     except FileExistsError:
         return False
 
 
-def precompile(directory, log=None):
-    """Compile every kind of ``KINDS`` that no other process of this test run has claimed in
-    ``directory``; returns ``[(name, seconds, error or None)]`` of those compiled here."""
-    os.makedirs(directory, exist_ok=True)
-    done = []
-    for k, (name, build) in enumerate(KINDS):
-        if not _claim(directory, k):
+def _next_kind(directory, waited):
+    """The first unclaimed kind whose prerequisites are compiled, claimed; None when every kind is
+    claimed; -1 when the unclaimed ones still wait for a prerequisite."""
+    pending = False
+    for k, (_, _, needs) in enumerate(KINDS):
+        if os.path.exists(os.path.join(directory, f"kind{k}")):
             continue
-        tic = time.perf_counter()
-        err = None
-        try:
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore")
-                build()
-        except Exception as e:  # noqa: BLE001 - the tests that need the kind report it
-            err = f"{type(e).__name__}: {e}"
-        done.append((name, time.perf_counter() - tic, err))
-        if log is not None:
-            log(f"precompiled {name}: {done[-1][1]:.1f} s" + (f" ({err})" if err else ""))
-    return done
+        if waited < WAIT_LIMIT and not all(os.path.exists(os.path.join(directory, f"done{j}")) for j in needs):
+            pending = True
+            continue
+        if _create(os.path.join(directory, f"kind{k}")):
+            return k
+        pending = True
+    return -1 if pending else None
+
+
+def precompile(directory, log=print):
+    """Compile the kinds of ``KINDS`` that no other process sharing ``directory`` has claimed, each
+    once its prerequisites are compiled; ``log`` gets a line for each kind that failed to build
+    (its tests then compile and report it).  Returns ``[(name, seconds, error or None)]``."""
+    done = []
+    waited = 0.0
+    try:
+        while True:
+            k = _next_kind(directory, waited)
+            if k is None:
+                return done
+            if k < 0:
+                time.sleep(0.5)
+                waited += 0.5
+                continue
+            name, build, _ = KINDS[k]
+            tic = time.perf_counter()
+            err = None
+            try:
+                with warnings.catch_warnings():
+                    warnings.simplefilter("ignore")
+                    build()
+            except Exception as e:  # noqa: BLE001 - the tests that need the kind report it
+                err = f"{type(e).__name__}: {e}"
+                log(f"tests/precompile.py: {name} failed to build ({err}); its tests compile it")
+            done.append((name, time.perf_counter() - tic, err))
+            _create(os.path.join(directory, f"done{k}"))
+    except OSError as e:                     # the directory went away or cannot be written
+        log(f"tests/precompile.py: stopped ({e})")
+        return done

@@ -57,3 +57,26 @@ def test_a_function_registered_by_name_is_inlined_by_llvm_without_forceinline(mo
     x = np.linspace(-1.0, 1.0, 9)
     assert _calls_of("plain_callee", build("plain_callee", False), x.copy())
     assert not _calls_of("registered_callee", build("registered_callee", True), x.copy())
+
+
+def test_the_explicit_time_loops_hold_no_call_of_the_stage_right_hand_side():
+    """RK4 and DOPRI5 on one scene: the time loop of each kind links the right-hand side's one
+    compiled library and LLVM inlined every call of it (its module for linking, which numba keeps
+    also for a kind loaded from the cache; ``inspect_llvm`` is empty there)."""
+    import warnings
+    from exudyn_lie.apps import bench_topology as BT
+    from exudyn_lie.mbs import Simulator
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        Simulator(BT.build_scene("chain", 3), "RK4", "SE3").Advance(2, 1e-3)
+        sim = Simulator(BT.build_scene("chain", 3), "DOPRI5", "SE3")
+        sim.SetAdaptive(rtol=1e-6, atol=1e-6)
+        sim.AdvanceTo(1e-3)
+    kinds = {sig[2].instance_class.__name__: cres for sig, cres in stepper.mk_steps.overloads.items()
+             if sig[2].instance_class.__name__ in ("Method", "AdaptiveMethod")}
+    assert set(kinds) == {"Method", "AdaptiveMethod"}
+    for name, cres in kinds.items():
+        ir = str(cres.library._get_module_for_linking())
+        assert "stage_rhs_llvm_inlined" in ir, name                   # linked into the time loop
+        calls = [line for line in ir.splitlines() if "call " in line and "stage_rhs_llvm_inlined" in line]
+        assert not calls, (name, calls[:2])

@@ -286,8 +286,8 @@ def stage_rhs(sd, wk, t, Vdot):
 @njit(cache=True, _nrt=False)
 def stage_rhs_llvm_inlined(sd, wk, t, Vdot):
     """:func:`stage_rhs` typed and lowered by numba once per kind of scene (its SceneData and Work
-    types), and inlined by LLVM into each kind of time loop that calls it: the explicit methods'
-    stage loops and :func:`stage_rhs_at`.  LLVM ``alwaysinline`` by name (``exudyn_lie/_noinline.py``),
+    types), and inlined by LLVM where it is called: into the stage loop of each explicit kind of
+    time loop, and into :func:`stage_rhs_at`.  LLVM ``alwaysinline`` by name (``exudyn_lie/_noinline.py``),
     not numba's ``forceinline``, which the functions compiled on its behalf would inherit (numba's
     ``inherit_if_not_set``): the right-hand side's callees stay what they were, and compile faster than
     with ``forceinline`` (docs/BENCH.md).  Inlined by numba instead (``stage_rhs``

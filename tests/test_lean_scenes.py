@@ -117,7 +117,8 @@ def test_lean_stage_has_no_code_of_absent_features(monkeypatch):
         sim = Simulator(lean_scene(), "RK4", "SE3", projectInitial=True)
         sim.Advance(1, 1e-3)
         loop = [cres for sig, cres in stepper.mk_steps.overloads.items()
-                if sig[0] == numba.typeof(sim.sd) and sig[2].instance_class.__name__ == "Method"]
+                if sig[:2] == (numba.typeof(sim.sd), numba.typeof(sim.wk))
+                and sig[2].instance_class.__name__ == "Method"]
         assert len(loop) == 1
         irs[lean] = str(loop[0].library._get_module_for_linking())
     for name in absent:

@@ -369,8 +369,9 @@ class EvaluatedSolver:
             def at_output(t1, last):
                 if model.pivoted and check.dependent is None:
                     check.dependent = set(range(sd.NumberOfObjects()))
+                # (model._vmax: max |q_t| of the state the step wrote, problem.write)
                 account.step(t1, model.velocity_constraints(t1, problem.R, problem.r, problem.prev, problem.qv),
-                             np.max(np.abs(qt)) if qt.size else 0.0)
+                             model._vmax)
                 check.at_output(t1, account.explain, t1 >= tEnd - 1e-9 * max(1.0, abs(tEnd)))
             self.loop_check = at_output
 

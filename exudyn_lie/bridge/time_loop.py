@@ -115,7 +115,7 @@ class TimeLoop:
         self.hookError = None
         self.steps = [t0, t0]            # start and end time of the current Exudyn step
         self.count = 0                   # Exudyn steps done
-        self.written = None              # (q, q_t) last written, when watched
+        self.written = None              # (q, q_t) last written, as bytes, when watched
         self.loopSeconds = 0.0
 
     # ------------------------------------------------------------------ the run
@@ -190,15 +190,21 @@ class TimeLoop:
             raise
 
     # ------------------------------------------------------------------ per Exudyn step
-    def _remember(self):
+    def _coordinates(self):
+        """mbs' Current q and q_t as bytes (a change to any bit of them is a change: a user function
+        that wrote the same values changed nothing); read without copying where Exudyn allows."""
         sd = self.mbs.systemData
-        self.written = (np.array(sd.GetODE2Coordinates()), np.array(sd.GetODE2Coordinates_t()))
+        try:
+            q, v = sd.GetODE2Coordinates(copy=False), sd.GetODE2Coordinates_t(copy=False)
+        except TypeError:                  # (an Exudyn without copy=False)
+            q, v = sd.GetODE2Coordinates(), sd.GetODE2Coordinates_t()
+        return np.asarray(q, float).tobytes() + np.asarray(v, float).tobytes()
+
+    def _remember(self):
+        self.written = self._coordinates()
 
     def _changed(self):
-        sd = self.mbs.systemData
-        w = self.written
-        return w is not None and not (np.array_equal(sd.GetODE2Coordinates(), w[0])
-                                      and np.array_equal(sd.GetODE2Coordinates_t(), w[1]))
+        return self.written is not None and self._coordinates() != self.written
 
     def hook(self, mainSolver, mbs, settings):
         """Exudyn's Newton iteration: the state at the step's end time into mbs."""

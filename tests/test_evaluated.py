@@ -26,8 +26,8 @@ TOL = 1e-8
 
 def _final_state(mbs):
     """(configuration, velocities) in mbs: the ODE2 coordinates, with the rotation vector of
-    every RotVecLG node replaced by its rotation matrix (a rotation vector near |pi| may be
-    written on either branch: each path keeps it continuous from its own last output)."""
+    every RotVecLG node replaced by its rotation matrix (the branch of the rotation vector: its
+    own test below)."""
     sd = mbs.systemData
     q = np.array(sd.GetODE2Coordinates())
     parts, lg = [], np.zeros(len(q), bool)
@@ -62,6 +62,51 @@ def test_heavy_top_same_trajectory_as_compiled(group):
     out = _both_paths(lambda: models.build("heavy_top", mbs=new_mbs())[0], 0.1, 1e-3, liegroup=group)
     (q0, v0), (q1, v1) = out["compiled"], out["exudyn"]
     assert _rel(q1, q0) < TOL and _rel(v1, v0) < TOL
+
+
+def test_rotvec_quat_inverts_quat_rotvec(rng):
+    """The quaternion of a rotation vector (the evaluated path's continuity rule) and back, at
+    |p| from 1e-9 to 2 pi - 1e-3, both branches of the series; a unit quaternion; the series and
+    the closed form agree at their switch."""
+    from exudyn_lie.mbs.rotation_parameters import quat_rotvec, rotvec_quat
+    q, back = np.empty(4), np.empty(3)
+    for t in (1e-9, 1e-5, 0.99e-4, 1.01e-4, 0.3, 3.0, np.pi, 4.0, 2 * np.pi - 1e-3):
+        x = rng.normal(size=3)
+        p = t * x / np.linalg.norm(x)
+        rotvec_quat(p, q)
+        quat_rotvec(q, back)
+        assert abs(q @ q - 1.0) < 4e-16 and np.abs(back - p).max() < 4e-15 * max(1.0, t), (t, back - p)
+    a, b = np.empty(4), np.empty(4)
+    ta, tb = 1e-4 * (1 - 1e-12), 1e-4 * (1 + 1e-12)
+    rotvec_quat(np.array([0.0, 0.0, ta]), a)
+    rotvec_quat(np.array([0.0, 0.0, tb]), b)
+    assert abs(a[3] / ta - b[3] / tb) < 1e-15          # sin(t/2) / t: series and closed form
+
+
+def test_rotation_vector_is_written_on_the_compiled_paths_branch_beyond_pi():
+    """A free RotVecLG body spinning at about 6 rad/s for 1.2 s (|theta| passes pi and the turnover
+    at 2 pi): the evaluated path writes the rotation vector coordinates the compiled path writes
+    (Exudyn's branch: the sign-continuous quaternion, bridge/node_writers.rotvec_row), not only the
+    same rotation.  Before, its continuity rule read the previous rotation vector as a quaternion
+    (one entry beyond the array) and wrote another branch (5.2 rad apart in a held-rate model,
+    tests/test_rotation_coordinate_marker.py)."""
+    def build():
+        mbs = new_mbs()
+        mbs.CreateRigidBody(inertia=InertiaCuboid(1000, [0.3, 0.1, 0.2]), referencePosition=[0, 0, 0],
+                            referenceRotationMatrix=np.eye(3), initialAngularVelocity=[3.0, -2.0, 5.0],
+                            nodeType=exu.NodeType.RotationRotationVector)
+        mbs.Assemble()
+        return mbs
+    out = {}
+    for ev in ("compiled", "exudyn"):
+        mbs = build()
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            exl.SolveDynamic(mbs, quiet_settings(1.2, 1200), evaluation=ev, method="RK4", showProgress=False)
+        out[ev] = np.array(mbs.systemData.GetODE2Coordinates())
+    theta = np.linalg.norm(out["compiled"][3:6])
+    assert np.pi < theta < 2 * np.pi - 0.1, theta        # on the long branch at the end
+    assert np.abs(out["exudyn"] - out["compiled"]).max() < 1e-9, (out["exudyn"], out["compiled"])
 
 
 def _pendulum_with_generic_ode2(mbs=None):

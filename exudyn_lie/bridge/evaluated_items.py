@@ -97,6 +97,15 @@ def check_model(mbs):
                               f"NodeRigidBodyRotVecLG is not supported when Exudyn evaluates the model (the model has "
                               f"items the compiled kernel does not have, or evaluation='exudyn'); solve with "
                               f"exudyn.SolveDynamic, or use a NodeRigidBodyEP / Rxyz node")
+        if t == "ConnectorCoordinate" and d.get("activeConnector", True) and not d.get("velocityLevel", False) \
+                and _rotation_coordinate_marker(mbs, d):
+            # the same at position level for any node: Exudyn's value is a Tait-Bryan angle of the node,
+            # its C_q component k of the world omega (CMarkerNodeRotationCoordinate), not the angle's gradient
+            raise BridgeError(f"{_describe_object(mbs, o, d)}: a MarkerNodeRotationCoordinate in a position-level "
+                              f"constraint: Exudyn's value is a Tait-Bryan angle of the node, whose gradient is not "
+                              f"the marker's Jacobian (a component of the world angular velocity), and exudyn_lie's "
+                              f"index-1 solve with that Jacobian would hold the angular velocity, not the angle; use "
+                              f"velocityLevel=True (compiled) or solve with exudyn.SolveDynamic")
         if t == "JointSliding2D" and d.get("activeConnector", True):
             # bridge/evaluated_sliding.py: both formulations (a point on the curve, s from the
             # positions); Exudyn's Jacobian of the rotation row leaves out its dependence on s
@@ -219,6 +228,11 @@ def ep_node_rows(mbs):
             rows += [int(r) for r in sd.GetNodeLTGAE(n)]
             coords.append([int(c) for c in sd.GetNodeLTGODE2(n)][3:7])
     return np.array(rows, np.int64), np.array(coords, np.int64).reshape(-1, 4)
+
+
+def _rotation_coordinate_marker(mbs, d):
+    """True if a marker of the item is a MarkerNodeRotationCoordinate."""
+    return any(mbs.GetMarker(int(m))["markerType"] == "NodeRotationCoordinate" for m in d.get("markerNumbers", []))
 
 
 def _rotvec_coordinate_marker(mbs, d):

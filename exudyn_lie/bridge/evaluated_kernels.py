@@ -16,17 +16,21 @@ from numba import njit
 
 from ..groups import so3
 from ..mbs.codes import uses_body_twist
+from ..mbs.rotation_parameters import rotvec_quat
 from ..mbs.stepper import copy_state
 from .node_writers import rotvec_row
 
 
 @njit(cache=True)
 def _rotvec_continuous(R, prev, p):
-    """Rotation vector of R on the branch nearest to ``prev`` (bridge/node_writers.rotvec_row,
-    whose continuity rule the compiled path uses for the same node type)."""
+    """Rotation vector ``p`` of R continued from the rotation vector ``prev`` by the compiled path's
+    rule for the same node type (bridge/node_writers.rotvec_row: the quaternion of R with the sign
+    nearest the previous one, here the quaternion of ``prev``), so that it passes |p| = pi as
+    Exudyn's Lie group update does."""
     z = np.zeros(3)
-    pp = prev.copy()
-    rotvec_row(R, z, z, pp, False, p, z.copy(), z.copy(), np.empty(4))
+    qprev = np.empty(4)
+    rotvec_quat(prev, qprev)
+    rotvec_row(R, z, z, qprev, False, p, z.copy(), z.copy(), np.empty(4))
 
 
 @njit(cache=True)

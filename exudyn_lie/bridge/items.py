@@ -258,6 +258,9 @@ register("marker", "BodyMass", "position", "a body's mass (mass-proportional loa
          {"bodyNumber": (FIXED, "the marker's body")})
 register("marker", "NodeCoordinate", "coordinate", "a position or rotation coordinate",
          {"nodeNumber": (FIXED, "the marker's node"), "coordinate": (FIXED, "the marker's coordinate")})
+register("marker", "NodeRotationCoordinate", "coordinate", "in velocity-level coordinate constraints: the "
+                                                           "node's world angular velocity about axis k",
+         {"nodeNumber": (FIXED, "the marker's node"), "rotationCoordinate": (FIXED, "the marker's axis")})
 
 # ---------------------------------------------------------------- loads
 register("load", "ForceVector", "vector", "a compiled load; with its user function, a Python force", {

@@ -52,7 +52,7 @@ from typing import List
 
 import numpy as np
 
-from ..mbs.scene import GROUND, AngleCoordinate, RotationParameterCoordinate, Scene, SceneError
+from ..mbs.scene import GROUND, AngleCoordinate, RotationParameterCoordinate, Scene, SceneError, frame_with_axis
 from . import items, pyforces
 from .nodes import NODE_KINDS
 from .reader_common import (BODY_OBJECTS, BridgeError, CONNECTOR_TYPES, CoordinateMarker, JOINT_READERS,
@@ -465,13 +465,16 @@ class _Reader(JointReaders, ForceReaders):
     def _what(self, kind, o, d):
         return f"object {o} ('{d.get('name', '')}') Object{d['objectType']}"
 
-    def coordinate_marker(self, m, what):
+    def coordinate_marker(self, m, what, velocityLevel=False):
         """(body, position axis, reference value) of a MarkerNodeCoordinate: the marker value
-        is the node's current coordinate ``p[axis] - reference`` (0 on a ground node)."""
+        is the node's current coordinate ``p[axis] - reference`` (0 on a ground node); in a
+        velocity-level row (``velocityLevel``) also a MarkerNodeRotationCoordinate."""
         m = int(m)
         if not 0 <= m < self.sd.NumberOfMarkers():
             raise BridgeError(f"{what}: marker {m} does not exist")
         d = self.mbs.GetMarker(m)
+        if d["markerType"] == "NodeRotationCoordinate":
+            return self.rotation_coordinate_marker(m, d, what, velocityLevel)
         if d["markerType"] != "NodeCoordinate":
             raise BridgeError(f"{what}: marker {m} is a Marker{d['markerType']}; this item needs "
                               f"MarkerNodeCoordinate markers")
@@ -519,6 +522,33 @@ class _Reader(JointReaders, ForceReaders):
             return CoordinateMarker(m, self.rigidNodeBody[n], np.eye(3)[k], ref)
         axis, origin = frame         # a Node1D: value = axis . (p - origin) - ref
         return CoordinateMarker(m, self.rigidNodeBody[n], axis, ref + float(axis @ origin))
+
+    def rotation_coordinate_marker(self, m, d, what, velocityLevel):
+        """A MarkerNodeRotationCoordinate (CMarkerNodeRotationCoordinate::ComputeMarkerData): its
+        rate is component k (``rotationCoordinate``) of the node's world angular velocity, and its
+        Jacobian that rate's, at both levels.  In a velocity-level row that is the rate of the
+        kernel's rotation coordinate about ``d = e_k``, ``(R^T e_k) . omega`` (mbs/coordinate_angles.py,
+        a frame whose third column is e_k), exactly.  Its position-level value is the Tait-Bryan (xyz)
+        angle k of the node's rotation in (-pi, pi], not tracked over turns, whose gradient is not that
+        Jacobian (for k = 0, 1 not an angle about a fixed axis at all): not compiled."""
+        n, k = int(d["nodeNumber"]), int(d["rotationCoordinate"])
+        nt = self.mbs.GetNode(n)["nodeType"]
+        if not velocityLevel:
+            raise NotCompiled(f"{what}: marker {m} (MarkerNodeRotationCoordinate) at position level: Exudyn's value is "
+                              f"the Tait-Bryan angle {k} of node {n}'s rotation in (-pi, pi], which exudyn_lie compiles "
+                              f"only as a rate, in velocity-level ObjectConnectorCoordinate rows")
+        if not 0 <= k < 3:
+            raise BridgeError(f"{what}: marker {m} (MarkerNodeRotationCoordinate) has rotationCoordinate {k}; it "
+                              f"must be 0, 1 or 2 (the world axis)")
+        axis = np.eye(3)[k]
+        if nt == "PointGround":
+            return CoordinateMarker(m, GROUND, axis, 0.0, markerType="NodeRotationCoordinate")
+        if n not in self.rigidNodeBody or nt not in ("RigidBodyRotVecLG", "RigidBodyEP", "RigidBodyRxyz"):
+            # (Exudyn's Assemble refuses it on nodes without an orientation, NodeRigidBody2D among them)
+            raise BridgeError(f"{what}: marker {m} (MarkerNodeRotationCoordinate) is on node {n} of type Node{nt}; "
+                              f"exudyn_lie takes it on the rigid-body nodes of ObjectRigidBody")
+        return CoordinateMarker(m, self.rigidNodeBody[n], axis, 0.0, markerType="NodeRotationCoordinate",
+                                angle=AngleCoordinate(frame_with_axis(axis, 2), 0.0))
 
 
 def SceneFromExudyn(mbs, configuration="initial") -> ExudynScene:

@@ -155,8 +155,8 @@ class JointReaders:
         key = "offsetUserFunction_t" if velocityLevel else "offsetUserFunction"
         uf = _userfunction(d, key, what)
         m0, m1 = (int(m) for m in d["markerNumbers"])
-        cA = self.coordinate_marker(m0, what)
-        cB = self.coordinate_marker(m1, what)
+        cA = self.coordinate_marker(m0, what, velocityLevel)
+        cB = self.coordinate_marker(m1, what, velocityLevel)
         A, ka, refA, B, kb, refB = cA.body, cA.spec, cA.ref, cB.body, cB.spec, cB.ref
         f = float(d.get("factor1", d.get("factorValue1", 1.0)))      # factorValue1: before 1.12.258
         if A == GROUND and (B == GROUND or f == 0.0):

@@ -86,6 +86,22 @@ def quat_rotvec(q, out):
         out[k] = q[1 + k] * fac
 
 
+@njit(cache=True, _nrt=False)
+def rotvec_quat(p, out):
+    """The quaternion ``(cos(t/2), sin(t/2) p / t)``, ``t = |p|``, of the rotation vector p (the inverse
+    of :func:`quat_rotvec` for |p| <= 2 pi); below t = 1e-4 the series of sin(t/2) / t to t^4, whose
+    next term, t^6 / 645120, is below the rounding of 1/2."""
+    t2 = p[0] * p[0] + p[1] * p[1] + p[2] * p[2]
+    t = math.sqrt(t2)
+    if t < 1e-4:
+        s = 0.5 - t2 / 48.0 + t2 * t2 / 3840.0
+    else:
+        s = math.sin(0.5 * t) / t
+    out[0] = math.cos(0.5 * t)
+    for k in range(3):
+        out[1 + k] = s * p[k]
+
+
 @njit(cache=True, inline="always", _nrt=False)
 def wrap_near(x, ref):
     # np.rint, not np.round: the same value (round half to even), but np.round's numba

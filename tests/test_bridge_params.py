@@ -581,6 +581,9 @@ def _models_with_every_item():
     mbs.AddObject(U.ObjectConnectorCoordinateSpringDamper(markerNumbers=[
         mbs.AddMarker(U.MarkerNodeCoordinate(nodeNumber=n1, coordinate=0)),
         mbs.AddMarker(U.MarkerNodeCoordinate(nodeNumber=n1r, coordinate=0))], stiffness=10))
+    spun = mbs.CreateRigidBody(inertia=InertiaCuboid(800, [0.1, 0.2, 0.3]), referencePosition=[0, 7, 0])
+    mbs.AddObject(U.ObjectConnectorCoordinate(markerNumbers=[mcg, mbs.AddMarker(U.MarkerNodeRotationCoordinate(
+        nodeNumber=mbs.GetObject(spun)["nodeNumber"], rotationCoordinate=2))], velocityLevel=True))
     return mbs
 
 

@@ -1,5 +1,7 @@
 """LLVM inline attributes set by name (exudyn_lie/_noinline.py): the stage right-hand side is
 inlined by LLVM into the explicit time loops, the group maps stay calls."""
+import numba
+import pytest
 from numba import njit
 
 from exudyn_lie import _noinline
@@ -36,6 +38,8 @@ def _calls_of(callee_name, caller, arg):
     return [line for line in ir.splitlines() if "call " in line and callee_name in line]
 
 
+@pytest.mark.skipif(bool(numba.config.BOUNDSCHECK), reason="the bounds audit (NUMBA_BOUNDSCHECK=1, README Tests) "
+                    "changes the callee's code, and LLVM's own choice to keep its call with it")
 def test_a_function_registered_by_name_is_inlined_by_llvm_without_forceinline(monkeypatch):
     """The same callee, compiled as a plain function: LLVM keeps the call (twice, the callee is
     not small) unless the callee's (module, qualname) is registered, then no call is left."""

@@ -130,6 +130,44 @@ def test_spring_on_the_angle_runs_on_the_evaluated_path_as_native():
     assert np.abs(x - ref.systemData.GetODE2Coordinates()).max() < 1e-6
 
 
+def test_ground_rotation_marker_is_a_ground_coordinate_at_position_level():
+    """On a NodePointGround the marker's value and rate are 0 and it has no Jacobian (Exudyn assembles
+    it): a position-level ConnectorCoordinate from it to a point mass's coordinate is compiled and
+    holds that coordinate at the offset, as Exudyn's run does."""
+    from exudyn.utilities import NodePoint, ObjectMassPoint, LoadForceVector, MarkerNodePosition
+    out = []
+    for lie in (False, True):
+        mbs = new_mbs()
+        p = mbs.AddNode(NodePoint(referenceCoordinates=[0, 0, 0], initialVelocities=[0.0, 0.5, 0.0]))
+        mbs.AddObject(ObjectMassPoint(nodeNumber=p, physicsMass=2.0))
+        mbs.AddLoad(LoadForceVector(markerNumber=mbs.AddMarker(MarkerNodePosition(nodeNumber=p)), loadVector=[1, 0, 0]))
+        ng = mbs.AddNode(NodePointGround())
+        mbs.AddObject(ObjectConnectorCoordinate(markerNumbers=[
+            mbs.AddMarker(MarkerNodeRotationCoordinate(nodeNumber=ng, rotationCoordinate=1)),
+            mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=p, coordinate=0))], offset=0.0))
+        mbs.Assemble()
+        ss = quiet_settings(0.5, 100)
+        (exl.SolveDynamic(mbs, ss, evaluation="compiled") if lie else exu.SolveDynamic(mbs, ss))
+        out.append(np.array(mbs.systemData.GetODE2Coordinates()))
+    assert abs(out[1][0]) < 1e-12 and abs(out[1][1] - 0.25) < 1e-12, out[1]
+    assert np.abs(out[1] - out[0]).max() < 1e-10, out
+
+
+def test_a_row_switched_to_position_level_during_the_run_stops_it():
+    """A pre-step function sets velocityLevel=False on the Exudyn-evaluated path (evaluation='exudyn'):
+    the rows are read again and refused with the reason, instead of holding the angular velocity."""
+    mbs = _held_rate_model("EP", 2)
+    o = mbs.systemData.NumberOfObjects() - 1
+
+    def pre(mbs, t):
+        if t > 0.05:
+            mbs.SetObjectParameter(o, "velocityLevel", False)
+        return True
+    mbs.SetPreStepUserFunction(pre)
+    with pytest.raises(BridgeError, match="Tait-Bryan angle of the node, whose gradient is not"):
+        exl.SolveDynamic(mbs, quiet_settings(0.2, 200), evaluation="exudyn", method="RK4")
+
+
 def _held_rate_model(node, k):
     """A box (offset COM, gravity) on a spherical joint at its node, its world angular velocity about
     axis k held at 2.5 rad/s by a velocity-level ObjectConnectorCoordinate (consistent initially)."""

@@ -57,7 +57,7 @@ import time
 import numpy as np
 from numba import njit
 
-from ..errors import ConstraintError
+from ..errors import ConstraintError, SimulationError
 from ..userwarn import warn_user
 
 #: default tolerance as a fraction of the model's size
@@ -373,6 +373,11 @@ class ConsistencyAccount:
         c = self.c
         g = c.row_residuals(t)
         v = gv if c._allRows else np.asarray(gv)[c.rows]
+        if not len(g) == len(v) == len(c._itemOfRow):
+            # (the compiled loop below reads and writes by index without checks)
+            raise SimulationError(f"the model's algebraic equations changed during the run ({len(c._itemOfRow)} "
+                                  f"checked rows at the start, {len(g)} now: was mbs assembled again by a user "
+                                  f"function?); exudyn_lie cannot follow that; solve with exudyn.SolveDynamic")
         self.vscale = max(self.vscale, float(vmax))
         if self.t0 is None:
             self.t0 = t

@@ -51,7 +51,8 @@ import numpy as np
 from ..errors import ConstraintError, SimulationError
 from ..mbs.block_kkt import BlockKKT
 from ..mbs.row_drives import offset_and_derivatives
-from .evaluated_items import LIE_GROUP_NODES, coordinate_constraint_rows, ep_node_rows, node_rows, position_derived_rows
+from .evaluated_items import (LIE_GROUP_NODES, coordinate_constraint_rows, ep_node_rows, node_rows, position_derived_rows,
+                              refuse_oblique_coordinate_row)
 from .evaluated_kernels import euler_parameter_eta, write_exudyn_state, write_moved_positions
 from .evaluated_sliding import SlidingCoordinates, sliding_joints
 from .reader import BridgeError, mbs_user_function
@@ -179,6 +180,7 @@ class EvaluatedModel:
         self.ydot = np.zeros(n1)
         self._ER = np.zeros((3, 3))
         self._rv = np.zeros((len(layout.lgNodes), 3))
+        self._rq = np.zeros((len(layout.lgNodes), 4))
         self._qsave = np.zeros(n)
         self._eta0 = np.zeros(0)
         self._etaBuf = np.zeros(m)
@@ -206,6 +208,8 @@ class EvaluatedModel:
         when a user function changed an object: an offset function, a connector switched on or
         to velocity level)."""
         mbs = self.mbs
+        for o in range(self.sd.NumberOfObjects()):     # (a connector switched on or to position level)
+            refuse_oblique_coordinate_row(mbs, o)
         self.velocityRows, functionRows = coordinate_constraint_rows(mbs)
         # rows whose g_v and eta come from the position level (position_derived_rows)
         self.positionRows, self._allPosition = position_derived_rows(mbs)
@@ -240,7 +244,7 @@ class EvaluatedModel:
         """Exudyn's Current q, v of the state (Lie group nodes and vector coordinates)."""
         L = self.L
         self._vmax = write_exudyn_state(L.gid, R, r, V, L.lgIdx, L.lgRef, prev, self.q, self.qt, L.vecIdx, qv, vv,
-                                        self._rv)
+                                        self._rv, self._rq)
 
     def _fastest_zeroing(self):
         """How the system Jacobian is zeroed before ``ComputeJacobianAE`` (which adds into it):

@@ -88,24 +88,7 @@ def check_model(mbs):
     for o in range(sd.NumberOfObjects()):
         d = mbs.GetObject(o)
         t = d["objectType"]
-        if t == "ConnectorCoordinate" and d.get("activeConnector", True) and _rotvec_coordinate_marker(mbs, d):
-            # Exudyn's C_q on a RotVecLG rotation coordinate is e_k on the local omega, not the
-            # gradient of theta_k: this path's symmetric solve with Exudyn's C_q would hold the
-            # velocity-level omega_k, not theta_k (the compiled kernel integrates Exudyn's model,
-            # mbs/oblique_solve.py)
-            raise BridgeError(f"{_describe_object(mbs, o, d)}: a constraint on a rotation coordinate of a "
-                              f"NodeRigidBodyRotVecLG is not supported when Exudyn evaluates the model (the model has "
-                              f"items the compiled kernel does not have, or evaluation='exudyn'); solve with "
-                              f"exudyn.SolveDynamic, or use a NodeRigidBodyEP / Rxyz node")
-        if t == "ConnectorCoordinate" and d.get("activeConnector", True) and not d.get("velocityLevel", False) \
-                and _rotation_coordinate_marker(mbs, d):
-            # the same at position level for any node: Exudyn's value is a Tait-Bryan angle of the node,
-            # its C_q component k of the world omega (CMarkerNodeRotationCoordinate), not the angle's gradient
-            raise BridgeError(f"{_describe_object(mbs, o, d)}: a MarkerNodeRotationCoordinate in a position-level "
-                              f"constraint: Exudyn's value is a Tait-Bryan angle of the node, whose gradient is not "
-                              f"the marker's Jacobian (a component of the world angular velocity), and exudyn_lie's "
-                              f"index-1 solve with that Jacobian would hold the angular velocity, not the angle; use "
-                              f"velocityLevel=True (compiled) or solve with exudyn.SolveDynamic")
+        refuse_oblique_coordinate_row(mbs, o, d)
         if t == "JointSliding2D" and d.get("activeConnector", True):
             # bridge/evaluated_sliding.py: both formulations (a point on the curve, s from the
             # positions); Exudyn's Jacobian of the rotation row leaves out its dependence on s
@@ -230,9 +213,43 @@ def ep_node_rows(mbs):
     return np.array(rows, np.int64), np.array(coords, np.int64).reshape(-1, 4)
 
 
+
+def refuse_oblique_coordinate_row(mbs, o, d=None):
+    """Refuse an active ObjectConnectorCoordinate whose Exudyn C_q is not the gradient of its
+    position-level equation (this path's index-1 solve with Exudyn's C_q would hold a velocity, not
+    the coordinate): checked at the start (:func:`check_model`) and again when a user function changed
+    the object during the run (evaluated.EvaluatedModel.read_rows: switched on, or to position level)."""
+    d = mbs.GetObject(o) if d is None else d
+    if d["objectType"] != "ConnectorCoordinate" or not d.get("activeConnector", True):
+        return
+    if _rotvec_coordinate_marker(mbs, d):
+        # Exudyn's C_q on a RotVecLG rotation coordinate is e_k on the local omega, not the
+        # gradient of theta_k: this path's symmetric solve with Exudyn's C_q would hold the
+        # velocity-level omega_k, not theta_k (the compiled kernel integrates Exudyn's model,
+        # mbs/oblique_solve.py)
+        raise BridgeError(f"{_describe_object(mbs, o, d)}: a constraint on a rotation coordinate of a "
+                          f"NodeRigidBodyRotVecLG is not supported when Exudyn evaluates the model (the model has "
+                          f"items the compiled kernel does not have, or evaluation='exudyn'); solve with "
+                          f"exudyn.SolveDynamic, or use a NodeRigidBodyEP / Rxyz node")
+    if not d.get("velocityLevel", False) and _rotation_coordinate_marker(mbs, d):
+        # the same at position level for any node: Exudyn's value is a Tait-Bryan angle of the node,
+        # its C_q component k of the world omega (CMarkerNodeRotationCoordinate), not the angle's gradient
+        raise BridgeError(f"{_describe_object(mbs, o, d)}: a MarkerNodeRotationCoordinate in a position-level "
+                          f"constraint: Exudyn's value is a Tait-Bryan angle of the node, whose gradient is not "
+                          f"the marker's Jacobian (a component of the world angular velocity), and exudyn_lie's "
+                          f"index-1 solve with that Jacobian would hold the angular velocity, not the angle; use "
+                          f"velocityLevel=True (compiled) or solve with exudyn.SolveDynamic")
+
+
 def _rotation_coordinate_marker(mbs, d):
-    """True if a marker of the item is a MarkerNodeRotationCoordinate."""
-    return any(mbs.GetMarker(int(m))["markerType"] == "NodeRotationCoordinate" for m in d.get("markerNumbers", []))
+    """True if a marker of the item is a MarkerNodeRotationCoordinate on a node with coordinates
+    (on a ground node its value is 0: a ground coordinate)."""
+    for m in d.get("markerNumbers", []):
+        md = mbs.GetMarker(int(m))
+        if md["markerType"] == "NodeRotationCoordinate" \
+                and mbs.GetNode(int(md["nodeNumber"]))["nodeType"] != "PointGround":
+            return True
+    return False
 
 
 def _rotvec_coordinate_marker(mbs, d):

@@ -16,33 +16,35 @@ from numba import njit
 
 from ..groups import so3
 from ..mbs.codes import uses_body_twist
-from ..mbs.rotation_parameters import rotvec_quat
 from ..mbs.stepper import copy_state
 from .node_writers import rotvec_row
 
 
 @njit(cache=True)
-def _rotvec_continuous(R, prev, p):
-    """Rotation vector ``p`` of R continued from the rotation vector ``prev`` by the compiled path's
-    rule for the same node type (bridge/node_writers.rotvec_row: the quaternion of R with the sign
-    nearest the previous one, here the quaternion of ``prev``), so that it passes |p| = pi as
-    Exudyn's Lie group update does."""
+def _rotvec_continuous(R, prev, p, qnew):
+    """Rotation vector ``p`` of R by the compiled path's rule for the same node type
+    (bridge/node_writers.rotvec_row): the quaternion of R with the sign nearest ``prev``, the
+    quaternion last written (kept, not the rotation vector: at the turnover near 2 pi that rule
+    writes the short vector of the same rotation, whose quaternion has the other sign), so that it
+    passes |p| = pi and turns over at 2 pi as Exudyn's Lie group update does; ``qnew`` receives the
+    quaternion written."""
     z = np.zeros(3)
-    qprev = np.empty(4)
-    rotvec_quat(prev, qprev)
-    rotvec_row(R, z, z, qprev, False, p, z.copy(), z.copy(), np.empty(4))
+    for k in range(4):
+        qnew[k] = prev[k]
+    rotvec_row(R, z, z, qnew, False, p, z.copy(), z.copy(), np.empty(4))
 
 
 @njit(cache=True)
-def write_exudyn_state(gid, R, r, V, lgIdx, lgRef, prev, q, qt, vecIdx, qv, vv, rv):
+def write_exudyn_state(gid, R, r, V, lgIdx, lgRef, prev, q, qt, vecIdx, qv, vv, rv, rq):
     """Exudyn's ODE2 coordinates ``q`` and velocities ``qt`` (mbs' Current views) of the
     state: a Lie group node writes ``log(R)`` minus the reference rotation vector (Exudyn:
     total = reference + current, componentwise), ``r`` minus the reference position,
     ``rdot = R U`` (SE3) or ``rdot`` (SO3xR3) and the local ``omega``; the vector-space
-    coordinates are copied.  ``rv`` (nl, 3) scratch for the rotation vectors.  Returns
-    ``max |qt|`` (the velocity scale of eta's differentiation step)."""
+    coordinates are copied.  ``prev`` (nl, 4) the quaternions last written; ``rv`` (nl, 3),
+    ``rq`` (nl, 4) receive the rotation vectors and quaternions written.  Returns ``max |qt|``
+    (the velocity scale of eta's differentiation step)."""
     for i in range(gid.shape[0]):
-        _rotvec_continuous(R[i], prev[i], rv[i])
+        _rotvec_continuous(R[i], prev[i], rv[i], rq[i])
         Vi = V[i]
         body = uses_body_twist(gid[i])
         for k in range(3):
@@ -67,14 +69,15 @@ def write_moved_positions(R, r, lgIdx, lgRef, prev, q, qt, vecIdx, qv, eps, ER, 
     """Exudyn's ODE2 coordinates of the configuration moved along the motion by ``eps``
     seconds at fixed velocities ``qt`` (for the acceleration term eta, :mod:`.evaluated`):
     a Lie group node ``R exp(eps omega)``, ``r + eps rdot`` (omega local, rdot global, read
-    from ``qt``); vector coordinates ``q + eps v``."""
+    from ``qt``); vector coordinates ``q + eps v``.  ``prev`` (nl, 4): the quaternions last written."""
     w = np.empty(3)
+    qnew = np.empty(4)
     for i in range(R.shape[0]):
         for k in range(3):
             w[k] = eps * qt[lgIdx[i, 3 + k]]
         so3.exp_into(w, ER)
         Rm = R[i] @ ER
-        _rotvec_continuous(Rm, prev[i], rv[i])
+        _rotvec_continuous(Rm, prev[i], rv[i], qnew)
         for k in range(3):
             q[lgIdx[i, k]] = r[i, k] + eps * qt[lgIdx[i, k]] - lgRef[i, k]
             q[lgIdx[i, 3 + k]] = rv[i, k] - lgRef[i, 3 + k]
@@ -83,13 +86,13 @@ def write_moved_positions(R, r, lgIdx, lgRef, prev, q, qt, vecIdx, qv, eps, ER, 
 
 
 @njit(cache=True)
-def unpack_state(gid, R, r, V, nvb, lgIdx, lgRef, prev, q, qt, vecIdx, qv, vv, y, rv):
+def unpack_state(gid, R, r, V, nvb, lgIdx, lgRef, prev, q, qt, vecIdx, qv, vv, y, rv, rq):
     """Exudyn's ``q``, ``qt`` (and the ODE1 coordinates ``y``) of a state of the problem's
     bodies (:mod:`.evaluated_problem`): the first ``nl = gid.size`` bodies are the Lie group
     nodes (:func:`write_exudyn_state`), the next ``nvb`` hold the vector-space ODE2
     coordinates three by three (position ``r``, velocity ``V[3:6]``), the rest the ODE1
-    coordinates three by three (``V[3:6]``).  ``qv``, ``vv`` receive the vector coordinates.
-    Returns ``max |qt|``."""
+    coordinates three by three (``V[3:6]``).  ``qv``, ``vv`` receive the vector coordinates,
+    ``rv``, ``rq`` the rotation vectors and quaternions written.  Returns ``max |qt|``."""
     nl = gid.shape[0]
     nv = qv.shape[0]
     for k in range(nv):
@@ -98,7 +101,7 @@ def unpack_state(gid, R, r, V, nvb, lgIdx, lgRef, prev, q, qt, vecIdx, qv, vv, y
         vv[k] = V[b, 3 + k % 3]
     for k in range(y.shape[0]):
         y[k] = V[nl + nvb + k // 3, 3 + k % 3]
-    return write_exudyn_state(gid, R[:nl], r[:nl], V[:nl], lgIdx, lgRef, prev, q, qt, vecIdx, qv, vv, rv)
+    return write_exudyn_state(gid, R[:nl], r[:nl], V[:nl], lgIdx, lgRef, prev, q, qt, vecIdx, qv, vv, rv, rq)
 
 
 @njit(cache=True)

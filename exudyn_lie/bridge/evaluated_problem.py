@@ -29,6 +29,7 @@ from ..mbs.scene import Scene
 from ..mbs.simulator import Simulator
 from ..mbs.stiffness import StageStiffnessWatch, watch_stages
 from .evaluated_jacobian import ExudynNewtonJacobian, applies as jacobian_applies
+from ..mbs.rotation_parameters import rotvec_quat
 from .evaluated_kernels import pack_rates, pack_state, unpack_state
 from .evaluated_stiffness import ode1_rate
 
@@ -66,7 +67,9 @@ class EvaluatedProblem:
         for name in names[nl:]:
             sc.AddPointMass(1.0, name=name)
         sc.SetRightHandSide(self)
-        self.prev = np.zeros((nl, 3))          # rotation vectors last written (their continuity)
+        # the quaternions of the rotation vectors last written (their continuity, evaluated_kernels)
+        self.prev = np.zeros((nl, 4))
+        self.prev[:, 0] = 1.0
         self._qv, self._vv, self._y = np.zeros(nv), np.zeros(nv), np.zeros(n1)
         self.sim = Simulator(sc, tableau, [GROUP_NAMES[g] for g in L.gid] + ["R3"] * (self.nvb + self.n1b))
         self.tableau = self.sim.tableau
@@ -124,13 +127,13 @@ class EvaluatedProblem:
         model, L = self.model, self.model.L
         gid, lgIdx, lgRef, vecIdx = L.gid, L.lgIdx, L.lgRef, L.vecIdx
         nl, nvb, n1 = self.nl, self.nvb, self.n1
-        q, qt, prev, rv = model.q, model.qt, self.prev, model._rv
+        q, qt, prev, rv, rq = model.q, model.qt, self.prev, model._rv, model._rq
         qs, vs, ys = np.zeros(self.nv), np.zeros(self.nv), np.zeros(n1)
         RsL, rsL = Rs[:nl], rs[:nl]
         accelerations, write_ode1, ydot = model.accelerations, model.write_ode1, model.ydot
 
         def stage(t):
-            model._vmax = unpack_state(gid, Rs, rs, Vs, nvb, lgIdx, lgRef, prev, q, qt, vecIdx, qs, vs, ys, rv)
+            model._vmax = unpack_state(gid, Rs, rs, Vs, nvb, lgIdx, lgRef, prev, q, qt, vecIdx, qs, vs, ys, rv, rq)
             if n1:
                 write_ode1(ys)
             acc = accelerations(t, RsL, rsL, prev, qs)
@@ -180,7 +183,7 @@ class EvaluatedProblem:
             U, _, Wt = np.linalg.svd(so3.exp(np.ascontiguousarray(rv)))
             Rl[i] = U @ Wt
             rl[i] = ref[:3] + q[idx[:3]]
-            self.prev[i] = rv
+            rotvec_quat(rv, self.prev[i])
             Vl[i, :3] = qt[idx[3:]]
             v = qt[idx[:3]]
             Vl[i, 3:] = Rl[i].T @ v if BODY_TWIST[self.gid[i]] else v
@@ -206,12 +209,12 @@ class EvaluatedProblem:
         self._ode1Steps = 0                  # (the step done again: its ODE1 rate measured again)
 
     def write(self):
-        """Write the state into mbs (Current) and remember the rotation vectors written."""
+        """Write the state into mbs (Current) and remember the quaternions of the rotation vectors written."""
         m, sim = self.model, self.sim
         L = m.L
         m._vmax = unpack_state(self.gid, sim.R, sim.r, sim.V, self.nvb, L.lgIdx, L.lgRef, self.prev, m.q, m.qt,
-                               L.vecIdx, self._qv, self._vv, self._y, m._rv)
-        self.prev[:] = m._rv
+                               L.vecIdx, self._qv, self._vv, self._y, m._rv, m._rq)
+        self.prev[:] = m._rq
         if self.n1:
             m.write_ode1(self._y)
 

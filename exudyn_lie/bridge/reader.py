@@ -533,6 +533,8 @@ class _Reader(JointReaders, ForceReaders):
         Jacobian (for k = 0, 1 not an angle about a fixed axis at all): not compiled."""
         n, k = int(d["nodeNumber"]), int(d["rotationCoordinate"])
         nt = self.mbs.GetNode(n)["nodeType"]
+        if nt == "PointGround":              # value and rate 0 at both levels, no Jacobian: ground
+            return CoordinateMarker(m, GROUND, np.eye(3)[min(max(k, 0), 2)], 0.0, markerType="NodeRotationCoordinate")
         if not velocityLevel:
             raise NotCompiled(f"{what}: marker {m} (MarkerNodeRotationCoordinate) at position level: Exudyn's value is "
                               f"the Tait-Bryan angle {k} of node {n}'s rotation in (-pi, pi], which exudyn_lie compiles "
@@ -541,8 +543,6 @@ class _Reader(JointReaders, ForceReaders):
             raise BridgeError(f"{what}: marker {m} (MarkerNodeRotationCoordinate) has rotationCoordinate {k}; it "
                               f"must be 0, 1 or 2 (the world axis)")
         axis = np.eye(3)[k]
-        if nt == "PointGround":
-            return CoordinateMarker(m, GROUND, axis, 0.0, markerType="NodeRotationCoordinate")
         if n not in self.rigidNodeBody or nt not in ("RigidBodyRotVecLG", "RigidBodyEP", "RigidBodyRxyz"):
             # (Exudyn's Assemble refuses it on nodes without an orientation, NodeRigidBody2D among them)
             raise BridgeError(f"{what}: marker {m} (MarkerNodeRotationCoordinate) is on node {n} of type Node{nt}; "

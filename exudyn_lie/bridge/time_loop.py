@@ -191,8 +191,9 @@ class TimeLoop:
 
     # ------------------------------------------------------------------ per Exudyn step
     def _coordinates(self):
-        """mbs' Current q and q_t as bytes (a change to any bit of them is a change: a user function
-        that wrote the same values changed nothing); read without copying where Exudyn allows."""
+        """mbs' Current q and q_t as bytes, read without copying where Exudyn allows.  A change to any
+        bit is a change (a user function that wrote the same values changed nothing; one that wrote
+        -0.0 over 0.0 makes the driver read the same state again), and a NaN written again is none."""
         sd = self.mbs.systemData
         try:
             q, v = sd.GetODE2Coordinates(copy=False), sd.GetODE2Coordinates_t(copy=False)

@@ -376,3 +376,42 @@ def test_check_stops_a_joint_marker_moved_on_the_evaluated_path():
     mbs.SetPreStepUserFunction(PreStepUserFunction)
     with pytest.raises(ConstraintError, match=r"object 2 .*ObjectJointGeneric do not hold at t = 0\.001 s"):
         exl.SolveDynamic(mbs, generic_settings(1000, 1.0), showProgress=False, evaluation="exudyn")
+
+
+def _double_pendulum():
+    SC = exu.SystemContainer()
+    _KEEP_DRIFT.append(SC)
+    mbs = SC.AddSystem()
+    from exudyn.utilities import InertiaCuboid
+    ground = mbs.CreateGround()
+    inertia = InertiaCuboid(density=1000, sideLengths=[1, 0.1, 0.1])
+    b0 = mbs.CreateRigidBody(inertia=inertia, referencePosition=[0.5, 0, 0], gravity=[0, -9.81, 0])
+    b1 = mbs.CreateRigidBody(inertia=inertia, referencePosition=[1.5, 0, 0], gravity=[0, -9.81, 0])
+    mbs.CreateRevoluteJoint(itemNumbers=[ground, b0], position=[0, 0, 0], axis=[0, 0, 1])
+    mbs.CreateRevoluteJoint(itemNumbers=[b0, b1], position=[1, 0, 0], axis=[0, 0, 1])
+    mbs.Assemble()
+    return mbs
+
+
+_KEEP_DRIFT = []
+
+
+@pytest.mark.parametrize("evaluation,remedy", [("compiled", "stabilization='position' or a smaller step"),
+                                               ("exudyn", "a smaller step holds it (this path has no stabilisation")])
+def test_drift_warning_names_what_holds_it_on_each_path(evaluation, remedy):
+    """An unstabilised RK4 run on SO3xR3 at a coarse step (the README's double pendulum, h = 20 ms):
+    the joints drift past the tolerance, the integrator's own account explains it, and the warning
+    (once per item) names what holds it: stabilization='position' on the compiled path, a smaller step
+    on the Exudyn-evaluated path, which has no stabilisation (and refuses the keyword)."""
+    mbs = _double_pendulum()
+    ss = exu.SimulationSettings()
+    ss.timeIntegration.numberOfSteps, ss.timeIntegration.endTime = 100, 2.0
+    ss.solution.file.write = False
+    ss.timeIntegration.verboseMode = 0
+    with warnings.catch_warnings(record=True) as rec:
+        warnings.simplefilter("always")
+        exl.SolveDynamic(mbs, ss, method="RK4", liegroup="SO3xR3", stabilization=None, evaluation=evaluation,
+                         showProgress=False)
+    drift = [str(w.message) for w in rec if "drift: Exudyn's residual" in str(w.message)]
+    assert drift and all("explains it: the drift of index-1 integration" in m and remedy in m for m in drift), drift
+    assert len(drift) == len(set(m.split(" drift:")[0] for m in drift))          # once per item

@@ -140,6 +140,9 @@ class ConstraintCheck:
     sliding coordinate, bridge/evaluated_sliding.py), which the test for multipliers leaves
     alone: its rows are equations of them."""
 
+    #: what holds a drift, said in its warning (the Exudyn-evaluated path has no stabilisation)
+    remedy = "stabilization='position' or a smaller step holds it"
+
     def __init__(self, mbs, solver, tolerance, dependent=None, aeCoordinates=()):
         self.mbs, self.solver = mbs, solver
         sd = mbs.systemData
@@ -314,9 +317,8 @@ class ConstraintCheck:
                 self.warned.add((kind, i))
                 warn_user(f"exudyn_lie: the constraints of {_label(self.mbs, kind, i)} drift: Exudyn's residual is "
                           f"{G[k]:.3g} at t = {t:.6g} s (tolerance {self.tol:.3g}), and exudyn_lie's own account "
-                          f"of the constraints explains it: the drift of explicit integration without "
-                          f"constraint stabilisation (reported once per item); stabilization='position' or a "
-                          f"smaller step holds it")
+                          f"of the constraints explains it: the drift of index-1 integration without "
+                          f"constraint stabilisation (reported once per item); {self.remedy}")
 
     def _velocity_redundancy(self, t):
         """The rule of :meth:`_redundancy` on Exudyn's velocity-level residuals (tolerance:

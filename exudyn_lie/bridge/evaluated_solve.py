@@ -360,6 +360,8 @@ class EvaluatedSolver:
             dependent = range(sd.NumberOfObjects()) if model.pivoted else None
             check = self.constraintCheck = ConstraintCheck(mbs, solver, P["tolCheck"], dependent,
                                                            () if model.sliding is None else model.sliding.slots)
+            check.remedy = ("a smaller step holds it (this path has no stabilisation; the compiled path has "
+                            "stabilization='position')")
             account = ConsistencyAccount(check)
             account.step(t0, model.velocity_constraints(t0, problem.R, problem.r, problem.prev, problem.qv),
                          np.max(np.abs(qt)) if qt.size else 0.0)

@@ -101,3 +101,11 @@ def test_compiled_evaluation_keeps_the_error():
     mbs, ss, sensors = build()
     with pytest.raises(BridgeError, match=r"parameter 'activeConnector' changed during the solve at t = 0\.1"):
         exl.SolveDynamic(mbs, ss, showProgress=False, evaluation="compiled")
+
+
+def test_changed_objects_reads_both_kinds_of_marks():
+    """The evaluated path's loop reads again the objects a user function changed: its own marks are
+    object indices; after a hand-over they are the compiled path's (kind, index, field, value)."""
+    from exudyn_lie.bridge.evaluated_solve import changed_objects
+    marks = [3, None, ("object", 5, "velocityLevel", None), ("load", 2, "load", None), ("object", 3, None, None)]
+    assert changed_objects(marks) == {3, 5}

@@ -203,13 +203,14 @@ class EvaluatedModel:
         self._cur = exu.ConfigurationType.Current
         self.aeCur = self.sd.GetAECoordinates(configuration=self._cur, copy=False) if m else np.zeros(0)
 
-    def read_rows(self):
+    def read_rows(self, changed=()):
         """What the rows need beyond Exudyn's evaluation, from the items as they are now (again
-        when a user function changed an object: an offset function, a connector switched on or
-        to velocity level)."""
+        when a user function changed the objects ``changed``: an offset function, a connector
+        switched on or to velocity level; one switched on or to position level is checked again as
+        evaluated_items.check_model checked every object at the start)."""
         mbs = self.mbs
-        for o in range(self.sd.NumberOfObjects()):     # (a connector switched on or to position level)
-            refuse_oblique_coordinate_row(mbs, o)
+        for o in changed:
+            refuse_oblique_coordinate_row(mbs, int(o))
         self.velocityRows, functionRows = coordinate_constraint_rows(mbs)
         # rows whose g_v and eta come from the position level (position_derived_rows)
         self.positionRows, self._allPosition = position_derived_rows(mbs)

@@ -25,11 +25,11 @@ import numpy as np
 
 from ..groups import so3
 from ..mbs.codes import BODY_TWIST, GROUP_NAMES
+from ..mbs.rotation_parameters import rotvec_quat
 from ..mbs.scene import Scene
 from ..mbs.simulator import Simulator
 from ..mbs.stiffness import StageStiffnessWatch, watch_stages
 from .evaluated_jacobian import ExudynNewtonJacobian, applies as jacobian_applies
-from ..mbs.rotation_parameters import rotvec_quat
 from .evaluated_kernels import pack_rates, pack_state, unpack_state
 from .evaluated_stiffness import ode1_rate
 

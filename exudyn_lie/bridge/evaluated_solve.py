@@ -413,8 +413,9 @@ class EvaluatedSolver:
         self._snap = problem.snapshot()          # the step's start (a repeat of the step restores it)
         model.start_step()
         if self._marks:
+            changed = changed_objects(self._marks)
             del self._marks[:]
-            model.read_rows()
+            model.read_rows(changed)
         if self._offsets:
             problem.write()                      # the step's start state into mbs
             model.set_parameter_offsets(self._offsets.record(t0, t1, self._actual_coordinates))
@@ -523,6 +524,19 @@ def hand_over_from(compiled, error, loop):
         compiled._chunks.rows = 0            # the compiled driver's fast hook defers to the loop's hook
     ev._marks = compiled._params.marks       # (its watch stays on for the rest of the loop)
     return ev
+
+
+def changed_objects(marks):
+    """The object indices among ``marks``: :class:`ObjectChanges` records indices; after a hand-over
+    from the compiled path its parameter watch's marks, ``(kind, index, field, value)`` (params.py)."""
+    out = set()
+    for mark in marks:
+        if isinstance(mark, tuple):
+            if mark[0] == "object":
+                out.add(int(mark[1]))
+        elif mark is not None:
+            out.add(int(mark))
+    return out
 
 
 class ObjectChanges(MainSystemPatch):

@@ -92,6 +92,20 @@ def position_marker(mbs, obj, p_world, node=False):
     return mbs.AddMarker(MarkerBodyPosition(bodyNumber=obj, localPosition=list(R.T @ (np.asarray(p_world) - r))))
 
 
+def box_on_spherical_joint(mbs, nodeType, R0, omega, com, sides=(0.4, 0.1, 0.2)):
+    """TestModels style: a box (offset COM, gravity -z, no initial translation) on a spherical joint
+    at its node to the ground, and a NodePointGround for coordinate items; returns (its node, the
+    ground node)."""
+    from exudyn.utilities import NodePointGround, ObjectGround, ObjectJointSpherical
+    b = add_body(mbs, nodeType, [0, 0, 0], R0, omega=omega, vel=(0, 0, 0), com=com, sides=sides,
+                 gravity=(0, 0, -9.81))
+    n = mbs.GetObject(b)["nodeNumber"]
+    g = mbs.AddObject(ObjectGround())
+    mbs.AddObject(ObjectJointSpherical(markerNumbers=[mbs.AddMarker(MarkerBodyRigid(bodyNumber=g)),
+                                                      mbs.AddMarker(MarkerNodeRigid(nodeNumber=n))]))
+    return n, mbs.AddNode(NodePointGround())
+
+
 def random_state(mbs, rng, scale=0.4):
     """Random current coordinates/velocities: unit Euler parameters, tangent ep_t."""
     sd = mbs.systemData

@@ -27,7 +27,8 @@ from exudyn_lie.mbs.node_coordinates import (PARAM_EULER_PARAMETERS, PARAM_ROTAT
 from exudyn_lie.mbs.oblique_solve import force_direction_rows
 from exudyn_lie.mbs.rotation_parameters import nearest_tait_bryan, quat_of
 from exudyn_lie.mbs.diagnostics import constraint_jacobian
-from test_bridge_common import add_body, compare, new_mbs, oracle, package, quiet_settings, random_state
+from test_bridge_common import (add_body, box_on_spherical_joint, compare, new_mbs, oracle, package, quiet_settings,
+                                random_state)
 
 KINDS = {"RotVecLG": (PARAM_ROTATION_VECTOR, 3), "EP": (PARAM_EULER_PARAMETERS, 4), "Rxyz": (PARAM_TAIT_BRYAN, 3)}
 PARAMETRISATIONS = {"RotVecLG": "rotationVector", "EP": "eulerParameters", "Rxyz": "taitBryanXYZ"}   # the kernel's names
@@ -269,16 +270,10 @@ def locked_model(node):
     that the motion stays away from the Tait-Bryan singularity, where the gradient of the other
     angles is unbounded) locked to the ground by an ObjectConnectorCoordinate; a consistent
     initial omega."""
-    from exudyn.utilities import MarkerNodeRigid, ObjectGround, ObjectJointSpherical, MarkerBodyRigid
     mbs = new_mbs()
     R0 = so3.exp(np.array([0.2, -0.3, 0.5]))
     om = _consistent_omega(node, 1, R0, [1.5, -2.0, 3.0])
-    b = add_body(mbs, node, [0, 0, 0], R0, omega=om, vel=(0, 0, 0), com=(0.15, 0.05, -0.1), gravity=(0, 0, -9.81))
-    n = mbs.GetObject(b)["nodeNumber"]
-    g = mbs.AddObject(ObjectGround())
-    mbs.AddObject(ObjectJointSpherical(markerNumbers=[mbs.AddMarker(MarkerBodyRigid(bodyNumber=g)),
-                                                      mbs.AddMarker(MarkerNodeRigid(nodeNumber=n))]))
-    ng = mbs.AddNode(NodePointGround())
+    n, ng = box_on_spherical_joint(mbs, node, R0, om, com=(0.15, 0.05, -0.1))
     mbs.AddObject(ObjectConnectorCoordinate(markerNumbers=[
         mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=ng, coordinate=0)),
         mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=n, coordinate=4))]))

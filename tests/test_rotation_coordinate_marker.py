@@ -13,14 +13,13 @@ world angular velocity, its Jacobian that rate's; the row ``f omega_B[k] - omega
 import exudyn as exu
 import numpy as np
 import pytest
-from exudyn.utilities import (MarkerBodyRigid, MarkerNodeCoordinate, MarkerNodeRigid, MarkerNodeRotationCoordinate,
-                              NodePointGround, ObjectConnectorCoordinate, ObjectConnectorCoordinateSpringDamper,
-                              ObjectGround, ObjectJointSpherical)
+from exudyn.utilities import (MarkerNodeCoordinate, MarkerNodeRotationCoordinate, NodePointGround,
+                              ObjectConnectorCoordinate, ObjectConnectorCoordinateSpringDamper)
 
 import exudyn_lie as exl
 from exudyn_lie.bridge.reader_common import BridgeError, NotCompiled
 from exudyn_lie.groups import so3
-from test_bridge_common import CUR, add_body, new_mbs, package, quiet_settings, random_state
+from test_bridge_common import CUR, add_body, box_on_spherical_joint, new_mbs, package, quiet_settings, random_state
 
 NODES = ("RotVecLG", "EP", "Rxyz")
 
@@ -174,13 +173,8 @@ def _held_rate_model(node, k):
     mbs = new_mbs()
     om = [1.0, -2.0, 3.0]
     om[k] = 2.5
-    b = add_body(mbs, node, [0, 0, 0], so3.exp(np.array([0.3, -0.2, 0.4])), omega=om, vel=(0, 0, 0),
-                 com=(0.02, 0.01, 0.0), sides=(0.3, 0.1, 0.2), gravity=(0, 0, -9.81))
-    n = mbs.GetObject(b)["nodeNumber"]
-    g = mbs.AddObject(ObjectGround())
-    mbs.AddObject(ObjectJointSpherical(markerNumbers=[mbs.AddMarker(MarkerBodyRigid(bodyNumber=g)),
-                                                      mbs.AddMarker(MarkerNodeRigid(nodeNumber=n))]))
-    ng = mbs.AddNode(NodePointGround())
+    n, ng = box_on_spherical_joint(mbs, node, so3.exp(np.array([0.3, -0.2, 0.4])), om, com=(0.02, 0.01, 0.0),
+                                   sides=(0.3, 0.1, 0.2))
     mbs.AddObject(ObjectConnectorCoordinate(markerNumbers=[
         mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=ng, coordinate=0)),
         mbs.AddMarker(MarkerNodeRotationCoordinate(nodeNumber=n, rotationCoordinate=k))], offset=2.5,

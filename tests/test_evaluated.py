@@ -44,8 +44,8 @@ def _rel(a, b):
 
 
 def _both_paths(build, T, h, **kw):
-    """The final state on both paths; the unstabilised method on both (the evaluated path
-    does not project, the compiled path's default projects)."""
+    """The final state on both paths; the unstabilised method on both (stabilization=None: the
+    two integrations themselves compared, not two projections)."""
     kw.setdefault("stabilization", None)
     out = {}
     for ev in ("compiled", "exudyn"):

@@ -203,8 +203,8 @@ BAD = {
     "evaluation='compiled' with a foreign item": ("generic_ode2", lambda m: None, dict(evaluation="compiled"),
                                                   r"ObjectGenericODE2 is not supported"),
     "unknown evaluation": ("generic_ode2", lambda m: None, dict(evaluation="python"), r"evaluation must be"),
-    "stabilization with a foreign item": ("cable2d_pendulum", lambda m: None, dict(stabilization="velocity"),
-                                          r"stabilization"),
+    "unknown stabilization with a foreign item": ("cable2d_pendulum", lambda m: None,
+                                                  dict(stabilization="baumgarte"), r"unknown stabilization"),
 }
 
 

@@ -7,7 +7,9 @@ model with joints: the medians of whole ``exl.SolveDynamic`` calls with the defa
 with ``stabilization=None`` (the paper's unstabilised method), interleaved round by round,
 at Exudyn's default output period of 0.01 s with a sensor, h = 1e-3 s, and the largest joint
 violation at the end of each (position and rotation rows of the model's joints,
-``models.geometry.joint_violations``)."""
+``models.geometry.joint_violations``).  With ``evaluation='exudyn'`` the same on the
+Exudyn-evaluated path, which projects onto Exudyn's own constraints after every Exudyn step
+(bridge/evaluated_projection.py)."""
 from __future__ import annotations
 
 import numpy as np
@@ -24,11 +26,11 @@ def _final_violation(mbs, info):
     return max(float(max(t[0], q[0])) for t, q in (joint_violations(j, R, r) for j in info.joints))
 
 
-def stabilization_cost(T=2.0, h=1e-3, period=0.01, repeats=7, models_=MODELS):
+def stabilization_cost(T=2.0, h=1e-3, period=0.01, repeats=7, models_=MODELS, evaluation="auto"):
     from .bench_micro import timed_paper_solve
 
     def one(name, stabilization):
-        t, mbs, info = timed_paper_solve(name, T, h, period, stabilization=stabilization)
+        t, mbs, info = timed_paper_solve(name, T, h, period, stabilization=stabilization, evaluation=evaluation)
         return t, _final_violation(mbs, info)
 
     out = {}

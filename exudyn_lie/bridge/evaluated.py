@@ -51,8 +51,8 @@ import numpy as np
 from ..errors import ConstraintError, SimulationError
 from ..mbs.block_kkt import BlockKKT
 from ..mbs.row_drives import offset_and_derivatives
-from .evaluated_items import (LIE_GROUP_NODES, coordinate_constraint_rows, ep_node_rows, node_rows, position_derived_rows,
-                              refuse_oblique_coordinate_row)
+from .evaluated_items import (LIE_GROUP_NODES, coordinate_constraint_rows, ep_node_rows, multiplier_rows, node_rows,
+                              position_derived_rows, refuse_oblique_coordinate_row)
 from .evaluated_kernels import euler_parameter_eta, write_exudyn_state, write_moved_positions
 from .evaluated_sliding import SlidingCoordinates, sliding_joints
 from .reader import BridgeError, mbs_user_function
@@ -212,6 +212,7 @@ class EvaluatedModel:
         for o in changed:
             refuse_oblique_coordinate_row(mbs, int(o))
         self.velocityRows, functionRows = coordinate_constraint_rows(mbs)
+        self.multiplierRows = multiplier_rows(mbs)
         # rows whose g_v and eta come from the position level (position_derived_rows)
         self.positionRows, self._allPosition = position_derived_rows(mbs)
         # an offset function's rate and acceleration are added to Exudyn's velocity level; the
@@ -277,8 +278,9 @@ class EvaluatedModel:
         self.sd.SetODE1Coordinates(y, configuration=self._cur)
 
     # ------------------------------------------------------------------ evaluations
-    def mass_force_jacobian(self, t):
-        """(M, f, C_q) at the state in mbs (C_q rows of the AE equations; None without).  M is
+    def mass_force_jacobian(self, t, forces=True):
+        """(M, f, C_q) at the state in mbs (C_q rows of the AE equations; None without; f = 0 without
+        ``forces``: the projections, bridge/evaluated_projection.py).  M is
         evaluated once when ``constantMass`` (Exudyn's ``reuseConstantMassMatrix`` on a system whose
         bodies all declare a constant one, evaluated_items.constant_mass_matrix): the dense copy of
         an n x n matrix per stage cost more than the rest of a stage for many bodies (particles);
@@ -293,13 +295,16 @@ class EvaluatedModel:
             M = self._getM()
             if self.constantMass:
                 self.kkt.constantM = M
-        if self._preNewton is not None:
+        if not forces:
+            f = np.zeros(self.n)
+        elif self._preNewton is not None:
             # Exudyn calls it before each residual of its Newton iteration (a load that follows the
             # state, say); a stage evaluation is this path's residual.  newtonIt 0: no Newton here
             self._preNewton(mbs, t, 0, 0)
-        self._ode2rhs(mbs)
-        f = self._residual()[:self.n]
-        if self.n1:
+        if forces:
+            self._ode2rhs(mbs)
+            f = self._residual()[:self.n]
+        if self.n1 and forces:
             self._ode1rhs(mbs)
             self.ydot[:] = self._residual()[self.n:self.n + self.n1]
         Cq = None
@@ -347,15 +352,16 @@ class EvaluatedModel:
         return out
 
     def position_residual(self, t):
-        """Exudyn's position-level residual at the state in mbs; a velocity-level row has none
-        (Exudyn returns its velocity equation there): 0; the rows of sliding joints in the basis
-        of bridge/evaluated_sliding.py."""
+        """Exudyn's position-level residual at the state in mbs; a velocity-level row and a
+        connector switched off have none (Exudyn returns its velocity equation, the multiplier,
+        there): 0; the rows of sliding joints in the basis of bridge/evaluated_sliding.py."""
         self._setTime(t)
         if self.sliding is not None:
             self.sliding.project(t, self.aeCur)
         self._ae(self.mbs, False)
         g = self._residual()[self.n + self.n1:].copy()
         g[self.velocityRows] = 0.0
+        g[self.multiplierRows] = 0.0
         return g if self.sliding is None else self.sliding.transform_rows(g)
 
     def ae_solution(self):

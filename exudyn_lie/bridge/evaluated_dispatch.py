@@ -69,13 +69,12 @@ def evaluated_path(mbs, evaluation, assemble, *, method, liegroup, stabilization
             reasons = [why.rstrip(".")]
     else:
         reasons = None
-    if stabilization not in (None, "none"):
-        raise BridgeError(f"stabilization={stabilization!r} is not available when Exudyn evaluates the model "
-                          f"(the model has items the compiled kernel does not have, or evaluation='exudyn'); use "
-                          f"stabilization=None")
+    if stabilization not in (None, "none", "velocity", "position"):
+        raise BridgeError(f"unknown stabilization {stabilization!r}; use None, 'velocity' or 'position'")
     tab = _check_method(method)
     lg = liegroup_argument(liegroup)
     solver = EvaluatedSolver(mbs, tab, lg, verbose=verbose, reasons=reasons, projectInitial=projectInitial,
+                             stabilization=stabilization,
                              autoImplicit=autoImplicit)
     solver.check_run(settings, substeps)
     return solver, None

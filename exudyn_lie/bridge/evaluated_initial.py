@@ -1,27 +1,16 @@
 """Initial consistency on the Exudyn-evaluated path: Exudyn's own constraint equations as the
 levels of the one rule (:func:`~exudyn_lie.mbs.initial_state.check_initial_state`, which the
-compiled path's ``Simulator._check_initial_consistency`` uses too); the projections:
-
-* positions: Gauss-Newton steps ``Delta = -M^-1 C_q^T (C_q M^-1 C_q^T)^-1 g`` in Exudyn's
-  velocity coordinates, applied on the group for Lie group nodes (``R exp(Delta omega)``,
-  ``r + Delta r``) and added to vector coordinates;
-* velocities: the mass-orthogonal projection ``v <- v - M^-1 C_q^T (C_q M^-1 C_q^T)^-1 C_q v``,
-  which does not depend on the velocity coordinates (the compiled path's projection in its
-  group velocities gives the same velocities).
-
-Both solves are the model's index-1 solve (:meth:`~.evaluated.EvaluatedModel.solve`) with ``f = 0``.
+compiled path's ``Simulator._check_initial_consistency`` uses too); the projections are those
+of every step (:mod:`.evaluated_projection`).
 """
 from __future__ import annotations
 
 import numpy as np
 
 from ..errors import ConstraintError
-from ..groups import so3
-from ..mbs.codes import BODY_TWIST
+from ..mbs.codes import PROJ_MAX_ITER, PROJ_TOL
 from ..mbs.initial_state import check_initial_state
-
-MAX_ITER = 20
-TOL = 1e-13
+from .evaluated_projection import position_scale, project_positions, project_velocities
 
 
 def _rows_to_objects(mbs):
@@ -42,13 +31,6 @@ def _names(mbs, rows):
     return ", ".join(dict.fromkeys(m.get(int(r), f"AE row {r}") for r in rows))
 
 
-def _correction(model, t, rhs):
-    """``Delta`` with ``C_q Delta = rhs`` of least M-norm (the KKT solve with f = 0)."""
-    M, f, Cq = model.mass_force_jacobian(t)
-    model.solve(M, np.zeros(model.n), Cq, np.asarray(rhs, float))
-    return model.a.copy()
-
-
 class _ExudynLevels:
     """Exudyn's own constraint equations at the problem's state as the levels of
     :func:`~exudyn_lie.mbs.initial_state.check_initial_state`."""
@@ -58,11 +40,8 @@ class _ExudynLevels:
         self.velocityChange = 0.0
 
     def position_residual(self):
-        p = self.problem
-        scale = max(1.0, float(np.max(np.abs(p.r))) if p.r.size else 1.0,
-                    float(np.max(np.abs(p.qv))) if p.qv.size else 1.0)
-        self.scale = scale
-        return self.model.position_residual(self.t), scale
+        self.scale = position_scale(self.model, self.problem)
+        return self.model.position_residual(self.t), self.scale
 
     def velocity_residual(self):
         m, p = self.model, self.problem
@@ -71,43 +50,26 @@ class _ExudynLevels:
 
     def project_positions(self):
         """Gauss-Newton steps on the group for Lie group nodes, added to vector coordinates."""
-        model, problem, t = self.model, self.problem, self.t
-        L = model.L
-        g = model.position_residual(t)
-        for _ in range(MAX_ITER):
-            d = _correction(model, t, -g)
-            for i in range(len(L.lgNodes)):
-                idx = L.lgIdx[i]
-                problem.R[i] = problem.R[i] @ so3.exp(np.ascontiguousarray(d[idx[3:]]))
-                problem.r[i] += d[idx[:3]]
-            problem.qv += d[L.vecIdx]
-            problem.write()
-            g = model.position_residual(t)
-            if np.max(np.abs(g)) <= TOL * self.scale:
-                return
-        bad = np.nonzero(np.abs(g) > TOL * self.scale)[0]
+        tol = PROJ_TOL * self.scale
+        g, _ = project_positions(self.model, self.problem, self.t, tol, chord=False)
+        if not np.max(np.abs(g)) > tol:
+            return
+        bad = np.nonzero(np.abs(g) > tol)[0]
         raise ConstraintError(f"the initial configuration could not be projected onto the constraints of "
-                              f"{self.describe_rows(bad)} in {MAX_ITER} Gauss-Newton steps (max |h| = "
+                              f"{self.describe_rows(bad)} in {PROJ_MAX_ITER} Gauss-Newton steps (max |h| = "
                               f"{np.max(np.abs(g)):.3g}); they may not be satisfiable")
 
     def project_velocities(self):
         """The mass-orthogonal projection, written as the problem's velocities."""
-        model, problem, t = self.model, self.problem, self.t
-        L = model.L
-        gv = model.velocity_constraints(t, problem.R, problem.r, problem.prev, problem.qv)
-        dv = _correction(model, t, -gv)
-        qt = model.qt.copy() + dv
-        for i in range(len(L.lgNodes)):
-            idx = L.lgIdx[i]
-            problem.V[i, :3] = qt[idx[3:]]
-            v = qt[idx[:3]]
-            problem.V[i, 3:] = problem.R[i].T @ v if BODY_TWIST[problem.gid[i]] else v
-        problem.set_vector_velocities(qt[L.vecIdx])
-        problem.write()
-        self.velocityChange = float(np.max(np.abs(dv)))
+        self.velocityChange = project_velocities(self.model, self.problem, self.t)
 
     def describe_rows(self, rows):
-        return "objects " + _names(self.model.mbs, rows)
+        return describe_rows(self.model.mbs, rows)
+
+
+def describe_rows(mbs, rows):
+    """The Exudyn items of AE rows ``rows``, for errors."""
+    return "objects " + _names(mbs, rows)
 
 
 def project_initial(model, problem, t, projectInitial):

@@ -191,6 +191,15 @@ def position_derived_rows(mbs):
     return np.array(sorted(set(rows)), np.int64), every
 
 
+def multiplier_rows(mbs):
+    """AE rows of connectors switched off (``activeConnector`` False): the equations ``lam = 0`` in
+    their multipliers alone, without a position or velocity level (Exudyn's residual there is the
+    multiplier itself)."""
+    sd = mbs.systemData
+    return np.array([r for o in range(sd.NumberOfObjects()) if not mbs.GetObject(o).get("activeConnector", True)
+                     for r in sd.GetObjectLTGAE(o)], np.int64)
+
+
 def node_rows(mbs):
     """The AE rows of the nodes' own equations (a NodeRigidBodyEP's ``|p|^2 = 1``)."""
     sd = mbs.systemData

@@ -33,7 +33,8 @@ from .evaluated_items import check_model, constant_mass_matrix, parameter_offset
 from .moving_offsets import ParameterOffsets
 from .params import MainSystemPatch
 from .evaluated_problem import EvaluatedProblem
-from .evaluated_initial import project_initial
+from .evaluated_initial import describe_rows, project_initial
+from .evaluated_projection import StepProjection
 from .evaluated_stiffness import check_step
 from .method_choice import auto_choice_text, stiff_choice, unstable_choice
 from ..errors import StepSizeError, step_size_error
@@ -122,8 +123,9 @@ class EvaluatedSolver:
     pathName = "evaluated"         # as solve_timing reports it
 
     def __init__(self, mbs, tableau, liegroup="auto", verbose=False, reasons=None, projectInitial=True,
-                 autoImplicit=False):
+                 autoImplicit=False, stabilization="position"):
         self.mbs = mbs
+        self.stabilization = None if stabilization == "none" else stabilization    # bridge/evaluated_projection.py
         self.autoImplicit = bool(autoImplicit) and not tableau.implicit     # bridge/method_choice.py
         self._explicit = tableau
         self.projectInitial = bool(projectInitial)
@@ -306,6 +308,8 @@ class EvaluatedSolver:
         if P["exudynReduces"]:
             problem.sim.SetNewtonFallbacks(False)
         problem.read_state(q, qt, y, t0)
+        self._project = (StepProjection(model, problem, self.stabilization, lambda rows: describe_rows(mbs, rows))
+                         if self.stabilization and model.m else None)
         fixed = project_initial(model, problem, t0, self.projectInitial)
         if fixed and self._takeOver is not None:
             warn_user(f"exudyn_lie: at the hand-over to the Exudyn-evaluated path (t = {self._takeOver:.6g} s) the "
@@ -360,21 +364,24 @@ class EvaluatedSolver:
             dependent = range(sd.NumberOfObjects()) if model.pivoted else None
             check = self.constraintCheck = ConstraintCheck(mbs, solver, P["tolCheck"], dependent,
                                                            () if model.sliding is None else model.sliding.slots)
-            check.remedy = ("a smaller step holds it (this path has no stabilisation; the compiled path has "
-                            "stabilization='position')")
             account = ConsistencyAccount(check)
             account.step(t0, model.velocity_constraints(t0, problem.R, problem.r, problem.prev, problem.qv),
                          np.max(np.abs(qt)) if qt.size else 0.0)
             check.start(P["ticTotal"], ticCheck)
             tEnd = P["tEnd"]
+            projected = None
+            if self._project is not None:
+                self._project.account = account      # (it accounts every step, before and after projecting)
+                projected = account.unexplained
 
             def at_output(t1, last):
                 if model.pivoted and check.dependent is None:
                     check.dependent = set(range(sd.NumberOfObjects()))
                 # (model._vmax: max |q_t| of the state the step wrote, problem.write)
-                account.step(t1, model.velocity_constraints(t1, problem.R, problem.r, problem.prev, problem.qv),
-                             model._vmax)
-                check.at_output(t1, account.explain, t1 >= tEnd - 1e-9 * max(1.0, abs(tEnd)))
+                if account.t != t1:
+                    account.step(t1, model.velocity_constraints(t1, problem.R, problem.r, problem.prev, problem.qv),
+                                 model._vmax)
+                check.at_output(t1, account.explain, t1 >= tEnd - 1e-9 * max(1.0, abs(tEnd)), projected)
             self.loop_check = at_output
 
     def _write_accelerations(self):
@@ -439,6 +446,8 @@ class EvaluatedSolver:
                 "(with a Jacobian of this step, then at each iterate)", "Exudyn reduced its step after each "
                 "failure (adaptiveStep) down to this one", "decrease timeIntegration.minimumStepSize or the "
                 "step size")) from None
+        if self._project is not None:
+            self._project(t1)
         problem.write()
         if P["needAcc"]:
             self._write_accelerations()
@@ -509,7 +518,7 @@ def hand_over_from(compiled, error, loop):
     try:
         ev = EvaluatedSolver(compiled.mbs, compiled._explicit, liegroup=compiled._liegroup_arg,
                              verbose=compiled.verbose, autoImplicit=compiled.autoImplicit,
-                             projectInitial=compiled.projectInitial)
+                             projectInitial=compiled.projectInitial, stabilization=compiled.stabilization)
         ev._takeOver = error.t
         if not ev.take_over(loop, loop.settings, plan["k"], plan["needAcc"],
                             getattr(compiled, "_constraintCheck", True), error.t):

@@ -67,10 +67,11 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
     :class:`~exudyn_lie.integrators.ButcherTableau` of the user's own; it must agree with an
     explicit solverType),
     ``liegroup`` ('SE3', 'SO3xR3', 'auto' or {rigid-body object index: group}),
-    ``stabilization`` (default 'auto': 'position' on the compiled path, so that joints hold
-    to round-off as Exudyn's generalized-alpha holds them to its Newton tolerance; its cost:
-    ``bench --sections stabilization``; None with ``constraintTolerance``, which projects by its own rule, and
-    on the Exudyn-evaluated path, which does not project; None: the paper's unstabilised
+    ``stabilization`` (default 'auto': 'position', so that joints hold to round-off as Exudyn's
+    generalized-alpha holds them to its Newton tolerance; on the Exudyn-evaluated path onto
+    Exudyn's own constraints, once their residual exceeds 1e-10 of the scale,
+    bridge/evaluated_projection.py; its cost: ``bench --sections stabilization``; None with
+    ``constraintTolerance``, which projects by its own rule; None: the paper's unstabilised
     methods; 'velocity'), ``projectInitial`` (default True: an inconsistent initial state is
     projected onto the constraints with a warning; False: ConstraintError), ``verbose``
     (print the group per body, the plan and the time spent), ``showProgress`` (a progress line every 2 s on runs longer than about 4 s, with
@@ -120,7 +121,7 @@ def SolveDynamic(mbs, simulationSettings=None, solverType=None, updateInitialVal
     if evaluation != "compiled":
         from .evaluated_dispatch import evaluated_path
         path, scene = evaluated_path(mbs, evaluation, assemble, method=method, liegroup=liegroup,
-                                     stabilization=None if auto else stabilization, projectInitial=projectInitial,
+                                     stabilization="position" if auto else stabilization, projectInitial=projectInitial,
                                      verbose=verbose, settings=settings, substeps=substeps, autoImplicit=autoImplicit)
         if path is not None:
             if constraintTolerance is not None:

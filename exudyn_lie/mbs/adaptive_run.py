@@ -68,6 +68,13 @@ class AdaptiveRun:
         """A new first step (no FSAL reuse) at the next call: the state was changed from outside."""
         self.started = False
 
+    def drop_fsal(self):
+        """The next step evaluates its stage 1 anew, the step size and its controller kept: the
+        state of the last accepted step was projected from outside (as the loop's own projection
+        does, mbs/adaptive.py: the last stage is no longer the state's)."""
+        if self.started and self.ist[_adaptive.IS_HAVE0] == _adaptive.HAVE0_FSAL:
+            self.ist[_adaptive.IS_HAVE0] = _adaptive.HAVE0_NONE
+
     def _hinit(self):
         """Hairer's HINIT on the group (``integrators/control.py``; as ``tests/reference_mk_adaptive.initial_step``):
         two evaluations; the first is kept as the first step's stage 1."""

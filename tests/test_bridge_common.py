@@ -51,6 +51,22 @@ def new_mbs():
     return mbs
 
 
+def double_pendulum(swinging=False):
+    """The README's double pendulum (two 1 m bars on revolute joints about z, gravity -y; Exudyn's
+    default EP nodes), at rest or ``swinging`` (2 rad/s, the tips at 1 and 3 m/s)."""
+    mbs = new_mbs()
+    ground = mbs.CreateGround()
+    inertia = InertiaCuboid(density=1000, sideLengths=[1, 0.1, 0.1])
+    prev = ground
+    for i in range(2):
+        kw = dict(initialAngularVelocity=[0, 0, 2.0], initialVelocity=[0, 1.0 + 2 * i, 0]) if swinging else {}
+        b = mbs.CreateRigidBody(inertia=inertia, referencePosition=[0.5 + i, 0, 0], gravity=[0, -9.81, 0], **kw)
+        mbs.CreateRevoluteJoint(itemNumbers=[prev, b], position=[i, 0, 0], axis=[0, 0, 1])
+        prev = b
+    mbs.Assemble()
+    return mbs
+
+
 def add_body(mbs, nodeType, position, R0, omega=(0.3, -0.2, 0.5), vel=(0.1, 0.2, -0.1), com=(0.1, 0.02, -0.03),
              sides=(0.4, 0.1, 0.2), gravity=None):
     inert = InertiaCuboid(density=1000, sideLengths=list(sides)).Translated(list(com))

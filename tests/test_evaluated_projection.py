@@ -7,31 +7,16 @@ import numpy as np
 import pytest
 
 import exudyn as exu
-from exudyn.utilities import InertiaCuboid
 
 import exudyn_lie as exl
 from exudyn_lie.bridge.evaluated_projection import PROJECT_ABOVE
 from exudyn_lie.bridge.reader import BridgeError
 
-from test_bridge_common import oracle
-
-_KEEP = []
+from test_bridge_common import double_pendulum, oracle
 
 
 def _double_pendulum():
-    SC = exu.SystemContainer()
-    _KEEP.append(SC)
-    mbs = SC.AddSystem()
-    ground = mbs.CreateGround()
-    inertia = InertiaCuboid(density=1000, sideLengths=[1, 0.1, 0.1])
-    b0 = mbs.CreateRigidBody(inertia=inertia, referencePosition=[0.5, 0, 0], gravity=[0, -9.81, 0],
-                             initialAngularVelocity=[0, 0, 2.0], initialVelocity=[0, 1.0, 0])
-    b1 = mbs.CreateRigidBody(inertia=inertia, referencePosition=[1.5, 0, 0], gravity=[0, -9.81, 0],
-                             initialAngularVelocity=[0, 0, 2.0], initialVelocity=[0, 3.0, 0])
-    mbs.CreateRevoluteJoint(itemNumbers=[ground, b0], position=[0, 0, 0], axis=[0, 0, 1])
-    mbs.CreateRevoluteJoint(itemNumbers=[b0, b1], position=[1, 0, 0], axis=[0, 0, 1])
-    mbs.Assemble()
-    return mbs
+    return double_pendulum(swinging=True)
 
 
 def _run(stabilization, evaluation="exudyn", h=0.02, T=2.0, method="RK4"):

@@ -379,21 +379,10 @@ def test_check_stops_a_joint_marker_moved_on_the_evaluated_path():
 
 
 def _double_pendulum():
-    SC = exu.SystemContainer()
-    _KEEP_DRIFT.append(SC)
-    mbs = SC.AddSystem()
-    from exudyn.utilities import InertiaCuboid
-    ground = mbs.CreateGround()
-    inertia = InertiaCuboid(density=1000, sideLengths=[1, 0.1, 0.1])
-    b0 = mbs.CreateRigidBody(inertia=inertia, referencePosition=[0.5, 0, 0], gravity=[0, -9.81, 0])
-    b1 = mbs.CreateRigidBody(inertia=inertia, referencePosition=[1.5, 0, 0], gravity=[0, -9.81, 0])
-    mbs.CreateRevoluteJoint(itemNumbers=[ground, b0], position=[0, 0, 0], axis=[0, 0, 1])
-    mbs.CreateRevoluteJoint(itemNumbers=[b0, b1], position=[1, 0, 0], axis=[0, 0, 1])
-    mbs.Assemble()
-    return mbs
+    from test_bridge_common import double_pendulum
+    return double_pendulum()
 
 
-_KEEP_DRIFT = []
 
 
 @pytest.mark.parametrize("evaluation", ["compiled", "exudyn"])

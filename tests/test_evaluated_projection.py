@@ -78,12 +78,13 @@ def test_the_paths_agree_with_the_default_stabilization():
     assert d < 1e-5, d
 
 
-@pytest.mark.parametrize("method,h", [("Heun", 0.025), ("ExplicitMidpoint", 0.015), ("RK4", 0.1)])
+@pytest.mark.parametrize("method,h", [("RK4", 0.05), ("RK4", 0.1), ("ESDIRK3", 0.1)])
 def test_coarse_steps_do_not_stop_a_projected_run(method, h):
     """The run-time check stays an oracle under projection by judging the corrections the velocity
-    level does not explain (bridge/evaluated_projection.py); a low-order method at a coarse step
-    makes large local errors at the position level, which are such corrections too: they must not
-    stop the run as a defect would (its rate rule, constraint_check.UNEXPLAINED_RATE)."""
+    level does not explain (bridge/evaluated_projection.py); a method at a coarse step (ESDIRK3:
+    order 3) makes large local errors at the position level, which are such corrections too: they
+    must not stop the run as a defect would (its rate rule, constraint_check.UNEXPLAINED_RATE).
+    (Methods the suite compiles anyway on this path: each other one is a compile of minutes.)"""
     mbs, _ = _run("auto", h=h, T=2.0, method=method)
     g, gv = _residuals(mbs)
     assert g <= PROJECT_ABOVE and gv <= PROJECT_ABOVE, (g, gv)

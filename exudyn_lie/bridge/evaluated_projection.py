@@ -20,8 +20,9 @@ is also what the stage equations of an implicit method cannot always absorb: Exu
 ``ANCFmovingRigidbody.py`` (a rigid body on an ALE cable, ESDIRK3 at the script's step) drifted
 off its sliding joint until no step, however small, had a Newton solution (t = 0.238 s); projected
 after each step (an earlier form of this module, which projected at every step, by hand), it
-passed that point and stopped later, at t = 0.384 s, for a cause not found.  The projection is made once per Exudyn step (after its MK
-steps, ``substeps`` or the adaptive ones): the state Exudyn's outputs and PostNewton see.
+passed that point and stopped later, at t = 0.384 s, for a cause not found.  The projection is
+made once per Exudyn step (after its MK steps, ``substeps`` or the adaptive ones): the state
+Exudyn's outputs and PostNewton see.
 """
 from __future__ import annotations
 

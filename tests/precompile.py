@@ -30,12 +30,6 @@ def _lean_fixed(method):
     return build
 
 
-def _lean_adaptive():
-    sim = _kernel_chain("DOPRI5")
-    sim.SetAdaptive(rtol=1e-6, atol=1e-6)
-    sim.AdvanceTo(1e-3)
-
-
 def _tree(stabilization):
     def build():
         from exudyn_lie.apps import bench_topology as BT
@@ -80,8 +74,6 @@ KINDS = [
     ("drop-in, ESDIRK3 (stiff, chosen by itself)", _drop_in("_stiff_springs"), (DROP_IN_RK4,)),
     ("drop-in, velocity Verlet", _drop_in("_pendulum", "VelocityVerlet"), (DROP_IN_RK4,)),
     ("drop-in, ESDIRK3 on adaptive steps", _drop_in("_pendulum", method="ESDIRK3"), (DROP_IN_RK4,)),
-    ("kernel, adaptive steps (lean scene)", _lean_adaptive, (LEAN_RK4,)),
-    ("kernel, ESDIRK3 (lean scene)", _lean_fixed("ESDIRK3"), (LEAN_RK4,)),
     ("tree solve (lean scene)", _tree(None), (LEAN_RK4,)),
 ]
 #: a run that selects fewer tests (``-k``, one file) is not made to wait for every kind

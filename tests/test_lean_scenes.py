@@ -64,6 +64,32 @@ def test_lean_and_full_give_identical_states(group, monkeypatch):
     assert np.abs(a.V).max() > 0.1 and np.abs(a.wk.lam).max() > 1.0
 
 
+def test_adaptive_and_implicit_steps_run_a_lean_scene_full(monkeypatch):
+    """The lean kinds serve fixed explicit steps only: an implicit method and adaptive steps compile
+    a lean scene full (the kinds the drop-in compiles anyway).  Switched after fixed steps
+    (SetAdaptive, SetMethod), the state and the path go on: the same states to the bit as the
+    scene compiled full from the start."""
+    assert Simulator(lean_scene(), "ESDIRK3", "SE3", projectInitial=True).sd.rowsAll is True
+    out = {}
+    for lean in (True, False):
+        monkeypatch.setattr(compiled, "LEAN_SCENES", lean)
+        sim = Simulator(lean_scene(), "DOPRI5", "SE3", projectInitial=True)
+        assert (sim.sd.rowsAll is None) == lean
+        sim.Advance(20, 1e-3)
+        before = (sim.t, sim.R.copy(), sim.V.copy())
+        sim.SetAdaptive(rtol=1e-8, atol=1e-8)
+        assert sim.sd.rowsAll is True and sim.wk.path.rollingDiscs is not None
+        assert sim.t == before[0] and np.array_equal(sim.R, before[1]) and np.array_equal(sim.V, before[2])
+        sim.AdvanceTo(0.05)
+        sim.SetMethod("ESDIRK3")
+        sim.Advance(10, 1e-3)
+        out[lean] = (sim.t, sim.R.copy(), sim.r.copy(), sim.V.copy())
+    assert out[True][0] == pytest.approx(0.06)
+    for x, y in zip(out[True], out[False]):
+        assert np.array_equal(x, y)
+    assert np.abs(out[True][3]).max() > 0.1
+
+
 def _add_non_lean(sc, kind):
     if kind == "cartesian":
         sc.AddCartesianSpringDamper(1, [0.25, 0, 0], 2, [-0.25, 0, 0], stiffness=[10.0, 10.0, 10.0],
@@ -102,13 +128,23 @@ def test_stabilization_makes_a_scene_full_with_the_switches_at_run_time(monkeypa
     assert np.array_equal(full.V, lean.V) and np.abs(lean.V).max() > 0.1
 
 
+def time_loop_ir(sim):
+    """The LLVM IR of the module for linking of ``sim``'s fixed-step time loop (``mk_steps`` for its
+    SceneData and Work types and a Method tuple), which numba keeps also for a kind loaded from
+    the cache: what the loop compiles, read without a compile of its own."""
+    import numba
+    from exudyn_lie.mbs import stepper
+    loop = [cres for sig, cres in stepper.mk_steps.overloads.items()
+            if sig[:2] == (numba.typeof(sim.sd), numba.typeof(sim.wk))
+            and sig[2].instance_class.__name__ == "Method"]
+    assert len(loop) == 1
+    return str(loop[0].library._get_module_for_linking())
+
+
 def test_lean_stage_has_no_code_of_absent_features(monkeypatch):
     """The time loop (RK4) of a lean scene contains none of the functions of the features it
     lacks; compiled full, the same scene's time loop contains them.  (Read from the time loop's
     module for linking, which numba keeps also for a kind loaded from the cache.)"""
-    import numba
-    from exudyn_lie.mbs import stepper
-
     absent = ["rolling_disc_row", "coordinate_row", "node_parameter", "cartesian_forces", "torsional_forces",
               "rigid_spring_forces", "rolling_disc_penalty_forces", "coordinate_spring_forces", "linear_spring_forces"]
     irs = {}
@@ -116,11 +152,7 @@ def test_lean_stage_has_no_code_of_absent_features(monkeypatch):
         monkeypatch.setattr(compiled, "LEAN_SCENES", lean)
         sim = Simulator(lean_scene(), "RK4", "SE3", projectInitial=True)
         sim.Advance(1, 1e-3)
-        loop = [cres for sig, cres in stepper.mk_steps.overloads.items()
-                if sig[:2] == (numba.typeof(sim.sd), numba.typeof(sim.wk))
-                and sig[2].instance_class.__name__ == "Method"]
-        assert len(loop) == 1
-        irs[lean] = str(loop[0].library._get_module_for_linking())
+        irs[lean] = time_loop_ir(sim)
     for name in absent:
         assert name not in irs[True], name
         assert name in irs[False], name
@@ -129,25 +161,15 @@ def test_lean_stage_has_no_code_of_absent_features(monkeypatch):
 
 def test_projection_compiled_only_with_stabilization():
     """Fixed steps without stabilisation (``SceneData.stabilization`` None) compile no
-    projection (the step loop's guarded call, compiled here afresh, has none of its code);
-    with ``stabilization='velocity'`` it is compiled, and the steps are projected."""
-    from numba import njit
-    from exudyn_lie.mbs.projection import is_stabilized, project_state_if
-
-    @njit
-    def after_step(sd, wk, R, r, V):          # the fixed steps' projection in mk_steps
-        if is_stabilized(sd.stabilization):
-            return project_state_if(sd.stabilization, sd, wk, sd.stabilization, R, r, V)
-        return 0
-
+    projection (the time loop has none of its code); with ``stabilization='velocity'`` it is
+    compiled, and the steps are projected."""
     irs, drift = {}, {}
     for stab in (None, "velocity"):
         sim = Simulator(lean_scene(), "RK4", "SE3", stabilization=stab, projectInitial=True)
         assert (sim.sd.stabilization is None) == (stab is None)
         sim.Advance(300, 2e-3)
         drift[stab] = np.abs(sim._residuals_and_JV()[1]).max()
-        assert after_step(sim.sd, sim.wk, sim.R, sim.r, sim.V) == 0
-        irs[stab] = after_step.inspect_llvm(after_step.signatures[-1])
+        irs[stab] = time_loop_ir(sim)
     assert "projection7project" not in irs[None]
     assert "projection7project" in irs["velocity"]
     assert drift["velocity"] < 1e-12 < drift[None]

@@ -295,18 +295,18 @@ class EvaluatedModel:
             M = self._getM()
             if self.constantMass:
                 self.kkt.constantM = M
-        if not forces:
-            f = np.zeros(self.n)
-        elif self._preNewton is not None:
-            # Exudyn calls it before each residual of its Newton iteration (a load that follows the
-            # state, say); a stage evaluation is this path's residual.  newtonIt 0: no Newton here
-            self._preNewton(mbs, t, 0, 0)
         if forces:
+            if self._preNewton is not None:
+                # Exudyn calls it before each residual of its Newton iteration (a load that follows the
+                # state, say); a stage evaluation is this path's residual.  newtonIt 0: no Newton here
+                self._preNewton(mbs, t, 0, 0)
             self._ode2rhs(mbs)
             f = self._residual()[:self.n]
-        if self.n1 and forces:
-            self._ode1rhs(mbs)
-            self.ydot[:] = self._residual()[self.n:self.n + self.n1]
+            if self.n1:
+                self._ode1rhs(mbs)
+                self.ydot[:] = self._residual()[self.n:self.n + self.n1]
+        else:
+            f = np.zeros(self.n)
         Cq = None
         if self.m:
             self._zeroJ()

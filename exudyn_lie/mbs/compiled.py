@@ -343,9 +343,10 @@ def scene_is_lean(scene: Scene, stabilization=None):
                                                   for kind, _, _ in joint_rows_of(j)))
 
 
-def compile_scene(scene: Scene, groups, stabilization=None):
+def compile_scene(scene: Scene, groups, stabilization=None, full=False):
     """Flat arrays for the kernel.  ``groups`` is the per-body list of group names;
-    ``stabilization``: None, 'velocity' or 'position' (mbs/projection.py)."""
+    ``stabilization``: None, 'velocity' or 'position' (mbs/projection.py); ``full``: full even
+    for a lean scene (:func:`scene_is_lean`)."""
     nb = scene.nBodies
     if nb == 0:
         raise SceneError("the scene has no bodies")
@@ -372,7 +373,7 @@ def compile_scene(scene: Scene, groups, stabilization=None):
     jrow0, jnrow, cols, bw = choose_solve(nb, J)
     rkind, rax, rbx, rA, rB, rjoint = cols
     m = len(rkind)
-    lean = scene_is_lean(scene, stabilization)
+    lean = not full and scene_is_lean(scene, stabilization)
     sd = SceneData(
         nb=nb, gid=gid, mass=mass, com=com, M=M, Minv=Minv,
         gravity=scene.gravity.astype(float), hasGravity=bool(np.any(scene.gravity != 0)),
@@ -531,6 +532,11 @@ def compile_carried(scene: Scene, sd=None):
                           (-1, 2)),
         springAngles=_rows([(s.angleA[2], s.angleB[2]) for s in scene.coordinateSprings], (-1, 2)))
     return Carried(track, path, probe_table(scene))
+
+
+def full_carried(carried):
+    """A lean scene's :class:`Carried` for its full SceneData, with the same path state arrays."""
+    return carried._replace(path=carried.path._replace(rollingDiscs=np.zeros((0, N_DISC))))
 
 
 def nothing_carried(sd):

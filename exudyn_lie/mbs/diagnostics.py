@@ -6,6 +6,7 @@ from .bodies import body_twist
 from .codes import BODY_TWIST, ROW_BODY_A, ROW_BODY_B
 from .constraints import joints_rows
 from .force_elements import spring_energy
+from .state import twist_to_world_velocity
 
 
 # --------------------------------------------------------------------------- diagnostics
@@ -143,3 +144,30 @@ def schur_complement(sd, wk, R, r, V):
         Jb = np.array([wk.Jr[q, c:c + 6] for q, c in lst])
         S[np.ix_(rows, rows)] += Jb @ Mi @ Jb.T
     return wk.h.copy(), S
+
+
+def momentum(bodies, gid, R, r, V):
+    """(linear momentum, angular momentum about the world origin) of ``bodies``, world frame."""
+    p = np.zeros(3)
+    L = np.zeros(3)
+    omega, vel = twist_to_world_velocity(gid, R, V)
+    for i, b in enumerate(bodies):
+        c = b.com
+        wW = R[i] @ omega[i]
+        vc = vel[i] + np.cross(wW, R[i] @ c)
+        Jc = b.inertia - b.mass * (np.dot(c, c) * np.eye(3) - np.outer(c, c))
+        p += b.mass * vc
+        L += np.cross(r[i] + R[i] @ c, b.mass * vc) + R[i] @ (Jc @ omega[i])
+    return p, L
+
+
+def joint_violations(h, rowJoint, rowIsRot, nj):
+    """(position, rotation) violation of each of ``nj`` joints, ``(..., nj)``: the 2-norms of its
+    translational and of its rotational rows' residuals ``h`` (..., m), summed row by row in the
+    rows' order (as ``np.bincount``, to the bit) for every leading index at once."""
+    h2 = np.asarray(h) * np.asarray(h)
+    pv = np.zeros(h2.shape[:-1] + (nj,))
+    rv = np.zeros_like(pv)
+    for q in range(len(rowJoint)):
+        (rv if rowIsRot[q] else pv)[..., rowJoint[q]] += h2[..., q]
+    return np.sqrt(pv), np.sqrt(rv)

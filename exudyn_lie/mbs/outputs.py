@@ -250,18 +250,18 @@ def run(sim, endTime, stepSize=None, outputEvery=1, startTime=None, progress=Fal
     else:
         h = float(stepSize)
         segs, nsteps, landing = _fixed_segments(t0, endTime, h, max(1, int(outputEvery)))
-        segments = [(OutputRows(sim, nsub, hs, False, maxRows=1), count) for nsub, hs, count in segs]
+        segments = [(OutputRows(sim, nsub, hs, False), count) for nsub, hs, count in segs]
         last = segments[-1][0] if landing else None           # the shorter step onto endTime
         times = np.zeros(1 + sum(c for _, c in segments))
     nout = times.size
-    nb, m, nj = sim.sd.nb, sim.sd.nrows, len(sim.scene.joints)
+    nb, m = sim.sd.nb, sim.sd.nrows
     R, r, V = np.zeros((nout, nb, 3, 3)), np.zeros((nout, nb, 3)), np.zeros((nout, nb, 6))
-    energy, res, pv, rv = np.zeros((nout, 3)), np.zeros((nout, m)), np.zeros((nout, nj)), np.zeros((nout, nj))
+    energy, res = np.zeros((nout, 3)), np.zeros((nout, m))
 
     def record(k, Rk, rk, Vk, t):
         R[k], r[k], V[k] = Rk, rk, Vk
         times[k] = t
-        energy[k], res[k], pv[k], rv[k] = sim.Diagnostics(R[k], r[k], V[k], t=t)
+        sim.RowsAndEnergy(R[k], r[k], V[k], t, energy[k], res[k])
 
     k = 0
     while k < nout and (times[k] <= t0 if adaptive else k == 0):     # outputs at the start: the state
@@ -277,17 +277,20 @@ def run(sim, endTime, stepSize=None, outputEvery=1, startTime=None, progress=Fal
                 n = rows.integrate_at(endTime, times[k:min(end, k + rows.maxRows)])
                 tk = times[k:k + n].copy()
             else:
-                n, _ = rows.integrate(1, sim.vmax)
-            cpu += _time.perf_counter() - tic
+                n, _ = rows.integrate(end - k, sim.vmax)
+            seconds = _time.perf_counter() - tic
+            cpu += seconds
             if rows.failure is not None:              # the state: the last accepted step
                 sim.RaiseStatus(rows.failure, sim._ad.step if adaptive else rows.h)
             if n == 0:
                 raise SimulationError(f"internal: no output reached at t = {sim.t:.6g} s")
             if not adaptive:
-                done += n * rows.nsub
+                rows.adapt(seconds, n)
+                steps = done + rows.nsub * np.arange(1, n + 1)
+                done = int(steps[-1])
                 # keep t exact (no drift from summing h); the shorter last step lands on endTime
-                sim.t = endTime if rows is last else t0 + done * h
-                tk = [sim.t]
+                tk = [endTime] if rows is last else t0 + steps * h
+                sim.t = float(tk[-1])
             for o in range(n):
                 record(k + o, rows.Ro[o], rows.ro[o], rows.Vo[o], tk[o])
             k += n
@@ -298,6 +301,7 @@ def run(sim, endTime, stepSize=None, outputEvery=1, startTime=None, progress=Fal
         segments[0][0].integrate_at(endTime, times[:0])
         if segments[0][0].failure is not None:
             sim.RaiseStatus(segments[0][0].failure, sim._ad.step)
+    pv, rv = sim.JointViolations(res)
     omega, vel = twist_to_world_velocity(np.tile(sim.gid, nout), R.reshape(-1, 3, 3), V.reshape(-1, 6))
     omega, vel = omega.reshape(nout, nb, 3), vel.reshape(nout, nb, 3)
     if adaptive:

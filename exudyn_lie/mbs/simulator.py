@@ -21,7 +21,7 @@ from .force_elements import write_row
 from .rotation_parameters import record_tracked, update_tracked_bodies
 from .step_observers import observe_initial_state, observed_at_start
 from .coordinate_forces import COORD_SPRING_FORCE
-from .compiled import compile_carried, compile_scene, make_work, resolve_groups
+from .compiled import compile_carried, compile_scene, full_carried, make_work, resolve_groups, with_redundant
 from .linalg import REL_PIVOT_TOL, rows_in_null_space, schur_rank_and_null
 from .row_drives import RowDrives
 from .scene import Scene, SceneError
@@ -33,7 +33,7 @@ from .adaptive_run import AdaptiveRun
 from .initial_state import RowLevels, check_initial_state, check_redundancy
 from .outputs import Result, run  # noqa: F401 (Result re-exported)
 from . import step_errors, stiffness
-from .diagnostics import constraint_jacobian, joint_rows_at, schur_complement
+from .diagnostics import constraint_jacobian, joint_rows_at, joint_violations, momentum, schur_complement
 from .external_seams import ExternalSeams
 
 
@@ -68,7 +68,7 @@ class Simulator(ExternalSeams):
             raise ValueError(f"unknown stabilization {stabilization!r}; use None, 'velocity' or 'position'")
         self.stabilization = None if stabilization == "none" else stabilization
         self.verbose = verbose
-        self.sd, self.rowJoint = compile_scene(scene, self.groups, self.stabilization)
+        self.sd, self.rowJoint = compile_scene(scene, self.groups, self.stabilization, full=self.tableau.implicit)
         self._carried = compile_carried(scene, self.sd)     # track plan, path state, probes: kept by every Work
         self.method = implicit_run.method_arrays_of(self.tableau, self.sd.gid)
         implicit_run.apply_fallbacks(self)
@@ -94,10 +94,20 @@ class Simulator(ExternalSeams):
         """Integrate with ``method`` (a name or a tableau) from now on; the state, the path state and
         the solve stay.  Adaptive steps: call :meth:`SetAdaptive` again."""
         self.tableau = resolve_pair(method)
+        if self.tableau.implicit:
+            self._compile_full()
         self.method = implicit_run.method_arrays_of(self.tableau, self.sd.gid)
         implicit_run.apply_fallbacks(self)
         self.wk = self._make_work()        # (a new Work keeps the path state: compile_carried)
         self._ad = None
+
+    def _compile_full(self):
+        """A lean scene compiled full: the lean kinds serve fixed explicit steps only (docs/ARCHITECTURE.md,
+        "Lean scenes"); the state, the path state and the solve stay."""
+        if self.sd.rowsAll is None:
+            sd, _ = compile_scene(self.scene, self.groups, self.stabilization, full=True)
+            self.sd, self._carried = with_redundant(sd, self.sd.redundant), full_carried(self._carried)
+            self.wk = self._make_work()
 
     @property
     def newtonCounters(self):
@@ -479,35 +489,25 @@ class Simulator(ExternalSeams):
         """(energy[3], residuals[m], joint position violation[nj], joint rotation violation[nj])
         at the current state (or at ``R, r, V``), the rows' moving offsets at ``t`` (default: the
         current time)."""
-        sd, wk = self.sd, self.wk
-        e = np.zeros(3)
-        h = np.zeros(sd.nrows)
-        self._drives_at(self.t if t is None else t)
-        kernel.all_rows(sd, wk, self.R if R is None else R, self.r if r is None else r, self.V if V is None else V,
-                        h, wk.Jr, wk.eta, e)
-        nj = len(self.scene.joints)
-        if not hasattr(self, "_rowIsRot"):
-            self._rowIsRot = sd.rowIndex[:, kernel.ROW_KIND] == kernel.ROW_ROT
-        h2 = h * h
-        pv = np.sqrt(np.bincount(self.rowJoint, weights=np.where(self._rowIsRot, 0.0, h2), minlength=nj))
-        rv = np.sqrt(np.bincount(self.rowJoint, weights=np.where(self._rowIsRot, h2, 0.0), minlength=nj))
-        return e, h, pv, rv
+        e, h = np.zeros(3), np.zeros(self.sd.nrows)
+        self.RowsAndEnergy(self.R if R is None else R, self.r if r is None else r, self.V if V is None else V,
+                           self.t if t is None else t, e, h)
+        return (e, h) + self.JointViolations(h)
+
+    def RowsAndEnergy(self, R, r, V, t, e, h):
+        """The first two of :meth:`Diagnostics` written into ``e`` (3,) and ``h`` (m,)."""
+        self._drives_at(t)
+        wk = self.wk   # (a resolved entry: numba typing the scene's tuples cost 40 us per output row)
+        call(self._entries, "all_rows", kernel.all_rows, (self.sd, wk, R, r, V, h, wk.Jr, wk.eta, e))
+
+    def JointViolations(self, h):
+        """(position, rotation) violation of every joint, ``(..., nj)``, from the residuals ``h`` (..., m)."""
+        return joint_violations(h, self.rowJoint, self.sd.rowIndex[:, kernel.ROW_KIND] == kernel.ROW_ROT,
+                                len(self.scene.joints))
 
     def Momentum(self):
         """(linear momentum, angular momentum about the world origin), world frame."""
-        p = np.zeros(3)
-        L = np.zeros(3)
-        omega, vel = twist_to_world_velocity(self.gid, self.R, self.V)
-        for i, b in enumerate(self.scene.bodies):
-            R = self.R[i]
-            c = b.com
-            xc = self.r[i] + R @ c
-            wW = R @ omega[i]
-            vc = vel[i] + np.cross(wW, R @ c)
-            Jc = b.inertia - b.mass * (np.dot(c, c) * np.eye(3) - np.outer(c, c))
-            p += b.mass * vc
-            L += np.cross(xc, b.mass * vc) + R @ (Jc @ omega[i])
-        return p, L
+        return momentum(self.scene.bodies, self.gid, self.R, self.r, self.V)
 
     # ----------------------------------------------------------------- adaptive steps
     def SetAdaptive(self, rtol=1e-3, atol=1e-6, maxStep=np.inf, minStep=0.0, firstStep=None, safety=0.9,
@@ -525,6 +525,7 @@ class Simulator(ExternalSeams):
         the constraint manifold (docs/ADAPTIVE.md, "Constraint tolerance").  The next
         :meth:`AdvanceTo` starts afresh from the current state.  ``acceptAtMinStep``: a step of
         ``minStep`` is accepted beyond the tolerance instead of stopping (``integrators/control.py``)."""
+        self._compile_full()
         self._ad = AdaptiveRun(self, rtol, atol, maxStep, minStep, firstStep, safety, maxIncrease, lengthScale,
                                timeScale, constraintTolerance, acceptAtMinStep)
 

@@ -67,19 +67,25 @@ def test_lean_and_full_give_identical_states(group, monkeypatch):
 def test_adaptive_and_implicit_steps_run_a_lean_scene_full(monkeypatch):
     """The lean kinds serve fixed explicit steps only: an implicit method and adaptive steps compile
     a lean scene full (the kinds the drop-in compiles anyway).  Switched after fixed steps
-    (SetAdaptive, SetMethod), the state and the path go on: the same states to the bit as the
-    scene compiled full from the start."""
+    (SetAdaptive, SetMethod), the state goes on, and so does a load written during the run
+    (LoadRow, as the bridge's parameter changes write it): the same states to the bit as the scene
+    compiled full from the start."""
     assert Simulator(lean_scene(), "ESDIRK3", "SE3", projectInitial=True).sd.rowsAll is True
+    sim = Simulator(lean_scene(), "RK4", "SE3", projectInitial=True)
+    sim.SetMethod("ESDIRK3")
+    assert sim.sd.rowsAll is True
     out = {}
     for lean in (True, False):
         monkeypatch.setattr(compiled, "LEAN_SCENES", lean)
         sim = Simulator(lean_scene(), "DOPRI5", "SE3", projectInitial=True)
         assert (sim.sd.rowsAll is None) == lean
         sim.Advance(20, 1e-3)
+        sim.LoadRow(0)[0][:] = [0.0, 4.0, -2.0]          # the load on body 2, changed during the run
         before = (sim.t, sim.R.copy(), sim.V.copy())
         sim.SetAdaptive(rtol=1e-8, atol=1e-8)
         assert sim.sd.rowsAll is True and sim.wk.path.rollingDiscs is not None
         assert sim.t == before[0] and np.array_equal(sim.R, before[1]) and np.array_equal(sim.V, before[2])
+        assert np.array_equal(sim.LoadRow(0)[0], [0.0, 4.0, -2.0])
         sim.AdvanceTo(0.05)
         sim.SetMethod("ESDIRK3")
         sim.Advance(10, 1e-3)

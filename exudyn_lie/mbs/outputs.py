@@ -261,7 +261,7 @@ def run(sim, endTime, stepSize=None, outputEvery=1, startTime=None, progress=Fal
     def record(k, Rk, rk, Vk, t):
         R[k], r[k], V[k] = Rk, rk, Vk
         times[k] = t
-        sim.RowsAndEnergy(R[k], r[k], V[k], t, energy[k], res[k])
+        sim._rows_and_energy(R[k], r[k], V[k], t, energy[k], res[k])
 
     k = 0
     while k < nout and (times[k] <= t0 if adaptive else k == 0):     # outputs at the start: the state
@@ -278,14 +278,15 @@ def run(sim, endTime, stepSize=None, outputEvery=1, startTime=None, progress=Fal
                 tk = times[k:k + n].copy()
             else:
                 n, _ = rows.integrate(end - k, sim.vmax)
-            seconds = _time.perf_counter() - tic
-            cpu += seconds
+            cpu += _time.perf_counter() - tic
             if rows.failure is not None:              # the state: the last accepted step
                 sim.RaiseStatus(rows.failure, sim._ad.step if adaptive else rows.h)
             if n == 0:
                 raise SimulationError(f"internal: no output reached at t = {sim.t:.6g} s")
             if not adaptive:
-                rows.adapt(seconds, n)
+                # chunks of 1, 2, 4, ... rows, not sized by the wall time: a stage's time is the chunk's
+                # start plus n h (stepper.mk_steps), so a time-dependent model's last bits follow the chunks
+                rows.size = min(rows.maxRows, 2 * rows.size)
                 steps = done + rows.nsub * np.arange(1, n + 1)
                 done = int(steps[-1])
                 # keep t exact (no drift from summing h); the shorter last step lands on endTime

@@ -21,7 +21,7 @@ from .force_elements import write_row
 from .rotation_parameters import record_tracked, update_tracked_bodies
 from .step_observers import observe_initial_state, observed_at_start
 from .coordinate_forces import COORD_SPRING_FORCE
-from .compiled import compile_carried, compile_scene, full_carried, make_work, resolve_groups, with_redundant
+from .compiled import compile_carried, compile_scene, full_carried, make_work, resolve_groups
 from .linalg import REL_PIVOT_TOL, rows_in_null_space, schur_rank_and_null
 from .row_drives import RowDrives
 from .scene import Scene, SceneError
@@ -102,11 +102,12 @@ class Simulator(ExternalSeams):
         self._ad = None
 
     def _compile_full(self):
-        """A lean scene compiled full: the lean kinds serve fixed explicit steps only (docs/ARCHITECTURE.md,
-        "Lean scenes"); the state, the path state and the solve stay."""
+        """A lean scene full (ARCHITECTURE.md, "Lean scenes"): the full compile's tables where the lean SceneData
+        has None, its own arrays else (loads and rows written since stay); state, path and solve stay."""
         if self.sd.rowsAll is None:
-            sd, _ = compile_scene(self.scene, self.groups, self.stabilization, full=True)
-            self.sd, self._carried = with_redundant(sd, self.sd.redundant), full_carried(self._carried)
+            full = compile_scene(self.scene, self.groups, self.stabilization, full=True)[0]
+            self.sd = self.sd._replace(**{f: getattr(full, f) for f in self.sd._fields if getattr(self.sd, f) is None})
+            self._carried = full_carried(self._carried)
             self.wk = self._make_work()
 
     @property
@@ -396,8 +397,7 @@ class Simulator(ExternalSeams):
     RaiseStatus = _raise_status
 
     def StageStiffness(self, h, nb=None):
-        """Shampine's estimate of the fastest rate the last fixed step of size ``h`` met, from
-        its stages (the first ``nb`` bodies, default all; :func:`.stiffness.stage_stiffness_of`)."""
+        """Shampine's estimate of the fastest rate the last fixed step ``h`` met (:func:`.stiffness.stage_stiffness_of`)."""
         return stiffness.stage_stiffness_of(self, h, nb)
 
     def suggest_step(self, h):
@@ -405,8 +405,7 @@ class Simulator(ExternalSeams):
         return stiffness.suggest_step(self, h)
 
     def SpectralRadius(self, R=None, r=None, V=None, t=None, iterations=40, seed=0):
-        """Estimate of the spectral radius of the linearised equations of motion at a state
-        (default: the current one; :func:`.stiffness.spectral_radius`)."""
+        """The linearised equations' spectral radius at a state (:func:`.stiffness.spectral_radius`)."""
         return stiffness.spectral_radius(self, R, r, V, t, iterations, seed)
 
     # ----------------------------------------------------------------- rows and tracked state (the bridge's API)
@@ -489,16 +488,17 @@ class Simulator(ExternalSeams):
         """(energy[3], residuals[m], joint position violation[nj], joint rotation violation[nj])
         at the current state (or at ``R, r, V``), the rows' moving offsets at ``t`` (default: the
         current time)."""
-        e, h = np.zeros(3), np.zeros(self.sd.nrows)
-        self.RowsAndEnergy(self.R if R is None else R, self.r if r is None else r, self.V if V is None else V,
-                           self.t if t is None else t, e, h)
+        e, h, wk = np.zeros(3), np.zeros(self.sd.nrows), self.wk
+        self._drives_at(self.t if t is None else t)
+        kernel.all_rows(self.sd, wk, self.R if R is None else R, self.r if r is None else r, self.V if V is None else V,
+                        h, wk.Jr, wk.eta, e)
         return (e, h) + self.JointViolations(h)
 
-    def RowsAndEnergy(self, R, r, V, t, e, h):
-        """The first two of :meth:`Diagnostics` written into ``e`` (3,) and ``h`` (m,)."""
+    def _rows_and_energy(self, R, r, V, t, e, h):
+        """:meth:`Diagnostics`' first two into ``e``, ``h``, for arrays of the state's own types (outputs.run):
+        through the resolved entry point (numba typing the scene's tuples cost 40 us per output row)."""
         self._drives_at(t)
-        wk = self.wk   # (a resolved entry: numba typing the scene's tuples cost 40 us per output row)
-        call(self._entries, "all_rows", kernel.all_rows, (self.sd, wk, R, r, V, h, wk.Jr, wk.eta, e))
+        call(self._entries, "all_rows", kernel.all_rows, (self.sd, self.wk, R, r, V, h, self.wk.Jr, self.wk.eta, e))
 
     def JointViolations(self, h):
         """(position, rotation) violation of every joint, ``(..., nj)``, from the residuals ``h`` (..., m)."""

@@ -265,3 +265,19 @@ def test_time_inside_solve_dynamic_is_split_and_summarised(corpus_run):
     assert s["scripts"] == len(STEPS) + 1
     text = corpus.render(list(records.values()), corpus.summarize(list(records.values())), "test", 0.0, 120)
     assert "## Time inside `SolveDynamic`" in text and "| `pendulumRevolute100.py` | compiled |" in text
+
+
+def test_scripts_running_at_once_do_not_write_into_each_others_files(tmp_path):
+    """With two jobs each works in its own copy of the folder: two scripts that write the same
+    relative file (as Exudyn's Examples share ``solution/sensorPos.txt``), wait, and read it back
+    both read their own line (in one shared copy the second overwrote the first's file)."""
+    src = tmp_path / "scripts"
+    src.mkdir()
+    body = ("import os, time\nos.makedirs('solution', exist_ok=True)\n"
+            "open('solution/shared.txt', 'w').write('{name}')\ntime.sleep(2.0)\n"
+            "assert open('solution/shared.txt').read() == '{name}', 'another script wrote here'\n")
+    for name in ("writerA", "writerB"):
+        (src / f"{name}.py").write_text(body.format(name=name))
+    records = corpus.run_corpus(corpus.collect_scripts([str(src)]), tmp_path / "out", timeout=60, jobs=2,
+                                log=lambda line: None)
+    assert [r["native"]["status"] for r in records] == ["ok", "ok"]

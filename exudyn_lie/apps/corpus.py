@@ -16,7 +16,8 @@ limit:
 
 The working directory of the runs is a copy of the script's folder (under ``OUT/cwd``), so
 data files are found and files the script writes to relative paths do not land in its
-source tree.
+source tree; one copy per job (``--jobs``), so scripts that run at the same time do not write
+into each other's files (Exudyn's Examples share names such as ``solution/sensorPos.txt``).
 
 Outcomes per script: native ``ok`` / ``error`` (class and first line) / ``timeout`` /
 ``died``; exudyn_lie ``ok``; ``refused`` (a ``SceneError`` / ``BridgeError``: input
@@ -44,6 +45,7 @@ import fnmatch
 import hashlib
 import json
 import os
+import queue
 import re
 import shlex
 import shutil
@@ -101,10 +103,10 @@ def display_names(scripts):
     return [os.path.relpath(s, common) for s in scripts]
 
 
-def working_copy(script_dir, root):
-    """A copy of the script's folder under ``root`` (one per folder and invocation)."""
+def working_copy(script_dir, root, slot=0):
+    """A copy of the script's folder under ``root`` (one per folder, job slot and invocation)."""
     tag = hashlib.sha1(script_dir.encode()).hexdigest()[:8]
-    dest = Path(root) / f"{os.path.basename(script_dir)}_{tag}"
+    dest = Path(root) / (f"{os.path.basename(script_dir)}_{tag}" + (f"_{slot}" if slot else ""))
     if dest.exists():
         shutil.rmtree(dest)
     skip = os.path.realpath(root)
@@ -616,9 +618,12 @@ def run_corpus(scripts, outdir, timeout=120.0, jobs=1, log=print, fine=10):
     outdir = Path(outdir).resolve()        # the children run in the scripts' working copies
     logdir = outdir / "logs"
     logdir.mkdir(parents=True, exist_ok=True)
-    cwds = {}
-    for d in sorted({os.path.dirname(s) for s in scripts}):
-        cwds[d] = working_copy(d, outdir / "cwd")
+    jobs = max(1, jobs)
+    cwds = {(d, k): working_copy(d, outdir / "cwd", k) for d in sorted({os.path.dirname(s) for s in scripts})
+            for k in range(jobs)}
+    slots = queue.SimpleQueue()            # a job's slot: its own working copies
+    for k in range(jobs):
+        slots.put(k)
     names = display_names(scripts)
     records = [None] * len(scripts)
     lock = threading.Lock()
@@ -627,24 +632,27 @@ def run_corpus(scripts, outdir, timeout=120.0, jobs=1, log=print, fine=10):
     def one(i):
         script = scripts[i]
         stem = f"{i:04d}_{Path(script).stem}"
-        cwd = cwds[os.path.dirname(script)]
+        slot = slots.get()
 
         def run(mode, factor=None):
             if _STOP.is_set():
                 raise KeyboardInterrupt
-            return run_script(mode, script, cwd, timeout, str(logdir), stem, factor)
-        native = run("native")
-        exl = run("exl") if native["solves"] else None
-        rec = classify(names[i], script, native, exl)
-        if fine and wants_fine_reference(rec):
-            add_fine_reference(rec, run("fine", fine), fine)
+            return run_script(mode, script, cwds[os.path.dirname(script), slot], timeout, str(logdir), stem, factor)
+        try:
+            native = run("native")
+            exl = run("exl") if native["solves"] else None
+            rec = classify(names[i], script, native, exl)
+            if fine and wants_fine_reference(rec):
+                add_fine_reference(rec, run("fine", fine), fine)
+        finally:
+            slots.put(slot)
         with lock:
             records[i] = rec
             done[0] += 1
             log(progress_line(done[0], len(scripts), rec))
 
     _STOP.clear()
-    pool = ThreadPoolExecutor(max_workers=max(1, jobs))
+    pool = ThreadPoolExecutor(max_workers=jobs)
     try:
         for f in [pool.submit(one, i) for i in range(len(scripts))]:
             f.result()

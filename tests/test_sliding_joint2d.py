@@ -68,7 +68,20 @@ def build(h=H, tEnd=T, axialForce=0.0, drive=False, **joint):
     return SC, mbs, ss, S, nData
 
 
+_REFERENCES = {}
+
+
 def solve(native, h=H, **kw):
+    if native:          # a fine native run serves every test of its model (50,000 steps of a few seconds)
+        key = (h, tuple(sorted(kw.items())))
+        if key not in _REFERENCES:
+            _REFERENCES[key] = _solve(native, h, **kw)
+        return tuple(x.copy() if isinstance(x, np.ndarray) else {k: v.copy() for k, v in x.items()}
+                     for x in _REFERENCES[key])
+    return _solve(native, h, **kw)
+
+
+def _solve(native, h=H, **kw):
     SC, mbs, ss, S, nData = build(h=h, **kw)
     if native:
         ss.timeIntegration.newton.relativeTolerance = 1e-12

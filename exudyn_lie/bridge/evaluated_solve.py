@@ -367,7 +367,7 @@ class EvaluatedSolver:
             account = ConsistencyAccount(check)
             account.step(t0, model.velocity_constraints(t0, problem.R, problem.r, problem.prev, problem.qv),
                          np.max(np.abs(qt)) if qt.size else 0.0)
-            check.start(P["ticTotal"], ticCheck)
+            check.start(P["ticTotal"], ticCheck, everyOutput=True)
             tEnd = P["tEnd"]
             projected = None
             if self._project is not None:

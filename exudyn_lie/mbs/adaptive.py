@@ -106,10 +106,10 @@ def adaptive_method(tab, gid=None):
 
 
 @njit(cache=True, _nrt=False)
-def dense_state(sd, wk, am, theta, h, R0, r0, V0, Ro, ro, Vo, w):
+def dense_state(sd, wk, P, theta, h, R0, r0, V0, Ro, ro, Vo, w):
     """The dense output at ``t + theta h`` of the last accepted step (module docstring):
-    ``Ro = g0 exp(h sum_j b_j(theta) k_j)``, ``Vo = V0 + h sum_j b_j(theta) Vdot_j``."""
-    P = am.P
+    ``Ro = g0 exp(h sum_j b_j(theta) k_j)``, ``Vo = V0 + h sum_j b_j(theta) Vdot_j`` (``P``: the
+    method's dense polynomials, ``AdaptiveMethod.P``)."""
     ns = P.shape[0]
     for j in range(ns):
         acc = 0.0
@@ -133,17 +133,18 @@ def dense_state(sd, wk, am, theta, h, R0, r0, V0, Ro, ro, Vo, w):
 
 
 @njit(cache=True, _nrt=False)
-def extra_stages(sd, wk, am, t, h, R0, r0, V0, S):
+def extra_stages(sd, wk, A, c, s, t, h, R0, r0, V0, S):
     """The dense-only stages s..s+m-1 of the last accepted step (from its start state), through the one
     compiled copy of the stage right-hand side outside the stage loop (``stage_rhs_at``, also the
     fixed steps' and the implicit stages'): an inlined copy here would be a second right-hand side in
     the adaptive kind's first compile (docs/BENCH.md), for stages evaluated only for outputs inside a
-    step."""
-    for j in range(am.s, am.A.shape[0]):
-        st = mk_stage_state(sd, wk, am.A, j, h, R0, r0, V0)
+    step.  ``A``, ``c``, ``s``: the method's (``AdaptiveMethod``) as arrays, not the method tuple: these
+    functions, the dense output's, are then compiled once for explicit and implicit pairs alike."""
+    for j in range(s, A.shape[0]):
+        st = mk_stage_state(sd, wk, A, j, h, R0, r0, V0)
         if st != STATUS_OK:
             return st
-        st = stage_rhs_at(sd, wk, t + am.c[j] * h, wk.Vd[j])
+        st = stage_rhs_at(sd, wk, t + c[j] * h, wk.Vd[j])
         S[C.S_N_RHS] += 1.0
         if st != STATUS_OK:
             return st
@@ -152,7 +153,7 @@ def extra_stages(sd, wk, am, t, h, R0, r0, V0, S):
 
 
 @njit(cache=True, _nrt=False)
-def serve_outputs(sd, wk, am, ctol, fs, ist, R0, r0, V0, R, r, V, S, tout, k, Ro, ro, Vo, Po, w):
+def serve_outputs(sd, wk, A, c, P, s, ctol, fs, ist, R0, r0, V0, R, r, V, S, tout, k, Ro, ro, Vo, Po, w):
     """Outputs ``tout[k:]`` inside the last accepted step ``(tprev, t]``: the end state at
     ``t`` itself, dense output inside (projected on the group when its constraint drift
     exceeds the constraint tolerance ``ctol``, as Simbody projects interpolated states); if ``Po``
@@ -165,12 +166,12 @@ def serve_outputs(sd, wk, am, ctol, fs, ist, R0, r0, V0, R, r, V, S, tout, k, Ro
             copy_state(R, r, V, Ro[k], ro[k], Vo[k])
         else:
             if ist[IS_EXTRA] == 0:
-                if am.A.shape[0] > am.s:
-                    st = extra_stages(sd, wk, am, tp, hp, R0, r0, V0, S)
+                if A.shape[0] > s:
+                    st = extra_stages(sd, wk, A, c, s, tp, hp, R0, r0, V0, S)
                     if st != STATUS_OK:
                         return st, k
                 ist[IS_EXTRA] = 1
-            dense_state(sd, wk, am, (tout[k] - tp) / hp, hp, R0, r0, V0, Ro[k], ro[k], Vo[k], w)
+            dense_state(sd, wk, P, (tout[k] - tp) / hp, hp, R0, r0, V0, Ro[k], ro[k], Vo[k], w)
             if ctol[CT_POS] > 0.0:                  # as Simbody's projectInterpolatedStates
                 st = update_row_drives(wk.drive, tout[k])     # the rows' moving offsets at the output time
                 if st == STATUS_OK:
@@ -196,8 +197,8 @@ def _last_step(t, h, tEnd):
 @njit(cache=True, inline="always", _nrt=False)
 def adaptive_start(sd, wk, am, ctl, R, r, V, Ro, ro, Vo, Po):
     """The outputs at or before the current time (a chunk served by the previous call's step)."""
-    return serve_outputs(sd, wk, am, ctl.ctol, ctl.fs, ctl.ist, ctl.R0, ctl.r0, ctl.V0, R, r, V, ctl.S, ctl.tout, 0,
-                         Ro, ro, Vo, Po, ctl.w)
+    return serve_outputs(sd, wk, am.A, am.c, am.P, am.s, ctl.ctol, ctl.fs, ctl.ist, ctl.R0, ctl.r0, ctl.V0, R, r, V,
+                         ctl.S, ctl.tout, 0, Ro, ro, Vo, Po, ctl.w)
 
 
 @njit(cache=True, inline="always", _nrt=False)
@@ -283,8 +284,8 @@ def adaptive_step_accepted(sd, wk, am, ctl, R, r, V, t, htry, Ro, ro, Vo, Po, k)
     fs[FS_H] = ctl.S[C.S_H]
     ist[IS_VALID] = 1
     ist[IS_EXTRA] = 0
-    return serve_outputs(sd, wk, am, ctl.ctol, fs, ist, ctl.R0, ctl.r0, ctl.V0, R, r, V, ctl.S, ctl.tout, k, Ro, ro,
-                         Vo, Po, ctl.w)
+    return serve_outputs(sd, wk, am.A, am.c, am.P, am.s, ctl.ctol, fs, ist, ctl.R0, ctl.r0, ctl.V0, R, r, V,
+                         ctl.S, ctl.tout, k, Ro, ro, Vo, Po, ctl.w)
 
 
 @njit(cache=True, inline="always", _nrt=False)

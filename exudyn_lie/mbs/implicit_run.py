@@ -13,8 +13,8 @@ SUBSTEPS = (2, 4, 8, 16, 32, 64)
 
 
 def method_arrays_of(tableau, gid):
-    """The stepper's form of ``tableau`` (mbs/methods.py): an explicit ``Method`` (a ``PartitionedMethod``
-    for a partitioned tableau), or an ``ImplicitMethod`` with its Newton arrays for the bodies of
+    """The stepper's form of ``tableau`` (mbs/methods.py): an explicit ``Method`` (partitioned or not),
+    or an ``ImplicitMethod`` with its Newton arrays for the bodies of
     group ids ``gid``."""
     return implicit_method(tableau, gid) if tableau.implicit else method_arrays(tableau)
 

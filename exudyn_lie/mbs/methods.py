@@ -1,23 +1,23 @@
 """The stepper's form of a tableau: the method tuples :func:`~.stepper.mk_steps` is compiled for (one
-specialisation per tuple type), built from the integrators' tableaus, and the configuration's own
-coefficients of a partitioned one (:func:`config_coefficients`, chosen at compile time)."""
+specialisation per tuple type), built from the integrators' tableaus, and the configurations' own
+coefficients (:func:`config_coefficients`: a partitioned method's, else ``A, b`` themselves)."""
 from collections import namedtuple
 
 import numpy as np
 from numba import types
 from numba.extending import overload
 
-# A tableau as the stepper uses it: A, b, c, the indices of the evaluated stages and the
-# embedded weights (no rows without a pair).
-Method = namedtuple("Method", ["A", "b", "c", "stages", "bhat"])
+# An explicit tableau as the stepper uses it: A, b, c, the indices of the evaluated stages, the
+# embedded weights (no rows without a pair), and Aq, bq, the coefficients that advance the
+# configurations: A, b themselves (the same arrays) but for a partitioned tableau
+# (integrators/partitioned.py: velocity Verlet, whose c are the configurations' cq).  One tuple type
+# for both, so that velocity Verlet runs on the explicit methods' compiled time loop (a kind of its
+# own cost 33-39 s of compilation) with the same arithmetic: a stage reads Aq[j, j] either way.
+Method = namedtuple("Method", ["A", "b", "c", "stages", "bhat", "Aq", "bq"])
 
 # A diagonally implicit tableau (ESDIRK) with its Newton iteration's arrays and state (mbs/implicit.py,
 # which registers the implicit overloads of is_implicit and implicit_stage)
 ImplicitMethod = namedtuple("ImplicitMethod", ["A", "b", "c", "stages", "bhat", "gamma", "newton"])
-
-# A partitioned explicit tableau (integrators/partitioned.py: velocity Verlet): A, b advance the
-# velocities, Aq, bq the configurations; c the stage times
-PartitionedMethod = namedtuple("PartitionedMethod", ["A", "b", "c", "stages", "bhat", "Aq", "bq"])
 
 
 def needed_stages(A, b):
@@ -36,20 +36,20 @@ def needed_stages(A, b):
 
 
 def method_arrays(tableau):
-    """The :class:`Method` of a :class:`~exudyn_lie.integrators.tableau.ButcherTableau` (a
-    :class:`PartitionedMethod` of a partitioned one)."""
+    """The :class:`Method` of an explicit :class:`~exudyn_lie.integrators.tableau.ButcherTableau`,
+    partitioned or not."""
     A, b, c = tableau.arrays()
     bh = np.zeros(0) if tableau.b_hat is None else np.array(tableau.b_hat, dtype=np.float64)
     if tableau.partitioned:
         Aq, bq = np.array(tableau.Aq, dtype=np.float64), np.array(tableau.bq, dtype=np.float64)
-        return PartitionedMethod(A=A, b=b, c=np.array(tableau.cq, dtype=np.float64),
-                                 stages=np.array(tableau.active_stages, dtype=np.int64), bhat=bh, Aq=Aq, bq=bq)
-    return Method(A=A, b=b, c=c, stages=needed_stages(A, b), bhat=bh)
+        return Method(A=A, b=b, c=np.array(tableau.cq, dtype=np.float64),
+                      stages=np.array(tableau.active_stages, dtype=np.int64), bhat=bh, Aq=Aq, bq=bq)
+    return Method(A=A, b=b, c=c, stages=needed_stages(A, b), bhat=bh, Aq=A, bq=b)
 
 
 def config_coefficients(tab):
-    """``(Aq, bq)``: the coefficients that advance the configurations, ``tab``'s own ``(A, b)`` but
-    for a :class:`PartitionedMethod` (chosen at compile time)."""
+    """``(Aq, bq)``: the coefficients that advance the configurations: a :class:`Method`'s fields, an
+    implicit or adaptive method's own ``(A, b)`` (chosen at compile time by the tuple's fields)."""
 
 
 @overload(config_coefficients, inline="always")

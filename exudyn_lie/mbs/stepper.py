@@ -2,8 +2,8 @@
 
 ``mk_steps`` advances the state ``(R, r, V)`` of all bodies, each in its own group
 (:mod:`.bodies`), with the tableau ``tab`` (:mod:`.methods`: a :class:`~.methods.Method`; an implicit
-one: :class:`~.methods.ImplicitMethod`, the last section below; a partitioned one, velocity Verlet:
-:class:`~.methods.PartitionedMethod`, whose configurations have coefficients of their own, ``Aq, bq``
+one: :class:`~.methods.ImplicitMethod`, the last section below; a partitioned one, velocity Verlet,
+is a :class:`~.methods.Method` whose configurations have coefficients of their own, ``Aq, bq``
 in place of ``A, b`` in the first and third lines below).  Its users: the
 fixed-step loop of :class:`~exudyn_lie.mbs.Simulator` (``Advance`` / ``Run``), the
 accelerations at a state (``nsteps = 0``), and the bridge's output chunks

@@ -63,25 +63,26 @@ def _drop_in(build, solverType=None, **kw):
 #: (name, build, prerequisites): one model per kind of the time loop that the suite compiles.  Every
 #: drop-in run also compiles the drop-in's RK4 kind (the accelerations at the start) and every kernel
 #: run the lean RK4 kind: a kind is taken only once the kinds it needs are compiled (else the two
-#: workers would compile those at once), and the lean kinds, the shortest, come last.  ESDIRK3 on
-#: adaptive steps waits for both: the Newton iteration (mbs/implicit.py) is compiled once per kind
+#: workers would compile those at once).  ESDIRK3 on adaptive steps waits for ESDIRK3 and DOPRI5: the
+#: Newton iteration (mbs/implicit.py) is compiled once per kind
 #: of scene for fixed and adaptive steps, the dense output (mbs/adaptive.py) once for explicit and
 #: implicit pairs (compiled at once by both workers, they cost about 100 s twice; by hand, numba's
-#: compile events).  The full tree solve waits for the drop-in's RK4 (the callees with the same
-#: array arguments, the joint rows among them, are compiled once), so that the worker free first
-#: takes a drop-in kind, the longest chain (RK4, ESDIRK3, its adaptive steps).  Velocity Verlet
-#: runs on the explicit methods' kind (mbs/methods.py).
-DROP_IN_RK4, LEAN_RK4, DROP_IN_ESDIRK3, DROP_IN_DOPRI5 = 0, 1, 3, 4
+#: compile events).  While one worker compiles the drop-in's RK4, the other takes the lean kinds and
+#: the oblique solve; the full tree solve waits for the drop-in's RK4 (the callees with the same
+#: array arguments, the joint rows among them, are compiled once) and comes last, after the longest
+#: chain (RK4, ESDIRK3, its adaptive steps).  Velocity Verlet runs on the explicit methods' kind
+#: (mbs/methods.py).
+DROP_IN_RK4, LEAN_RK4, DROP_IN_ESDIRK3, DROP_IN_DOPRI5 = 0, 1, 4, 5
 KINDS = [
     ("drop-in, RK4", _drop_in("_pendulum"), ()),
     ("kernel, RK4 (lean scene)", _lean_fixed("RK4"), ()),
+    ("tree solve (lean scene)", _tree(None), (LEAN_RK4,)),
     ("rotation-vector coordinate rows (oblique solve)", _oblique, ()),
     ("drop-in, ESDIRK3 (stiff, chosen by itself)", _drop_in("_stiff_springs"), (DROP_IN_RK4,)),
     ("drop-in, adaptive steps (DOPRI5)", _drop_in("_pendulum", "DOPRI5"), (DROP_IN_RK4,)),
     ("drop-in, ESDIRK3 on adaptive steps", _drop_in("_pendulum", method="ESDIRK3"),
      (DROP_IN_ESDIRK3, DROP_IN_DOPRI5)),
     ("tree solve, stabilised (full scene)", _tree("velocity"), (DROP_IN_RK4,)),
-    ("tree solve (lean scene)", _tree(None), (LEAN_RK4,)),
 ]
 #: a run that selects fewer tests (``-k``, one file) is not made to wait for every kind
 MIN_TESTS = 200

@@ -16,6 +16,7 @@ compiled function is defined.
 """
 import hashlib
 import os
+import pickle
 import re
 import weakref
 
@@ -290,16 +291,35 @@ def enable_caching(self):
         _numba_enable_caching(self)
 
 
+_numba_load_index = caching.IndexDataCacheFile._load_index
+
+
+def load_index(self):
+    """numba's ``IndexDataCacheFile._load_index``, an index that does not unpickle taken as empty.
+
+    numba unpickles a cache index before it compares the index's source stamp, and the index
+    names the argument types by their classes: an index written by other sources of the package
+    (a namedtuple since removed, such as ``PartitionedMethod``) raised at every load of its
+    function where the index's path stays the same between versions (``NUMBA_CACHE_DIR``, the
+    ``__pycache__`` fallback), until the cache was deleted by hand.  Stale either way, so empty:
+    the function compiles and its next save writes a fresh index."""
+    try:
+        return _numba_load_index(self)
+    except (AttributeError, ImportError, EOFError, pickle.UnpicklingError):
+        return {}
+
+
 def install():
     """Put the package's locators in front of numba's (idempotent): NUMBA_CACHE_DIR if set,
     else the cache every copy of the package shares (:func:`shared_cache_dir`), else
-    ``__pycache__``, else numba's user-wide cache."""
+    ``__pycache__``, else numba's user-wide cache; an unreadable index is an empty one (:func:`load_index`)."""
     classes = caching.CacheImpl._locator_classes
     for cls in LOCATORS:
         if cls in classes:
             classes.remove(cls)
     classes[0:0] = list(LOCATORS)
     caching.Cache.load_overload = load_overload
+    caching.IndexDataCacheFile._load_index = load_index
     dispatcher.Dispatcher.enable_caching = enable_caching
     if not getattr(codegen.CPUCodeLibrary._unserialize, "_exudyn_lie", False):
         def _unserialize(cls, codegen_, state):

@@ -34,25 +34,15 @@ def pytest_unconfigure(config):
         shutil.rmtree(d, ignore_errors=True)
 
 
-#: files of a minute or more on a warm cache (``--durations``), run first: ``--dist loadfile`` hands out
-#: files in collection order, and one of them started last kept one worker busy for up to two minutes
-#: after the other had finished (longest first keeps the two workers' ends together)
-LONG_FILES = ("test_paper_reproduction.py", "test_sliding_joint2d.py", "test_trust.py", "test_foreign_items.py",
-              "test_node_rotation_coordinates.py", "test_coordinate_drives.py", "test_bridge_params.py",
-              "test_stress_suite.py", "test_item_corpus.py", "test_rolling_disc_penalty.py")
-
-
 @pytest.hookimpl(trylast=True)
 def pytest_collection_modifyitems(session, config, items):
-    """The long files first (:data:`LONG_FILES`, in that order; the others as collected).  A worker
-    of ``pytest -n N`` (N >= 2) compiles its share of the kernel's kinds once its tests are selected, so that no kind is compiled by two workers at once: only for runs of at least
+    """A worker of ``pytest -n N`` (N >= 2) compiles its share of the kernel's kinds once its tests
+    are selected, so that no kind is compiled by two workers at once: only for runs of at least
     ``precompile.MIN_TESTS`` tests, not with ``--collect-only``, not with
     ``EXUDYN_LIE_TEST_PRECOMPILE=0``."""
     import os
     import sys
     from precompile import MIN_TESTS, precompile
-    rank = {name: k for k, name in enumerate(LONG_FILES)}
-    items.sort(key=lambda it: rank.get(it.path.name, len(rank)))     # (stable: the order within a file stays)
     d = getattr(config, "workerinput", {}).get("exudyn_lie_precompile")
     if (d is None or int(config.workerinput.get("workercount", 1)) < 2 or len(items) < MIN_TESTS
             or config.option.collectonly or os.environ.get("EXUDYN_LIE_TEST_PRECOMPILE") == "0"):

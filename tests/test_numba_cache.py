@@ -7,6 +7,8 @@ numba to the stamp."""
 import os
 import shutil
 
+import pytest
+
 from exudyn_lie import _numba_cache as nc
 from exudyn_lie.groups import se3, so3
 from exudyn_lie.mbs import kernel
@@ -97,3 +99,30 @@ def test_cache_load_defers_bitcode_and_runtime(tmp_path):
     assert second[second.index("pending") + 1] == "1"          # loaded, bitcode not parsed
     assert second[second.index("linked") + 1] == "True"
     assert second[-1] == "0"                                   # linking parsed it
+
+
+def test_an_index_that_names_a_removed_class_is_an_empty_index(tmp_path):
+    """An index written by other sources, whose argument types include a class the package no longer
+    has (methods.PartitionedMethod), is stale: numba unpickled it before comparing its stamp and
+    raised at every load; the package's load_index takes it as empty (the function compiles)."""
+    import pickle
+    import sys
+    import types
+    from collections import namedtuple
+    from numba.core import caching
+    mod = types.ModuleType("exudyn_lie_test_gone_module")
+    Gone = namedtuple("Gone", ["a"])
+    Gone.__module__ = mod.__name__
+    mod.Gone = Gone
+    sys.modules[mod.__name__] = mod
+    try:
+        index = caching.IndexDataCacheFile(str(tmp_path), "fn-1.py311", ("stamp", "key"))
+        index._save_index({(Gone(1), "signature"): "fn-1.py311.0.nbc"})
+        assert index._load_index() == {(Gone(1), "signature"): "fn-1.py311.0.nbc"}
+        del mod.Gone
+        with pytest.raises((AttributeError, pickle.UnpicklingError)):
+            nc._numba_load_index(index)                     # numba's own load
+        assert caching.IndexDataCacheFile._load_index is nc.load_index
+        assert index._load_index() == {}
+    finally:
+        del sys.modules[mod.__name__]

@@ -64,10 +64,9 @@ def _drop_in(build, solverType=None, **kw):
 #: drop-in run also compiles the drop-in's RK4 kind (the accelerations at the start) and every kernel
 #: run the lean RK4 kind: a kind is taken only once the kinds it needs are compiled (else the two
 #: workers would compile those at once).  ESDIRK3 on adaptive steps waits for ESDIRK3 and DOPRI5: the
-#: Newton iteration (mbs/implicit.py) is compiled once per kind
-#: of scene for fixed and adaptive steps, the dense output (mbs/adaptive.py) once for explicit and
-#: implicit pairs (compiled at once by both workers, they cost about 100 s twice; by hand, numba's
-#: compile events).  While one worker compiles the drop-in's RK4, the other takes the lean kinds and
+#: Newton iteration (mbs/implicit.py) is compiled once per kind of scene for fixed and adaptive steps,
+#: the dense output (mbs/adaptive.py) once for explicit and implicit pairs (compiled at once by both
+#: workers, they cost about 100 s twice; by hand, numba's compile events).  While one worker compiles the drop-in's RK4, the other takes the lean kinds and
 #: the oblique solve; the full tree solve waits for the drop-in's RK4 (the callees with the same
 #: array arguments, the joint rows among them, are compiled once) and comes last, after the longest
 #: chain (RK4, ESDIRK3, its adaptive steps).  Velocity Verlet runs on the explicit methods' kind

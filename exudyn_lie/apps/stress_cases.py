@@ -224,7 +224,7 @@ def collect_stage_arguments(sim, h, nsteps):
     sd, wk = sim.sd, sim.wk
     tab = sim.method
     A, c = tab.A, tab.c
-    if getattr(tab, "Aq", A) is not A or getattr(tab, "gamma", 0.0):
+    if sim.tableau.partitioned or sim.tableau.implicit:
         # (mk_stage_state forms the configurations with A: a partitioned method's Aq, an implicit
         # method's Newton iteration are not what mk_steps would do)
         raise ValueError(f"collect_stage_arguments follows explicit methods that are not partitioned, not "

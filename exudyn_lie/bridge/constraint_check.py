@@ -39,11 +39,11 @@ run, so the check keeps to a time budget of :data:`BUDGET` of the solve's wall t
 set-up (about 0.2 ms: the items, the model's size, two residual evaluations) included: an
 output is skipped while the check has used more (the outputs to skip are counted from the
 run's rate so far, so a skipped output costs a decrement), so cheap runs are checked at every
-few outputs, and the first and the last output always.  The Exudyn-evaluated path, whose steps
-cost far more than a read, is checked at every output with no budget: its verdict weighs the
-growth between judgements, and outputs skipped by the wall time made it follow the machine's load
-(a coarse RK4 run of tests/test_evaluated_projection.py stopped under load only).  One judgement can cost more than a read, so the budget is set below the 5 % a user
-would notice.
+few outputs, and the first and the last output always.  One judgement can cost more than a read,
+so the budget is set below the 5 % a user would notice.  The Exudyn-evaluated path, whose steps cost
+far more than a read, is checked at every output with no budget: its verdict weighs the growth
+between judgements, and outputs skipped by the wall time made it follow the machine's load (a coarse
+RK4 run of tests/test_evaluated_projection.py stopped under load only).
 
 The tolerance is ``constraintCheck`` of ``exl.SolveDynamic``: ``True`` (the default)
 ``DEFAULT_RELATIVE`` times the model's size (the diagonal of the box around its nodes and

@@ -325,6 +325,33 @@ def test_drive_script_converges_to_native_fine_step_with_order_4(name):
     assert 3.5 < slope < 4.5
 
 
+def test_a_driven_run_does_not_follow_how_its_outputs_are_chunked(monkeypatch, tmp_path):
+    """A stage's time is one product from the run's start (mbs/clock.py), so the output chunks, which
+    the bridge sizes by the wall time (``outputs.CHUNK_SECONDS``), cannot change a time-dependent
+    model's result: one output per call of the stepper against as many as a chunk holds, to the bit."""
+    from exudyn_lie.mbs import outputs
+    integrate = outputs.OutputRows.integrate
+    finals, sizes = [], []
+
+    def spy(self, nout, vmax):
+        sizes[-1] = max(sizes[-1], min(nout, self.size))
+        return integrate(self, nout, vmax)
+    monkeypatch.setattr(outputs.OutputRows, "integrate", spy)
+    for seconds in (0.0, 1e9):
+        monkeypatch.setattr(outputs, "CHUNK_SECONDS", seconds)
+        sizes.append(0)
+        mbs, ss = importlib.import_module("item_corpus.prescribedCrank").Build()
+        ss.timeIntegration.numberOfSteps = 1000
+        ss.timeIntegration.verboseMode = 0
+        ss.solution.file.name = str(tmp_path / f"chunks{len(sizes)}.txt")
+        ss.solution.file.writePeriod = 0.01             # an output every ten steps
+        exl.SolveDynamic(mbs, ss, method="RK4")
+        sd = mbs.systemData
+        finals.append(np.r_[sd.GetODE2Coordinates(), sd.GetODE2Coordinates_t()])
+    assert sizes[0] == 1 and sizes[1] > 10, sizes
+    assert np.array_equal(finals[0], finals[1]), np.abs(finals[0] - finals[1]).max()
+
+
 # ---------------------------------------------------------------------------- projections and drift
 def driven_scene(velocityLevel=False):
     """A body driven along x (x = 0.1 sin(2 pi t), or its rate at velocity level), y and z

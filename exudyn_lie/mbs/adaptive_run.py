@@ -137,8 +137,8 @@ class AdaptiveRun:
         ctl = _adaptive.AdaptiveControl(self.par, self.S, self.tol, self.ctol, self.fs, self.ist, self.R0, self.r0,
                                         self.V0, self.dPhi, self.dV, self.w, tout)
         noOut = sim.NoOutputs()
-        # the one stepper with the adaptive controller (t0, h, nsteps, every unused; no accelerations)
-        args = (sim.sd, sim.wk, self.method, ctl, 0.0, 0.0, 0, sim.R, sim.r, sim.V, float(sim.vmax), 0, Ro, ro, Vo,
+        # the one stepper with the adaptive controller (t0, k0, h, nsteps, every unused; no accelerations)
+        args = (sim.sd, sim.wk, self.method, ctl, 0.0, 0, 0.0, 0, sim.R, sim.r, sim.V, float(sim.vmax), 0, Ro, ro, Vo,
                 noOut[4] if Po is None else Po, noOut[5], noOut[6])
         st, k = call(sim._entries, "adaptive", kernel.mk_steps, args)
         sim.t = float(self.fs[_adaptive.FS_T])

@@ -59,14 +59,14 @@ def advance(sim, n, h):
     while True:
         st, d = sim._mk_steps(n - done, h)
         done += d
-        sim.t += d * h
+        sim._clock.advance(d)
         if st != kernel.STATUS_NEWTON or not sim.tableau.implicit or not sim.newtonSubsteps:
             return st
         st = substeps(sim, h, sim.t)
         if st != kernel.STATUS_OK:
             return st
         done += 1
-        sim.t += h
+        sim._clock.advance(1)
         if done == n:
             return st
 

@@ -88,41 +88,42 @@ class OutputRows:
         computed, the rows' times).  ``vmax``: the stepper's blow-up bound."""
         sim, h, nsub = self.sim, self.h, self.nsub
         n = max(1, min(int(nout), self.size))
-        t0 = sim.t
+        clock = sim._clock
+        t0, k0 = clock.start(h)         # step k at t0 + k h, however the steps are chunked (mbs/clock.py)
         acc = n if self.doacc else 0
         # where a blow-up's step suggestion linearises (stiffness.suggest_step)
-        sim._segmentStart = (t0, sim.R.copy(), sim.r.copy(), sim.V.copy())
+        sim._segmentStart = (clock.t, sim.R.copy(), sim.r.copy(), sim.V.copy())
         total, done = n * nsub, 0
         while True:
             if done % nsub == 0:         # whole output periods, their outputs from row done // nsub on
                 o = done // nsub
-                args = (sim.sd, sim.wk, sim.method, sim.control, float(t0 + done * h), h, total - done, sim.R, sim.r,
+                args = (sim.sd, sim.wk, sim.method, sim.control, t0, k0 + done, h, total - done, sim.R, sim.r,
                         sim.V, float(vmax), nsub, self.Ro[o:n], self.ro[o:n], self.Vo[o:n], self.Po[o:n],
                         self.Vdo[o:acc], self.lamo[o:acc])
                 st, d = call(self._ep, "mk", stepper.mk_steps, args)
             else:                        # the rest of a period after a step in parts: one step at a time
-                st, d = sim._mk_steps(1, h, t0 + done * h)
+                st, d = sim._mk_steps(1, h, t0 + (k0 + done) * h)
                 if d and (done + 1) % nsub == 0:
-                    self._record((done + 1) // nsub - 1, t0 + (done + 1) * h)
+                    self._record((done + 1) // nsub - 1, t0 + (k0 + done + 1) * h)
             done += d
             if st == kernel.STATUS_OK and done < total:
                 continue
             if st != kernel.STATUS_NEWTON or not sim.tableau.implicit:
                 break
-            st = implicit_run.substeps(sim, h, t0 + done * h)      # an implicit step that failed, in parts
+            st = implicit_run.substeps(sim, h, t0 + (k0 + done) * h)      # an implicit step that failed, in parts
             if st != kernel.STATUS_OK:
                 break
             done += 1
             if done % nsub == 0:
-                self._record(done // nsub - 1, t0 + done * h)
+                self._record(done // nsub - 1, t0 + (k0 + done) * h)
             if done == total:
                 break
         rows = done // nsub
         if st != kernel.STATUS_OK and self.doacc and rows > 0 and np.isnan(self.Vdo[rows - 1, 0, 0]):
             rows -= 1                   # its accelerations failed: not an output
-        sim.t = t0 + done * h           # on a failure: the last accepted step
+        clock.advance(done)             # on a failure: the last accepted step
         self.failure = None if st == kernel.STATUS_OK else st
-        return rows, t0 + (np.arange(1, self.maxRows + 1) * nsub) * h
+        return rows, t0 + (k0 + np.arange(1, self.maxRows + 1) * nsub) * h
 
     def _record(self, o, t):
         """Output row ``o`` of the state at ``t`` (as ``stepper.record_output``; the accelerations
@@ -289,9 +290,10 @@ def run(sim, endTime, stepSize=None, outputEvery=1, startTime=None, progress=Fal
                 rows.size = min(rows.maxRows, 2 * rows.size)
                 steps = done + rows.nsub * np.arange(1, n + 1)
                 done = int(steps[-1])
-                # keep t exact (no drift from summing h); the shorter last step lands on endTime
+                # the clock's times (sim.t: t0 + steps h); the shorter last step lands on endTime
                 tk = [endTime] if rows is last else t0 + steps * h
-                sim.t = float(tk[-1])
+                if rows is last:
+                    sim.t = endTime
             for o in range(n):
                 record(k + o, rows.Ro[o], rows.ro[o], rows.Vo[o], tk[o])
             k += n

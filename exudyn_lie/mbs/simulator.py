@@ -29,6 +29,7 @@ from .state import BodyStates, twist_to_world_velocity, world_velocity_to_twist
 from .stepper import fixed_step_control
 from . import implicit_run
 from .entry import call
+from .clock import StepClock
 from .adaptive_run import AdaptiveRun
 from .initial_state import RowLevels, check_initial_state, check_redundancy
 from .outputs import Result, run  # noqa: F401 (Result re-exported)
@@ -91,8 +92,8 @@ class Simulator(ExternalSeams):
                 print(f"exudyn_lie: body {i} ({b.name}): {self.groups[i]}")
 
     def SetMethod(self, method):
-        """Integrate with ``method`` (a name or a tableau) from now on; the state, the path state and
-        the solve stay.  Adaptive steps: call :meth:`SetAdaptive` again."""
+        """Integrate with ``method`` (a name or a tableau) from now on; state, path state and solve stay
+        (adaptive steps: call :meth:`SetAdaptive` again)."""
         self.tableau = resolve_pair(method)
         if self.tableau.implicit:
             self._compile_full()
@@ -112,8 +113,8 @@ class Simulator(ExternalSeams):
 
     @property
     def newtonCounters(self):
-        """An implicit method's Newton work so far (``{'jacobians', 'factorizations', 'iterations',
-        'stages', 'retries', 'fullNewton'}``; None for an explicit method)."""
+        """An implicit method's Newton work so far (``{'jacobians', 'factorizations', 'iterations', 'stages',
+        'retries', 'fullNewton'}``; None for an explicit one)."""
         return implicit_run.newton_counters_of(self)
 
     def _make_work(self, solve="auto"):
@@ -243,8 +244,7 @@ class Simulator(ExternalSeams):
         check_redundancy(self)
 
     def _residuals_and_JV(self):
-        """h(g, t) and J V - w(t) at the current state and time, row by row (no dense Jacobian;
-        ``w`` the velocity targets of the rows' drives, mbs/row_drives.py)."""
+        """h(g, t) and J V - w(t) at the current state, row by row (``w``: the rows' drives, mbs/row_drives.py)."""
         return self.RowResiduals(self.R, self.r, self.V, self.t)
 
     def RowResiduals(self, R, r, V, t):
@@ -263,10 +263,9 @@ class Simulator(ExternalSeams):
         return wk.h.copy(), JV - wk.rdrive[1]
 
     def _check_initial_consistency(self):
-        """Raise for an inconsistent initial state, or (``projectInitial``) project it onto
-        the constraints (:func:`.initial_state.check_initial_state`) and record what was
-        corrected in ``self.initialProjection`` (None if nothing was): the joints, the
-        residuals and the size of the correction."""
+        """Raise for an inconsistent initial state, or (``projectInitial``) project it onto the constraints
+        (:func:`.initial_state.check_initial_state`); ``self.initialProjection``: what was corrected (joints,
+        residuals, size of the correction), None if nothing."""
         self.initialProjection = None
         if self.sd.nrows == 0:
             return
@@ -374,8 +373,7 @@ class Simulator(ExternalSeams):
         implicit_run.apply_fallbacks(self)
 
     def NoOutputs(self):
-        """The output arguments of ``stepper.mk_steps`` for a call that records nothing:
-        ``(0, Ro, ro, Vo, Po, Vdo, lamo)`` with no rows (of the one compiled signature)."""
+        """``mk_steps``' output arguments recording nothing: ``(0, Ro, ro, Vo, Po, Vdo, lamo)`` with no rows."""
         out = getattr(self, "_noOutputs", None)
         if out is None:
             nb, m = self.sd.nb, self.sd.nrows
@@ -383,10 +381,14 @@ class Simulator(ExternalSeams):
                                      np.zeros((0, nb, 4)), np.zeros((0, nb, 6)), np.zeros((0, m)))
         return out
 
+    # the time: an origin plus whole steps (mbs/clock.py); setting it starts a new origin
+    t = property(lambda self: self._clock.t, lambda self, t: setattr(self, "_clock", StepClock(t)))
+
     def _mk_steps(self, n, h, t=None, R=None, r=None, V=None):
-        """``stepper.mk_steps`` through its resolved compiled entry point: a plain numba
-        call re-derives the types of the two namedtuples every time (~10 us)."""
-        args = (self.sd, self.wk, self.method, self.control, float(self.t if t is None else t), float(h), int(n),
+        """``stepper.mk_steps`` through its resolved entry point (a plain call re-types the tuples, ~10 us);
+        steps from the current time (``t`` None) take their times from the clock, which the caller advances."""
+        t0, k0 = self._clock.start(h) if t is None and n > 0 else (float(self.t if t is None else t), 0)
+        args = (self.sd, self.wk, self.method, self.control, t0, k0, float(h), int(n),
                 self.R if R is None else R, self.r if r is None else r, self.V if V is None else V,
                 float(self.vmax)) + self.NoOutputs()
         return call(self._entries, "fixed", kernel.mk_steps, args)
@@ -470,16 +472,14 @@ class Simulator(ExternalSeams):
         self.sd.coordSpringLaw[k, COORD_SPRING_FORCE] = force
 
     def Accelerations(self):
-        """``(Vdot, lambda)`` at the current state from the index-1 system (eq. index1):
-        Vdot (nb, 6) in the group velocity coordinates, lambda the multipliers (m,)."""
+        """``(Vdot, lambda)`` at the current state (eq. index1): Vdot (nb, 6) in the group velocity coordinates."""
         st = self._evaluate(self.t, self.R, self.r, self.V)
         if st != kernel.STATUS_OK:
             self._raise_status(st, 0.0)
         return self.wk.Vd[0].copy(), self.wk.lam.copy()
 
     def _evaluate(self, t, R, r, V):
-        """Equations of motion at one state (``mk_steps`` with no step): accelerations in
-        ``wk.Vd[0]``, multipliers in ``wk.lam``; returns the kernel status."""
+        """Equations of motion at one state (``mk_steps`` with no step) into ``wk.Vd[0]``, ``wk.lam``; a status."""
         st, _ = self._mk_steps(0, 0.0, t, R, r, V)
         return st
 

@@ -43,7 +43,8 @@ Three seams (the third, the step observers after each accepted step, is :mod:`.s
 
 **The loop** (:func:`mk_steps`).
 
-**Fixed steps** (``ctl`` a :class:`Control`): ``nsteps`` steps of size ``h`` from ``t0``.
+**Fixed steps** (``ctl`` a :class:`Control`): ``nsteps`` steps of size ``h`` from ``t0 + k0 h``
+(step ``n`` at ``t0 + (k0 + n) h``: :mod:`.clock`).
 ``nsteps = 0`` evaluates the equations of motion once at the current state (the
 first stage of a step): accelerations in ``wk.Vd[0]``, multipliers in ``wk.lam``.
 (One call site of the inlined right-hand side serves both uses: a second one would
@@ -481,7 +482,7 @@ def project_step_end(sd, wk, t, R, r, V):
 
 # --------------------------------------------------------------------------- the loop
 @njit(cache=True, _nrt=False)
-def mk_steps(sd, wk, tab, ctl, t0, h, nsteps, R, r, V, vmax, every, Ro, ro, Vo, Po, Vdo, lamo):
+def mk_steps(sd, wk, tab, ctl, t0, k0, h, nsteps, R, r, V, vmax, every, Ro, ro, Vo, Po, Vdo, lamo):
     """Advance MK steps in place.  Returns (status, steps done / outputs written); on a
     failure (R, r, V) hold the last accepted step (the rejected one is undone).  Its arguments and
     outputs, fixed and adaptive steps: the module docstring's "The loop"."""
@@ -505,7 +506,7 @@ def mk_steps(sd, wk, tab, ctl, t0, h, nsteps, R, r, V, vmax, every, Ro, ro, Vo, 
                 return STATUS_OK, n
             evalOnly = False
         else:
-            t = t0 + n * h
+            t = t0 + (k0 + n) * h       # one product from the origin (mbs/clock.py)
             hs = h
             evalOnly = n >= nsteps
             if evalOnly and nsteps > 0 and pending < 0:

@@ -58,8 +58,7 @@ def test_exudyns_jacobian_is_the_difference_jacobian_without_the_constraint_curv
 
 def _rates(sim):
     """The stage right-hand side at the simulator's state (what newton_jacobian differences from)."""
-    from exudyn_lie.mbs.implicit import stage_rhs_at
-    from exudyn_lie.mbs.stepper import copy_state
+    from exudyn_lie.mbs.stepper import copy_state, stage_rhs_at
     out = np.zeros_like(sim.V)
     copy_state(sim.R, sim.r, sim.V, sim.wk.Rs, sim.wk.rs, sim.wk.Vs)
     assert stage_rhs_at(sim.sd, sim.wk, sim.t, out) == 0

@@ -53,8 +53,8 @@ from .row_drives import update_row_drives
 from .rotation_parameters import tracked_at
 from . import stepper
 from .methods import needed_stages
-from .stepper import (ACT_ACCEPT, ACT_RETRY, ACT_STOP, controller_is, copy_state, mk_stage_k, mk_stage_state,
-                      stage_rhs_at)
+from .rhs_address import rhs_at
+from .stepper import ACT_ACCEPT, ACT_RETRY, ACT_STOP, controller_is, copy_state, mk_stage_k, mk_stage_state
 
 # A tableau as the adaptive loop uses it: the stage matrix and nodes extended by the dense
 # extra stages, b (s), the stages of a step (b or bhat needs them), e = b - bhat, the dense
@@ -135,16 +135,16 @@ def dense_state(sd, wk, P, theta, h, R0, r0, V0, Ro, ro, Vo, w):
 @njit(cache=True, _nrt=False)
 def extra_stages(sd, wk, A, c, s, t, h, R0, r0, V0, S):
     """The dense-only stages s..s+m-1 of the last accepted step (from its start state), through the one
-    compiled copy of the stage right-hand side outside the stage loop (``stage_rhs_at``, also the
-    fixed steps' and the implicit stages'): an inlined copy here would be a second right-hand side in
-    the adaptive kind's first compile (docs/BENCH.md), for stages evaluated only for outputs inside a
-    step.  ``A``, ``c``, ``s``: the method's (``AdaptiveMethod``) as arrays, not the method tuple: these
+    compiled copy of the stage right-hand side outside the stage loop (``stage_rhs_at`` through its
+    address, mbs/rhs_address.py, also the fixed steps' and the implicit stages'): an inlined copy here
+    would be a second right-hand side in the adaptive kind's first compile (docs/BENCH.md), for stages
+    evaluated only for outputs inside a step.  ``A``, ``c``, ``s``: the method's (``AdaptiveMethod``) as arrays, not the method tuple: these
     functions, the dense output's, are then compiled once for explicit and implicit pairs alike."""
     for j in range(s, A.shape[0]):
         st = mk_stage_state(sd, wk, A, j, h, R0, r0, V0)
         if st != STATUS_OK:
             return st
-        st = stage_rhs_at(sd, wk, t + c[j] * h, wk.Vd[j])
+        st = rhs_at(sd, wk, t + c[j] * h, wk.Vd[j])
         S[C.S_N_RHS] += 1.0
         if st != STATUS_OK:
             return st

@@ -4,7 +4,7 @@ A fixed step's stage time is ``t0 + (k0 + n) h + c_j h`` (:func:`~.stepper.mk_st
 k0``): one product from the origin, never a sum of steps.  Restarting each call of the stepper
 at the time the previous call reached would round differently with the number of steps per
 call, so a time-dependent model's last bits would follow how the outputs were chunked (the
-bridge sizes its chunks by the wall time).  Setting the time (a start, Exudyn's time after a
+bridge sizes its chunks by the wall time).  Setting the time (a start, the host's time after a
 user function, an adaptive run's end) or stepping with another size starts a new origin.
 """
 

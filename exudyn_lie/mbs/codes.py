@@ -55,6 +55,8 @@ STATUS_EXTERNAL = 6        # the right-hand side evaluated in Python raised (mbs
 STATUS_STEP_MIN = 7        # adaptive steps: the error control asks for a step below the minimum (mbs.adaptive)
 STATUS_NEWTON = 8          # an implicit stage's Newton iteration did not converge (mbs.implicit)
 STATUS_STIFF = 9           # fixed steps watched: the stages show a mode beyond the stability radius (mbs.stiffness)
+STATUS_NO_RHS = 10         # a Work without the address of the stage right-hand side (mbs.rhs_address)
+EXT_RHS = 2                # Work.ext[EXT_RHS]: that address
 # what a failed status refers to (Work.failInfo): the failing constraint row, the numerical rank of
 # redundant rows, the body whose stage argument left the domain of dexpinv
 INFO_ROW, INFO_RANK, INFO_BODY = 0, 1, 2

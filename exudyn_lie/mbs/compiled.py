@@ -94,7 +94,7 @@ Work = namedtuple("Work", [
     "tmp6", "tmp12", "v3", "m3",      # scratch vectors and matrices
     "ident", "zero3", "zero6",        # constants: the ground's rotation, position and velocity
     "ext",                            # [token of the external rhs evaluator (mbs.external), 0: none;
-                                      #  1 if the forces it returned were not finite]
+                                      #  1 if the forces it returned were not finite; codes.EXT_RHS]
     "rdrive",                         # (3, m): the time-dependent part of each row (mbs.row_drives): value,
                                       #   rate (the velocity target of J V) and acceleration (added to eta)
     "drive",                          # [token of the row-drive evaluator (mbs.row_drives)], None without
@@ -587,8 +587,7 @@ def make_work(sd, nstages, solve="auto", carried=None):
         perm=np.zeros(m, np.int64), ytmp=np.zeros(m), failInfo=np.zeros(4, np.int64),
         tmp6=np.zeros(6), tmp12=np.zeros(12), v3=np.zeros((N_SCRATCH3, 3)), m3=np.zeros((4, 3, 3)),
         ident=np.eye(3), zero3=np.zeros(3), zero6=np.zeros(6),
-        ext=np.zeros(2,
-                     np.int64), rdrive=constant_drives(sd),
+        ext=np.zeros(3, np.int64), rdrive=constant_drives(sd),
         # a full scene's [handle] of the row drives' evaluator (0: none; Simulator._make_work)
         drive=None if lean else np.zeros(1, np.int64), Vw=np.zeros((nb, 6) if sd.hasQext else (0, 6)),
         tplan=plan, Tw=np.zeros(work_size(nb, m, plan)) if tree else None,

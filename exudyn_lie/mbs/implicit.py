@@ -54,7 +54,8 @@ from .linalg import band_lu_extents, band_lu_factor_inplace, band_lu_solve_exten
 from .jacobian_groups import (FD_STEP, NEW_COUPLING, body_coupling, color_bodies, grouped_differences, probe_coupling,
                               restore_configuration)
 from .methods import ImplicitMethod, needed_stages
-from .stepper import copy_state, stage_rhs_at
+from .rhs_address import rhs_at
+from .stepper import copy_state
 
 # The Newton iteration's arrays and state (one per simulator: tab.newton)
 Newton = namedtuple("Newton", [
@@ -192,7 +193,7 @@ def newton_jacobian(sd, wk, nw, t, R, r, V, A0):
                 continue
             e = FD_STEP * max(1.0, abs(V[i, k]))
             wk.Vs[i, k] = V[i, k] + e
-            st = stage_rhs_at(sd, wk, t, nw.Ap)
+            st = rhs_at(sd, wk, t, nw.Ap)
             wk.Vs[i, k] = V[i, k]
             if st != STATUS_OK:
                 nw.st[NS_STALE] = 1.0        # Dv, Dth partly overwritten: the next stage makes them anew
@@ -202,7 +203,7 @@ def newton_jacobian(sd, wk, nw, t, R, r, V, A0):
                 X[m] = 0.0
             X[k] = FD_STEP
             exp_compose(gid[i], R[i], r[i], X, wk.Rs[i], wk.rs[i], wk.m3[0], wk.v3[0])
-            st = stage_rhs_at(sd, wk, t, nw.Ap)
+            st = rhs_at(sd, wk, t, nw.Ap)
             restore_configuration(i, R, r, wk.Rs, wk.rs)
             if st != STATUS_OK:
                 nw.st[NS_STALE] = 1.0
@@ -395,7 +396,7 @@ def newton_iterate(sd, wk, nw, j, jprev, hg, tj, R, r, V, vscale, full):
                 wk.failInfo[INFO_BODY] = i
                 return STATUS_NEWTON
             exp_compose(gid[i], R[i], r[i], Ti, wk.Rs[i], wk.rs[i], wk.m3[0], wk.v3[0])
-        st = stage_rhs_at(sd, wk, tj, Ap)
+        st = rhs_at(sd, wk, tj, Ap)
         nw.st[NS_ITERATIONS] += 1.0
         if st == STATUS_EXTERNAL and wk.ext[1] != 0:     # non-finite rates outside: the iterate diverged
             wk.ext[1] = 0
@@ -562,7 +563,7 @@ def _implicit_is_implicit(tab):
 @overload(stepper.evaluate_stage, inline="always")
 def _implicit_evaluate_stage(sd, wk, tab, t, Vdot):
     if stepper.carries_newton(tab):
-        return lambda sd, wk, tab, t, Vdot: stage_rhs_at(sd, wk, t, Vdot)
+        return lambda sd, wk, tab, t, Vdot: rhs_at(sd, wk, t, Vdot)
 
 
 @overload(stepper.implicit_stage, inline="always")

@@ -25,7 +25,8 @@ from numba import njit
 
 from .bodies import exp_compose
 from .codes import STATUS_OK
-from .stepper import copy_state, stage_rhs_at
+from .rhs_address import rhs_at
+from .stepper import copy_state
 
 #: grouped_differences' status when a row outside the group's pattern changed
 NEW_COUPLING = -1
@@ -71,7 +72,7 @@ def probe_coupling(sd, wk, t, R, r, V, A0, Ap, axes, coupled, X):
             X[k] = FD_STEP * (1.0 + 0.125 * k) * axes[c, k]
             wk.Vs[c, k] = V[c, k] + X[k] * max(1.0, abs(V[c, k]))
         exp_compose(gid[c], R[c], r[c], X, wk.Rs[c], wk.rs[c], wk.m3[0], wk.v3[0])
-        st = stage_rhs_at(sd, wk, t, Ap)
+        st = rhs_at(sd, wk, t, Ap)
         for k in range(6):
             wk.Vs[c, k] = V[c, k]
         restore_configuration(c, R, r, wk.Rs, wk.rs)
@@ -161,7 +162,7 @@ def grouped_differences(sd, wk, t, R, r, V, A0, Ap, axes, coupled, color, ncol, 
                     wk.Vs[i, k] = V[i, k] + eps[i]
             if not some:
                 continue
-            st = stage_rhs_at(sd, wk, t, Ap)
+            st = rhs_at(sd, wk, t, Ap)
             for i in range(nb):
                 if color[i] == q:
                     wk.Vs[i, k] = V[i, k]
@@ -176,7 +177,7 @@ def grouped_differences(sd, wk, t, R, r, V, A0, Ap, axes, coupled, color, ncol, 
                 if color[i] == q and axes[i, k] != 0.0:
                     eps[i] = X[k]
                     exp_compose(gid[i], R[i], r[i], X, wk.Rs[i], wk.rs[i], wk.m3[0], wk.v3[0])
-            st = stage_rhs_at(sd, wk, t, Ap)
+            st = rhs_at(sd, wk, t, Ap)
             for i in range(nb):
                 if color[i] == q:
                     restore_configuration(i, R, r, wk.Rs, wk.rs)

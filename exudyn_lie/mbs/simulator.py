@@ -30,6 +30,7 @@ from .stepper import fixed_step_control
 from . import implicit_run
 from .entry import call
 from .clock import StepClock
+from .rhs_address import EXT_RHS, keep_rhs_address
 from .adaptive_run import AdaptiveRun
 from .initial_state import RowLevels, check_initial_state, check_redundancy
 from .outputs import Result, run  # noqa: F401 (Result re-exported)
@@ -118,16 +119,17 @@ class Simulator(ExternalSeams):
         return implicit_run.newton_counters_of(self)
 
     def _make_work(self, solve="auto"):
-        """New work arrays (``compiled.make_work``; ``solve``: see ``compiled.solve_plan``).
-        Their types may differ from the old ones (the tree solve's plan is None for the band
-        solve), so the resolved compiled entry points are dropped with them."""
+        """New work arrays (``compiled.make_work``; ``solve``: see ``compiled.solve_plan``), with room for an
+        embedded pair's dense-output extra stages.  Their types may differ from the old ones (the tree
+        solve's plan is None for the band solve): the resolved compiled entry points go with them."""
         dense = self.tableau.dense
-        # room for the dense-output extra stages of an embedded pair (adaptive steps)
         extra = dense.extra_stages if (dense is not None and self.tableau.b_hat is not None) else 0
         wk = make_work(self.sd, len(self.method.b) + extra, solve, self._carried)
         wk.ext[0] = external.handle(self._extToken) if self._extToken else 0
         if self._driveToken:
             wk = wk._replace(drive=np.array([external.handle(self._driveToken)], np.int64))
+        if self.tableau.implicit or self.tableau.b_hat is not None:     # (mbs/rhs_address.py)
+            keep_rhs_address(self.sd, wk)
         self._entries = {}
         return wk
 
@@ -198,6 +200,8 @@ class Simulator(ExternalSeams):
         self._carried = c._replace(track=c.track._replace(watchBody=b.copy(), watchEntry=entry),
                                    path=c.path._replace(watchMax=np.zeros(len(b))))
         self.wk = self.wk._replace(track=self._carried.track, path=self._carried.path)
+        if self.wk.ext[EXT_RHS]:
+            keep_rhs_address(self.sd, self.wk)
         self._entries = {}
         self.ResetWatch()
 
@@ -411,15 +415,10 @@ class Simulator(ExternalSeams):
         return stiffness.spectral_radius(self, R, r, V, t, iterations, seed)
 
     # ----------------------------------------------------------------- rows and tracked state (the bridge's API)
-    @property
-    def nRows(self):
-        """Number of constraint rows."""
-        return int(self.sd.nrows)
+    nRows = property(lambda self: int(self.sd.nrows), doc="Number of constraint rows.")
 
-    @property
-    def hasRedundantRows(self):
-        """True if the constraints were found redundant (the rank-revealing solve runs)."""
-        return bool(self.sd.redundant)
+    hasRedundantRows = property(lambda self: bool(self.sd.redundant),
+                                doc="True if the constraints were found redundant (the rank-revealing solve runs).")
 
     @property
     def hasPythonStage(self):

@@ -16,6 +16,8 @@ def raise_status(sim, st, h):
     """Raise the error for a kernel status of ``sim`` (:meth:`Simulator.RaiseStatus`)."""
     if st == kernel.STATUS_STEP_MIN:
         sim._ad.raise_step_min()
+    if st == kernel.STATUS_NO_RHS:
+        raise SimulationError("internal: a Work without the address of the stage right-hand side (mbs/rhs_address.py)")
     if st == kernel.STATUS_EXTERNAL:
         external.reraise(sim._driveToken)
         external.reraise(sim._extToken)

@@ -136,9 +136,9 @@ def fixed_step_watch(sd, wk, tab, ctl, t, h, R, r, V):
 
 @njit(cache=True, _nrt=False)
 def stage_rhs_at(sd, wk, t, Vdot):
-    """:func:`stage_rhs` as a call, for its call sites outside the stage loop (the implicit stages'
-    Newton iteration, :func:`fixed_step_watch`, the adaptive steps' dense-only stages): each inlined
-    copy of the right-hand side costs seconds of LLVM's time."""
+    """:func:`stage_rhs` as a call, for its call sites outside the stage loop: :func:`fixed_step_watch`,
+    and through its address (:mod:`.rhs_address`: compiled once, not again inside each caller) the
+    implicit stages' Newton iteration and the adaptive steps' dense-only stages."""
     return stage_rhs_llvm_inlined(sd, wk, t, Vdot)
 
 
@@ -326,9 +326,9 @@ def is_implicit(tab):
 
 def evaluate_stage(sd, wk, tab, t, Vdot):
     """``stage_rhs`` as the method's specialisation of ``mk_steps`` calls it: inlined by LLVM for an
-    explicit method (:func:`stage_rhs_llvm_inlined`), through the call the Newton iteration makes
-    for an implicit one (:func:`stage_rhs_at`; each inlined copy of the right-hand side costs
-    seconds of compile time)."""
+    explicit method (:func:`stage_rhs_llvm_inlined`), through the address the Newton iteration calls
+    for an implicit one (:func:`stage_rhs_at`, :mod:`.rhs_address`: each copy of the right-hand side
+    in a compiled function costs seconds of compile time)."""
 
 
 def implicit_stage(sd, wk, tab, j, h, t, R, r, V):

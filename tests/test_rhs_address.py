@@ -48,3 +48,13 @@ def test_a_work_without_the_address_stops_with_an_error_not_a_crash():
     sim.wk.ext[EXT_RHS] = 0
     with pytest.raises(SimulationError, match="without the address of the stage right-hand side"):
         sim.Advance(1, 1e-3)
+
+
+def test_only_implicit_methods_and_adaptive_steps_load_the_address():
+    """Fixed explicit steps, an embedded pair's too, never call through it: their Work has none (the
+    separate library costs a process about 0.1 s); adaptive steps (the dense output's extra stages)
+    get it when they start."""
+    sim = Simulator(BT.build_scene("chain", 3), "DOPRI5", "SE3")
+    assert sim.wk.ext[EXT_RHS] == 0
+    sim.SetAdaptive(rtol=1e-6, atol=1e-8)
+    assert sim.wk.ext[EXT_RHS] == rhs_address(sim.sd, sim.wk) != 0

@@ -136,7 +136,7 @@ def dense_state(sd, wk, P, theta, h, R0, r0, V0, Ro, ro, Vo, w):
 def extra_stages(sd, wk, A, c, s, t, h, R0, r0, V0, S):
     """The dense-only stages s..s+m-1 of the last accepted step (from its start state), through the one
     compiled copy of the stage right-hand side outside the stage loop (``stage_rhs_at`` through its
-    address, mbs/rhs_address.py, also the fixed steps' and the implicit stages'): an inlined copy here
+    address, mbs/rhs_address.py, as the implicit stages' Newton iteration calls it): an inlined copy here
     would be a second right-hand side in the adaptive kind's first compile (docs/BENCH.md), for stages
     evaluated only for outputs inside a step.  ``A``, ``c``, ``s``: the method's (``AdaptiveMethod``) as arrays, not the method tuple: these
     functions, the dense output's, are then compiled once for explicit and implicit pairs alike."""

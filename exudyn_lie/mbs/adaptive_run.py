@@ -18,6 +18,7 @@ from . import kernel
 from . import projection as _projection
 from .bodies import exp_compose
 from .entry import call
+from .rhs_address import keep_rhs_address
 
 
 class AdaptiveRun:
@@ -26,6 +27,7 @@ class AdaptiveRun:
     def __init__(self, sim, rtol=1e-3, atol=1e-6, maxStep=np.inf, minStep=0.0, firstStep=None, safety=0.9,
                  maxIncrease=10.0, lengthScale=1.0, timeScale=1.0, constraintTolerance=None, acceptAtMinStep=False):
         tab = sim.tableau
+        keep_rhs_address(sim.sd, sim.wk)      # the dense output's extra stages (mbs/rhs_address.py)
         maxStep = float(np.inf if maxStep is None else maxStep)
         minStep = float(0.0 if minStep is None else minStep)
         if not maxStep > 0:

@@ -55,7 +55,7 @@ from .jacobian_groups import (FD_STEP, NEW_COUPLING, body_coupling, color_bodies
                               restore_configuration)
 from .methods import ImplicitMethod, needed_stages
 from .rhs_address import rhs_at
-from .stepper import copy_state
+from .stepper import copy_state, stage_rhs_at
 
 # The Newton iteration's arrays and state (one per simulator: tab.newton)
 Newton = namedtuple("Newton", [
@@ -563,7 +563,7 @@ def _implicit_is_implicit(tab):
 @overload(stepper.evaluate_stage, inline="always")
 def _implicit_evaluate_stage(sd, wk, tab, t, Vdot):
     if stepper.carries_newton(tab):
-        return lambda sd, wk, tab, t, Vdot: rhs_at(sd, wk, t, Vdot)
+        return lambda sd, wk, tab, t, Vdot: stage_rhs_at(sd, wk, t, Vdot)     # (the time loop's direct call)
 
 
 @overload(stepper.implicit_stage, inline="always")

@@ -285,8 +285,7 @@ def run(sim, endTime, stepSize=None, outputEvery=1, startTime=None, progress=Fal
             if n == 0:
                 raise SimulationError(f"internal: no output reached at t = {sim.t:.6g} s")
             if not adaptive:
-                # chunks of 1, 2, 4, ... rows, not sized by the wall time: a stage's time is the chunk's
-                # start plus n h (stepper.mk_steps), so a time-dependent model's last bits follow the chunks
+                # chunks of 1, 2, 4, ... rows (a stage's time does not depend on them: mbs/clock.py)
                 rows.size = min(rows.maxRows, 2 * rows.size)
                 steps = done + rows.nsub * np.arange(1, n + 1)
                 done = int(steps[-1])

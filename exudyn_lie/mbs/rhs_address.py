@@ -10,15 +10,15 @@ mbs/jacobian_groups.py) and the dense output's extra stages (mbs/adaptive.py).
 ``newton_jacobian`` alone took 9.8 s, 8.0 s of it in LLVM (by hand: its ``metadata['timers']``,
 compiled with the rest cached).  Called through its address, the right-hand side is compiled once,
 as ``stage_rhs_at`` itself, and those callers hold an indirect call.  The time loop itself keeps
-its direct calls (the explicit stages' inlined copy, the fixed steps' watch): ``stage_rhs_at``
-loaded as a library of its own costs about 0.1 s per process (by hand, warm cache), which a
-process that integrates explicit fixed steps would pay for nothing.
+its direct calls (the explicit stages' inlined copy, an implicit method's first stage, the fixed
+steps' watch): ``stage_rhs_at`` loaded as a library of its own costs about 0.1 s per process (by
+hand, warm cache), which a process that integrates fixed explicit steps would pay for nothing.
 
 The address is data, so the callers stay cacheable: :func:`rhs_address` compiles (or loads from
 the cache) ``stage_rhs_at`` for the types of a scene's ``SceneData`` and ``Work`` and returns the
 address of its native function; the simulator writes it into ``wk.ext[EXT_RHS]`` of every
-``Work`` it makes for an implicit method or an embedded pair (``Simulator._make_work``: no other
-code makes one).  A ``Work`` without it makes the call return ``STATUS_NO_RHS`` instead of
+``Work`` it makes for an implicit method or adaptive steps (``Simulator._make_work``: no other
+code makes one; ``AdaptiveRun``, when adaptive steps start).  A ``Work`` without it makes the call return ``STATUS_NO_RHS`` instead of
 jumping to 0.
 """
 from llvmlite import ir
@@ -51,7 +51,10 @@ def rhs_address(sd, wk):
         cres = stage_rhs_at.overloads[sig]
         if cres.signature.return_type != types.int64:
             raise TypeError(f"stage_rhs_at returns {cres.signature.return_type}, the call expects int64")
-        addr = _ADDRESSES[sig] = int(cres.library.get_pointer_to_function(cres.fndesc.llvm_func_name))
+        addr = int(cres.library.get_pointer_to_function(cres.fndesc.llvm_func_name))
+        if not addr:
+            raise RuntimeError(f"no native function {cres.fndesc.llvm_func_name} in stage_rhs_at's library")
+        _ADDRESSES[sig] = addr
     return addr
 
 

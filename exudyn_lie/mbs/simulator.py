@@ -128,7 +128,7 @@ class Simulator(ExternalSeams):
         wk.ext[0] = external.handle(self._extToken) if self._extToken else 0
         if self._driveToken:
             wk = wk._replace(drive=np.array([external.handle(self._driveToken)], np.int64))
-        if self.tableau.implicit or self.tableau.b_hat is not None:     # (mbs/rhs_address.py)
+        if self.tableau.implicit or getattr(self, "_ad", None) is not None:     # (mbs/rhs_address.py)
             keep_rhs_address(self.sd, wk)
         self._entries = {}
         return wk

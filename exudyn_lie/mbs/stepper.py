@@ -59,7 +59,7 @@ in that evaluation leaves ``Vdo[o, 0, 0]`` NaN.
 **Adaptive steps** (``ctl`` an ``adaptive.AdaptiveControl``, ``tab`` an
 ``adaptive.AdaptiveMethod``): from ``ctl.fs[FS_T]`` with the next step ``ctl.fs[FS_H]``
 until ``ctl.fs[FS_TEND]``, or until every output time ``ctl.tout`` is written to
-``Ro, ro, Vo, Po`` (dense output); ``t0, h, nsteps, every`` are not used and ``Vdo,
+``Ro, ro, Vo, Po`` (dense output); ``t0, k0, h, nsteps, every`` are not used and ``Vdo,
 lamo`` have no rows.  Returns the number of outputs written (:mod:`.adaptive`).
 
 **Implicit methods** (``tab`` an ``ImplicitMethod`` or ``adaptive.AdaptiveImplicitMethod``, carrying

@@ -90,6 +90,7 @@ class OutputRows:
         n = max(1, min(int(nout), self.size))
         clock = sim._clock
         t0, k0 = clock.start(h)         # step k at t0 + k h, however the steps are chunked (mbs/clock.py)
+        at = lambda k: t0 + (k0 + k) * h     # noqa: E731 - the time after this call's k-th step
         acc = n if self.doacc else 0
         # where a blow-up's step suggestion linearises (stiffness.suggest_step)
         sim._segmentStart = (clock.t, sim.R.copy(), sim.r.copy(), sim.V.copy())
@@ -102,20 +103,20 @@ class OutputRows:
                         self.Vdo[o:acc], self.lamo[o:acc])
                 st, d = call(self._ep, "mk", stepper.mk_steps, args)
             else:                        # the rest of a period after a step in parts: one step at a time
-                st, d = sim._mk_steps(1, h, t0 + (k0 + done) * h)
+                st, d = sim._mk_steps(1, h, at(done))
                 if d and (done + 1) % nsub == 0:
-                    self._record((done + 1) // nsub - 1, t0 + (k0 + done + 1) * h)
+                    self._record((done + 1) // nsub - 1, at(done + 1))
             done += d
             if st == kernel.STATUS_OK and done < total:
                 continue
             if st != kernel.STATUS_NEWTON or not sim.tableau.implicit:
                 break
-            st = implicit_run.substeps(sim, h, t0 + (k0 + done) * h)      # an implicit step that failed, in parts
+            st = implicit_run.substeps(sim, h, at(done))      # an implicit step that failed, in parts
             if st != kernel.STATUS_OK:
                 break
             done += 1
             if done % nsub == 0:
-                self._record(done // nsub - 1, t0 + (k0 + done) * h)
+                self._record(done // nsub - 1, at(done))
             if done == total:
                 break
         rows = done // nsub
@@ -123,7 +124,7 @@ class OutputRows:
             rows -= 1                   # its accelerations failed: not an output
         clock.advance(done)             # on a failure: the last accepted step
         self.failure = None if st == kernel.STATUS_OK else st
-        return rows, t0 + (k0 + np.arange(1, self.maxRows + 1) * nsub) * h
+        return rows, at(np.arange(1, self.maxRows + 1) * nsub)
 
     def _record(self, o, t):
         """Output row ``o`` of the state at ``t`` (as ``stepper.record_output``; the accelerations
@@ -268,7 +269,7 @@ def run(sim, endTime, stepSize=None, outputEvery=1, startTime=None, progress=Fal
     while k < nout and (times[k] <= t0 if adaptive else k == 0):     # outputs at the start: the state
         record(k, sim.R, sim.r, sim.V, times[k] if adaptive else t0)
         k += 1
-    cpu, tlast, done = 0.0, _time.time(), 0
+    cpu, tlast = 0.0, _time.time()
     for rows, count in segments:
         end = k + count
         while k < end:
@@ -278,7 +279,7 @@ def run(sim, endTime, stepSize=None, outputEvery=1, startTime=None, progress=Fal
                 n = rows.integrate_at(endTime, times[k:min(end, k + rows.maxRows)])
                 tk = times[k:k + n].copy()
             else:
-                n, _ = rows.integrate(end - k, sim.vmax)
+                n, tk = rows.integrate(end - k, sim.vmax)      # (the clock's times: t0 + steps h)
             cpu += _time.perf_counter() - tic
             if rows.failure is not None:              # the state: the last accepted step
                 sim.RaiseStatus(rows.failure, sim._ad.step if adaptive else rows.h)
@@ -287,11 +288,8 @@ def run(sim, endTime, stepSize=None, outputEvery=1, startTime=None, progress=Fal
             if not adaptive:
                 # chunks of 1, 2, 4, ... rows (a stage's time does not depend on them: mbs/clock.py)
                 rows.size = min(rows.maxRows, 2 * rows.size)
-                steps = done + rows.nsub * np.arange(1, n + 1)
-                done = int(steps[-1])
-                # the clock's times (sim.t: t0 + steps h); the shorter last step lands on endTime
-                tk = [endTime] if rows is last else t0 + steps * h
-                if rows is last:
+                if rows is last:                      # the shorter last step lands on endTime
+                    tk = [endTime]
                     sim.t = endTime
             for o in range(n):
                 record(k + o, rows.Ro[o], rows.ro[o], rows.Vo[o], tk[o])

@@ -326,9 +326,9 @@ def is_implicit(tab):
 
 def evaluate_stage(sd, wk, tab, t, Vdot):
     """``stage_rhs`` as the method's specialisation of ``mk_steps`` calls it: inlined by LLVM for an
-    explicit method (:func:`stage_rhs_llvm_inlined`), through the address the Newton iteration calls
-    for an implicit one (:func:`stage_rhs_at`, :mod:`.rhs_address`: each copy of the right-hand side
-    in a compiled function costs seconds of compile time)."""
+    explicit method (:func:`stage_rhs_llvm_inlined`), through a call for an implicit one
+    (:func:`stage_rhs_at`, which the Newton iteration calls through its address, :mod:`.rhs_address`:
+    each copy of the right-hand side in a compiled function costs seconds of compile time)."""
 
 
 def implicit_stage(sd, wk, tab, j, h, t, R, r, V):

@@ -222,7 +222,7 @@ class TorqueFreeRotation:
         """Rotation matrices (nt, 3, 3), body -> world."""
         t = np.atleast_1d(np.asarray(t, float))
         if self.steady:
-            return np.array([self.R0 @ _expm_so3(self.w0 * tk) for tk in t])
+            return self.R0 @ _expm_so3(self.w0[None] * t[:, None])
         phi = self.precession_angle(t)
         A = self._frame(self.omega(t))
         c, s = np.cos(phi), np.sin(phi)
@@ -232,8 +232,13 @@ class TorqueFreeRotation:
 
 
 def _expm_so3(x):
-    th = np.linalg.norm(x)
-    K = np.array([[0, -x[2], x[1]], [x[2], 0, -x[0]], [-x[1], x[0], 0]])
-    if th < 1e-8:
-        return np.eye(3) + K + 0.5 * K @ K
-    return np.eye(3) + np.sin(th) / th * K + (1 - np.cos(th)) / th ** 2 * K @ K
+    """Rodrigues' formula for each row of ``x`` (n, 3): (n, 3, 3); its Taylor terms below 1e-8 rad."""
+    th = np.linalg.norm(x, axis=1)
+    K = np.zeros((len(x), 3, 3))
+    K[:, 0, 1], K[:, 0, 2], K[:, 1, 2] = -x[:, 2], x[:, 1], -x[:, 0]
+    K[:, 1, 0], K[:, 2, 0], K[:, 2, 1] = x[:, 2], -x[:, 1], x[:, 0]
+    small = th < 1e-8
+    ths = np.where(small, 1.0, th)
+    a = np.where(small, 1.0, np.sin(ths) / ths)
+    b = np.where(small, 0.5, (1 - np.cos(ths)) / ths ** 2)
+    return np.eye(3) + a[:, None, None] * K + b[:, None, None] * (K @ K)

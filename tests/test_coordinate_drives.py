@@ -439,3 +439,24 @@ def test_evaluated_path_honours_moving_offsets_and_velocity_level_rows():
     assert abs(x[1] - 0.25 * np.sin(2 * T)) < 1e-9
     assert abs(v[1] - 0.5 * np.cos(2 * T)) < 1e-9
     assert abs(x[2] - (0.2 + 0.7 * T)) < 1e-12 and abs(v[2] - 0.7) < 1e-12
+
+
+@pytest.mark.parametrize("adaptive", [False, True], ids=["fixed", "adaptive"])
+def test_run_rows_are_the_diagnostics_of_their_states(adaptive):
+    """Simulator.Run's energies and residuals, computed a chunk of output rows at a time, are
+    Simulator.Diagnostics of each row's own state and time: with moving offsets (rows evaluated one
+    at a time, each at its time) and without (one call per chunk); fixed steps with a shorter
+    landing step, and adaptive steps' dense outputs."""
+    from exudyn_lie.apps import bench_topology as BT
+    from exudyn_lie.bridge.reader import SceneFromExudyn
+    kw = dict(rtol=1e-6, atol=1e-8) if adaptive else {}
+    for sc, drives in ((SceneFromExudyn(drive_model(), "initial"), True), (BT.build_scene("chain", 3), False)):
+        sim = Simulator(sc, "DOPRI5" if adaptive else "RK4", "SE3", projectInitial=True)
+        res = sim.Run(endTime=0.0505, stepSize=1e-3, outputEvery=3, **kw)
+        assert len(res.times) > 15 and res.times[-1] == 0.0505 and bool(sim._drives) == drives
+        for k in range(len(res.times)):
+            e, h = sim.Diagnostics(res.R[k], res.r[k], res.V[k], t=res.times[k])[:2]
+            np.testing.assert_array_equal(res.energy[k], e)
+            np.testing.assert_array_equal(res.residuals[k], h)
+        moving = max(len(np.unique(res.residuals[:, q])) for q in range(res.residuals.shape[1]))
+        assert len(np.unique(res.energy[:, 0])) > 10 and (not drives or moving > 10), moving

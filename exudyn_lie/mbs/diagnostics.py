@@ -28,15 +28,19 @@ def kinetic_and_gravity(gid, M, mass, com, gravity, R, r, V, Vb):
 
 @njit(cache=True, _nrt=False)
 def all_rows(sd, wk, R, r, V, h, Jr, eta, e):
-    """Diagnostics at the state (R, r, V): residuals ``h``, Jacobian rows ``Jr`` and
-    ``eta`` of every joint, and ``e`` = (kinetic, gravity potential, spring potential)."""
-    joints_rows(sd.gid, sd.jointIndex, sd.jointPoints, sd.jointFrames, sd.jointParams, sd.rowIndex, sd.rowsAll,
-                wk.path.bodyParameters, wk.path.jointAngles, R, r, V, h, Jr, eta, wk.rdrive, wk.v3, wk.ident,
-                wk.zero3, wk.zero6)
-    ekin, egrav = kinetic_and_gravity(sd.gid, sd.M, sd.mass, sd.com, sd.gravity, R, r, V, wk.tmp6)
-    e[0] = ekin
-    e[1] = egrav
-    e[2] = spring_energy(sd, wk, R, r, V)       # the registered force elements' (mbs/force_elements.py)
+    """Diagnostics at the states ``(R[k], r[k], V[k])``, k = 0 .. n-1 (the rows' moving offsets in
+    ``wk.rdrive`` shared): residuals ``h[k]`` of every joint and ``e[k]`` = (kinetic, gravity
+    potential, spring potential); ``Jr``, ``eta`` the Jacobian rows and eta of the last state.
+    Output rows come a chunk at a time: one call per chunk, where a call per row cost more than the
+    rows themselves (its Python frames and the unboxing of the scene's tuples)."""
+    for k in range(R.shape[0]):
+        joints_rows(sd.gid, sd.jointIndex, sd.jointPoints, sd.jointFrames, sd.jointParams, sd.rowIndex,
+                    sd.rowsAll, wk.path.bodyParameters, wk.path.jointAngles, R[k], r[k], V[k], h[k], Jr, eta,
+                    wk.rdrive, wk.v3, wk.ident, wk.zero3, wk.zero6)
+        ekin, egrav = kinetic_and_gravity(sd.gid, sd.M, sd.mass, sd.com, sd.gravity, R[k], r[k], V[k], wk.tmp6)
+        e[k, 0] = ekin
+        e[k, 1] = egrav
+        e[k, 2] = spring_energy(sd, wk, R[k], r[k], V[k])   # the registered force elements' (mbs/force_elements.py)
 
 
 @njit(cache=True, inline="always", _nrt=False)

@@ -487,17 +487,11 @@ class Simulator(ExternalSeams):
         """(energy[3], residuals[m], joint position violation[nj], joint rotation violation[nj])
         at the current state (or at ``R, r, V``), the rows' moving offsets at ``t`` (default: the
         current time)."""
-        e, h, wk = np.zeros(3), np.zeros(self.sd.nrows), self.wk
+        e, h, wk = np.zeros((1, 3)), np.zeros((1, self.sd.nrows)), self.wk
         self._drives_at(self.t if t is None else t)
-        kernel.all_rows(self.sd, wk, self.R if R is None else R, self.r if r is None else r, self.V if V is None else V,
-                        h, wk.Jr, wk.eta, e)
-        return (e, h) + self.JointViolations(h)
-
-    def _rows_and_energy(self, R, r, V, t, e, h):
-        """:meth:`Diagnostics`' first two into ``e``, ``h``, for arrays of the state's own types (outputs.run):
-        through the resolved entry point (numba typing the scene's tuples cost 40 us per output row)."""
-        self._drives_at(t)
-        call(self._entries, "all_rows", kernel.all_rows, (self.sd, self.wk, R, r, V, h, self.wk.Jr, self.wk.eta, e))
+        one = lambda x, y: np.ascontiguousarray(x if y is None else y, dtype=float)[None]
+        kernel.all_rows(self.sd, wk, one(self.R, R), one(self.r, r), one(self.V, V), h, wk.Jr, wk.eta, e)
+        return (e[0], h[0]) + self.JointViolations(h[0])
 
     def JointViolations(self, h):
         """(position, rotation) violation of every joint, ``(..., nj)``, from the residuals ``h`` (..., m)."""

@@ -404,3 +404,28 @@ def test_drift_warning_names_what_holds_it_on_each_path(evaluation):
     drift = [str(w.message) for w in rec if "drift: Exudyn's residual" in str(w.message)]
     assert drift and all("explains it: the drift of index-1 integration" in m and remedy in m for m in drift), drift
     assert len(drift) == len(set(m.split(" drift:")[0] for m in drift))          # once per item
+
+
+def test_check_stops_a_marker_moved_on_a_swinging_body_at_a_coarse_step():
+    """A pre-step function moves the marker of the second joint on the first (swinging) bar at RK4's
+    coarse step of the evaluated path's projection test (h = 0.1 s, omega h ~ 0.3).  The moved marker
+    moves Exudyn's velocity level too (omega x dp), as the method's own error does, so the velocity
+    level's drift does not excuse growth where a Python function runs between steps
+    (constraint_check.ConsistencyAccount): the check stops the run early, naming the joint; the same
+    run without the pre-step function runs to the end (tests/test_evaluated_projection.py)."""
+    from test_bridge_common import double_pendulum
+    mbs = double_pendulum(swinging=True)
+    joint2 = 4
+    mA = mbs.GetObject(joint2)["markerNumbers"][0]
+    p0 = np.array(mbs.GetMarker(mA)["localPosition"], float)
+
+    def PreStepUserFunction(mbs, t):
+        mbs.SetMarkerParameter(mA, "localPosition", list(p0 + [0.0, 0.5 * t, 0.0]))
+        return True
+    mbs.SetPreStepUserFunction(PreStepUserFunction)
+    ss = exu.SimulationSettings()
+    ss.timeIntegration.numberOfSteps, ss.timeIntegration.endTime = 20, 2.0
+    ss.solution.file.write = False
+    ss.timeIntegration.verboseMode = 0
+    with pytest.raises(ConstraintError, match=r"object 4 .* do not hold at t = 0\.[1-3] s.* not what the velocity-level"):
+        exl.SolveDynamic(mbs, ss, method="RK4", evaluation="exudyn", showProgress=False)

@@ -364,7 +364,9 @@ class EvaluatedSolver:
             dependent = range(sd.NumberOfObjects()) if model.pivoted else None
             check = self.constraintCheck = ConstraintCheck(mbs, solver, P["tolCheck"], dependent,
                                                            () if model.sliding is None else model.sliding.slots)
-            account = ConsistencyAccount(check)
+            betweenSteps = (bool(mbs.GetPreStepUserFunction()) or bool(mbs.GetPostStepUserFunction())
+                            or mbs_user_function(mbs, "PostNewtonUserFunction") is not None)
+            account = ConsistencyAccount(check, weighMethodError=not betweenSteps)
             account.step(t0, model.velocity_constraints(t0, problem.R, problem.r, problem.prev, problem.qv),
                          np.max(np.abs(qt)) if qt.size else 0.0)
             check.start(P["ticTotal"], ticCheck, everyOutput=True)

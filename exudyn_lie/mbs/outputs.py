@@ -124,7 +124,12 @@ class OutputRows:
             rows -= 1                   # its accelerations failed: not an output
         clock.advance(done)             # on a failure: the last accepted step
         self.failure = None if st == kernel.STATUS_OK else st
-        return rows, at(np.arange(1, self.maxRows + 1) * nsub)
+        if rows > 8:
+            return rows, at(np.arange(1, rows + 1) * nsub)
+        times = np.empty(rows)          # one step per call where a user function runs between steps:
+        for o in range(rows):           # numpy's arange and arithmetic per call cost more than the rows
+            times[o] = at((o + 1) * nsub)
+        return rows, times
 
     def _record(self, o, t):
         """Output row ``o`` of the state at ``t`` (as ``stepper.record_output``; the accelerations

@@ -245,8 +245,10 @@ class EvaluatedSolver:
         # (mbs/implicit_run.substeps), which keeps the data coordinates of the step's start: a
         # friction contact that sticks inside the step has no solution in its slipping mode
         reduces = follow and bool(ss.timeIntegration.adaptiveStep)
+        # a Python function between Exudyn's steps (constraint_check.ConsistencyAccount: the drift excuses nothing)
+        betweenSteps = userStep or mbs_user_function(mbs, "PostNewtonUserFunction") is not None
         self._loopPlan = dict(k=k, h=h, t0=t0, tEnd=tEnd, nsteps=nsteps, needAcc=needAcc, groups=groups, why=why,
-                              exudynReduces=reduces,
+                              exudynReduces=reduces, betweenSteps=betweenSteps,
                               tolCheck=tolCheck, ticTotal=ticTotal, log=self.verbose or ss.timeIntegration.verboseMode >= 1,
                               reuseMass=bool(ss.timeIntegration.reuseConstantMassMatrix))
         self._integration = 0.0
@@ -364,9 +366,7 @@ class EvaluatedSolver:
             dependent = range(sd.NumberOfObjects()) if model.pivoted else None
             check = self.constraintCheck = ConstraintCheck(mbs, solver, P["tolCheck"], dependent,
                                                            () if model.sliding is None else model.sliding.slots)
-            betweenSteps = (bool(mbs.GetPreStepUserFunction()) or bool(mbs.GetPostStepUserFunction())
-                            or mbs_user_function(mbs, "PostNewtonUserFunction") is not None)
-            account = ConsistencyAccount(check, weighMethodError=not betweenSteps)
+            account = ConsistencyAccount(check, weighMethodError=not P["betweenSteps"])
             account.step(t0, model.velocity_constraints(t0, problem.R, problem.r, problem.prev, problem.qv),
                          np.max(np.abs(qt)) if qt.size else 0.0)
             check.start(P["ticTotal"], ticCheck, everyOutput=True)

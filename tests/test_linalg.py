@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from numba import njit
 
-from exudyn_lie.mbs.linalg import REL_PIVOT_TOL, band_ldl_inplace, band_ldl_solve_inplace
+from exudyn_lie.mbs.linalg import REL_PIVOT_TOL, band_ldl_inplace, band_ldl_solve_inplace, max_abs
 
 
 @njit(cache=False)
@@ -164,3 +164,19 @@ def test_reverse_cuthill_mckee_finds_the_band_of_a_shuffled_one(rng):
     rcm_numbering(Ds, Z, n, perm, iperm, deg, nbr)
     assert sorted(perm) == list(range(n)) and np.all(iperm[perm] == ident)
     assert max(bandwidths(Ds, Z, n, iperm)) <= 17
+
+
+def test_max_abs_is_numpys_max_of_abs_with_nan_and_empty(rng):
+    """The per-step tests of the evaluated path's projection and check (mbs/linalg.max_abs) decide
+    as ``np.max(np.abs(x))``: the same value, a NaN anywhere gives NaN (a blown-up state must not
+    read as converged), an empty vector 0; views with a stride too."""
+    for n in (1, 2, 7, 50):
+        x = rng.standard_normal(n) * 10.0 ** rng.integers(-12, 12, n)
+        assert max_abs(x) == np.max(np.abs(x))
+        assert max_abs(x[::2]) == np.max(np.abs(x[::2]))
+        for k in (0, n - 1):
+            y = x.copy()
+            y[k] = np.nan
+            assert np.isnan(max_abs(y))
+    assert max_abs(np.array([-np.inf, 1.0])) == np.inf
+    assert max_abs(np.zeros(0)) == 0.0

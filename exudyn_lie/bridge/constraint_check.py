@@ -74,6 +74,7 @@ import numpy as np
 from numba import njit
 
 from ..errors import ConstraintError, SimulationError
+from ..mbs.linalg import max_abs
 from ..userwarn import warn_user
 
 #: default tolerance as a fraction of the model's size
@@ -318,13 +319,14 @@ class ConstraintCheck:
         if not self.items or not self.mbs.systemIsConsistent:
             return                        # items modified by a user function, until Exudyn assembles again
         self.checks += 1
-        g = np.abs(self.row_residuals(t))
-        gmax = float(g.max())
+        g = self.row_residuals(t)
+        gmax = max_abs(g)
         if self.dependent is not None:
             self._velocity_redundancy(t)
-        pmax = 0.0 if projected is None or not len(projected) else float(np.max(projected))
+        pmax = 0.0 if projected is None else max_abs(projected)       # (sums of |.|)
         if (gmax <= self._floor or gmax <= self.tol) and (pmax <= self._floor or pmax <= self.tol):
             return
+        g = np.abs(g)
         if self._level is None:
             self._level = np.full(len(self.items), self.tol)
         G = self.residuals(t, g)

@@ -29,7 +29,9 @@ from __future__ import annotations
 import numpy as np
 
 from ..groups import so3
+from ..errors import ConstraintError
 from ..mbs.codes import BODY_TWIST, PROJ_FAIL, PROJ_MAX_ITER, PROJ_TOL
+from ..mbs.linalg import max_abs
 
 #: a step's state is projected when Exudyn's residual exceeds this fraction of the scale (positions:
 #: ``max(1, max |q|)``, velocities: ``max(1, max |q_t|)``), and then to PROJ_TOL of it.  On the compiled
@@ -69,8 +71,8 @@ def position_scale(model, problem):
         import exudyn as exu
         ref = model.sd.GetODE2Coordinates(configuration=exu.ConfigurationType.Reference)
         model._vecReference = np.asarray(ref, float)[model.L.vecIdx]
-    return max(1.0, float(np.max(np.abs(p.r))) if p.r.size else 1.0,
-               float(np.max(np.abs(p.qv + model._vecReference))) if p.qv.size else 1.0)
+    return max(1.0, max_abs(p.r.reshape(-1)) if p.r.size else 1.0,
+               max_abs(p.qv + model._vecReference) if p.qv.size else 1.0)
 
 
 def project_positions(model, problem, t, tol, MC=None, chord=True):
@@ -87,7 +89,7 @@ def project_positions(model, problem, t, tol, MC=None, chord=True):
     gprev = np.inf
     fresh = False
     for _ in range(PROJ_MAX_ITER):
-        gmax = np.max(np.abs(g))
+        gmax = max_abs(g)
         if not gmax > tol or (chord and fresh and gmax > 0.5 * gprev):
             break
         fresh = MC is None or not chord or gmax > 0.1 * gprev
@@ -121,7 +123,7 @@ def project_velocities(model, problem, t, gv=None, MC=None):
         problem.V[i, 3:] = problem.R[i].T @ v if BODY_TWIST[problem.gid[i]] else v
     problem.set_vector_velocities(qt[L.vecIdx])
     problem.write()
-    return float(np.max(np.abs(dv))) if dv.size else 0.0
+    return max_abs(dv)
 
 
 class StepProjection:
@@ -154,7 +156,8 @@ class StepProjection:
             self.account.step(t, gv, self.model._vmax)
 
     def __call__(self, t):
-        from ..errors import ConstraintError
+        """Project the state integrated to ``t`` (written into mbs here); returns whether it changed
+        (written again then)."""
         model, problem = self.model, self.problem
         problem.write()
         if len(model.multiplierRows):
@@ -165,17 +168,18 @@ class StepProjection:
         changed = False
         MC = None
         if self.positions:
-            scale = position_scale(model, problem)
-            tol = PROJ_TOL * scale
             g = model.position_residual(t)
-            if np.max(np.abs(g)) > PROJECT_ABOVE * scale:
+            gmax = max_abs(g)
+            # (the scale is at least 1: below PROJECT_ABOVE no scale is needed to tell)
+            if gmax > PROJECT_ABOVE and gmax > PROJECT_ABOVE * position_scale(model, problem):
+                tol = PROJ_TOL * position_scale(model, problem)
                 g, MC = project_positions(model, problem, t, tol, metric(model, t))
                 changed = True
-                if np.max(np.abs(g)) > PROJ_FAIL * tol:
+                if max_abs(g) > PROJ_FAIL * tol:
                     bad = np.nonzero(np.abs(g) > PROJ_FAIL * tol)[0]
                     raise ConstraintError(
                         f"position projection did not converge in {PROJ_MAX_ITER} iterations at t = {t:.6g} s (max "
-                        f"|h| = {np.max(np.abs(g)):.3g}); the constraints of {self.describe_rows(bad)} may not be "
+                        f"|h| = {max_abs(g):.3g}); the constraints of {self.describe_rows(bad)} may not be "
                         f"satisfiable")
                 gv = model.velocity_constraints(t, R, r, prev, problem.qv)
         # the velocities with the metric of the positions' last step (C_q there differs from the state's by
@@ -183,7 +187,8 @@ class StepProjection:
         for _ in range(2):
             gv = gv.copy()                   # (the account holds the one it was given)
             gv[model.multiplierRows] = 0.0
-            if not np.max(np.abs(gv)) > PROJECT_ABOVE * max(1.0, float(np.max(np.abs(model.qt))) if model.n else 1.0):
+            gvmax = max_abs(gv)
+            if not (gvmax > PROJECT_ABOVE and gvmax > PROJECT_ABOVE * max(1.0, max_abs(model.qt))):
                 break
             project_velocities(model, problem, t, gv, MC)
             changed = True

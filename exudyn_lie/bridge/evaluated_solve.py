@@ -448,9 +448,10 @@ class EvaluatedSolver:
                 "(with a Jacobian of this step, then at each iterate)", "Exudyn reduced its step after each "
                 "failure (adaptiveStep) down to this one", "decrease timeIntegration.minimumStepSize or the "
                 "step size")) from None
-        if self._project is not None:
-            self._project(t1)
-        problem.write()
+        if self._project is None:
+            problem.write()
+        else:
+            self._project(t1)                    # (it writes the state, and again where it changed it)
         if P["needAcc"]:
             self._write_accelerations()
         elif model.sliding is not None:

@@ -55,6 +55,21 @@ from numba import njit
 REL_PIVOT_TOL = 1e-12
 
 
+@njit(cache=True, _nrt=False)
+def max_abs(x):
+    """``max |x_i|`` of a 1-D array, NaN if any entry is NaN, 0 for an empty one: numpy's
+    ``np.max(np.abs(x))`` for the small vectors of Python code that runs once per step (its
+    reduction machinery costs ten times this call on a vector of ten entries)."""
+    m = 0.0
+    for k in range(x.shape[0]):
+        a = abs(x[k])
+        if not a <= m:                   # (a NaN stays: nothing compares above it)
+            m = a
+            if a != a:
+                return a
+    return m
+
+
 @njit(cache=True, forceinline=True, _nrt=False)
 def band_ldl_inplace(B, m, bw, rel_tol, d0):
     """Factor ``S = L D L^T`` (unit lower L; the square-root-free Cholesky) in band storage:

@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import SimulationError
+from ..errors import SimulationError, step_size_error
 from ..integrators.stability import is_a_stable, pair_growth, stability_coefficients, stability_radius
 from . import kernel
 from .bodies import body_dexpinv_stage, exp_compose
@@ -82,7 +82,6 @@ def check_linear_stability(tableau, h, t, ev, source, refuse=True, nsteps=None):
     for the eigenvalues ``ev`` of the linearised equations at time ``t`` (``source`` says
     where they come from; ``nsteps``: over a run of that many steps, :func:`largest_stable_step`);
     returns (fastest rate |lambda|, largest stable step)."""
-    from ..errors import step_size_error
     ev = np.asarray(ev, complex)
     hmax = largest_stable_step(tableau, ev, nsteps)
     rate = float(np.max(np.abs(ev))) if ev.size else 0.0
@@ -111,7 +110,6 @@ class StageStiffnessWatch:
         second-order estimate of the stages does not see (a rate measured some steps before counts
         for each of them); ``strict``: fail at the first step beyond (a caller that repeats it with
         an implicit method)."""
-        from ..errors import step_size_error
         if self.radius == np.inf:       # an A-stable method: no mode is beyond its region
             return
         rho = stage_stiffness_of(sim, h, nb)

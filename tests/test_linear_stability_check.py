@@ -49,6 +49,49 @@ def test_modal_eigenvalues_are_those_of_the_first_order_matrix(damping):
     assert _mismatch(ev, _first_order(MK, MD)) < 1e-10
 
 
+def _root_residual(lam, c, w2):
+    """The largest relative residual of ``lambda^2 + c lambda + w2`` over ``lam``, each against the
+    quadratic (c, w2) it fits best: a root computed with cancellation fails it."""
+    r = np.abs(lam[:, None] ** 2 + c[None, :] * lam[:, None] + w2[None, :])
+    s = np.abs(lam[:, None]) ** 2 + np.abs(c[None, :] * lam[:, None]) + np.abs(w2[None, :]) + 1e-300
+    return float(np.max(np.min(r / s, axis=1)))
+
+
+@pytest.mark.parametrize("case", ["strongly_overdamped", "rigid_modes", "complex"])
+def test_modal_eigenvalues_solve_each_quadratic_to_round_off(case):
+    """Each eigenvalue to round-off relative to itself: a strongly damped mode's slow root (1e-6
+    beside 1e6, which cancels in the textbook formula), zero eigenvalues of M^-1 K with stiffness-
+    proportional damping (rigid modes: lambda^2 = 0, both roots 0) and complex ones (a non-symmetric
+    stiffness)."""
+    rng = np.random.default_rng(11)
+    k = 8
+    Q, _ = np.linalg.qr(rng.standard_normal((k, k)))
+    if case == "strongly_overdamped":
+        w2, a, b = 1.0 + rng.random(k), 1e6, 0.0
+    elif case == "rigid_modes":
+        Q = np.eye(k)                       # (the zero eigenvalues exact)
+        w2, a, b = np.r_[0.0, 0.0, 1e3 * rng.random(k - 2)], 0.0, 1e-3
+    else:
+        w2, a, b = np.r_[1e2 + 30j, 1e2 - 30j, 5.0 + rng.random(k - 2)], 0.5, 2e-3
+    MK = (Q * w2) @ Q.T if case != "complex" else np.real_if_close(Q @ _real_block(w2) @ Q.T)
+    ev = modal_eigenvalues(MK, a * np.eye(k) + b * MK, rtol=1e-12)
+    assert ev is not None
+    w2 = np.asarray(w2, complex)
+    if case == "rigid_modes":
+        # (the fit's a is round-off, ~1e-17, not 0: those roots are checked against 0, not against it)
+        rigid = np.abs(ev) < 1e-12
+        assert np.sum(rigid) == 4 and np.all(np.isfinite(ev))
+        ev = ev[~rigid]
+    assert _root_residual(ev, a + b * w2, w2) < 1e-13
+
+
+def _real_block(w2):
+    """A real matrix with the eigenvalues ``w2`` (a conjugate pair first, as a 2 x 2 block)."""
+    B = np.diag(np.real(w2)).astype(float)
+    B[0, 1], B[1, 0] = np.imag(w2[0]), -np.imag(w2[0])
+    return B
+
+
 def test_modal_eigenvalues_refuse_damping_that_is_not_proportional():
     rng = np.random.default_rng(3)
     MK = np.diag(rng.random(6) * 100)
@@ -56,6 +99,16 @@ def test_modal_eigenvalues_refuse_damping_that_is_not_proportional():
     # proportional up to one entry: not proportional
     MD = 0.1 * np.eye(6) + 0.01 * MK
     MD[0, 5] = 1e-3
+    assert modal_eigenvalues(MK, MD) is None
+    # M^-1 K near a multiple of I (equal oscillators, weak coupling) and dampers 30 % apart: a and b
+    # of the fit grow large and cancel; the test against MD itself still refuses it
+    n = 10
+    L = 2.0 * np.eye(n) - np.eye(n, k=1) - np.eye(n, k=-1)
+    MK = 1e4 * np.eye(n) + 1e-2 * L
+    d = 1.0 + 0.3 * np.sin(np.arange(n - 1))
+    MD = np.zeros((n, n))
+    for i, di in enumerate(d):
+        MD[i:i + 2, i:i + 2] += di * np.array([[1.0, -1.0], [-1.0, 1.0]])
     assert modal_eigenvalues(MK, MD) is None
 
 

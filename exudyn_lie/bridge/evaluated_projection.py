@@ -171,8 +171,9 @@ class StepProjection:
             g = model.position_residual(t)
             gmax = max_abs(g)
             # (the scale is at least 1: below PROJECT_ABOVE no scale is needed to tell)
-            if gmax > PROJECT_ABOVE and gmax > PROJECT_ABOVE * position_scale(model, problem):
-                tol = PROJ_TOL * position_scale(model, problem)
+            scale = position_scale(model, problem) if gmax > PROJECT_ABOVE else 1.0
+            if gmax > PROJECT_ABOVE * scale:
+                tol = PROJ_TOL * scale
                 g, MC = project_positions(model, problem, t, tol, metric(model, t))
                 changed = True
                 if max_abs(g) > PROJ_FAIL * tol:

@@ -152,3 +152,62 @@ def test_dropin_prints_the_analytic_fastest_mode_of_a_stiff_generic_ode2(rayleig
     if a == b == 0.0:
         hmax = float(re.search(r"stable up to h = ([0-9.e+-]+) s", out).group(1))
         assert hmax == pytest.approx(2.0 * np.sqrt(2.0) / np.sqrt(w2.max()), rel=5e-3)   # RK4 on the imaginary axis
+
+
+def test_dominant_eigenvalues_are_eigenvalues_and_find_the_fastest():
+    """The converged Ritz values of Arnoldi's iteration (non-proportional damping) lie on eigenvalues
+    of the first-order matrix, and the fastest one is among them."""
+    rng = np.random.default_rng(5)
+    k = 150
+    B = rng.standard_normal((k, k))
+    w2 = np.r_[1e8, 3e7, rng.random(k - 2) * 1e4]
+    Q, _ = np.linalg.qr(rng.standard_normal((k, k)))
+    MK = (Q * w2) @ Q.T
+    MD = np.diag(rng.random(k)) + 1e-3 * (B @ B.T)
+    ritz = evaluated_stiffness.dominant_eigenvalues(MK, MD)
+    full = _first_order(MK, MD)
+    assert ritz.size >= 2
+    for th in ritz:
+        assert np.min(np.abs(full - th)) <= 1e-6 * abs(th)
+    assert np.max(np.abs(ritz)) == pytest.approx(np.max(np.abs(full)), rel=1e-9)
+
+
+def _oscillators(n, kk, d, h, steps=5, method=None):
+    """n uncoupled unit masses with stiffnesses ``kk`` and dampers ``d`` (not proportional) as one
+    ObjectGenericODE2; returns (printed output, final coordinates)."""
+    SC = exu.SystemContainer()
+    mbs = SC.AddSystem()
+    node = mbs.AddNode(NodeGenericODE2(referenceCoordinates=[0.0] * n, initialCoordinates=[1e-3] * n,
+                                       initialCoordinates_t=[0.0] * n, numberOfODE2Coordinates=n))
+    mbs.AddObject(ObjectGenericODE2(nodeNumbers=[node], massMatrix=np.eye(n), stiffnessMatrix=np.diag(kk),
+                                    dampingMatrix=np.diag(d)))
+    mbs.Assemble()
+    ss = exu.SimulationSettings()
+    ss.timeIntegration.numberOfSteps = steps
+    ss.timeIntegration.endTime = steps * h
+    ss.timeIntegration.verboseMode = 0
+    ss.solution.file.write = False
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        exl.SolveDynamic(mbs, ss, **({} if method is None else {"method": method}))
+    return np.array(mbs.systemData.GetODE2Coordinates())
+
+
+def test_dropin_choice_by_the_largest_modes_with_damping_not_proportional(capsys):
+    """120 oscillators (2 k = 240 >= KRYLOV_FROM), one of them stiff, dampers not proportional: the
+    drop-in's line names Arnoldi's iteration and the analytic fastest |lambda|; at a step where RK4 is
+    stable the estimate decides nothing and the run is RK4's (equal to the bit to a named RK4 run)."""
+    n = 120
+    rng = np.random.default_rng(2)
+    kk = np.r_[1e8, rng.random(n - 1) * 1e3 + 10.0]
+    d = rng.random(n) * 0.5
+    assert 2 * n >= evaluated_stiffness.KRYLOV_FROM
+    _oscillators(n, kk, d, 1e-3)
+    out = capsys.readouterr().out
+    assert "Arnoldi" in out and "implicit ESDIRK3" in out, out
+    lam = np.concatenate([np.roots([1.0, di, ki]) for di, ki in zip(d, kk)])
+    rate = float(re.search(r"fastest mode \|lambda\| ~ ([0-9.e+-]+) 1/s", out).group(1))
+    assert rate == pytest.approx(np.max(np.abs(lam)), rel=1e-3)
+    q = _oscillators(n, kk, d, 1e-5)                  # h |lambda| = 0.1: RK4 stable
+    assert "ESDIRK3" not in capsys.readouterr().out
+    np.testing.assert_array_equal(q, _oscillators(n, kk, d, 1e-5, method="RK4"))

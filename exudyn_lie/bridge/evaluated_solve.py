@@ -35,7 +35,7 @@ from .params import MainSystemPatch
 from .evaluated_problem import EvaluatedProblem
 from .evaluated_initial import describe_rows, project_initial
 from .evaluated_projection import StepProjection
-from .evaluated_stiffness import check_step
+from .evaluated_stiffness import KRYLOV_NOTE, check_step, choice_step
 from .method_choice import auto_choice_text, stiff_choice, unstable_choice
 from ..errors import StepSizeError, step_size_error
 from ..mbs.codes import STATUS_BLOWUP
@@ -324,14 +324,7 @@ class EvaluatedSolver:
         problem.write()
         # stability of the step at the initial state (stiff items at the script's step); adaptive
         # steps find a stable step themselves
-        auto = self.autoImplicit and self._adaptive is None
-        rate, stable = check_step(model, tab, h, self._adaptive is None and not auto, nsteps=nsteps)
-        if auto:
-            problem.watch_stiffness(strict=True)
-            chosen, line = stiff_choice(tab, h, stable, rate, "Exudyn's linearisation at the initial state")
-            if line:
-                self._switch(chosen, line)
-                tab = chosen
+        tab, rate, stable, exact = self._stability_at_start(tab, h, nsteps)
         if self._adaptive is not None:
             problem.sim.SetAdaptive(**self._adaptive)
         # the initial accelerations (and a measured estimate of the cost per step)
@@ -354,7 +347,8 @@ class EvaluatedSolver:
                       f"{1e-6 * perStep * nsteps * 1e6:.3g} s for {nsteps} steps)")
         if P["log"]:
             print(self.describe_plan(layout, P["groups"], P["why"], h, k, nsteps))
-            print(f"exudyn_lie: fastest linearised mode |lambda| = {rate:.4g} 1/s: stable up to h = {stable:.3g} s; "
+            print(f"exudyn_lie: fastest linearised mode |lambda| = {rate:.4g} 1/s: stable up to h = "
+                  f"{'' if exact else 'at most '}{stable:.3g} s; "
                   f"one stage costs {1e6 * perStage:.1f} us (Exudyn's evaluation, its dense copies of M "
                   f"and the Jacobian, the solve)")
         problem.write()                      # the initial state and time, for Exudyn's initial outputs
@@ -385,6 +379,22 @@ class EvaluatedSolver:
                                  model._vmax)
                 check.at_output(t1, account.explain, t1 >= tEnd - 1e-9 * max(1.0, abs(tEnd)), projected)
             self.loop_check = at_output
+
+    def _stability_at_start(self, tab, h, nsteps):
+        """The check of the step at the initial state: the drop-in's own choice of its method where the
+        user named none (fixed steps), else the StepSizeError of a named explicit method beyond its
+        stable step; returns (tableau, fastest rate, largest stable step, whether that step is exact)."""
+        model, problem = self.model, self.problem
+        if not (self.autoImplicit and self._adaptive is None):
+            return (tab, *check_step(model, tab, h, self._adaptive is None, nsteps=nsteps), True)
+        rate, stable, exact = choice_step(model, tab, h, nsteps=nsteps)
+        problem.watch_stiffness(strict=True)
+        chosen, line = stiff_choice(tab, h, stable, rate, "Exudyn's linearisation at the initial state"
+                                    + ("" if exact else KRYLOV_NOTE))
+        if line:
+            self._switch(chosen, line)
+            tab = chosen
+        return tab, rate, stable, exact
 
     def _write_accelerations(self):
         """Exudyn's q_tt and multipliers at the state in mbs (written there)."""
@@ -469,9 +479,9 @@ class EvaluatedSolver:
         if not self._may_switch():
             return
         problem.write()
-        rate, stable = check_step(self.model, problem.tableau, h, False)
+        rate, stable, exact = choice_step(self.model, problem.tableau, h)
         tab, line = stiff_choice(problem.tableau, h, stable, rate, f"Exudyn's linearisation at t = {t:.6g} s, "
-                                 f"after its PostNewton changed the data coordinates")
+                                 f"after its PostNewton changed the data coordinates" + ("" if exact else KRYLOV_NOTE))
         if line:
             self._switch(tab, line)
 

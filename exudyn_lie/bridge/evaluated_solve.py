@@ -347,8 +347,8 @@ class EvaluatedSolver:
                       f"{1e-6 * perStep * nsteps * 1e6:.3g} s for {nsteps} steps)")
         if P["log"]:
             print(self.describe_plan(layout, P["groups"], P["why"], h, k, nsteps))
-            print(f"exudyn_lie: fastest linearised mode |lambda| = {rate:.4g} 1/s: stable up to h = "
-                  f"{'' if exact else 'at most '}{stable:.3g} s; "
+            print(f"exudyn_lie: fastest linearised mode |lambda| {'=' if exact else '>='} {rate:.4g} 1/s: stable up "
+                  f"to h = {'' if exact else 'at most '}{stable:.3g} s; "
                   f"one stage costs {1e6 * perStage:.1f} us (Exudyn's evaluation, its dense copies of M "
                   f"and the Jacobian, the solve)")
         problem.write()                      # the initial state and time, for Exudyn's initial outputs

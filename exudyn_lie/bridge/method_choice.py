@@ -3,7 +3,8 @@ the explicit default where it is stable at the script's own step, else the L-sta
 ESDIRK3 (mbs/implicit.py).  Both paths decide once at the start of a fixed-step run, from the
 largest stable step of the explicit method at the initial state: the compiled path from the
 spectral radius of its linearised equations (``Simulator.SpectralRadius``), the evaluated path
-from the eigenvalues of Exudyn's own linearisation (``evaluated_stiffness.check_step``)."""
+from the eigenvalues of Exudyn's own linearisation (``evaluated_stiffness.choice_step``: the largest
+modes first where the damping is not proportional)."""
 from ..integrators.control import P_H_MIN
 from ..integrators.tableau import get_method
 from .run_plan import adaptive_settings

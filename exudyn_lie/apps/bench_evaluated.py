@@ -225,6 +225,11 @@ def target_lines(res):
         L.append(f"| Exudyn-evaluated path: overhead per stage around Exudyn's calls, 1 body + 1 foreign item "
                  f"<= {TARGET_OVERHEAD_US:g} us | {o:.3g} us ({1e6 * r1['evaluatedPerStage']:.3g} us per stage, "
                  f"Exudyn's calls {1e6 * r1['calls']:.3g} us) | {'yes' if o <= TARGET_OVERHEAD_US else 'no'} |")
+    for N in sorted(res["rows"]):
+        r = res["rows"][N]
+        o, c = 1e6 * r["overheadPerStage"], 1e6 * r["calls"]
+        L.append(f"| Exudyn-evaluated path, {N} bod{'y' if N == 1 else 'ies'}: overhead per stage <= Exudyn's own calls (issue 32) | "
+                 f"{o:.3g} us against {c:.3g} us | {'yes' if o <= c else 'no'} |")
     e = res["exponent"]
     L.append(f"| Exudyn-evaluated path: cost per step ~ N^p, p <= {TARGET_EXPONENT:g} (N = 10 ... 50) | p = {e:.2f} "
              f"(Exudyn's calls alone {res['exponentCalls']:.2f}, generalized-alpha {res['exponentNative']:.2f}) | "

@@ -28,15 +28,18 @@ from ..mbs.stiffness import check_linear_stability, largest_stable_step
 from .general_contact import general_contacts
 
 
-def linear_eigenvalues(model, split=False, unstableAt=None):
+def linear_eigenvalues(model, split=False):
     """Eigenvalues of the linearised, constrained equations at the state in mbs (with ``split``: those
-    of the ODE2 coordinates and those of the ODE1 coordinates apart).
+    of the ODE2 coordinates and those of the ODE1 coordinates apart)."""
+    MK, MD, ev1 = _linearised(model)
+    ev = _second_order_eigenvalues(MK, MD)
+    return (ev, ev1) if split else np.concatenate([ev, ev1])
 
-    ``unstableAt = (tableau, h, nsteps)``: where the damping is not proportional and the system is
-    large, the converged Ritz values of the largest modes (:func:`dominant_eigenvalues`) are returned
-    instead of all eigenvalues when they alone put ``h`` beyond the tableau's largest stable step
-    (the step limit they give is then an upper bound of the true one; the drop-in's choice of its
-    method needs no more); the second value says which (True: all of them)."""
+
+def _linearised(model):
+    """``(MK, MD, ev1)`` at the state in mbs: ``M_r^-1 K_r`` and ``M_r^-1 D_r`` on the motions the
+    constraints allow (both None where there is no such motion, no stiffness nor damping, or M_r is
+    singular), and the eigenvalues of the ODE1 coordinates' own Jacobian."""
     n = model.n
     M, f, Cq = model.mass_force_jacobian(model.sd.GetTime())
     M = np.array(M)
@@ -60,33 +63,31 @@ def linear_eigenvalues(model, split=False, unstableAt=None):
     else:
         N = np.eye(n)
     k = N.shape[1]
-    none = np.zeros(0, complex)
     if k == 0 or not (np.any(K) or np.any(D)):
-        return _pack(none, ev1, split, unstableAt)
+        return None, None, ev1
     Mr = N.T @ M @ N
     try:
-        MK = np.linalg.solve(Mr, N.T @ K @ N)
-        MD = np.linalg.solve(Mr, N.T @ D @ N)
+        return np.linalg.solve(Mr, N.T @ K @ N), np.linalg.solve(Mr, N.T @ D @ N), ev1
     except np.linalg.LinAlgError:
-        return _pack(none, ev1, split, unstableAt)
-    ev = modal_eigenvalues(MK, MD)
-    if ev is None and unstableAt is not None and 2 * k >= KRYLOV_FROM:
-        tab, h, nsteps = unstableAt
-        ritz = dominant_eigenvalues(MK, MD)
-        if ritz.size and h > largest_stable_step(tab, np.concatenate([ritz, ev1]), nsteps):
-            return _pack(ritz, ev1, split, unstableAt, exact=False)
+        return None, None, ev1
+
+
+def _second_order_eigenvalues(MK, MD, ev=None):
+    """The finite eigenvalues of ``[[0, I], [-MK, -MD]]`` (none without MK): ``ev`` where given (those
+    of :func:`modal_eigenvalues`), else those of :func:`modal_eigenvalues`, else numpy's of the whole
+    matrix."""
+    if MK is None:
+        return np.zeros(0, complex)
     if ev is None:
+        ev = modal_eigenvalues(MK, MD)
+    if ev is None:
+        k = MK.shape[0]
         A = np.zeros((2 * k, 2 * k))
         A[:k, k:] = np.eye(k)
         A[k:, :k] = -MK
         A[k:, k:] = -MD
         ev = np.linalg.eigvals(A)
-    return _pack(ev[np.isfinite(ev)], ev1, split, unstableAt)
-
-
-def _pack(ev2, ev1, split, unstableAt, exact=True):
-    out = (ev2, ev1) if split else np.concatenate([ev2, ev1])
-    return (out, exact) if unstableAt is not None else out
+    return ev[np.isfinite(ev)]
 
 
 #: from this size of the first-order matrix on (2 k, k the motions the constraints allow), the choice of
@@ -240,10 +241,20 @@ def check_step(model, tableau, h, refuse=True, nsteps=None):
 
 def choice_step(model, tableau, h, nsteps=None):
     """:func:`check_step` for the drop-in's own choice of its method (no StepSizeError): ``(fastest rate,
-    largest stable step, exact)``; with ``exact`` False, the largest modes alone showed ``h`` beyond
-    the stable step (:func:`linear_eigenvalues`' ``unstableAt``), which is then an upper bound."""
+    largest stable step, exact)``.  Where the damping is not proportional and the system is large,
+    the converged Ritz values of the largest modes (:func:`dominant_eigenvalues`) decide alone when
+    they put ``h`` beyond the stable step (fewer eigenvalues can only raise it): ``exact`` False, the
+    stable step an upper bound of the true one; else every eigenvalue."""
     if general_contacts(model.mbs) or tableau.partitioned:
         return (*check_step(model, tableau, h, False, nsteps), True)
-    ev, exact = linear_eigenvalues(model, unstableAt=(tableau, h, nsteps))
-    rate, hmax = check_linear_stability(tableau, h, model.sd.GetTime(), ev, "", False, nsteps)
-    return rate, hmax, exact
+    t = model.sd.GetTime()
+    MK, MD, ev1 = _linearised(model)
+    modal = None if MK is None else modal_eigenvalues(MK, MD)
+    if MK is not None and modal is None and 2 * MK.shape[0] >= KRYLOV_FROM:
+        ritz = dominant_eigenvalues(MK, MD)
+        if ritz.size:
+            rate, hmax = check_linear_stability(tableau, h, t, np.concatenate([ritz, ev1]), "", False, nsteps)
+            if h > hmax:
+                return rate, hmax, False
+    ev = np.concatenate([_second_order_eigenvalues(MK, MD, modal), ev1])
+    return (*check_linear_stability(tableau, h, t, ev, "", False, nsteps), True)
